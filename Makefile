@@ -1,0 +1,54 @@
+# Entry points; see README.md. Every target that builds first installs missing Debian packages
+# (scripts/install-deps.sh, a quick no-op when everything is there).
+BUILD ?= build
+ASAN_BUILD ?= build-asan
+JOBS ?= $(shell nproc)
+PYTHON ?= /usr/bin/python3
+CMAKE_FLAGS ?=
+
+.PHONY: all deps build test test-sanitize reproduce experiment bench bench-short bench-record dashboard test-browser clean
+
+all: build
+
+deps:
+	@bash scripts/install-deps.sh
+
+build: deps
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) > /dev/null
+	@cmake --build $(BUILD) -j $(JOBS)
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+# The same tests under AddressSanitizer and UndefinedBehaviorSanitizer (CI runs this too).
+test-sanitize: deps
+	@cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCDP_SANITIZE=ON -DCDP_BUILD_BENCHMARKS=OFF > /dev/null
+	@cmake --build $(ASAN_BUILD) -j $(JOBS)
+	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
+
+reproduce: build
+	$(PYTHON) scripts/reproduce.py --build $(BUILD) --jobs $(JOBS)
+
+# make experiment EXP=experiments/NAME.json
+experiment: build
+	$(BUILD)/bin/experiment $(EXP)
+
+bench: build
+	$(PYTHON) scripts/run_benchmarks.py --build $(BUILD) --out results/bench/latest.json
+
+bench-short: build
+	$(PYTHON) scripts/run_benchmarks.py --build $(BUILD) --short --out results/bench/latest.json
+
+bench-record: bench
+	$(PYTHON) scripts/record_benchmark.py results/bench/latest.json results/bench/history
+
+dashboard:
+	$(PYTHON) scripts/make_dashboard.py --history results/bench/history --latest results/bench/latest.json \
+	    --table results/table1.json --out results/dashboard/index.html
+
+test-browser: dashboard
+	@bash scripts/install-deps.sh --browser
+	$(PYTHON) scripts/test_dashboard_browser.py results/dashboard/index.html
+
+clean:
+	rm -rf $(BUILD) $(ASAN_BUILD)

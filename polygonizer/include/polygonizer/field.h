@@ -1,0 +1,122 @@
+// The implicit field interface every algorithm of the project works on.
+//
+// A field F: R^3 -> R is negative inside, positive outside and zero on the surface, so its
+// gradient points outward. Models implement the protected eval_* hooks; callers use the public
+// wrappers, which count evaluations by kind so that algorithms can report their cost.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace cdp {
+
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+
+// Axis-aligned box.
+struct Box {
+  Vec3 min = Vec3::Zero();
+  Vec3 max = Vec3::Zero();
+
+  Vec3 size() const { return max - min; }
+  Vec3 center() const { return 0.5 * (min + max); }
+  double diagonal() const { return size().norm(); }
+  bool contains(const Vec3& p) const {
+    return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+  }
+  bool valid() const { return (max.array() > min.array()).all() && min.allFinite() && max.allFinite(); }
+  Box inflated(double margin) const { return {min.array() - margin, max.array() + margin}; }
+};
+
+// Evaluation counts by kind. `value` counts value-only evaluations (single or batched),
+// `value_gradient` value-and-gradient evaluations, `gradient_hessian` evaluations that also
+// produce the Hessian.
+struct EvaluationCounts {
+  std::uint64_t value = 0;
+  std::uint64_t value_gradient = 0;
+  std::uint64_t gradient_hessian = 0;
+  std::uint64_t total() const { return value + value_gradient + gradient_hessian; }
+  EvaluationCounts operator-(const EvaluationCounts& o) const {
+    return {value - o.value, value_gradient - o.value_gradient, gradient_hessian - o.gradient_hessian};
+  }
+};
+
+class Field {
+ public:
+  virtual ~Field() = default;
+  Field() = default;
+  Field(const Field&) = delete;
+  Field& operator=(const Field&) = delete;
+
+  double value(const Vec3& p) const {
+    n_value_.fetch_add(1, std::memory_order_relaxed);
+    return eval_value(p);
+  }
+  // Value and gradient in one evaluation; returns the value.
+  double value_gradient(const Vec3& p, Vec3& gradient) const {
+    n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+    return eval_value_gradient(p, gradient);
+  }
+  Vec3 gradient(const Vec3& p) const {
+    Vec3 g;
+    value_gradient(p, g);
+    return g;
+  }
+  // Value, gradient and Hessian in one evaluation; returns the value.
+  double gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const {
+    n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
+    return eval_gradient_hessian(p, gradient, hessian);
+  }
+  // Batched values: out[i] = F(points[i]). Models with a vectorized kernel override eval_values.
+  void values(const Vec3* points, double* out, std::size_t n) const {
+    n_value_.fetch_add(n, std::memory_order_relaxed);
+    eval_values(points, out, n);
+  }
+
+  // A box that contains the surface (the model's own, or the "bounds" given in its JSON).
+  const Box& bounds() const { return bounds_; }
+  void set_bounds(const Box& b) { bounds_ = b; }
+
+  // The model's type name as written in JSON ("sphere", "vis", ...).
+  virtual std::string type_name() const = 0;
+
+  // A bound L with |F(a) - F(b)| <= L |a - b| inside bounds(), when the model knows one.
+  // Ray casting steps by |F| / L; models without a bound let the caller estimate one.
+  virtual std::optional<double> lipschitz_bound() const { return std::nullopt; }
+
+  // The minimum distance between two constraint points of a data-driven model; the paper's
+  // Marching Tetrahedra "precision" convention scales this. Empty for models without points.
+  virtual std::optional<double> constraint_spacing() const { return std::nullopt; }
+
+  EvaluationCounts counts() const {
+    return {n_value_.load(std::memory_order_relaxed), n_value_gradient_.load(std::memory_order_relaxed),
+            n_gradient_hessian_.load(std::memory_order_relaxed)};
+  }
+  void reset_counts() const {
+    n_value_ = 0;
+    n_value_gradient_ = 0;
+    n_gradient_hessian_ = 0;
+  }
+
+ protected:
+  virtual double eval_value(const Vec3& p) const = 0;
+  virtual double eval_value_gradient(const Vec3& p, Vec3& gradient) const = 0;
+  virtual double eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const = 0;
+  virtual void eval_values(const Vec3* points, double* out, std::size_t n) const {
+    for (std::size_t i = 0; i < n; ++i) out[i] = eval_value(points[i]);
+  }
+
+  Box bounds_;
+
+ private:
+  mutable std::atomic<std::uint64_t> n_value_{0};
+  mutable std::atomic<std::uint64_t> n_value_gradient_{0};
+  mutable std::atomic<std::uint64_t> n_gradient_hessian_{0};
+};
+
+}  // namespace cdp
