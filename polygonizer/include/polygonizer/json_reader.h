@@ -66,6 +66,7 @@ class JsonReader {
   std::string path_;
   std::filesystem::path base_dir_;
   std::set<std::string> used_;
+  mutable std::set<std::string> asked_;  // every key an accessor looked for, present or not
 };
 
 // Parses a JSON file; InvalidInputError naming the file when it is missing or malformed.

@@ -16,12 +16,21 @@ struct SeedOptions {
 };
 
 struct SurfaceSeed {
-  Vec3 point;      // on the surface (bisected along a grid edge, then Newton-projected)
-  int cluster;     // seeds of one connected group of crossed cells share a cluster id
+  Vec3 point;   // see the functions below for whether it lies on the surface
+  int cluster;  // crossings of one 26-connected group of crossed grid cells share a cluster id
 };
 
-// Seeds in a deterministic order, clusters numbered from 0. Throws NoSurfaceError when the field
-// is NaN on the grid, has no zero crossing, or (with require_closed_in_box) leaves the box.
+// Every grid edge with a sign change, its crossing point linearly interpolated (not on the
+// surface: cheap, for coverage checks "is this crossing already meshed?"), in a deterministic
+// order, clusters numbered from 0 in order of first appearance. Throws NoSurfaceError when the
+// field is NaN on the grid, has no zero crossing, or (with require_closed_in_box) leaves the box.
+std::vector<SurfaceSeed> find_surface_crossings(const Field& field, const SeedOptions& options = {});
+
+// One seed per cluster, on the surface (bisected along its grid edge, then Newton-projected);
+// the first crossing of the cluster whose projection converges. Same errors as above.
 std::vector<SurfaceSeed> find_surface_seeds(const Field& field, const SeedOptions& options = {});
+
+// Grid spacing the functions above use for a field and options.
+double seed_grid_spacing(const Field& field, const SeedOptions& options = {});
 
 }  // namespace cdp

@@ -1,0 +1,127 @@
+#include <polygonizer/mesh_topology.h>
+
+#include <algorithm>
+#include <numeric>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace cdp {
+
+namespace {
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(int a, int b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+struct HalfEdge {
+  int lo, hi;       // undirected key
+  bool forward;     // traversed lo -> hi
+  int face;
+};
+
+}  // namespace
+
+MeshTopology analyze_topology(const Mesh& mesh) {
+  MeshTopology t;
+  const std::size_t nv = mesh.positions.size();
+  const std::size_t nf = mesh.triangles.size();
+  t.triangles = nf;
+
+  std::vector<char> referenced(nv, 0);
+  std::vector<HalfEdge> halfedges;
+  halfedges.reserve(3 * nf);
+  std::vector<std::array<int, 3>> sorted_tris(nf);
+  for (std::size_t f = 0; f < nf; ++f) {
+    const auto& tri = mesh.triangles[f];
+    for (int k = 0; k < 3; ++k) referenced[tri[k]] = 1;
+    const Vec3& a = mesh.positions[tri[0]];
+    const Vec3& b = mesh.positions[tri[1]];
+    const Vec3& c = mesh.positions[tri[2]];
+    const Vec3 cr = (b - a).cross(c - a);
+    t.signed_volume += a.dot(b.cross(c)) / 6.0;
+    t.area += 0.5 * cr.norm();
+    const double e2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+    const bool repeated = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];
+    if (repeated || cr.squaredNorm() <= 1e-24 * e2 * e2) ++t.degenerate_triangles;
+    auto s = tri;
+    std::sort(s.begin(), s.end());
+    sorted_tris[f] = s;
+    if (repeated) continue;
+    for (int k = 0; k < 3; ++k) {
+      const int u = tri[k], v = tri[(k + 1) % 3];
+      halfedges.push_back({std::min(u, v), std::max(u, v), u < v, static_cast<int>(f)});
+    }
+  }
+  std::sort(sorted_tris.begin(), sorted_tris.end());
+  for (std::size_t i = 1; i < nf; ++i)
+    if (sorted_tris[i] == sorted_tris[i - 1]) ++t.duplicate_triangles;
+
+  t.vertices = static_cast<std::size_t>(std::count(referenced.begin(), referenced.end(), 1));
+  t.unreferenced_vertices = nv - t.vertices;
+
+  std::sort(halfedges.begin(), halfedges.end(), [](const HalfEdge& a, const HalfEdge& b) {
+    return a.lo != b.lo ? a.lo < b.lo : a.hi != b.hi ? a.hi < b.hi : a.face < b.face;
+  });
+  UnionFind faces(nf);
+  for (auto group = halfedges.begin(); group != halfedges.end();) {
+    const auto stop = std::find_if(group, halfedges.end(), [&](const HalfEdge& h) {
+      return h.lo != group->lo || h.hi != group->hi;
+    });
+    const auto uses = stop - group;
+    ++t.edges;
+    if (uses == 1) ++t.boundary_edges;
+    if (uses >= 3) ++t.nonmanifold_edges;
+    if (uses == 2 && group[0].forward == group[1].forward) ++t.misoriented_edges;
+    for (auto other = group + 1; other != stop; ++other) faces.unite(group->face, other->face);
+    group = stop;
+  }
+  std::unordered_set<int> roots;
+  for (std::size_t f = 0; f < nf; ++f) roots.insert(faces.find(static_cast<int>(f)));
+  t.components = roots.size();
+
+  // Vertex manifoldness: the triangles around a vertex must form one fan, i.e. be connected
+  // through edges that contain the vertex.
+  std::vector<int> offsets(nv + 1, 0);
+  for (const auto& tri : mesh.triangles)
+    for (int k = 0; k < 3; ++k) ++offsets[tri[k] + 1];
+  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+  std::vector<int> incident(offsets.back());
+  {
+    std::vector<int> fill = offsets;
+    for (std::size_t f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) incident[fill[mesh.triangles[f][k]]++] = static_cast<int>(f);
+  }
+  std::unordered_map<int, int> first_face_with;  // other vertex -> local face index
+  for (std::size_t v = 0; v < nv; ++v) {
+    const int begin = offsets[v], end = offsets[v + 1];
+    if (end - begin <= 1) continue;
+    UnionFind local(end - begin);
+    first_face_with.clear();
+    for (int i = begin; i < end; ++i) {
+      for (int w : mesh.triangles[incident[i]]) {
+        if (w == static_cast<int>(v)) continue;
+        auto [it, inserted] = first_face_with.emplace(w, i - begin);
+        if (!inserted) local.unite(it->second, i - begin);
+      }
+    }
+    int fans = 0;
+    for (int i = 0; i < end - begin; ++i) fans += local.find(i) == i;
+    if (fans > 1) ++t.nonmanifold_vertices;
+  }
+
+  t.euler_characteristic = static_cast<int>(t.vertices) - static_cast<int>(t.edges) + static_cast<int>(nf);
+  if (t.closed() && t.edge_manifold() && t.oriented() && t.vertex_manifold() && nf > 0)
+    t.genus = (2 * static_cast<int>(t.components) - t.euler_characteristic) / 2;
+  return t;
+}
+
+}  // namespace cdp

@@ -1,0 +1,48 @@
+// Compiled models: a C++ model is one templated function of the point; gradient and Hessian
+// come from automatic differentiation. To add one, write the functor and add one line to the
+// list at the bottom. Its JSON is {"type": "<name>"} with an optional "bounds".
+#include <polygonizer/errors.h>
+#include <polygonizer/models/autodiff_field.h>
+
+#include "builtin_models.h"
+
+namespace cdp {
+
+namespace {
+
+// Genus-2 surface (a smooth double torus): (x (x-1)^2 (x-2) + y^2)^2 + z^2 - 0.01, whose
+// cross-section z = 0 has two holes, around x = 0.5 and x = 1.5.
+struct DoubleTorus {
+  template <class T>
+  T operator()(const T& x, const T& y, const T& z) const {
+    const T a = x * (x - 1.0) * (x - 1.0) * (x - 2.0) + y * y;
+    return a * a + z * z - 0.01;
+  }
+};
+
+// Tanglecube (genus 5), the same surface as the expression example, compiled.
+struct Tanglecube {
+  template <class T>
+  T operator()(const T& x, const T& y, const T& z) const {
+    const T x2 = x * x, y2 = y * y, z2 = z * z;
+    return x2 * x2 - 5.0 * x2 + y2 * y2 - 5.0 * y2 + z2 * z2 - 5.0 * z2 + 11.8;
+  }
+};
+
+template <class Fn>
+FieldBuilder compiled(const std::string& name, const Box& bounds) {
+  return [name, bounds](JsonReader&) -> std::unique_ptr<Field> {
+    return std::make_unique<FunctionField<Fn>>(name, Fn{}, bounds);
+  };
+}
+
+}  // namespace
+
+std::map<std::string, FieldBuilder> compiled_model_builders() {
+  return {
+      {"double_torus", compiled<DoubleTorus>("double_torus", Box{{-0.3, -0.7, -0.3}, {2.3, 0.7, 0.3}})},
+      {"tanglecube", compiled<Tanglecube>("tanglecube", Box{{-3, -3, -3}, {3, 3, 3}})},
+  };
+}
+
+}  // namespace cdp

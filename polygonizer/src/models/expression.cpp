@@ -1,0 +1,287 @@
+#include <polygonizer/autodiff.h>
+#include <polygonizer/errors.h>
+#include <polygonizer/models/expression.h>
+
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <new>
+#include <numbers>
+#include <vector>
+
+namespace cdp {
+
+namespace detail {
+
+enum class Op { Const, X, Y, Z, Add, Sub, Mul, Div, Neg, PowConst, Pow, Sqrt, Exp, Log, Sin, Cos, Tan, Abs, Min, Max };
+
+struct Instruction {
+  Op op;
+  double constant = 0;
+};
+
+// Deep enough for any formula a person writes; the evaluator keeps its stack in a fixed array.
+constexpr int kMaxStack = 64;
+
+struct ExpressionProgram {
+  std::vector<Instruction> code;
+
+  template <class T>
+  T run(const T& x, const T& y, const T& z) const {
+    using std::abs, std::cos, std::exp, std::log, std::max, std::min, std::pow, std::sin, std::sqrt, std::tan;
+    // Raw storage: constructing kMaxStack jets per call would cost more than the formula.
+    alignas(T) unsigned char storage[sizeof(T) * kMaxStack];
+    T* stack = reinterpret_cast<T*>(storage);
+    int top = -1;
+    for (const Instruction& in : code) {
+      switch (in.op) {
+        case Op::Const: new (&stack[++top]) T(in.constant); break;
+        case Op::X: new (&stack[++top]) T(x); break;
+        case Op::Y: new (&stack[++top]) T(y); break;
+        case Op::Z: new (&stack[++top]) T(z); break;
+        case Op::Add: --top; stack[top] = stack[top] + stack[top + 1]; break;
+        case Op::Sub: --top; stack[top] = stack[top] - stack[top + 1]; break;
+        case Op::Mul: --top; stack[top] = stack[top] * stack[top + 1]; break;
+        case Op::Div: --top; stack[top] = stack[top] / stack[top + 1]; break;
+        case Op::Pow: --top; stack[top] = pow(stack[top], stack[top + 1]); break;
+        case Op::Min: --top; stack[top] = min(stack[top], stack[top + 1]); break;
+        case Op::Max: --top; stack[top] = max(stack[top], stack[top + 1]); break;
+        case Op::Neg: stack[top] = -stack[top]; break;
+        case Op::PowConst: stack[top] = pow(stack[top], in.constant); break;
+        case Op::Sqrt: stack[top] = sqrt(stack[top]); break;
+        case Op::Exp: stack[top] = exp(stack[top]); break;
+        case Op::Log: stack[top] = log(stack[top]); break;
+        case Op::Sin: stack[top] = sin(stack[top]); break;
+        case Op::Cos: stack[top] = cos(stack[top]); break;
+        case Op::Tan: stack[top] = tan(stack[top]); break;
+        case Op::Abs: stack[top] = abs(stack[top]); break;
+      }
+    }
+    return stack[0];
+  }
+};
+
+namespace {
+
+struct Node {
+  Op op;
+  double constant = 0;
+  std::vector<Node> args;
+  bool is_constant() const { return op == Op::Const; }
+};
+
+// Recursive-descent parser:
+//   expr  := term (('+' | '-') term)*
+//   term  := unary (('*' | '/') unary)*
+//   unary := ('-' | '+') unary | power
+//   power := primary ('^' unary)?          right-associative, binds tighter than unary minus
+//   primary := number | name | name '(' expr (',' expr)* ')' | '(' expr ')'
+class Parser {
+ public:
+  Parser(const std::string& text, const std::map<std::string, double>& params) : s_(text), params_(params) {}
+
+  Node parse() {
+    Node n = expr();
+    skip_space();
+    if (pos_ < s_.size()) error(std::string("unexpected '") + s_[pos_] + "'");
+    return n;
+  }
+
+ private:
+  [[noreturn]] void error(const std::string& what) const {
+    throw InvalidInputError("expression: " + what + " at position " + std::to_string(pos_ + 1));
+  }
+  void skip_space() {
+    while (pos_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[pos_]))) ++pos_;
+  }
+  bool accept(char c) {
+    skip_space();
+    if (pos_ < s_.size() && s_[pos_] == c) {
+      ++pos_;
+      return true;
+    }
+    return false;
+  }
+  void expect(char c) {
+    if (!accept(c)) {
+      skip_space();
+      error(std::string("expected '") + c + "'" +
+            (pos_ < s_.size() ? std::string(", found '") + s_[pos_] + "'" : ", found the end"));
+    }
+  }
+
+  static Node binary(Op op, Node a, Node b) {
+    Node n{op, 0, {}};
+    n.args.push_back(std::move(a));
+    n.args.push_back(std::move(b));
+    return fold(std::move(n));
+  }
+  static Node unary_node(Op op, Node a) {
+    Node n{op, 0, {}};
+    n.args.push_back(std::move(a));
+    return fold(std::move(n));
+  }
+  // Constant subtrees become one constant; x^c becomes PowConst so that negative bases with
+  // integer exponents stay exact.
+  static Node fold(Node n) {
+    bool all_const = !n.args.empty();
+    for (const auto& a : n.args) all_const = all_const && a.is_constant();
+    if (all_const) {
+      ExpressionProgram p;
+      emit(n, p.code);
+      return Node{Op::Const, p.run(0.0, 0.0, 0.0), {}};
+    }
+    if (n.op == Op::Pow && n.args[1].is_constant()) {
+      Node r{Op::PowConst, n.args[1].constant, {}};
+      r.args.push_back(std::move(n.args[0]));
+      return r;
+    }
+    return n;
+  }
+
+  Node expr() {
+    Node n = term();
+    for (;;) {
+      if (accept('+')) n = binary(Op::Add, std::move(n), term());
+      else if (accept('-')) n = binary(Op::Sub, std::move(n), term());
+      else return n;
+    }
+  }
+  Node term() {
+    Node n = unary();
+    for (;;) {
+      if (accept('*')) n = binary(Op::Mul, std::move(n), unary());
+      else if (accept('/')) n = binary(Op::Div, std::move(n), unary());
+      else return n;
+    }
+  }
+  Node unary() {
+    if (accept('-')) return unary_node(Op::Neg, unary());
+    if (accept('+')) return unary();
+    return power();
+  }
+  Node power() {
+    Node base = primary();
+    if (accept('^')) return binary(Op::Pow, std::move(base), unary());
+    return base;
+  }
+  Node primary() {
+    skip_space();
+    if (pos_ >= s_.size()) error("unexpected end of formula");
+    const char c = s_[pos_];
+    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.') {
+      const char* begin = s_.c_str() + pos_;
+      char* end = nullptr;
+      const double v = std::strtod(begin, &end);
+      if (end == begin) error("malformed number");
+      pos_ += static_cast<std::size_t>(end - begin);
+      return Node{Op::Const, v, {}};
+    }
+    if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
+      const std::size_t start = pos_;
+      while (pos_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '_')) ++pos_;
+      const std::string name = s_.substr(start, pos_ - start);
+      skip_space();
+      if (pos_ < s_.size() && s_[pos_] == '(') return call(name, start);
+      if (name == "x") return Node{Op::X, 0, {}};
+      if (name == "y") return Node{Op::Y, 0, {}};
+      if (name == "z") return Node{Op::Z, 0, {}};
+      if (name == "pi") return Node{Op::Const, std::numbers::pi, {}};
+      if (auto it = params_.find(name); it != params_.end()) return Node{Op::Const, it->second, {}};
+      pos_ = start;
+      error("unknown name '" + name + "'");
+    }
+    if (accept('(')) {
+      Node n = expr();
+      expect(')');
+      return n;
+    }
+    error(std::string("unexpected '") + c + "'");
+  }
+  Node call(const std::string& name, std::size_t name_pos) {
+    static const std::map<std::string, std::pair<Op, int>> functions = {
+        {"sqrt", {Op::Sqrt, 1}}, {"exp", {Op::Exp, 1}}, {"log", {Op::Log, 1}}, {"sin", {Op::Sin, 1}},
+        {"cos", {Op::Cos, 1}},   {"tan", {Op::Tan, 1}}, {"abs", {Op::Abs, 1}}, {"min", {Op::Min, 2}},
+        {"max", {Op::Max, 2}},   {"pow", {Op::Pow, 2}}};
+    auto it = functions.find(name);
+    if (it == functions.end()) {
+      pos_ = name_pos;
+      error("unknown function '" + name + "'");
+    }
+    expect('(');
+    std::vector<Node> args;
+    args.push_back(expr());
+    while (accept(',')) args.push_back(expr());
+    const std::size_t close = pos_;
+    expect(')');
+    if (static_cast<int>(args.size()) != it->second.second) {
+      pos_ = close;
+      error(name + " takes " + std::to_string(it->second.second) + " argument(s), found " +
+            std::to_string(args.size()));
+    }
+    Node n{it->second.first, 0, std::move(args)};
+    return fold(std::move(n));
+  }
+
+ public:
+  static void emit(const Node& n, std::vector<Instruction>& code) {
+    for (const auto& a : n.args) emit(a, code);
+    code.push_back({n.op, n.constant});
+  }
+
+ private:
+  const std::string& s_;
+  const std::map<std::string, double>& params_;
+  std::size_t pos_ = 0;
+};
+
+int stack_depth(const std::vector<Instruction>& code) {
+  int depth = 0, max_depth = 0;
+  for (const auto& in : code) {
+    switch (in.op) {
+      case Op::Const: case Op::X: case Op::Y: case Op::Z: ++depth; break;
+      case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Pow: case Op::Min: case Op::Max: --depth; break;
+      default: break;
+    }
+    max_depth = std::max(max_depth, depth);
+  }
+  return max_depth;
+}
+
+}  // namespace
+}  // namespace detail
+
+Expression::Expression(const std::string& formula, const std::map<std::string, double>& params, const Box& bounds)
+    : formula_(formula), program_(std::make_unique<detail::ExpressionProgram>()) {
+  for (const auto& [name, v] : params) {
+    if (name == "x" || name == "y" || name == "z" || name == "pi")
+      throw InvalidInputError("expression: parameter '" + name + "' shadows a built-in name");
+    if (!std::isfinite(v)) throw InvalidInputError("expression: parameter '" + name + "' is not finite");
+  }
+  detail::Parser parser(formula_, params);
+  detail::Parser::emit(parser.parse(), program_->code);
+  if (detail::stack_depth(program_->code) > detail::kMaxStack)
+    throw InvalidInputError("expression: formula nested too deeply (more than " +
+                            std::to_string(detail::kMaxStack) + " pending operands)");
+  if (!bounds.valid()) throw InvalidInputError("expression: bounds must be a non-empty box");
+  set_bounds(bounds);
+}
+
+Expression::~Expression() = default;
+
+double Expression::eval_value(const Vec3& p) const { return program_->run(p.x(), p.y(), p.z()); }
+
+double Expression::eval_value_gradient(const Vec3& p, Vec3& gradient) const {
+  const Jet1 r = program_->run(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2));
+  gradient = r.g;
+  return r.v;
+}
+
+double Expression::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const {
+  const Jet2 r = program_->run(Jet2::variable(p.x(), 0), Jet2::variable(p.y(), 1), Jet2::variable(p.z(), 2));
+  gradient = r.g;
+  hessian = r.h;
+  return r.v;
+}
+
+}  // namespace cdp

@@ -1,0 +1,190 @@
+#include <polygonizer/errors.h>
+#include <polygonizer/newton_projection.h>
+#include <polygonizer/surface_seeds.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+namespace cdp {
+
+namespace {
+
+std::string format_point(const Vec3& p) {
+  std::ostringstream s;
+  s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return s.str();
+}
+
+struct SeedGrid {
+  Vec3 origin;
+  double h;
+  std::array<int, 3> n;  // cells per axis
+  std::vector<double> values;
+  std::size_t index(int i, int j, int k) const {
+    return (static_cast<std::size_t>(k) * (n[1] + 1) + j) * (n[0] + 1) + i;
+  }
+  Vec3 point(int i, int j, int k) const { return origin + h * Vec3(i, j, k); }
+};
+
+SeedGrid sample_grid(const Field& field, const SeedOptions& options) {
+  if (options.resolution < 2) throw InvalidInputError("seeding: resolution must be at least 2");
+  const Box& box = field.bounds();
+  if (!box.valid()) throw NoSurfaceError("seeding: the field has no valid bounding box");
+  SeedGrid g;
+  g.origin = box.min;
+  g.h = box.size().maxCoeff() / options.resolution;
+  for (int a = 0; a < 3; ++a) g.n[a] = std::max(1, static_cast<int>(std::ceil(box.size()[a] / g.h - 1e-9)));
+  const std::size_t count = static_cast<std::size_t>(g.n[0] + 1) * (g.n[1] + 1) * (g.n[2] + 1);
+  std::vector<Vec3> points;
+  points.reserve(count);
+  for (int k = 0; k <= g.n[2]; ++k)
+    for (int j = 0; j <= g.n[1]; ++j)
+      for (int i = 0; i <= g.n[0]; ++i) points.push_back(g.point(i, j, k));
+  g.values.resize(count);
+  field.values(points.data(), g.values.data(), count);
+  for (std::size_t i = 0; i < count; ++i)
+    if (!std::isfinite(g.values[i]))
+      throw NoSurfaceError("seeding: the field is not finite (" + std::to_string(g.values[i]) + ") at " +
+                           format_point(points[i]));
+  if (options.require_closed_in_box) {
+    for (int k = 0; k <= g.n[2]; ++k)
+      for (int j = 0; j <= g.n[1]; ++j)
+        for (int i = 0; i <= g.n[0]; ++i) {
+          const bool boundary = i == 0 || j == 0 || k == 0 || i == g.n[0] || j == g.n[1] || k == g.n[2];
+          if (boundary && g.values[g.index(i, j, k)] < 0)
+            throw NoSurfaceError("seeding: the surface leaves the box (F < 0 at boundary point " +
+                                 format_point(g.point(i, j, k)) + "); give larger \"bounds\"");
+        }
+  }
+  return g;
+}
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(int a, int b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+struct Crossing {
+  Vec3 a, b;      // grid edge end points, F(a) < 0 <= F(b) or the reverse
+  double fa, fb;
+  int cell;       // a crossed cell containing the edge
+};
+
+}  // namespace
+
+double seed_grid_spacing(const Field& field, const SeedOptions& options) {
+  return field.bounds().size().maxCoeff() / std::max(options.resolution, 1);
+}
+
+namespace {
+
+std::vector<std::pair<Crossing, int>> crossings_with_clusters(const Field& field, const SeedOptions& options) {
+  const SeedGrid g = sample_grid(field, options);
+  const auto inside = [&](int i, int j, int k) { return g.values[g.index(i, j, k)] < 0; };
+  const int nx = g.n[0], ny = g.n[1], nz = g.n[2];
+  const auto cell_id = [&](int i, int j, int k) { return (k * ny + j) * nx + i; };
+
+  std::vector<char> crossed(static_cast<std::size_t>(nx) * ny * nz, 0);
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        int n_in = 0;
+        for (int c = 0; c < 8; ++c) n_in += inside(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+        crossed[cell_id(i, j, k)] = n_in > 0 && n_in < 8;
+      }
+  UnionFind clusters(crossed.size());
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        if (!crossed[cell_id(i, j, k)]) continue;
+        for (int dk = -1; dk <= 1; ++dk)
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const int a = i + di, b = j + dj, c = k + dk;
+              if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
+              if (crossed[cell_id(a, b, c)]) clusters.unite(cell_id(i, j, k), cell_id(a, b, c));
+            }
+      }
+
+  std::vector<std::pair<Crossing, int>> out;
+  std::vector<int> cluster_number(crossed.size(), -1);
+  int next_cluster = 0;
+  for (int k = 0; k <= nz; ++k)
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i)
+        for (int axis = 0; axis < 3; ++axis) {
+          int i2 = i + (axis == 0), j2 = j + (axis == 1), k2 = k + (axis == 2);
+          if (i2 > nx || j2 > ny || k2 > nz) continue;
+          if (inside(i, j, k) == inside(i2, j2, k2)) continue;
+          // Any cell containing this edge is crossed; take the one with the smallest indices.
+          const int ci = std::min(i, nx - 1), cj = std::min(j, ny - 1), ck = std::min(k, nz - 1);
+          const int root = clusters.find(cell_id(ci, cj, ck));
+          if (cluster_number[root] < 0) cluster_number[root] = next_cluster++;
+          Crossing c{g.point(i, j, k), g.point(i2, j2, k2), g.values[g.index(i, j, k)],
+                     g.values[g.index(i2, j2, k2)], cell_id(ci, cj, ck)};
+          out.emplace_back(c, cluster_number[root]);
+        }
+  if (out.empty()) {
+    std::ostringstream msg;
+    msg << "seeding: no zero crossing of the field in its box " << format_point(field.bounds().min) << " - "
+        << format_point(field.bounds().max) << " at resolution " << options.resolution
+        << " (F is " << (g.values[0] < 0 ? "negative" : "positive") << " everywhere sampled)";
+    throw NoSurfaceError(msg.str());
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<SurfaceSeed> find_surface_crossings(const Field& field, const SeedOptions& options) {
+  std::vector<SurfaceSeed> out;
+  for (const auto& [c, cluster] : crossings_with_clusters(field, options)) {
+    const double t = c.fa / (c.fa - c.fb);
+    out.push_back({c.a + t * (c.b - c.a), cluster});
+  }
+  return out;
+}
+
+std::vector<SurfaceSeed> find_surface_seeds(const Field& field, const SeedOptions& options) {
+  const auto crossings = crossings_with_clusters(field, options);
+  int n_clusters = 0;
+  for (const auto& c : crossings) n_clusters = std::max(n_clusters, c.second + 1);
+  std::vector<char> done(n_clusters, 0);
+  std::vector<SurfaceSeed> seeds;
+  const double h = seed_grid_spacing(field, options);
+  ProjectionOptions popt;
+  popt.max_travel = 2 * h;
+  for (const auto& [c, cluster] : crossings) {
+    if (done[cluster]) continue;
+    // Bisection keeps the bracket; 40 halvings take the edge to ~1e-12 of a cell.
+    Vec3 a = c.a, b = c.b;
+    double fa = c.fa;
+    for (int it = 0; it < 40; ++it) {
+      const Vec3 m = 0.5 * (a + b);
+      const double fm = field.value(m);
+      if ((fm < 0) == (fa < 0)) a = m, fa = fm;
+      else b = m;
+    }
+    const ProjectionResult r = project_to_surface(field, 0.5 * (a + b), popt);
+    if (!r.ok()) continue;
+    seeds.push_back({r.point, cluster});
+    done[cluster] = 1;
+  }
+  if (seeds.empty())
+    throw NoSurfaceError("seeding: the field changes sign but no crossing could be projected onto the surface "
+                         "(vanishing or non-finite gradient)");
+  return seeds;
+}
+
+}  // namespace cdp
