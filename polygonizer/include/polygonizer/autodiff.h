@@ -1,4 +1,6 @@
 // Forward-mode automatic differentiation in three variables, to second order.
+// Values are computed exactly as with plain doubles, so value(), value_gradient() and
+// gradient_hessian() of a model agree to the last bit.
 //
 // Jet<1> carries a value and its gradient, Jet<2> also the Hessian. A model written once as a
 // template over its scalar type T (double, Jet<1>, Jet<2>) gets exact derivatives: every
@@ -80,7 +82,9 @@ inline Jet<O> operator*(const Jet<O>& a, const Jet<O>& b) {
 template <int O>
 inline Jet<O> operator/(const Jet<O>& a, const Jet<O>& b) {
   const double inv = 1.0 / b.v;
-  return a * chain(b, inv, -inv * inv, 2.0 * inv * inv * inv);
+  Jet<O> r = a * chain(b, inv, -inv * inv, 2.0 * inv * inv * inv);
+  r.v = a.v / b.v;  // the value exactly as plain doubles compute it
+  return r;
 }
 
 // Mixed with plain numbers (ints convert: these are not templates in the scalar argument).
@@ -91,7 +95,7 @@ inline Jet<O> operator/(const Jet<O>& a, const Jet<O>& b) {
   inline Jet<O> operator-(double a, const Jet<O>& b) { return (-b) + a; }                         \
   inline Jet<O> operator*(const Jet<O>& a, double b) { return chain(a, a.v * b, b, 0.0); }        \
   inline Jet<O> operator*(double a, const Jet<O>& b) { return b * a; }                            \
-  inline Jet<O> operator/(const Jet<O>& a, double b) { return a * (1.0 / b); }                    \
+  inline Jet<O> operator/(const Jet<O>& a, double b) { return chain(a, a.v / b, 1.0 / b, 0.0); }                    \
   inline Jet<O> operator/(double a, const Jet<O>& b) { return Jet<O>(a) / b; }                    \
   inline bool operator<(const Jet<O>& a, const Jet<O>& b) { return a.v < b.v; }                   \
   inline bool operator>(const Jet<O>& a, const Jet<O>& b) { return a.v > b.v; }                   \
@@ -160,11 +164,15 @@ inline Jet<O> pow(const Jet<O>& u, double p) {
 }
 template <int O>
 inline Jet<O> pow(const Jet<O>& u, const Jet<O>& w) {
-  return exp(w * log(u));
+  Jet<O> r = exp(w * log(u));
+  r.v = std::pow(u.v, w.v);
+  return r;
 }
 template <int O>
 inline Jet<O> pow(double a, const Jet<O>& w) {
-  return exp(w * std::log(a));
+  Jet<O> r = exp(w * std::log(a));
+  r.v = std::pow(a, w.v);
+  return r;
 }
 
 // Value of a plain number or a jet, for code templated on the scalar type.

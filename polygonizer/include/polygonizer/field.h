@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products, used with Vec3 everywhere
 
 #include <atomic>
 #include <cstddef>

@@ -60,7 +60,8 @@ Blobs::Blobs(BlobKernel kernel, double threshold, std::vector<Blob> blobs)
 double Blobs::eval_value(const Vec3& p) const {
   double sum = 0;
   for (const auto& b : blobs_) {
-    const double s = (p - b.center).squaredNorm() / (b.radius * b.radius);
+    const double inv_r2 = 1.0 / (b.radius * b.radius);
+    const double s = (p - b.center).squaredNorm() * inv_r2;  // as in the derivative paths, bit for bit
     if (kernel_ == BlobKernel::Wyvill && s >= 1.0) continue;
     sum += b.strength * kernel(kernel_, s).k;
   }

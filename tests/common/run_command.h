@@ -1,0 +1,58 @@
+// Runs a command-line program of build/bin for the app tests: exit code, stdout and stderr.
+#pragma once
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace cdp::test {
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+// `args` is passed to /bin/sh after the program path; quote what needs quoting.
+inline CommandResult run_app(const std::string& program, const std::string& args) {
+  static int counter = 0;
+  const auto err_path = std::filesystem::temp_directory_path() /
+                        ("cdp_app_stderr_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
+  const std::string cmd = std::string(CDP_BIN_DIR) + "/" + program + " " + args + " 2>" + err_path.string();
+  CommandResult r;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf{};
+  std::size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err_path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  r.err = ss.str();
+  std::filesystem::remove(err_path);
+  return r;
+}
+
+// A fresh temporary folder, removed when the object goes.
+struct TempDir {
+  std::filesystem::path path;
+  explicit TempDir(const std::string& name) {
+    path = std::filesystem::temp_directory_path() / ("cdp_" + name + "_" + std::to_string(getpid()));
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~TempDir() { std::filesystem::remove_all(path); }
+  std::filesystem::path write(const std::string& file, const std::string& text) const {
+    std::ofstream(path / file) << text;
+    return path / file;
+  }
+};
+
+}  // namespace cdp::test

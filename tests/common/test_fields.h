@@ -1,0 +1,31 @@
+// Small fields shared by the tests of every module.
+#pragma once
+
+#include <polygonizer/field_factory.h>
+#include <polygonizer/models/analytic.h>
+#include <polygonizer/models/blobs.h>
+#include <polygonizer/models/expression.h>
+
+#include <memory>
+#include <string>
+
+namespace cdp::test {
+
+inline constexpr const char* kTanglecube = "x^4 - 5*x^2 + y^4 - 5*y^2 + z^4 - 5*z^2 + 11.8";
+
+inline std::unique_ptr<Field> tanglecube() {
+  return std::make_unique<Expression>(kTanglecube, std::map<std::string, double>{}, Box{{-3, -3, -3}, {3, 3, 3}});
+}
+
+// Three Wyvill blobs far apart: three sphere-like components.
+inline std::unique_ptr<Field> three_separate_blobs() {
+  return std::make_unique<Blobs>(BlobKernel::Wyvill, 0.3,
+                                 std::vector<Blob>{{{0, 0, 0}, 1.0, 1.0}, {{3, 0, 0}, 1.0, 1.0}, {{0, 3, 0.5}, 1.2, 1.0}});
+}
+
+// A field from JSON text, as a user would write it.
+inline std::unique_ptr<Field> field_from_json(const std::string& text) {
+  return make_field(nlohmann::json::parse(text), "<test>");
+}
+
+}  // namespace cdp::test

@@ -1,0 +1,66 @@
+// The Newton step converges onto the surface and reports, rather than loops, when it cannot.
+#include <gtest/gtest.h>
+
+#include <polygonizer/newton_projection.h>
+
+#include "common/test_fields.h"
+
+namespace cdp {
+namespace {
+
+TEST(NewtonProjection, ConvergesOntoTheSurfaceFromNearbyPoints) {
+  Torus t(Vec3::Zero(), 1.0, 0.3);
+  for (const Vec3& start : {Vec3(1.5, 0, 0), Vec3(0.8, 0.8, 0.2), Vec3(0, -1.1, -0.1)}) {
+    const ProjectionResult r = project_to_surface(t, start);
+    ASSERT_TRUE(r.ok()) << to_string(r.status);
+    EXPECT_LT(std::abs(t.value(r.point)), 1e-9);
+    EXPECT_LE(r.iterations, 10);
+  }
+}
+
+TEST(NewtonProjection, ConvergesQuadraticallyOnAPolynomialField) {
+  const auto f = test::tanglecube();
+  const ProjectionResult r = project_to_surface(*f, Vec3(2.0, 0.3, 0.1));
+  ASSERT_TRUE(r.ok()) << to_string(r.status);
+  EXPECT_LT(r.residual, 1e-9);
+  EXPECT_LE(r.iterations, 12);
+}
+
+TEST(NewtonProjection, ReportsAVanishingGradient) {
+  const auto f = test::field_from_json(
+      R"({"type": "expression", "value": "x^2 + y^2 + z^2 - 1", "bounds": [[-2,-2,-2],[2,2,2]]})");
+  const ProjectionResult r = project_to_surface(*f, Vec3::Zero());
+  EXPECT_EQ(r.status, ProjectionStatus::VanishingGradient);
+  EXPECT_FALSE(r.ok());
+}
+
+TEST(NewtonProjection, StopsWithinItsBoundsWhenThereIsNoSurface) {
+  // F >= 1 everywhere: Newton would walk forever towards the minimum at the origin and beyond.
+  const auto f = test::field_from_json(
+      R"({"type": "expression", "value": "x^2 + y^2 + z^2 + 1", "bounds": [[-2,-2,-2],[2,2,2]]})");
+  ProjectionOptions opt;
+  opt.max_iterations = 25;
+  const ProjectionResult r = project_to_surface(*f, Vec3(1, 1, 1), opt);
+  EXPECT_FALSE(r.ok());
+  EXPECT_LE(r.iterations, 25);
+  const auto before = f->counts().value_gradient;
+  EXPECT_LE(before, 26u);
+}
+
+TEST(NewtonProjection, ReportsTooFarWhenTheTravelLimitIsHit) {
+  Sphere s(Vec3::Zero(), 1.0);
+  ProjectionOptions opt;
+  opt.max_travel = 0.1;
+  const ProjectionResult r = project_to_surface(s, Vec3(3, 0, 0), opt);
+  EXPECT_EQ(r.status, ProjectionStatus::TooFar);
+}
+
+TEST(NewtonProjection, ReportsNonFiniteFields) {
+  const auto f =
+      test::field_from_json(R"({"type": "expression", "value": "log(x - 5) + y + z", "bounds": [[-1,-1,-1],[1,1,1]]})");
+  const ProjectionResult r = project_to_surface(*f, Vec3(0.1, 0.2, 0.3));
+  EXPECT_EQ(r.status, ProjectionStatus::NotFinite);
+}
+
+}  // namespace
+}  // namespace cdp
