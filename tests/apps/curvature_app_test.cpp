@@ -12,6 +12,8 @@ struct AppCase {
   std::string name, json, at;
 };
 
+std::ostream& operator<<(std::ostream& os, const AppCase& c) { return os << c.name; }
+
 class CurvatureApp : public ::testing::TestWithParam<AppCase> {};
 
 TEST_P(CurvatureApp, PrintsEveryMeasureForAProjectedPoint) {
