@@ -1,0 +1,138 @@
+"""Shared reading of experiment summaries and the paper's Table 1 for the reproduction scripts."""
+import json
+import math
+import os
+import platform
+import subprocess
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PAPER_TABLE = os.path.join(ROOT, "..", "shared", "paper", "table1.json")
+
+
+def load_summary(name, results=None):
+    path = os.path.join(results or os.path.join(ROOT, "results"), name, "summary.json")
+    with open(path) as f:
+        return json.load(f)
+
+
+def load_paper_table(path=PAPER_TABLE):
+    """The paper's rows as dicts keyed by its column names, per method ('adaptive', 'mt')."""
+    with open(path) as f:
+        t = json.load(f)
+    cols = t["columns"]
+    rows = {"adaptive": [dict(zip(cols, r)) for r in t["ours"]],
+            "mt": [dict(zip(cols, r)) for r in t["marching_tetrahedra"]]}
+    return t, rows
+
+
+def get(d, *keys, default=None):
+    for k in keys:
+        if not isinstance(d, dict) or k not in d:
+            return default
+        d = d[k]
+    return d
+
+
+def number(x):
+    return x if isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) else None
+
+
+def silhouette_fraction(metrics):
+    s = get(metrics, "silhouette_disagreement")
+    if isinstance(s, dict):
+        return number(s.get("fraction"))
+    return number(s)
+
+
+def run_row(run):
+    """The numbers of one run that the tables, claims and plots use (None where missing)."""
+    st, m = run.get("stats", {}), run.get("metrics", {})
+    tri = number(get(st, "triangles"))
+    sec = number(get(st, "seconds"))
+    ev = number(get(st, "field_evaluations", "total"))
+    verts = number(get(st, "vertices"))
+    return {
+        "id": run["id"], "method": run["method"], "parameter_name": run["parameter_name"],
+        "parameter": run["parameter"], "status": run.get("status"), "reason": run.get("reason", ""),
+        "time_ms": sec * 1000 if sec is not None else None,
+        "triangles": tri, "vertices": verts,
+        "triangles_per_s": tri / sec if tri and sec else None,
+        "evaluations_per_triangle": ev / tri if ev and tri else None,
+        "evaluations_per_vertex": ev / verts if ev and verts else None,
+        "curvature_seconds": number(get(st, "curvature_seconds")),
+        "seconds": sec,
+        "ratio_ls": number(get(m, "edge_ratio", "mean")),
+        "deviation": number(get(m, "edge_ratio", "std")),
+        "edge_ratio_histogram": get(m, "edge_ratio", "histogram"),
+        "depth_error": number(get(m, "depth_error", "mean")),
+        "depth_error_relative": number(get(m, "depth_error", "relative_mean")),
+        "phong_error": number(get(m, "phong_error_deg", "mean")),
+        "phong_stdev": number(get(m, "phong_error_deg", "std")),
+        "silhouette": silhouette_fraction(m),
+        "near_equilateral": number(get(m, "near_equilateral_fraction")),
+        "min_angle_min": number(get(m, "min_angle_deg", "min")),
+        "min_angle_mean": number(get(m, "min_angle_deg", "mean")),
+        "closed": get(m, "topology", "closed"),
+        "manifold": get(m, "topology", "manifold"),
+        "components": get(m, "topology", "components"),
+        "genus": get(m, "topology", "genus"),
+    }
+
+
+def rows_by_method(summary):
+    out = {}
+    for run in summary["runs"]:
+        r = run_row(run)
+        key = r["method"] + ("_tolerance" if r["parameter_name"] == "tolerance" else "")
+        out.setdefault(key, []).append(r)
+    for rows in out.values():
+        rows.sort(key=lambda r: r["parameter"])
+    return out
+
+
+def environment(build_dir):
+    """Machine, compiler, build type and commit, recorded with every table."""
+    env = {"machine": platform.machine(), "cpu": "", "cores": os.cpu_count()}
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    env["cpu"] = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    cache = {}
+    try:
+        with open(os.path.join(build_dir, "CMakeCache.txt")) as f:
+            for line in f:
+                if "=" in line and ":" in line.split("=", 1)[0]:
+                    k, v = line.rstrip("\n").split("=", 1)
+                    cache[k.split(":")[0]] = v
+    except OSError:
+        pass
+    env["build_type"] = cache.get("CMAKE_BUILD_TYPE", "")
+    compiler = cache.get("CMAKE_CXX_COMPILER", "c++")
+    try:
+        env["compiler"] = subprocess.run([compiler, "--version"], capture_output=True, text=True).stdout.splitlines()[0]
+    except (OSError, IndexError):
+        env["compiler"] = compiler
+    try:
+        env["commit"] = subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True).stdout.strip()
+        env["dirty"] = bool(dirty)
+    except OSError:
+        env["commit"] = ""
+    return env
+
+
+def interpolate_loglog(xs, ys, x):
+    """y at x on the log-log polyline through (xs, ys); None outside the range."""
+    pts = sorted((a, b) for a, b in zip(xs, ys) if a and b and a > 0 and b > 0)
+    for (x0, y0), (x1, y1) in zip(pts, pts[1:]):
+        if x0 <= x <= x1:
+            if x1 == x0:
+                return y0
+            t = (math.log(x) - math.log(x0)) / (math.log(x1) - math.log(x0))
+            return math.exp(math.log(y0) + t * (math.log(y1) - math.log(y0)))
+    return None

@@ -1,0 +1,49 @@
+#!/usr/bin/python3
+"""results/README.md: the table, the claims and the figures on one page."""
+import argparse
+import glob
+import json
+import os
+
+import results_lib as rl
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--results", default=os.path.join(rl.ROOT, "results"))
+    ap.add_argument("--seconds", type=float, default=None, help="how long make reproduce took")
+    a = ap.parse_args()
+    r = a.results
+    parts = ["# Results", "",
+             "Everything in this folder is produced by `make reproduce` (see the top-level README); "
+             "the committed files are those of the last run." +
+             (" That run took {:.1f} minutes including the experiments.".format(a.seconds / 60) if a.seconds else ""),
+             ""]
+    for name in ("table1.md", "claims.md"):
+        p = os.path.join(r, name)
+        if os.path.exists(p):
+            with open(p) as f:
+                text = f.read()
+            parts += [text.replace("\n# ", "\n## ").replace("# ", "## ", 1), ""]
+    plots = sorted(glob.glob(os.path.join(r, "plots", "*.png")))
+    if plots:
+        parts += ["## Plots", ""] + ["![{0}](plots/{0})".format(os.path.basename(p)) for p in plots] + [""]
+    captions = os.path.join(r, "figures", "captions.json")
+    if os.path.exists(captions):
+        with open(captions) as f:
+            caps = json.load(f)
+        parts += ["## Figures", ""]
+        for fig in caps:
+            parts += ["### " + fig["title"], "", "![{}](figures/{})".format(fig["title"], fig["file"]), "",
+                      fig["caption"], ""]
+    others = sorted(d for d in os.listdir(r) if os.path.exists(os.path.join(r, d, "summary.csv")))
+    if others:
+        parts += ["## Experiments", "", "Per-run metrics: `results/<experiment>/runs/<run>/metrics.json`; "
+                  "summaries: " + ", ".join("[{0}]({0}/summary.csv)".format(d) for d in others) + ".", ""]
+    with open(os.path.join(r, "README.md"), "w") as f:
+        f.write("\n".join(parts))
+    print("results_readme: wrote", os.path.join(r, "README.md"))
+
+
+if __name__ == "__main__":
+    main()
