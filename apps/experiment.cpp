@@ -86,6 +86,7 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
   e.name = file.stem().string();
   const nlohmann::json spec = cdp::read_json_file(file);
   cdp::JsonReader r(spec, file.string(), "", file.parent_path());
+  r.check_keys({"description", "seed", "field", "evaluation", "keep_meshes", "runs"});
   e.description = r.string("description", "");
   e.seed = r.integer("seed", 1);
 
@@ -109,6 +110,7 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
 
   if (r.has("evaluation")) {
     auto ev = r.object("evaluation");
+    ev.check_keys({"views", "resolution", "projection"});
     e.views = static_cast<int>(ev.integer("views", 6));
     e.resolution = static_cast<int>(ev.integer("resolution", 128));
     e.projection = ev.choice("projection", {"perspective", "orthographic"}, "perspective");
@@ -119,6 +121,8 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
 
   for (auto& run : r.objects("runs")) {
     const std::string method = run.choice("method", {"adaptive", "mc", "mt"});
+    if (method == "adaptive") run.check_keys({"method", "label", "factor", "tolerance", "min_edge", "max_edge"});
+    else run.check_keys({"method", "label", "cell", "precision", "traversal"});
     std::vector<std::string> sweep_keys =
         method == "adaptive" ? std::vector<std::string>{"factor", "tolerance"} : std::vector<std::string>{"cell", "precision"};
     std::string key;

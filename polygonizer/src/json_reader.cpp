@@ -175,6 +175,20 @@ std::vector<JsonReader> JsonReader::objects(const std::string& key) {
   return out;
 }
 
+void JsonReader::check_keys(const std::vector<std::string>& allowed) const {
+  const std::set<std::string> ok(allowed.begin(), allowed.end());
+  for (const auto& [key, value] : object_->items()) {
+    if (ok.count(key)) continue;
+    std::string best;
+    std::size_t best_d = 3;
+    for (const auto& k : allowed) {
+      const std::size_t d = edit_distance(key, k);
+      if (d < best_d) best_d = d, best = k;
+    }
+    fail(key, best.empty() ? "unknown key" : "unknown key (did you mean \"" + best + "\"?)");
+  }
+}
+
 void JsonReader::finish(const std::vector<std::string>& known) const {
   for (const auto& [key, value] : object_->items()) {
     if (used_.count(key)) continue;

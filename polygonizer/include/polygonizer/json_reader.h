@@ -46,6 +46,10 @@ class JsonReader {
   JsonReader object(const std::string& key);
   std::vector<JsonReader> objects(const std::string& key);  // an array of objects
 
+  // Throws on the first key not in `allowed` (with a suggestion), before any is read, so that a
+  // misspelled key is reported as such rather than as the required key it failed to be.
+  void check_keys(const std::vector<std::string>& allowed) const;
+
   // Throws on the first key that was never read, suggesting the nearest known spelling.
   // `known` lists keys that are valid but were not read on this path (for the suggestion).
   void finish(const std::vector<std::string>& known = {}) const;
