@@ -1,0 +1,22 @@
+// Marching Cubes (Lorensen & Cline 1987) on a cubic lattice over the field's box, with the case
+// table generated from a stated rule (cube_cases.h), face ambiguities decided consistently
+// between neighbouring cubes, crossings found by a root search on the field, and either
+// Bloomenthal's continuation or a full grid traversal (marching_options.h).
+#pragma once
+
+#include <baselines/marching_options.h>
+
+#include <polygonizer/polygonize_result.h>
+
+namespace cdp {
+
+// A welded, indexed mesh (one vertex per crossed lattice edge) with normals from the field
+// gradient; closed, oriented and edge-manifold when the surface lies inside the box.
+// stats.method = "mc"; stats.extra holds "traversal", "cell_size", "precision" (if given),
+// "lattice_cells", "root_tolerance", "cubes_visited", "cubes_crossed", "root_evaluations",
+// "face_ambiguity", and for the continuation "seeds", "unresolved_seeds", "starts".
+// Throws InvalidInputError for invalid options, NoSurfaceError when no cube is crossed or the
+// surface leaves the box (with require_closed_in_box), LimitExceededError at a bound.
+PolygonizeResult marching_cubes(const Field& field, const MarchingOptions& options = {});
+
+}  // namespace cdp

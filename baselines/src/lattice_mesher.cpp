@@ -1,0 +1,354 @@
+#include "lattice_mesher.h"
+
+#include "edge_root.h"
+
+#include <polygonizer/errors.h>
+#include <polygonizer/mesh_topology.h>
+#include <polygonizer/newton_projection.h>
+#include <polygonizer/surface_seeds.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace cdp::marching {
+
+namespace {
+
+using Key = std::uint64_t;
+using Cell = std::array<long, 3>;
+
+std::string format_point(const Vec3& p) {
+  std::ostringstream s;
+  s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return s.str();
+}
+
+// Faces (numbered as in cube_cases.h) whose corners are not all on one side.
+int crossed_faces(const std::array<double, 8>& f) {
+  static constexpr int faces[6][4] = {{0, 2, 4, 6}, {1, 3, 5, 7}, {0, 1, 4, 5}, {2, 3, 6, 7}, {0, 1, 2, 3}, {4, 5, 6, 7}};
+  int mask = 0;
+  for (int face = 0; face < 6; ++face) {
+    int in = 0;
+    for (int c : faces[face]) in += f[c] < 0;
+    if (in != 0 && in != 4) mask |= 1 << face;
+  }
+  return mask;
+}
+
+class LatticeMesher {
+ public:
+  LatticeMesher(const Field& field, const MarchingOptions& options, const char* method, const CubeMesher& mesher)
+      : field_(field), options_(options), method_(method), mesher_(mesher) {
+    h_ = resolve_cell_size(field, options);
+    lattice_ = make_marching_lattice(field, h_);
+    n_ = lattice_.cells;
+    tolerance_ = options.root_tolerance > 0 ? options.root_tolerance : 1e-6 * h_;
+    if (!std::isfinite(tolerance_)) throw InvalidInputError(std::string(method_) + ": root_tolerance must be finite");
+    if (options.seed_resolution < 2) throw InvalidInputError(std::string(method_) + ": seed_resolution must be at least 2");
+  }
+
+  void run_grid();
+  void run_continuation();
+
+  Mesh mesh;
+  double h_ = 0, tolerance_ = 0;
+  MarchingLattice lattice_;
+  std::size_t cubes_visited = 0, cubes_crossed = 0, seed_search_cubes = 0, open_boundary_faces = 0;
+  std::size_t root_evaluations = 0, corner_evaluations = 0, centre_vertices = 0, starts = 0, seeds = 0, unresolved_seeds = 0;
+
+ private:
+  Key point_key(long i, long j, long k) const {
+    return static_cast<Key>(i) +
+           static_cast<Key>(n_[0] + 1) * (static_cast<Key>(j) + static_cast<Key>(n_[1] + 1) * static_cast<Key>(k));
+  }
+  Key cell_key(const Cell& c) const {
+    return static_cast<Key>(c[0]) + static_cast<Key>(n_[0]) * (static_cast<Key>(c[1]) + static_cast<Key>(n_[1]) * c[2]);
+  }
+  Vec3 point(long i, long j, long k) const {
+    const Vec3& o = lattice_.origin;
+    return Vec3(o.x() + h_ * static_cast<double>(i), o.y() + h_ * static_cast<double>(j),
+                o.z() + h_ * static_cast<double>(k));
+  }
+  bool in_lattice(const Cell& c) const {
+    for (int a = 0; a < 3; ++a)
+      if (c[a] < 0 || c[a] >= n_[a]) return false;
+    return true;
+  }
+  void check_finite(const Vec3& p, double v) const {
+    if (!std::isfinite(v))
+      throw NoSurfaceError(std::string(method_) + ": the field is not finite (" + std::to_string(v) + ") at " +
+                           format_point(p));
+  }
+
+  std::array<double, 8> cached_corners(const Cell& c);
+  void check_boundary(const Cell& c, int mask);
+  void mesh_cube(const Cell& c, const std::array<double, 8>& f);
+  int vertex(const Cell& c, LocalEdge e, const std::array<double, 8>& f);
+  int centre_vertex(const Cell& c, int polygon, const std::array<double, 8>& f);
+  std::optional<Cell> crossed_cube_near(const Vec3& p);
+  void follow(const Cell& start, std::size_t cluster, std::size_t clusters);
+  void count_cube() {
+    if (++cubes_visited > options_.max_cubes)
+      throw LimitExceededError(std::string(method_) + ": more than max_cubes = " + std::to_string(options_.max_cubes) +
+                               " cubes visited");
+  }
+
+  const Field& field_;
+  const MarchingOptions& options_;
+  const char* method_;
+  const CubeMesher& mesher_;
+  std::array<long, 3> n_{};
+  std::unordered_map<Key, double> corner_cache_;
+  std::unordered_map<Key, int> edge_vertex_;
+  std::unordered_set<Key> visited_;
+  CubeMesh cube_mesh_;
+  std::vector<int> centre_ids_;
+  double progress_reported_ = 0;
+};
+
+std::array<double, 8> LatticeMesher::cached_corners(const Cell& c) {
+  std::array<double, 8> f;
+  std::array<Key, 8> keys;
+  std::array<int, 8> missing;
+  std::array<Vec3, 8> points;
+  int m = 0;
+  for (int q = 0; q < 8; ++q) {
+    const long i = c[0] + (q & 1), j = c[1] + ((q >> 1) & 1), k = c[2] + ((q >> 2) & 1);
+    keys[q] = point_key(i, j, k);
+    const auto it = corner_cache_.find(keys[q]);
+    if (it != corner_cache_.end()) {
+      f[q] = it->second;
+    } else {
+      missing[m] = q;
+      points[m++] = point(i, j, k);
+    }
+  }
+  if (m > 0) {
+    std::array<double, 8> values;
+    field_.values(points.data(), values.data(), m);
+    corner_evaluations += m;
+    for (int r = 0; r < m; ++r) {
+      check_finite(points[r], values[r]);
+      f[missing[r]] = values[r];
+      corner_cache_.emplace(keys[missing[r]], values[r]);
+    }
+  }
+  return f;
+}
+
+void LatticeMesher::check_boundary(const Cell& c, int mask) {
+  for (int face = 0; face < 6; ++face) {
+    if (!((mask >> face) & 1)) continue;
+    const int axis = face / 2;
+    const bool on_boundary = face % 2 == 0 ? c[axis] == 0 : c[axis] == n_[axis] - 1;
+    if (!on_boundary) continue;
+    if (options_.require_closed_in_box)
+      throw NoSurfaceError(std::string(method_) + ": the surface leaves the lattice near " +
+                           format_point(point(c[0], c[1], c[2])) +
+                           " (F < 0 on the boundary of the box); give larger \"bounds\"");
+    ++open_boundary_faces;
+  }
+}
+
+int LatticeMesher::vertex(const Cell& c, LocalEdge e, const std::array<double, 8>& f) {
+  const long ia = c[0] + (e.a & 1), ja = c[1] + ((e.a >> 1) & 1), ka = c[2] + ((e.a >> 2) & 1);
+  const Key key = point_key(ia, ja, ka) * 8 + static_cast<Key>(e.a ^ e.b);
+  const auto [it, inserted] = edge_vertex_.emplace(key, static_cast<int>(mesh.positions.size()));
+  if (!inserted) return it->second;
+  const Vec3 pb = point(c[0] + (e.b & 1), c[1] + ((e.b >> 1) & 1), c[2] + ((e.b >> 2) & 1));
+  const EdgeRoot root = find_edge_root(field_, point(ia, ja, ka), f[e.a], pb, f[e.b], tolerance_);
+  root_evaluations += root.evaluations;
+  mesh.positions.push_back(root.point);
+  return it->second;
+}
+
+// The mean of the polygon's crossings, moved onto the surface by the Newton projection when it
+// converges within half a cell (it is left at the mean otherwise).
+int LatticeMesher::centre_vertex(const Cell& c, int polygon, const std::array<double, 8>& f) {
+  int& id = centre_ids_[polygon];
+  if (id >= 0) return id;
+  Vec3 mean = Vec3::Zero();
+  for (LocalEdge e : cube_mesh_.centres[polygon]) mean += mesh.positions[vertex(c, e, f)];
+  mean /= static_cast<double>(cube_mesh_.centres[polygon].size());
+  ProjectionOptions po;
+  po.tolerance = tolerance_;
+  po.max_iterations = 20;
+  po.max_step = 0.5 * h_;
+  po.max_travel = 0.5 * h_;
+  const ProjectionResult projected = project_to_surface(field_, mean, po);
+  id = static_cast<int>(mesh.positions.size());
+  mesh.positions.push_back(projected.ok() ? projected.point : mean);
+  ++centre_vertices;
+  return id;
+}
+
+void LatticeMesher::mesh_cube(const Cell& c, const std::array<double, 8>& f) {
+  cube_mesh_.clear();
+  mesher_(f, cube_mesh_);
+  if (cube_mesh_.triangles.empty()) return;
+  ++cubes_crossed;
+  centre_ids_.assign(cube_mesh_.centres.size(), -1);
+  const auto id = [&](LocalEdge e) { return e.a == kCentre ? centre_vertex(c, e.b, f) : vertex(c, e, f); };
+  for (const CubeTriangle& t : cube_mesh_.triangles) mesh.triangles.push_back({id(t[0]), id(t[1]), id(t[2])});
+  if (mesh.triangles.size() > options_.max_triangles)
+    throw LimitExceededError(std::string(method_) + ": more than max_triangles = " +
+                             std::to_string(options_.max_triangles) + " triangles");
+}
+
+void LatticeMesher::run_grid() {
+  const double total = static_cast<double>(n_[0]) * static_cast<double>(n_[1]) * static_cast<double>(n_[2]);
+  if (total > static_cast<double>(options_.max_cubes))
+    throw LimitExceededError(std::string(method_) + ": the grid has " + std::to_string(static_cast<long long>(total)) +
+                             " cubes, more than max_cubes = " + std::to_string(options_.max_cubes));
+  const long sx = n_[0] + 1, sy = n_[1] + 1;
+  std::vector<Vec3> points(static_cast<std::size_t>(sx * sy));
+  std::vector<double> lower(points.size()), upper(points.size());
+  const auto sample_slab = [&](long k, std::vector<double>& out) {
+    for (long j = 0; j < sy; ++j)
+      for (long i = 0; i < sx; ++i) points[j * sx + i] = point(i, j, k);
+    field_.values(points.data(), out.data(), points.size());
+    corner_evaluations += points.size();
+    for (std::size_t q = 0; q < points.size(); ++q) check_finite(points[q], out[q]);
+  };
+  sample_slab(0, lower);
+  for (long k = 0; k < n_[2]; ++k) {
+    sample_slab(k + 1, upper);
+    for (long j = 0; j < n_[1]; ++j)
+      for (long i = 0; i < n_[0]; ++i) {
+        std::array<double, 8> f;
+        for (int q = 0; q < 8; ++q)
+          f[q] = (q & 4 ? upper : lower)[(j + ((q >> 1) & 1)) * sx + i + (q & 1)];
+        const int mask = crossed_faces(f);
+        if (mask == 0) continue;
+        const Cell c{i, j, k};
+        check_boundary(c, mask);
+        mesh_cube(c, f);
+      }
+    std::swap(lower, upper);
+    if (options_.progress) options_.progress(static_cast<double>(k + 1) / static_cast<double>(n_[2]));
+  }
+  cubes_visited = static_cast<std::size_t>(total);
+}
+
+// The cube holding p, or failing that the nearest cube within two cells (Chebyshev distance,
+// in a fixed order) whose corners straddle the surface: a seed can lie in a cube the surface
+// crosses without changing the sign of any corner.
+std::optional<Cell> LatticeMesher::crossed_cube_near(const Vec3& p) {
+  Cell base;
+  for (int a = 0; a < 3; ++a) {
+    const double x = std::floor((p[a] - lattice_.origin[a]) / h_);
+    base[a] = static_cast<long>(std::clamp(x, 0.0, static_cast<double>(n_[a] - 1)));
+  }
+  for (long r = 0; r <= 2; ++r)
+    for (long dk = -r; dk <= r; ++dk)
+      for (long dj = -r; dj <= r; ++dj)
+        for (long di = -r; di <= r; ++di) {
+          if (std::max({std::abs(di), std::abs(dj), std::abs(dk)}) != r) continue;
+          const Cell c{base[0] + di, base[1] + dj, base[2] + dk};
+          if (!in_lattice(c)) continue;
+          ++seed_search_cubes;
+          if (crossed_faces(cached_corners(c)) != 0) return c;
+        }
+  return std::nullopt;
+}
+
+// Bloomenthal's continuation from one crossed cube: a cube's neighbour across a face with a
+// sign change is crossed too, so a breadth-first walk over such faces visits every cube of the
+// polygonized component and no other.
+void LatticeMesher::follow(const Cell& start, std::size_t cluster, std::size_t clusters) {
+  if (!visited_.insert(cell_key(start)).second) return;
+  ++starts;
+  std::deque<Cell> queue{start};
+  std::size_t done = 0;
+  while (!queue.empty()) {
+    const Cell c = queue.front();
+    queue.pop_front();
+    count_cube();
+    const std::array<double, 8> f = cached_corners(c);
+    const int mask = crossed_faces(f);
+    check_boundary(c, mask);
+    mesh_cube(c, f);
+    for (int face = 0; face < 6; ++face) {
+      if (!((mask >> face) & 1)) continue;
+      Cell nb = c;
+      nb[face / 2] += face % 2 == 0 ? -1 : 1;
+      if (in_lattice(nb) && visited_.insert(cell_key(nb)).second) queue.push_back(nb);
+    }
+    if (options_.progress && ++done % 4096 == 0) {
+      const double local = static_cast<double>(done) / static_cast<double>(done + queue.size());
+      progress_reported_ = std::max(progress_reported_, (static_cast<double>(cluster) + local) / clusters);
+      options_.progress(progress_reported_);
+    }
+  }
+}
+
+void LatticeMesher::run_continuation() {
+  SeedOptions seed_options;
+  seed_options.resolution = options_.seed_resolution;
+  seed_options.require_closed_in_box = options_.require_closed_in_box;
+  const std::vector<SurfaceSeed> found = find_surface_seeds(field_, seed_options);
+  seeds = found.size();
+  for (std::size_t s = 0; s < found.size(); ++s) {
+    const std::optional<Cell> start = crossed_cube_near(found[s].point);
+    if (!start) {
+      ++unresolved_seeds;
+      continue;
+    }
+    follow(*start, s, found.size());
+  }
+}
+
+}  // namespace
+
+PolygonizeResult run_marching(const Field& field, const MarchingOptions& options, const char* method,
+                              const CubeMesher& mesher, const nlohmann::json& extra) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const EvaluationCounts before = field.counts();
+  LatticeMesher lm(field, options, method, mesher);
+  if (options.traversal == Traversal::Grid) lm.run_grid();
+  else lm.run_continuation();
+  if (lm.mesh.triangles.empty())
+    throw NoSurfaceError(std::string(method) + ": no cube of the lattice (cell " + std::to_string(lm.h_) +
+                         ") is crossed by the surface; it is absent or smaller than a cell");
+  compute_field_normals(field, lm.mesh);
+  if (options.progress) options.progress(1.0);
+
+  PolygonizeResult result;
+  PolygonizeStats& st = result.stats;
+  st.method = method;
+  st.triangles = lm.mesh.num_triangles();
+  st.vertices = lm.mesh.num_vertices();
+  st.components = analyze_topology(lm.mesh).components;
+  st.field_evaluations = field.counts() - before;
+  st.extra = extra;
+  st.extra["traversal"] = to_string(options.traversal);
+  st.extra["cell_size"] = lm.h_;
+  if (options.precision >= 0) st.extra["precision"] = options.precision;
+  st.extra["lattice_cells"] = {lm.lattice_.cells[0], lm.lattice_.cells[1], lm.lattice_.cells[2]};
+  st.extra["root_tolerance"] = lm.tolerance_;
+  st.extra["cubes_visited"] = lm.cubes_visited;
+  st.extra["cubes_crossed"] = lm.cubes_crossed;
+  st.extra["corner_evaluations"] = lm.corner_evaluations;
+  st.extra["root_evaluations"] = lm.root_evaluations;
+  st.extra["centre_vertices"] = lm.centre_vertices;
+  if (options.traversal == Traversal::Continuation) {
+    st.extra["seed_resolution"] = options.seed_resolution;
+    st.extra["seeds"] = lm.seeds;
+    st.extra["unresolved_seeds"] = lm.unresolved_seeds;
+    st.extra["starts"] = lm.starts;
+    st.extra["seed_search_cubes"] = lm.seed_search_cubes;
+  }
+  if (!options.require_closed_in_box) st.extra["open_boundary_faces"] = lm.open_boundary_faces;
+  result.mesh = std::move(lm.mesh);
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace cdp::marching

@@ -1,0 +1,44 @@
+// The machinery Marching Cubes and Marching Tetrahedra share: the lattice, the cached corner
+// values, the two traversals, the welded edge vertices and the statistics. A method only says
+// how one cube with given corner values is cut into triangles.
+#pragma once
+
+#include <baselines/marching_options.h>
+
+#include <polygonizer/polygonize_result.h>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace cdp::marching {
+
+// A lattice edge seen from one cube: corners a and b (numbered as in cube_cases.h) with b's
+// offset at least a's in every coordinate, so the edge has one name shared by all its cubes.
+// With a == kCentre it stands instead for an extra vertex, private to the cube, at the centre of
+// the polygon CubeMesh::centres[b].
+struct LocalEdge {
+  std::uint8_t a = 0, b = 0;
+};
+inline constexpr std::uint8_t kCentre = 255;
+using CubeTriangle = std::array<LocalEdge, 3>;  // counter-clockwise seen from outside
+
+struct CubeMesh {
+  std::vector<CubeTriangle> triangles;
+  std::vector<std::vector<LocalEdge>> centres;  // polygons whose centre is a vertex
+  void clear() {
+    triangles.clear();
+    centres.clear();
+  }
+};
+
+// Appends the triangles of one cube with corner values f (inside: f < 0) to `out`.
+using CubeMesher = std::function<void(const std::array<double, 8>& f, CubeMesh& out)>;
+
+// Runs the traversal of the options over the lattice, meshing each visited cube with `mesher`.
+// `method` names the method in errors and statistics; `extra` is merged into stats.extra.
+PolygonizeResult run_marching(const Field& field, const MarchingOptions& options, const char* method,
+                              const CubeMesher& mesher, const nlohmann::json& extra);
+
+}  // namespace cdp::marching

@@ -1,0 +1,157 @@
+// Helpers shared by the Marching Cubes and Marching Tetrahedra tests: a random field that
+// exercises every cube case, and comparisons of meshes by geometry rather than by index.
+#pragma once
+
+#include <polygonizer/field.h>
+#include <polygonizer/mesh.h>
+#include <polygonizer/mesh_topology.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace cdp::test {
+
+// Trilinear interpolation of random values in [-1, 1] on the integer lattice of spacing 1
+// starting at `origin`, forced positive outside the ball of radius `radius` around the box
+// centre so that the surface is closed inside the box. On a polygonizer lattice with the same
+// origin and cell 1, every corner sign pattern and face ambiguity occurs, and the field is
+// linear along edges and bilinear on faces, as the asymptotic decider assumes.
+class NoiseField : public Field {
+ public:
+  NoiseField(int n, unsigned seed) : n_(n), values_((n + 1) * (n + 1) * (n + 1)) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1, 1);
+    const double c = n / 2.0, radius = n / 2.0 - 1;
+    for (int k = 0; k <= n; ++k)
+      for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) {
+          const double v = u(rng);
+          const bool outside = Vec3(i - c, j - c, k - c).norm() > radius;
+          values_[index(i, j, k)] = outside ? 1.0 : (v == 0 ? 0.5 : v);
+        }
+    set_bounds({Vec3::Zero(), Vec3::Constant(n)});
+  }
+  std::string type_name() const override { return "noise"; }
+
+ protected:
+  double eval_value(const Vec3& p) const override {
+    Vec3 g;
+    return eval_value_gradient(p, g);
+  }
+  double eval_value_gradient(const Vec3& p, Vec3& gradient) const override {
+    int cell[3];
+    double t[3];
+    for (int a = 0; a < 3; ++a) {
+      const double x = std::clamp(p[a], 0.0, static_cast<double>(n_));
+      cell[a] = std::min(n_ - 1, static_cast<int>(std::floor(x)));
+      t[a] = x - cell[a];
+    }
+    double value = 0;
+    gradient.setZero();
+    for (int c = 0; c < 8; ++c) {
+      const int o[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+      const double v = values_[index(cell[0] + o[0], cell[1] + o[1], cell[2] + o[2])];
+      double w[3], dw[3];
+      for (int a = 0; a < 3; ++a) {
+        w[a] = o[a] ? t[a] : 1 - t[a];
+        dw[a] = o[a] ? 1 : -1;
+      }
+      value += v * w[0] * w[1] * w[2];
+      gradient += v * Vec3(dw[0] * w[1] * w[2], w[0] * dw[1] * w[2], w[0] * w[1] * dw[2]);
+    }
+    return value;
+  }
+  double eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const override {
+    hessian.setZero();  // not used by the polygonizers under test
+    return eval_value_gradient(p, gradient);
+  }
+
+ private:
+  std::size_t index(int i, int j, int k) const { return (static_cast<std::size_t>(k) * (n_ + 1) + j) * (n_ + 1) + i; }
+  int n_;
+  std::vector<double> values_;
+};
+
+// A mesh's triangles as position triples, each rotated to start at its smallest vertex
+// (keeping orientation), sorted: equal for meshes that differ only in vertex numbering.
+inline std::vector<std::array<std::array<double, 3>, 3>> triangle_set(const Mesh& mesh) {
+  std::vector<std::array<std::array<double, 3>, 3>> out;
+  for (const auto& t : mesh.triangles) {
+    std::array<std::array<double, 3>, 3> tri;
+    for (int q = 0; q < 3; ++q) {
+      const Vec3& p = mesh.positions[t[q]];
+      tri[q] = {p.x(), p.y(), p.z()};
+    }
+    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
+    out.push_back(tri);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Closed, oriented outward, edge- and vertex-manifold, no duplicate triangles.
+inline void expect_closed_manifold(const MeshTopology& t) {
+  EXPECT_EQ(t.boundary_edges, 0u);
+  EXPECT_EQ(t.nonmanifold_edges, 0u);
+  EXPECT_EQ(t.misoriented_edges, 0u);
+  EXPECT_EQ(t.nonmanifold_vertices, 0u);
+  EXPECT_EQ(t.duplicate_triangles, 0u);
+  EXPECT_EQ(t.unreferenced_vertices, 0u);
+  EXPECT_GT(t.signed_volume, 0);
+}
+
+}  // namespace cdp::test
+
+// The checks both methods must pass, written once.
+#include <baselines/marching_options.h>
+#include <polygonizer/polygonize_result.h>
+
+namespace cdp::test {
+
+using MarchingMethod = PolygonizeResult (*)(const Field&, const MarchingOptions&);
+
+inline MarchingOptions marching_options(double cell, Traversal traversal) {
+  MarchingOptions o;
+  o.cell_size = cell;
+  o.traversal = traversal;
+  return o;
+}
+
+// Both traversals: closed, manifold, outward, with the expected components and genus, and the
+// same triangles (the continuation visits exactly the crossed cubes of a connected lattice).
+inline void expect_topology_both_traversals(MarchingMethod method, const Field& field, double cell,
+                                            std::size_t components, int genus) {
+  const PolygonizeResult cont = method(field, marching_options(cell, Traversal::Continuation));
+  const PolygonizeResult grid = method(field, marching_options(cell, Traversal::Grid));
+  for (const PolygonizeResult* r : {&cont, &grid}) {
+    SCOPED_TRACE(r == &cont ? "continuation" : "grid");
+    const MeshTopology t = analyze_topology(r->mesh);
+    expect_closed_manifold(t);
+    EXPECT_EQ(t.components, components);
+    EXPECT_EQ(t.genus, genus);
+    EXPECT_EQ(r->stats.components, components);
+    EXPECT_EQ(r->stats.triangles, r->mesh.num_triangles());
+    EXPECT_EQ(r->stats.vertices, r->mesh.num_vertices());
+    ASSERT_EQ(r->mesh.normals.size(), r->mesh.num_vertices());
+    for (const Vec3& n : r->mesh.normals) EXPECT_NEAR(n.norm(), 1.0, 1e-9);
+  }
+  EXPECT_EQ(triangle_set(cont.mesh), triangle_set(grid.mesh));
+}
+
+// Relative area errors at the given cells (continuation), for checking convergence.
+inline std::vector<double> area_errors(MarchingMethod method, const Field& field, double exact,
+                                       const std::vector<double>& cells) {
+  std::vector<double> errors;
+  for (double cell : cells) {
+    const PolygonizeResult r = method(field, marching_options(cell, Traversal::Continuation));
+    errors.push_back(std::abs(analyze_topology(r.mesh).area - exact) / exact);
+  }
+  return errors;
+}
+
+}  // namespace cdp::test

@@ -1,0 +1,151 @@
+// Checks baselines/marching_cubes.h: topology on closed surfaces of genus 0, 1 and 5 and on
+// several components, for both traversals; area convergence; vertices on the surface; every
+// cube case met by random fields closes up; errors.
+#include "marching_checks.h"
+
+#include <baselines/marching_cubes.h>
+
+#include <polygonizer/errors.h>
+#include <polygonizer/models/analytic.h>
+
+#include <common/test_fields.h>
+
+#include <gtest/gtest.h>
+
+#include <numbers>
+
+namespace cdp {
+namespace {
+
+using test::expect_topology_both_traversals;
+
+TEST(MarchingCubes, SphereIsOneClosedGenusZeroMeshFromBothTraversals) {
+  const Sphere sphere({0.013, -0.021, 0.008}, 1.0);
+  expect_topology_both_traversals(marching_cubes, sphere, 0.15, 1, 0);
+}
+
+TEST(MarchingCubes, TorusHasGenusOne) {
+  const Torus torus({0.01, 0.02, -0.015}, 1.0, 0.4);
+  expect_topology_both_traversals(marching_cubes, torus, 0.12, 1, 1);
+}
+
+TEST(MarchingCubes, TanglecubeHasGenusFive) {
+  const auto tangle = test::tanglecube();
+  expect_topology_both_traversals(marching_cubes, *tangle, 0.2, 1, 5);
+}
+
+TEST(MarchingCubes, SeparateBlobsGiveOneComponentEach) {
+  const auto blobs = test::three_separate_blobs();
+  expect_topology_both_traversals(marching_cubes, *blobs, 0.12, 3, 0);
+}
+
+TEST(MarchingCubes, EveryCaseOfRandomFieldsClosesUpUnderEveryAmbiguityRule) {
+  for (FaceAmbiguity rule : {FaceAmbiguity::AsymptoticDecider, FaceAmbiguity::JoinInside, FaceAmbiguity::SeparateInside})
+    for (unsigned seed : {1u, 2u, 3u}) {
+      SCOPED_TRACE(std::string(to_string(rule)) + " seed " + std::to_string(seed));
+      const test::NoiseField noise(14, seed);
+      MarchingOptions o = test::marching_options(1.0, Traversal::Grid);
+      o.face_ambiguity = rule;
+      const PolygonizeResult r = marching_cubes(noise, o);
+      const MeshTopology t = analyze_topology(r.mesh);
+      test::expect_closed_manifold(t);
+      EXPECT_EQ(t.euler_characteristic, 2 * static_cast<int>(t.components) - 2 * t.genus);
+      EXPECT_GT(t.components + t.genus, 5u);  // many pieces and handles: not a trivial test
+    }
+}
+
+TEST(MarchingCubes, AreaConvergesOnSphereAndTorus) {
+  const Sphere sphere({0.013, -0.021, 0.008}, 1.0);
+  const auto s = test::area_errors(marching_cubes, sphere, 4 * std::numbers::pi, {0.4, 0.2, 0.1, 0.05});
+  const Torus torus({0.01, 0.02, -0.015}, 1.0, 0.4);
+  const auto t = test::area_errors(marching_cubes, torus, 4 * std::numbers::pi * std::numbers::pi * 0.4,
+                                   {0.2, 0.1, 0.05});
+  for (const auto* e : {&s, &t})
+    for (std::size_t i = 1; i < e->size(); ++i) EXPECT_LT((*e)[i], (*e)[i - 1]) << "cell step " << i;
+  EXPECT_LT(s.back(), 2e-3);
+  EXPECT_LT(t.back(), 3e-3);
+}
+
+TEST(MarchingCubes, VerticesLieOnTheSurfaceWithinTheRootTolerance) {
+  // Signed distance fields: |F| is the distance to the surface, at most the distance along the
+  // edge to the crossing.
+  const Sphere sphere({0.013, -0.021, 0.008}, 1.0);
+  const Torus torus({0.01, 0.02, -0.015}, 1.0, 0.4);
+  for (const Field* f : {static_cast<const Field*>(&sphere), static_cast<const Field*>(&torus)})
+    for (double tol : {1e-3, 1e-7}) {
+      MarchingOptions o = test::marching_options(0.1, Traversal::Continuation);
+      o.root_tolerance = tol;
+      const PolygonizeResult r = marching_cubes(*f, o);
+      double worst = 0;
+      for (const Vec3& p : r.mesh.positions) worst = std::max(worst, std::abs(f->value(p)));
+      EXPECT_LE(worst, tol * (1 + 1e-6)) << f->type_name();
+      EXPECT_DOUBLE_EQ(r.stats.extra.at("root_tolerance").get<double>(), tol);
+    }
+}
+
+TEST(MarchingCubes, NormalsPointOutward) {
+  const Sphere sphere(Vec3::Zero(), 1.0);
+  const PolygonizeResult r = marching_cubes(sphere, test::marching_options(0.2, Traversal::Continuation));
+  for (std::size_t v = 0; v < r.mesh.num_vertices(); ++v)
+    EXPECT_GT(r.mesh.normals[v].dot(r.mesh.positions[v].normalized()), 0.999);
+}
+
+TEST(MarchingCubes, ContinuationEvaluatesOnlyNearTheSurfaceAndIsDeterministic) {
+  const Sphere sphere({0.013, -0.021, 0.008}, 1.0);
+  const PolygonizeResult cont = marching_cubes(sphere, test::marching_options(0.02, Traversal::Continuation));
+  const PolygonizeResult grid = marching_cubes(sphere, test::marching_options(0.02, Traversal::Grid));
+  // 111^3 lattice corners against a shell of cubes one cell thick: many times fewer.
+  // Root searches cost the same in both (same crossed edges); the lattice corners do not.
+  const auto corners = [](const PolygonizeResult& r) { return r.stats.extra.at("corner_evaluations").get<std::size_t>(); };
+  EXPECT_LT(corners(cont) * 10, corners(grid));
+  EXPECT_LT(cont.stats.field_evaluations.value, grid.stats.field_evaluations.value);
+  EXPECT_EQ(cont.stats.extra.at("root_evaluations"), grid.stats.extra.at("root_evaluations"));
+  EXPECT_GT(cont.stats.field_evaluations.value_gradient, 0u);  // normals
+  EXPECT_EQ(cont.stats.method, "mc");
+  EXPECT_EQ(cont.stats.extra.at("traversal"), "continuation");
+  EXPECT_EQ(grid.stats.extra.at("traversal"), "grid");
+  const PolygonizeResult again = marching_cubes(sphere, test::marching_options(0.02, Traversal::Continuation));
+  EXPECT_EQ(again.mesh.positions, cont.mesh.positions);
+  EXPECT_EQ(again.mesh.triangles, cont.mesh.triangles);
+}
+
+TEST(MarchingCubes, PrecisionNeedsAVariationalModel) {
+  const Sphere sphere(Vec3::Zero(), 1.0);
+  MarchingOptions o;
+  o.precision = 2;
+  try {
+    marching_cubes(sphere, o);
+    FAIL() << "expected InvalidInputError";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--precision needs a variational (data-driven) model"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(MarchingCubes, SurfaceLeavingTheBoxIsAnErrorUnlessClippingIsAsked) {
+  Sphere sphere(Vec3::Zero(), 1.0);
+  sphere.set_bounds({Vec3(-1.2, -1.2, -1.2), Vec3(1.2, 1.2, 0.5)});
+  for (Traversal tr : {Traversal::Continuation, Traversal::Grid})
+    EXPECT_THROW(marching_cubes(sphere, test::marching_options(0.2, tr)), NoSurfaceError);
+  MarchingOptions o = test::marching_options(0.2, Traversal::Grid);
+  o.require_closed_in_box = false;
+  const PolygonizeResult r = marching_cubes(sphere, o);
+  EXPECT_GT(analyze_topology(r.mesh).boundary_edges, 0u);
+  EXPECT_GT(r.stats.extra.at("open_boundary_faces").get<std::size_t>(), 0u);
+}
+
+TEST(MarchingCubes, BoundsAreEnforced) {
+  const Sphere sphere(Vec3::Zero(), 1.0);
+  MarchingOptions o = test::marching_options(0.05, Traversal::Grid);
+  o.max_cubes = 1000;
+  EXPECT_THROW(marching_cubes(sphere, o), LimitExceededError);
+  o.traversal = Traversal::Continuation;
+  EXPECT_THROW(marching_cubes(sphere, o), LimitExceededError);
+  o = test::marching_options(0.05, Traversal::Continuation);
+  o.max_triangles = 100;
+  EXPECT_THROW(marching_cubes(sphere, o), LimitExceededError);
+  EXPECT_THROW(marching_cubes(sphere, test::marching_options(-1, Traversal::Grid)), InvalidInputError);
+}
+
+}  // namespace
+}  // namespace cdp
