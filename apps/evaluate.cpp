@@ -1,0 +1,160 @@
+// build/bin/evaluate FIELD.json MESH.ply [--rays N] [--views V] [--projection perspective|orthographic]
+//                    [--samples N] [--cache DIR] -o METRICS.json
+// Measures one mesh of one field: depth and Phong errors against exact ray casting (the ground
+// truth, cached in DIR when given), silhouette disagreement, triangle quality, topology and
+// distances between mesh and surface. Writes METRICS.json (schema in raytrace/README.md) and
+// prints a short summary.
+#include <raytrace/evaluate.h>
+#include <raytrace/ground_truth_cache.h>
+#include <raytrace/phong_normal.h>
+
+#include <polygonizer/errors.h>
+#include <polygonizer/field_factory.h>
+#include <polygonizer/mesh_io.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: evaluate FIELD.json MESH.ply [--rays N] [--views V] [--projection perspective|orthographic] "
+    "[--samples N] [--cache DIR] -o METRICS.json";
+
+long long parse_count(const std::string& option, const std::string& text, long long lo, long long hi) {
+  std::size_t used = 0;
+  long long v = 0;
+  try {
+    v = std::stoll(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || text.empty() || v < lo || v > hi)
+    throw cdp::InvalidInputError(option + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                                 "], found \"" + text + "\"");
+  return v;
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw cdp::InvalidInputError(path.string() + ": cannot open");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void write_atomically(const fs::path& path, const std::string& text) {
+  auto tmp = path;
+  tmp += ".tmp" + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw cdp::InvalidInputError(path.string() + ": cannot write");
+    out << text;
+    out.close();
+    if (!out) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw cdp::InvalidInputError(path.string() + ": write failed");
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw cdp::InvalidInputError(path.string() + ": cannot rename the output into place: " + ec.message());
+  }
+}
+
+bool same_rays(const std::vector<cdp::Ray>& a, const std::vector<cdp::Ray>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (a[i].origin != b[i].origin || a[i].direction != b[i].direction) return false;
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    std::string field_path, mesh_path, out_path, cache_dir;
+    cdp::EvaluateOptions options;
+    for (int i = 1; i < argc; ++i) {
+      const std::string arg = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw cdp::InvalidInputError(arg + " needs a value; " + kUsage);
+        return argv[++i];
+      };
+      if (arg == "--rays") options.camera.resolution = static_cast<int>(parse_count(arg, value(), 1, 8192));
+      else if (arg == "--views") options.camera.views = static_cast<int>(parse_count(arg, value(), 1, 10000));
+      else if (arg == "--samples") options.sampling.samples = static_cast<std::size_t>(parse_count(arg, value(), 0, 100000000));
+      else if (arg == "--projection") options.camera.projection = cdp::parse_projection(value());
+      else if (arg == "--cache") cache_dir = value();
+      else if (arg == "-o") out_path = value();
+      else if (arg == "-h" || arg == "--help") {
+        std::cout << kUsage << "\n";
+        return 0;
+      } else if (!arg.empty() && arg[0] != '-' && field_path.empty()) field_path = arg;
+      else if (!arg.empty() && arg[0] != '-' && mesh_path.empty()) mesh_path = arg;
+      else throw cdp::InvalidInputError("unexpected argument \"" + arg + "\"; " + kUsage);
+    }
+    if (field_path.empty() || mesh_path.empty() || out_path.empty()) throw cdp::InvalidInputError(kUsage);
+
+    const std::string field_text = read_text(field_path);
+    const auto field = cdp::load_field(field_path);
+    cdp::Mesh mesh = cdp::read_mesh(mesh_path);
+    std::string normals_source = "file";
+    if (mesh.normals.size() != mesh.positions.size()) {
+      mesh.normals = cdp::area_weighted_normals(mesh);
+      normals_source = "area_weighted (the mesh file has no vertex normals)";
+    }
+
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<cdp::Ray> rays = cdp::make_camera_rays(field->bounds(), options.camera);
+    const std::string key = cdp::ground_truth_key(field_text, options.camera, options.raycast);
+    std::optional<cdp::GroundTruth> truth;
+    bool cached = false;
+    if (!cache_dir.empty()) {
+      truth = cdp::load_ground_truth(cache_dir, key);
+      // A cache written by another build whose rays differ is stale: recompute it.
+      if (truth && !same_rays(truth->rays, rays)) truth.reset();
+      cached = truth.has_value();
+    }
+    if (!truth) {
+      truth = cdp::compute_ground_truth(*field, std::move(rays), options.raycast);
+      if (!cache_dir.empty()) cdp::save_ground_truth(*truth, cache_dir, key);
+    }
+    const double gt_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    nlohmann::json metrics = cdp::evaluate_mesh(*field, mesh, *truth, options, normals_source, key);
+    metrics["files"] = {{"field", field_path}, {"mesh", mesh_path}};
+    metrics["rays"]["ground_truth_cached"] = cached;
+    metrics["rays"]["ground_truth_seconds"] = gt_seconds;
+    write_atomically(out_path, metrics.dump(2) + "\n");
+
+    const auto& r = metrics["rays"];
+    std::printf("%s: %zu triangles, %zu rays (%s), %zu surface hits\n", mesh_path.c_str(), mesh.num_triangles(),
+                r["count"].get<std::size_t>(), cached ? "cached ground truth" : "ground truth computed",
+                r["surface_hits"].get<std::size_t>());
+    auto num = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : std::nan(""); };
+    std::printf("depth error mean %.4g (relative %.3g)  Phong error mean %.4g deg std %.4g  silhouette %.4g\n",
+                num(metrics["depth_error"]["mean"]), num(metrics["depth_error"]["relative_mean"]),
+                num(metrics["phong_error_deg"]["mean"]), num(metrics["phong_error_deg"]["std"]),
+                num(metrics["silhouette_disagreement"]));
+    std::printf("edge ratio mean %.4g std %.4g  near-equilateral %.3f  min angle %.3g deg  genus %d\n",
+                num(metrics["edge_ratio"]["mean"]), num(metrics["edge_ratio"]["std"]),
+                num(metrics["near_equilateral_fraction"]), num(metrics["min_angle_deg"]["min"]),
+                metrics["topology"]["genus"].get<int>());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "evaluate: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,34 @@
+// The paper's accuracy measures: depth error and Phong error along the ground-truth rays, and
+// how often the mesh and the surface disagree on whether a ray hits at all.
+#pragma once
+
+#include <raytrace/embree_scene.h>
+#include <raytrace/implicit_raycast.h>
+
+#include <polygonizer/mesh.h>
+
+namespace cdp {
+
+// Mean, population standard deviation (divide by n) and maximum of n values; zero when n = 0.
+struct SampleStats {
+  std::size_t count = 0;
+  double mean = 0.0, std = 0.0, max = 0.0, min = 0.0;
+};
+SampleStats sample_stats(const std::vector<double>& values);
+
+struct AccuracyMetrics {
+  std::size_t rays = 0;
+  std::size_t compared = 0;      // rays whose ground truth is Hit or Miss
+  std::size_t both_hit = 0, surface_only = 0, mesh_only = 0, neither = 0;
+  std::size_t excluded = 0;      // StartsInside, StepLimit or NotFinite ground truth
+  SampleStats depth;             // |t_mesh - t_surface| over rays hitting both
+  double depth_relative_mean = 0.0;  // depth.mean / diagonal of the field's box
+  SampleStats phong_deg;         // angle between field normal at the true hit and Phong normal
+  double silhouette_disagreement = 0.0;  // (surface_only + mesh_only) / compared
+};
+
+// `mesh` must have normals (the ones the Phong normals blend). Throws InvalidInputError when the
+// sizes do not match.
+AccuracyMetrics compute_accuracy(const GroundTruth& truth, const std::vector<MeshHit>& mesh_hits, const Mesh& mesh);
+
+}  // namespace cdp

@@ -1,0 +1,53 @@
+// Ray-mesh intersection and closest-point queries through Embree. Every Embree call of the
+// project is in embree_scene.cpp, so moving to another Embree version touches one file.
+#pragma once
+
+#include <raytrace/camera.h>
+
+#include <polygonizer/mesh.h>
+
+#include <limits>
+#include <memory>
+#include <vector>
+
+namespace cdp {
+
+// Embree's conventions: the hit point is (1-u-v) p0 + u p1 + v p2 of triangle `triangle`.
+struct MeshHit {
+  int triangle = -1;
+  double u = 0.0, v = 0.0;
+  double t = std::numeric_limits<double>::infinity();
+  bool hit() const { return triangle >= 0; }
+};
+
+struct ClosestPoint {
+  Vec3 point = Vec3::Zero();
+  double distance = std::numeric_limits<double>::infinity();
+  int triangle = -1;
+};
+
+// An Embree scene of one mesh (robust build flag, float vertices relative to the mesh's centre).
+// Embree finds the triangle; t, u and v are then recomputed in double on that triangle, so that
+// depth errors are not floored by float rounding (about 1e-7 of the distance).
+class EmbreeScene {
+ public:
+  // Throws InvalidInputError on out-of-range indices or non-finite positions.
+  explicit EmbreeScene(const Mesh& mesh);
+  ~EmbreeScene();
+  EmbreeScene(const EmbreeScene&) = delete;
+  EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+  // The first hit of every ray (t >= 0), in parallel over blocks of rays.
+  std::vector<MeshHit> intersect(const std::vector<Ray>& rays) const;
+  // The nearest point of the mesh to every point (rtcPointQuery), in parallel.
+  std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The point of triangle (a, b, c) nearest to p (Ericson, Real-Time Collision Detection, 5.1.5).
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+}  // namespace cdp

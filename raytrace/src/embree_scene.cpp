@@ -1,0 +1,217 @@
+// The only file of the project that calls Embree (version 3).
+#include <raytrace/embree_scene.h>
+
+#include <polygonizer/errors.h>
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <string>
+
+namespace cdp {
+
+namespace {
+
+void record_error(void* user, RTCError code, const char* message) {
+  auto* first = static_cast<std::string*>(user);
+  if (first->empty()) first->assign("Embree error " + std::to_string(static_cast<int>(code)) + ": " + (message ? message : ""));
+}
+
+constexpr unsigned kRayBlock = 256;
+
+}  // namespace
+
+struct EmbreeScene::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  std::string error;
+  Vec3 center = Vec3::Zero();  // subtracted before the float conversion
+  double query_margin = 0.0;   // float rounding of the scene, added to point-query radii
+  std::vector<Vec3> positions;
+  std::vector<std::array<int, 3>> triangles;
+
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+  void check(const char* what) const {
+    if (!error.empty()) throw InvalidInputError(std::string("EmbreeScene: ") + what + ": " + error);
+  }
+};
+
+EmbreeScene::EmbreeScene(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.positions = mesh.positions;
+  m.triangles = mesh.triangles;
+  const auto nv = static_cast<long long>(mesh.positions.size());
+  Box box{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
+  for (const Vec3& p : mesh.positions) {
+    if (!p.allFinite()) throw InvalidInputError("EmbreeScene: a vertex position is not finite");
+    box.min = box.min.cwiseMin(p);
+    box.max = box.max.cwiseMax(p);
+  }
+  for (const auto& t : mesh.triangles)
+    for (int i : t)
+      if (i < 0 || i >= nv) throw InvalidInputError("EmbreeScene: a triangle index is out of range");
+  if (nv > 0) {
+    m.center = box.center();
+    m.query_margin = 1e-6 * (box.diagonal() + box.max.cwiseAbs().maxCoeff());
+  }
+
+  m.device = rtcNewDevice(nullptr);
+  if (!m.device) throw InvalidInputError("EmbreeScene: cannot create an Embree device");
+  rtcSetDeviceErrorFunction(m.device, record_error, &m.error);
+  m.scene = rtcNewScene(m.device);
+  rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(m.scene, RTC_BUILD_QUALITY_HIGH);
+  if (!mesh.triangles.empty()) {
+    RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    // rtcSetNewGeometryBuffer allocates with the padding Embree's vector loads need.
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                           3 * sizeof(float), mesh.positions.size()));
+    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(unsigned), mesh.triangles.size()));
+    m.check("allocating buffers");
+    if (!vb || !ib) throw InvalidInputError("EmbreeScene: cannot allocate the geometry buffers");
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+      for (int a = 0; a < 3; ++a) vb[3 * i + a] = static_cast<float>(mesh.positions[i][a] - m.center[a]);
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+      for (int a = 0; a < 3; ++a) ib[3 * i + a] = static_cast<unsigned>(mesh.triangles[i][a]);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(m.scene, geom);
+    rtcReleaseGeometry(geom);
+  }
+  rtcCommitScene(m.scene);
+  m.check("building the scene");
+}
+
+EmbreeScene::~EmbreeScene() = default;
+
+std::vector<MeshHit> EmbreeScene::intersect(const std::vector<Ray>& rays) const {
+  const Impl& m = *impl_;
+  std::vector<MeshHit> hits(rays.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kRayBlock), [&](const tbb::blocked_range<std::size_t>& r) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const Ray& ray = rays[i];
+      const Vec3 o = ray.origin - m.center;
+      RTCRayHit rh{};
+      rh.ray.org_x = static_cast<float>(o.x());
+      rh.ray.org_y = static_cast<float>(o.y());
+      rh.ray.org_z = static_cast<float>(o.z());
+      rh.ray.dir_x = static_cast<float>(ray.direction.x());
+      rh.ray.dir_y = static_cast<float>(ray.direction.y());
+      rh.ray.dir_z = static_cast<float>(ray.direction.z());
+      rh.ray.tnear = 0.0f;
+      rh.ray.tfar = std::numeric_limits<float>::infinity();
+      rh.ray.mask = 0xFFFFFFFFu;
+      rh.ray.flags = 0;
+      rh.ray.time = 0.0f;
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(m.scene, &context, &rh);
+      if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+      MeshHit& h = hits[i];
+      h.triangle = static_cast<int>(rh.hit.primID);
+      h.u = rh.hit.u;
+      h.v = rh.hit.v;
+      h.t = rh.ray.tfar;
+      // Recompute t, u, v in double on the triangle Embree found.
+      const auto& tri = m.triangles[rh.hit.primID];
+      const Vec3& p0 = m.positions[tri[0]];
+      const Vec3 e1 = m.positions[tri[1]] - p0, e2 = m.positions[tri[2]] - p0;
+      const Vec3 n = e1.cross(e2);
+      const double denom = n.dot(ray.direction);
+      if (std::abs(denom) > 1e-12 * n.norm()) {
+        const double t = n.dot(p0 - ray.origin) / denom;
+        const Vec3 q = ray.origin + t * ray.direction - p0;
+        const double d00 = e1.dot(e1), d01 = e1.dot(e2), d11 = e2.dot(e2), d20 = q.dot(e1), d21 = q.dot(e2);
+        const double den = d00 * d11 - d01 * d01;
+        if (den > 0.0 && std::isfinite(t)) {
+          double u = (d11 * d20 - d01 * d21) / den, v = (d00 * d21 - d01 * d20) / den;
+          // The double triangle differs from Embree's float one by rounding: keep the blend inside.
+          u = std::clamp(u, 0.0, 1.0);
+          v = std::clamp(v, 0.0, 1.0);
+          if (u + v > 1.0) {
+            const double s = u + v;
+            u /= s;
+            v /= s;
+          }
+          h.t = t;
+          h.u = u;
+          h.v = v;
+        }
+      }
+    }
+  });
+  return hits;
+}
+
+std::vector<ClosestPoint> EmbreeScene::closest_points(const std::vector<Vec3>& points) const {
+  const Impl& m = *impl_;
+  std::vector<ClosestPoint> out(points.size());
+  struct PointQueryData {
+    const Impl* impl;
+    Vec3 point;
+    ClosestPoint best;
+  };
+  // Embree calls this for every triangle whose bounds meet the query sphere; it shrinks the sphere.
+  const RTCPointQueryFunction callback = [](RTCPointQueryFunctionArguments* args) -> bool {
+    auto* d = static_cast<PointQueryData*>(args->userPtr);
+    const auto& tri = d->impl->triangles[args->primID];
+    const auto& P = d->impl->positions;
+    const Vec3 q = closest_point_on_triangle(d->point, P[tri[0]], P[tri[1]], P[tri[2]]);
+    const double dist = (q - d->point).norm();
+    if (dist < d->best.distance) {
+      d->best = {q, dist, static_cast<int>(args->primID)};
+      args->query->radius = static_cast<float>(dist + d->impl->query_margin);
+      return true;
+    }
+    return false;
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), kRayBlock), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      PointQueryData data{&m, points[i], {}};
+      const Vec3 p = points[i] - m.center;
+      RTCPointQuery query;
+      query.x = static_cast<float>(p.x());
+      query.y = static_cast<float>(p.y());
+      query.z = static_cast<float>(p.z());
+      query.time = 0.0f;
+      query.radius = std::numeric_limits<float>::infinity();
+      RTCPointQueryContext context;
+      rtcInitPointQueryContext(&context);
+      rtcPointQuery(m.scene, &query, &context, callback, &data);
+      out[i] = data.best;
+    }
+  });
+  return out;
+}
+
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  const double denom = va + vb + vc;
+  if (!(denom > 0)) return a;  // degenerate triangle: the edge cases above already cover it
+  return a + ab * (vb / denom) + ac * (vc / denom);
+}
+
+}  // namespace cdp

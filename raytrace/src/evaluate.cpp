@@ -1,0 +1,112 @@
+#include <raytrace/embree_scene.h>
+#include <raytrace/evaluate.h>
+
+#include <polygonizer/errors.h>
+
+#include <cmath>
+
+namespace cdp {
+
+namespace {
+// JSON has no infinity or NaN: such values become null.
+nlohmann::json number(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+}  // namespace
+
+nlohmann::json to_json(const SampleStats& s) {
+  return {{"count", s.count}, {"mean", number(s.mean)}, {"std", number(s.std)}, {"min", number(s.min)},
+          {"max", number(s.max)}};
+}
+
+nlohmann::json to_json(const MeshQuality& q) {
+  nlohmann::json j;
+  j["triangles"] = q.triangles;
+  j["vertices"] = q.vertices;
+  j["degenerate_triangles"] = q.degenerate;
+  j["edge_ratio"] = to_json(q.edge_ratio);
+  j["edge_ratio"]["histogram"] = {{"edges", q.histogram_edges}, {"counts", q.histogram_counts},
+                                  {"overflow", q.histogram_overflow}};
+  j["near_equilateral_fraction"] = q.near_equilateral_fraction;
+  j["near_equilateral_definition"] = "longest / shortest edge <= " + nlohmann::json(q.near_equilateral_ratio).dump();
+  j["min_angle_deg"] = to_json(q.min_angle_deg);
+  j["radius_ratio"] = to_json(q.radius_ratio);
+  j["edge_length"] = to_json(q.edge_length);
+  const MeshTopology& t = q.topology;
+  j["topology"] = {{"closed", t.closed()},
+                   {"manifold", t.edge_manifold() && t.vertex_manifold()},
+                   {"oriented", t.oriented()},
+                   {"watertight", t.watertight()},
+                   {"components", t.components},
+                   {"genus", t.genus},
+                   {"euler_characteristic", t.euler_characteristic},
+                   {"boundary_edges", t.boundary_edges},
+                   {"nonmanifold_edges", t.nonmanifold_edges},
+                   {"nonmanifold_vertices", t.nonmanifold_vertices},
+                   {"misoriented_edges", t.misoriented_edges},
+                   {"degenerate_triangles", t.degenerate_triangles},
+                   {"duplicate_triangles", t.duplicate_triangles},
+                   {"area", t.area},
+                   {"signed_volume", t.signed_volume}};
+  return j;
+}
+
+nlohmann::json to_json(const AccuracyMetrics& a) {
+  nlohmann::json j;
+  j["depth_error"] = to_json(a.depth);
+  j["depth_error"]["relative_mean"] = number(a.depth_relative_mean);
+  j["phong_error_deg"] = to_json(a.phong_deg);
+  j["silhouette_disagreement"] = a.silhouette_disagreement;
+  j["silhouette_counts"] = {{"compared", a.compared}, {"surface_only", a.surface_only}, {"mesh_only", a.mesh_only},
+                            {"both_hit", a.both_hit}, {"neither", a.neither}, {"excluded", a.excluded}};
+  return j;
+}
+
+nlohmann::json evaluate_mesh(const Field& field, const Mesh& mesh, const GroundTruth& truth,
+                             const EvaluateOptions& options, const std::string& normals_source,
+                             const std::string& cache_key) {
+  if (mesh.normals.size() != mesh.positions.size())
+    throw InvalidInputError("evaluate: the mesh needs one normal per vertex");
+  const EmbreeScene scene(mesh);
+  const std::vector<MeshHit> mesh_hits = scene.intersect(truth.rays);
+  const AccuracyMetrics accuracy = compute_accuracy(truth, mesh_hits, mesh);
+  const MeshQuality quality = compute_mesh_quality(mesh, options.quality);
+
+  nlohmann::json j{{"schema", kMetricsSchema}};
+  j.update(to_json(accuracy));
+  j.update(to_json(quality));
+  j["normals"] = normals_source;
+
+  const GroundTruthCounts c = truth.counts();
+  std::size_t mesh_hit_count = 0;
+  for (const MeshHit& h : mesh_hits) mesh_hit_count += h.hit();
+  nlohmann::json rays = to_json(options.camera);
+  rays["count"] = truth.rays.size();
+  rays["cache_key"] = cache_key;
+  rays["lipschitz"] = truth.setup.lipschitz;
+  rays["lipschitz_source"] = truth.setup.lipschitz_from_model ? "model" : "estimate or option";
+  rays["min_step"] = truth.setup.min_step;
+  rays["surface_hits"] = c.hits;
+  rays["mesh_hits"] = mesh_hit_count;
+  rays["misses"] = c.misses;
+  rays["starts_inside"] = c.starts_inside;
+  rays["step_limit"] = c.step_limit;
+  rays["not_finite"] = c.not_finite;
+  rays["grazing"] = c.grazing;
+  rays["tangent"] = c.tangent;
+  rays["near_miss"] = c.near_miss;
+  j["rays"] = rays;
+
+  const SampleStats vd = vertex_distance(field, mesh);
+  j["vertex_distance"] = {{"mean", number(vd.mean)}, {"max", number(vd.max)}, {"count", vd.count},
+                          {"method", "|F|/|grad F| at every vertex"}};
+  const SampleStats ms = mesh_to_surface_distance(field, mesh, options.sampling);
+  j["mesh_to_surface"] = {{"mean", number(ms.mean)}, {"max", number(ms.max)}, {"samples", ms.count},
+                          {"seed", options.sampling.seed},
+                          {"method", "|F|/|grad F| at area-weighted random points of the triangles"}};
+  const SampleStats sm = surface_to_mesh_distance(truth, scene);
+  j["surface_to_mesh"] = {{"mean", number(sm.mean)}, {"max", number(sm.max)}, {"points", sm.count},
+                          {"method", "distance from every ground-truth ray hit to the nearest mesh point"}};
+  j["hausdorff_estimate"] = number(std::max(ms.max, sm.max));
+  return j;
+}
+
+}  // namespace cdp
