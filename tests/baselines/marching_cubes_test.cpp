@@ -60,10 +60,11 @@ TEST(MarchingCubes, AreaConvergesOnSphereAndTorus) {
   const Torus torus({0.01, 0.02, -0.015}, 1.0, 0.4);
   const auto t = test::area_errors(marching_cubes, torus, 4 * std::numbers::pi * std::numbers::pi * 0.4,
                                    {0.2, 0.1, 0.05});
+  // Second order: halving the cell divides the error by about four (measured 3.4 to 4.6).
   for (const auto* e : {&s, &t})
-    for (std::size_t i = 1; i < e->size(); ++i) EXPECT_LT((*e)[i], (*e)[i - 1]) << "cell step " << i;
-  EXPECT_LT(s.back(), 2e-3);
-  EXPECT_LT(t.back(), 3e-3);
+    for (std::size_t i = 1; i < e->size(); ++i) EXPECT_GT((*e)[i - 1], 2.5 * (*e)[i]) << "cell step " << i;
+  EXPECT_LT(s.back(), 1e-3);
+  EXPECT_LT(t.back(), 1e-3);
 }
 
 TEST(MarchingCubes, VerticesLieOnTheSurfaceWithinTheRootTolerance) {
