@@ -318,7 +318,7 @@ PolygonizeResult run_marching(const Field& field, const MarchingOptions& options
     throw NoSurfaceError(std::string(method) + ": no cube of the lattice (cell " + std::to_string(lm.h_) +
                          ") is crossed by the surface; it is absent or smaller than a cell");
   compute_field_normals(field, lm.mesh);
-  if (options.progress) options.progress(1.0);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   PolygonizeResult result;
   PolygonizeStats& st = result.stats;
@@ -347,7 +347,9 @@ PolygonizeResult run_marching(const Field& field, const MarchingOptions& options
   }
   if (!options.require_closed_in_box) st.extra["open_boundary_faces"] = lm.open_boundary_faces;
   result.mesh = std::move(lm.mesh);
-  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // Like the adaptive polygonizer's: the polygonization, not the topology count for the stats.
+  st.seconds = seconds;
+  if (options.progress) options.progress(1.0);
   return result;
 }
 
