@@ -135,6 +135,26 @@ TEST(MarchingCubes, SurfaceLeavingTheBoxIsAnErrorUnlessClippingIsAsked) {
   EXPECT_GT(r.stats.extra.at("open_boundary_faces").get<std::size_t>(), 0u);
 }
 
+TEST(MarchingCubes, ProgressRisesToOne) {
+  const Sphere sphere({0.013, -0.021, 0.008}, 1.0);
+  for (Traversal tr : {Traversal::Continuation, Traversal::Grid}) {
+    std::vector<double> seen;
+    MarchingOptions o = test::marching_options(0.03, tr);
+    o.progress = [&](double f) { seen.push_back(f); };
+    marching_cubes(sphere, o);
+    ASSERT_GE(seen.size(), 2u) << to_string(tr);
+    for (std::size_t i = 1; i < seen.size(); ++i) EXPECT_GE(seen[i], seen[i - 1]);
+    EXPECT_GE(seen.front(), 0.0);
+    EXPECT_EQ(seen.back(), 1.0);
+  }
+}
+
+TEST(MarchingCubes, NonFiniteFieldIsAnError) {
+  const auto nan_field = test::field_from_json(
+      R"({"type": "expression", "value": "sqrt(x^2 + y^2 + z^2 - 0.25) - 0.5", "bounds": [[-1, -1, -1], [1, 1, 1]]})");
+  EXPECT_THROW(marching_cubes(*nan_field, test::marching_options(0.1, Traversal::Grid)), NoSurfaceError);
+}
+
 TEST(MarchingCubes, BoundsAreEnforced) {
   const Sphere sphere(Vec3::Zero(), 1.0);
   MarchingOptions o = test::marching_options(0.05, Traversal::Grid);
