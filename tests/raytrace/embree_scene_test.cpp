@@ -1,0 +1,94 @@
+// Checks raytrace/embree_scene.h: hits agree with the triangle they name, misses, closest points
+// against brute force, and the closest point on a triangle in each of its regions.
+#include <raytrace/embree_scene.h>
+#include <raytrace/reference_meshes.h>
+
+#include <polygonizer/errors.h>
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace cdp {
+namespace {
+
+TEST(EmbreeScene, HitsLieOnTheTriangleTheyNameAndAreFirstHits) {
+  const Mesh mesh = icosphere(3, Vec3(10.0, -5.0, 2.0), 2.0);  // away from the origin on purpose
+  const EmbreeScene scene(mesh);
+  CameraOptions camera;
+  camera.views = 3;
+  camera.resolution = 16;
+  const Box box{Vec3(8, -7, 0), Vec3(12, -3, 4)};
+  const auto rays = make_camera_rays(box, camera);
+  const auto hits = scene.intersect(rays);
+  ASSERT_EQ(hits.size(), rays.size());
+  std::size_t n_hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const Ray& r = rays[i];
+    // The exact sphere bounds the inscribed polyhedron: a ray missing the sphere misses the mesh.
+    const Vec3 q = r.origin - Vec3(10.0, -5.0, 2.0);
+    const double b = q.dot(r.direction), disc = b * b - (q.squaredNorm() - 4.0);
+    if (disc < 0) {
+      EXPECT_FALSE(hits[i].hit());
+    }
+    if (!hits[i].hit()) continue;
+    ++n_hits;
+    const auto& t = mesh.triangles[hits[i].triangle];
+    const Vec3 p = (1 - hits[i].u - hits[i].v) * mesh.positions[t[0]] + hits[i].u * mesh.positions[t[1]] +
+                   hits[i].v * mesh.positions[t[2]];
+    EXPECT_NEAR((r.origin + hits[i].t * r.direction - p).norm(), 0.0, 1e-11);
+    EXPECT_GE(hits[i].u, 0.0);
+    EXPECT_GE(hits[i].v, 0.0);
+    EXPECT_LE(hits[i].u + hits[i].v, 1.0);
+    // First hit: the front face, whose outward normal faces the ray; t lies before the far root.
+    const Vec3 n = (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+    EXPECT_LT(n.dot(r.direction), 0.0);
+    EXPECT_LE(hits[i].t, -b + 1e-9);
+  }
+  EXPECT_GT(n_hits, 100u);
+}
+
+TEST(EmbreeScene, ClosestPointsMatchBruteForce) {
+  const Mesh mesh = icosphere(2);
+  const EmbreeScene scene(mesh);
+  std::mt19937_64 rng(7);
+  std::vector<Vec3> points;
+  for (int i = 0; i < 200; ++i) {
+    Vec3 p;
+    for (int a = 0; a < 3; ++a) p[a] = static_cast<double>(rng() >> 11) * 0x1.0p-53 * 4.0 - 2.0;
+    points.push_back(p);
+  }
+  const auto closest = scene.closest_points(points);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    double best = 1e300;
+    for (const auto& t : mesh.triangles)
+      best = std::min(best, (closest_point_on_triangle(points[i], mesh.positions[t[0]], mesh.positions[t[1]],
+                                                       mesh.positions[t[2]]) -
+                             points[i]).norm());
+    EXPECT_NEAR(closest[i].distance, best, 1e-12) << i;
+    EXPECT_NEAR((closest[i].point - points[i]).norm(), closest[i].distance, 1e-12);
+    EXPECT_GE(closest[i].triangle, 0);
+  }
+}
+
+TEST(EmbreeScene, ClosestPointOnTriangleRegions) {
+  const Vec3 a(0, 0, 0), b(2, 0, 0), c(0, 2, 0);
+  EXPECT_EQ(closest_point_on_triangle(Vec3(0.5, 0.5, 3), a, b, c), Vec3(0.5, 0.5, 0));  // interior
+  EXPECT_EQ(closest_point_on_triangle(Vec3(-1, -1, 1), a, b, c), a);                     // vertex
+  EXPECT_EQ(closest_point_on_triangle(Vec3(3, -1, 0), a, b, c), b);
+  EXPECT_EQ(closest_point_on_triangle(Vec3(1, -1, 0), a, b, c), Vec3(1, 0, 0));          // edge ab
+  EXPECT_TRUE(closest_point_on_triangle(Vec3(2, 2, 0), a, b, c).isApprox(Vec3(1, 1, 0)));  // edge bc
+  EXPECT_EQ(closest_point_on_triangle(Vec3(-1, 1, 0), a, b, c), Vec3(0, 1, 0));          // edge ca
+}
+
+TEST(EmbreeScene, EmptyMeshMissesAndBadIndicesThrow) {
+  const EmbreeScene empty{Mesh{}};
+  const auto hits = empty.intersect({Ray{Vec3(0, 0, -5), Vec3::UnitZ()}});
+  EXPECT_FALSE(hits[0].hit());
+  Mesh bad = icosphere(0);
+  bad.triangles[0][1] = 99;
+  EXPECT_THROW(EmbreeScene{bad}, InvalidInputError);
+}
+
+}  // namespace
+}  // namespace cdp

@@ -1,0 +1,44 @@
+// Checks raytrace/phong_normal.h: barycentric blending and area-weighted vertex normals.
+#include <raytrace/phong_normal.h>
+#include <raytrace/reference_meshes.h>
+
+#include <polygonizer/errors.h>
+
+#include <gtest/gtest.h>
+
+namespace cdp {
+namespace {
+
+TEST(PhongNormal, BlendsVertexNormalsWithEmbreeBarycentrics) {
+  Mesh m;
+  m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  m.triangles = {{0, 1, 2}};
+  m.normals = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
+  EXPECT_EQ(phong_normal(m, 0, 0, 0), Vec3::UnitX());
+  EXPECT_EQ(phong_normal(m, 0, 1, 0), Vec3::UnitY());
+  EXPECT_EQ(phong_normal(m, 0, 0, 1), Vec3::UnitZ());
+  EXPECT_TRUE(phong_normal(m, 0, 1.0 / 3, 1.0 / 3).isApprox(Vec3(1, 1, 1).normalized(), 1e-15));
+  EXPECT_TRUE(phong_normal(m, 0, 0.5, 0).isApprox(Vec3(1, 1, 0).normalized(), 1e-15));
+  m.normals[1] = -Vec3::UnitX();
+  EXPECT_EQ(phong_normal(m, 0, 0.5, 0), Vec3::Zero());
+  m.normals.clear();
+  EXPECT_THROW(phong_normal(m, 0, 0, 0), InvalidInputError);
+}
+
+TEST(PhongNormal, AreaWeightedNormalsOfAnIcosphereAreNearlyRadial) {
+  const Mesh m = icosphere(3);
+  const auto n = area_weighted_normals(m);
+  ASSERT_EQ(n.size(), m.positions.size());
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    EXPECT_NEAR(n[i].norm(), 1.0, 1e-14);
+    EXPECT_GT(n[i].dot(m.normals[i]), 0.999);
+  }
+  // The area weighting: one tiny triangle hardly tilts a vertex shared with a big one.
+  Mesh two;
+  two.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(-1e-3, 0, 1e-3)};
+  two.triangles = {{0, 1, 2}, {0, 2, 3}};
+  EXPECT_GT(area_weighted_normals(two)[0].z(), 0.999);
+}
+
+}  // namespace
+}  // namespace cdp
