@@ -1,6 +1,7 @@
 #include "lattice_mesher.h"
 
 #include "edge_root.h"
+#include "flat_map.h"
 
 #include <polygonizer/errors.h>
 #include <polygonizer/mesh_topology.h>
@@ -14,8 +15,6 @@
 #include <optional>
 #include <sstream>
 #include <string>
-#include <unordered_map>
-#include <unordered_set>
 
 namespace cdp::marching {
 
@@ -105,9 +104,9 @@ class LatticeMesher {
   const char* method_;
   const CubeMesher& mesher_;
   std::array<long, 3> n_{};
-  std::unordered_map<Key, double> corner_cache_;
-  std::unordered_map<Key, int> edge_vertex_;
-  std::unordered_set<Key> visited_;
+  FlatMap<double> corner_cache_;
+  FlatMap<int> edge_vertex_;
+  FlatMap<char> visited_;
   CubeMesh cube_mesh_;
   std::vector<int> centre_ids_;
   double progress_reported_ = 0;
@@ -122,9 +121,8 @@ std::array<double, 8> LatticeMesher::cached_corners(const Cell& c) {
   for (int q = 0; q < 8; ++q) {
     const long i = c[0] + (q & 1), j = c[1] + ((q >> 1) & 1), k = c[2] + ((q >> 2) & 1);
     keys[q] = point_key(i, j, k);
-    const auto it = corner_cache_.find(keys[q]);
-    if (it != corner_cache_.end()) {
-      f[q] = it->second;
+    if (const double* cached = corner_cache_.find(keys[q])) {
+      f[q] = *cached;
     } else {
       missing[m] = q;
       points[m++] = point(i, j, k);
@@ -160,13 +158,13 @@ void LatticeMesher::check_boundary(const Cell& c, int mask) {
 int LatticeMesher::vertex(const Cell& c, LocalEdge e, const std::array<double, 8>& f) {
   const long ia = c[0] + (e.a & 1), ja = c[1] + ((e.a >> 1) & 1), ka = c[2] + ((e.a >> 2) & 1);
   const Key key = point_key(ia, ja, ka) * 8 + static_cast<Key>(e.a ^ e.b);
-  const auto [it, inserted] = edge_vertex_.emplace(key, static_cast<int>(mesh.positions.size()));
-  if (!inserted) return it->second;
+  const auto [id, inserted] = edge_vertex_.emplace(key, static_cast<int>(mesh.positions.size()));
+  if (!inserted) return *id;
   const Vec3 pb = point(c[0] + (e.b & 1), c[1] + ((e.b >> 1) & 1), c[2] + ((e.b >> 2) & 1));
   const EdgeRoot root = find_edge_root(field_, point(ia, ja, ka), f[e.a], pb, f[e.b], tolerance_);
   root_evaluations += root.evaluations;
   mesh.positions.push_back(root.point);
-  return it->second;
+  return static_cast<int>(mesh.positions.size()) - 1;
 }
 
 // The mean of the polygon's crossings, moved onto the surface by the Newton projection when it
@@ -263,7 +261,7 @@ std::optional<Cell> LatticeMesher::crossed_cube_near(const Vec3& p) {
 // sign change is crossed too, so a breadth-first walk over such faces visits every cube of the
 // polygonized component and no other.
 void LatticeMesher::follow(const Cell& start, std::size_t cluster, std::size_t clusters) {
-  if (!visited_.insert(cell_key(start)).second) return;
+  if (!visited_.emplace(cell_key(start), 1).second) return;
   ++starts;
   std::deque<Cell> queue{start};
   std::size_t done = 0;
@@ -279,7 +277,7 @@ void LatticeMesher::follow(const Cell& start, std::size_t cluster, std::size_t c
       if (!((mask >> face) & 1)) continue;
       Cell nb = c;
       nb[face / 2] += face % 2 == 0 ? -1 : 1;
-      if (in_lattice(nb) && visited_.insert(cell_key(nb)).second) queue.push_back(nb);
+      if (in_lattice(nb) && visited_.emplace(cell_key(nb), 1).second) queue.push_back(nb);
     }
     if (options_.progress && ++done % 4096 == 0) {
       const double local = static_cast<double>(done) / static_cast<double>(done + queue.size());
