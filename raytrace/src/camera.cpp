@@ -66,15 +66,21 @@ std::vector<Ray> make_camera_rays(const Box& box, const CameraOptions& o) {
     const Vec3 right = dir.cross(up_hint).normalized();
     const Vec3 up = right.cross(dir);
     const Vec3 eye = center - eye_distance * dir;
-    // Half-extent of the image: on the plane through the centre (orthographic) or at unit
-    // distance from the eye (perspective).
-    double half;
-    if (o.projection == Projection::Orthographic) {
-      half = radius * kImageMargin;
-    } else if (o.fov_deg > 0) {
+    // Half-extent of the square image: on the plane through the centre (orthographic) or at unit
+    // distance from the eye (perspective), fitted to the projected corners of the box.
+    double half = 0.0;
+    if (o.projection == Projection::Perspective && o.fov_deg > 0) {
       half = std::tan(0.5 * o.fov_deg * std::numbers::pi / 180.0);
     } else {
-      half = std::tan(std::asin(1.0 / o.distance)) * kImageMargin;
+      for (int k = 0; k < 8; ++k) {
+        const Vec3 corner((k & 1) ? box.max.x() : box.min.x(), (k & 2) ? box.max.y() : box.min.y(),
+                          (k & 4) ? box.max.z() : box.min.z());
+        const Vec3 q = corner - eye;
+        // The eye is outside the bounding sphere, so every corner is in front of it.
+        const double depth = o.projection == Projection::Perspective ? q.dot(dir) : 1.0;
+        half = std::max({half, std::abs(q.dot(right)) / depth, std::abs(q.dot(up)) / depth});
+      }
+      half *= kImageMargin;
     }
     for (int row = 0; row < n; ++row) {
       for (int col = 0; col < n; ++col) {

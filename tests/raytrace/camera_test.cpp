@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace cdp {
 namespace {
 
@@ -25,11 +27,27 @@ TEST(Camera, PerspectiveRaysStartOutsideTheBoxAndAimAtTheBoundingSphere) {
   // The centre pixel of an odd resolution looks straight at the box centre.
   const Ray& centre = rays[3 * 7 + 3];
   EXPECT_NEAR((centre.origin + o.distance * radius * centre.direction - kBox.center()).norm(), 0.0, 1e-12);
-  // The image covers the bounding sphere: corner rays pass outside it, edge-centre rays graze it.
-  const Ray& corner = rays[0];
-  const Vec3 to_c = kBox.center() - corner.origin;
-  const double miss = (to_c - to_c.dot(corner.direction) * corner.direction).norm();
-  EXPECT_GT(miss, radius);
+  // The image covers the box: every corner lies within a pixel of some ray of every view, and
+  // it fits the box closely: most rays of a view meet the box.
+  for (int v = 0; v < o.views; ++v) {
+    const Vec3 eye = rays[v * 49].origin;
+    std::size_t meet = 0;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 corner((k & 1) ? kBox.max.x() : kBox.min.x(), (k & 2) ? kBox.max.y() : kBox.min.y(),
+                        (k & 4) ? kBox.max.z() : kBox.min.z());
+      double best = 1e9;
+      for (int i = 0; i < 49; ++i)
+        best = std::min(best, std::acos(std::min(1.0, rays[v * 49 + i].direction.dot((corner - eye).normalized()))));
+      EXPECT_LT(best, 0.1) << "view " << v << " corner " << k;  // a pixel spans about 0.1 rad here
+    }
+    for (int i = 0; i < 49; ++i) {
+      const Ray& r = rays[v * 49 + i];
+      // Distance from the box centre to the ray's line against the box's bounding radius.
+      const Vec3 q = kBox.center() - r.origin;
+      meet += (q - q.dot(r.direction) * r.direction).norm() < radius;
+    }
+    EXPECT_GT(meet, 20u);
+  }
 }
 
 TEST(Camera, OrthographicRaysOfOneViewAreParallel) {

@@ -33,8 +33,8 @@ struct CameraOptions {
   // Eye distance from the box centre, in units of the box's half-diagonal (its bounding sphere's
   // radius); must be > 1 so the eye is outside the box.
   double distance = 3.0;
-  // Perspective: full field of view in degrees; 0 fits the bounding sphere (with a 2% margin).
-  // Orthographic: unused; the image is a square that covers the bounding sphere (2% margin).
+  // Perspective: full field of view in degrees; 0 fits the square image to the projected corners
+  // of the box (with a 2% margin). Orthographic: unused; the image always fits the box corners.
   double fov_deg = 0.0;
   // Explicit viewing directions (the eye looks along them); when not empty they replace `views`.
   std::vector<Vec3> directions;
