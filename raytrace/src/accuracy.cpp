@@ -53,6 +53,10 @@ AccuracyMetrics compute_accuracy(const GroundTruth& truth, const std::vector<Mes
     ++a.both_hit;
     depth.push_back(std::abs(m.t - s.t));
     const Vec3 pn = phong_normal(mesh, m.triangle, m.u, m.v);
+    if (pn == Vec3::Zero() || s.normal == Vec3::Zero()) {
+      ++a.phong_undefined;
+      continue;
+    }
     // atan2 of sine and cosine stays accurate at small angles, where acos loses half the digits.
     phong.push_back(std::atan2(s.normal.cross(pn).norm(), s.normal.dot(pn)) * 180.0 / std::numbers::pi);
   }

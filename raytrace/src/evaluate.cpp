@@ -54,6 +54,7 @@ nlohmann::json to_json(const AccuracyMetrics& a) {
   j["depth_error"] = to_json(a.depth);
   j["depth_error"]["relative_mean"] = number(a.depth_relative_mean);
   j["phong_error_deg"] = to_json(a.phong_deg);
+  j["phong_error_deg"]["undefined"] = a.phong_undefined;
   j["silhouette_disagreement"] = a.silhouette_disagreement;
   j["silhouette_counts"] = {{"compared", a.compared}, {"surface_only", a.surface_only}, {"mesh_only", a.mesh_only},
                             {"both_hit", a.both_hit}, {"neither", a.neither}, {"excluded", a.excluded}};

@@ -100,6 +100,20 @@ TEST(Accuracy, FlippedNormalsGivePhongErrorsNear180Degrees) {
   ASSERT_GT(a.both_hit, 50u);
   EXPECT_GT(a.phong_deg.mean, 178.0);
   EXPECT_GT(a.phong_deg.min, 170.0);
+  EXPECT_EQ(a.phong_undefined, 0u);
+}
+
+TEST(Accuracy, CancellingVertexNormalsLeaveThePhongErrorUndefinedAndCounted) {
+  const PlaneCase pc;
+  Mesh m = pc.square(0.0, Vec3::UnitZ());
+  m.normals[2] = -Vec3::UnitZ();  // opposite ends of the diagonal 0-2: its midpoint blends to zero
+  const GroundTruth gt = compute_ground_truth(
+      pc.field, {Ray{Vec3(0, 0, 2), -Vec3::UnitZ()}, Ray{Vec3(0.5, -0.5, 2), -Vec3::UnitZ()}});
+  const EmbreeScene scene(m);
+  const AccuracyMetrics a = compute_accuracy(gt, scene.intersect(gt.rays), m);
+  EXPECT_EQ(a.both_hit, 2u);
+  EXPECT_EQ(a.phong_undefined, 1u);
+  EXPECT_EQ(a.phong_deg.count, 1u);
 }
 
 TEST(Accuracy, SilhouetteCountsRaysHittingOnlyOneSide) {

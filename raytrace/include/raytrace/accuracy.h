@@ -24,6 +24,9 @@ struct AccuracyMetrics {
   SampleStats depth;             // |t_mesh - t_surface| over rays hitting both
   double depth_relative_mean = 0.0;  // depth.mean / diagonal of the field's box
   SampleStats phong_deg;         // angle between field normal at the true hit and Phong normal
+  // Rays hitting both where the angle is undefined (a zero field gradient, or vertex normals that
+  // cancel in the blend): left out of phong_deg and counted here.
+  std::size_t phong_undefined = 0;
   double silhouette_disagreement = 0.0;  // (surface_only + mesh_only) / compared
 };
 
