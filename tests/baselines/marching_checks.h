@@ -132,6 +132,7 @@ inline void expect_topology_both_traversals(MarchingMethod method, const Field& 
     SCOPED_TRACE(r == &cont ? "continuation" : "grid");
     const MeshTopology t = analyze_topology(r->mesh);
     expect_closed_manifold(t);
+    EXPECT_TRUE(t.watertight());  // also no degenerate triangles on these smooth fields
     EXPECT_EQ(t.components, components);
     EXPECT_EQ(t.genus, genus);
     EXPECT_EQ(r->stats.components, components);
