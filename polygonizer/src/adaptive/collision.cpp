@@ -1,0 +1,136 @@
+// The overlap tests of paper section 6 ("Self-Intersection" and "Front-Collision" in Figure 6).
+// Both look for front points threatened by the expansion of a candidate point: visible from it,
+// on the same side of the surface, closer than the heuristic edge length. Whether the point hit
+// lies on the candidate's own front (split) or on another front (merge) is the caller's concern.
+// Front points are found through a spatial hash, so a test costs a few cells, never a pass over
+// all fronts.
+#include "tracker.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace cdp::adaptive {
+
+namespace {
+
+// Keeps bridges from running almost along a front edge.
+constexpr double kSectorMargin = 0.05;
+
+}  // namespace
+
+bool Tracker::crosses_front(int vu, int vw, const Vec3& w_point, int frame_vertex) const {
+  // In the tangent plane at frame_vertex: does segment u-w cross a front edge that shares no
+  // end point with it? Front edges near the segment are found from their start nodes, which
+  // lie within half the segment plus the longest edge of its midpoint.
+  const Vec3& N = mesh_.normals[frame_vertex];
+  Vec3 e0 = N.unitOrthogonal();
+  const Vec3 e1 = N.cross(e0);
+  const auto flat = [&](const Vec3& x) { return Eigen::Vector2d(x.dot(e0), x.dot(e1)); };
+  const Vec3& u_point = mesh_.positions[vu];
+  const Eigen::Vector2d u = flat(u_point), w = flat(w_point);
+  const auto orient = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+    const Eigen::Vector2d ab = b - a, ac = c - a;
+    return ab.x() * ac.y() - ab.y() * ac.x();
+  };
+  const Vec3 mid = 0.5 * (u_point + w_point);
+  const double radius = 0.5 * (w_point - u_point).norm() + longest_edge_;
+  bool hit = false;
+  front_hash_.for_each_near(mid, radius, [&](int r) {
+    if (hit) return;
+    const int vr = fs_.nodes[r].vertex, vs = fs_.nodes[fs_.nodes[r].next].vertex;
+    if (vr == vu || vr == vw || vs == vu || vs == vw) return;
+    if (!(mesh_.normals[vr].dot(N) > 0) || !(mesh_.normals[vs].dot(N) > 0)) return;
+    const Eigen::Vector2d a = flat(mesh_.positions[vr]), b = flat(mesh_.positions[vs]);
+    const double o1 = orient(u, w, a), o2 = orient(u, w, b), o3 = orient(a, b, u), o4 = orient(a, b, w);
+    if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) hit = true;
+  });
+  return hit;
+}
+
+bool Tracker::can_bridge(int node, int q) const {
+  const FrontNode& n = fs_.nodes[node];
+  const FrontNode& m = fs_.nodes[q];
+  if (m.front < 0) return false;
+  // The point itself, its neighbours and (as the paper requires with varying edge lengths) the
+  // neighbours' neighbours are never in the way; compare vertices, since after a split or merge
+  // a vertex occurs at two nodes.
+  const FrontNode& a = fs_.nodes[n.prev];
+  const FrontNode& b = fs_.nodes[n.next];
+  const int vm = m.vertex;
+  if (vm == n.vertex || vm == a.vertex || vm == b.vertex || vm == fs_.nodes[a.prev].vertex ||
+      vm == fs_.nodes[b.next].vertex)
+    return false;
+  if (!(mesh_.normals[vm].dot(mesh_.normals[n.vertex]) > 0)) return false;
+  const Vec3& p = mesh_.positions[n.vertex];
+  const Vec3& x = mesh_.positions[vm];
+  // Each point must see the other inside its unmeshed sector, else the bridge would cross
+  // triangles already made.
+  if (!in_sector(node, x, kSectorMargin) || !in_sector(q, p, kSectorMargin)) return false;
+  (void)p;
+  return !crosses_front(n.vertex, vm, x, n.vertex);
+}
+
+double Tracker::bridge_quality(int node, int q) const {
+  // The bridge cuts the front angles at both ends in two; the smallest part becomes the
+  // smallest angle of a triangle soon after.
+  const double t = sector_position(node, mesh_.positions[fs_.nodes[q].vertex]);
+  const double u = sector_position(q, mesh_.positions[fs_.nodes[node].vertex]);
+  return std::min({t, fs_.nodes[node].angle - t, u, fs_.nodes[q].angle - u});
+}
+
+int Tracker::find_collision(int node, double delta) const {
+  const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
+  const double radius = s_.collision_factor * delta;
+  // Among the threatened points, the nearest one whose bridge leaves no angle below
+  // kGoodBridge; failing that, the one whose bridge leaves the largest smallest angle.
+  constexpr double kGoodBridge = 0.5;
+  int best = -1;
+  double best_d = std::numeric_limits<double>::infinity(), best_quality = -1;
+  front_hash_.for_each_near(p, radius, [&](int q) {
+    const double d = (mesh_.positions[fs_.nodes[q].vertex] - p).norm();
+    if (d >= radius || !can_bridge(node, q)) return;
+    const double quality = std::min(bridge_quality(node, q), kGoodBridge);
+    const bool better = quality > best_quality ||
+                        (quality == best_quality && (d < best_d || (d == best_d && q < best)));
+    if (!better) return;
+    best = q;
+    best_d = d;
+    best_quality = quality;
+  });
+  return best;
+}
+
+int Tracker::find_closing_obstacle(int node) const {
+  // Closing the angle adds the edge prev-next; the paper adds this test because with varying
+  // edge lengths a front point can sit inside the triangle (prev, node, next).
+  const FrontNode& n = fs_.nodes[node];
+  const int va = fs_.nodes[n.prev].vertex, vb = fs_.nodes[n.next].vertex;
+  const Vec3& p = mesh_.positions[n.vertex];
+  const Vec3& N = mesh_.normals[n.vertex];
+  const Vec3& a = mesh_.positions[va];
+  const Vec3& b = mesh_.positions[vb];
+  const double radius = std::max((a - p).norm(), (b - p).norm());
+  // Inside test in the tangent plane of p: x is inside when it lies on p's side of the line
+  // a-b (the sector test covers the two other sides).
+  const Vec3 ab = b - a;
+  const Vec3 inward = N.cross(ab);  // points into the triangle when the triangle is (a, p, b)
+  const double side_p = inward.dot(p - a);
+  int best = -1;
+  double best_d = std::numeric_limits<double>::infinity();
+  front_hash_.for_each_near(p, radius, [&](int q) {
+    const int vq = fs_.nodes[q].vertex;
+    if (vq == n.vertex || vq == va || vq == vb) return;
+    const Vec3& x = mesh_.positions[vq];
+    const double d = (x - p).norm();
+    if (d >= radius || d > best_d || (d == best_d && q > best)) return;
+    if (!(mesh_.normals[vq].dot(N) > 0)) return;
+    // On p's side of line a-b, with a small tolerance so points right on the new edge count.
+    if (inward.dot(x - a) * side_p < -0.05 * side_p * side_p) return;
+    if (!in_sector(node, x, 0)) return;
+    best = q;
+    best_d = d;
+  });
+  return best;
+}
+
+}  // namespace cdp::adaptive

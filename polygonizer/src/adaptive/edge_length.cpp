@@ -1,0 +1,22 @@
+#include "edge_length.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cdp::adaptive {
+
+double chord_for_deviation(double r, double eps) {
+  // Beyond eps = r the sagitta formula has no solution below the diameter.
+  const double e = std::min(eps, r);
+  return 2.0 * std::sqrt(std::max(0.0, 2.0 * r * e - e * e));
+}
+
+double edge_length(const Sizing& s, double min_radius) {
+  double l = s.max_edge;
+  if (std::isfinite(min_radius) && min_radius > 0) {
+    l = s.mode == SizingMode::Factor ? min_radius / s.factor : chord_for_deviation(min_radius, s.tolerance);
+  }
+  return std::clamp(l, s.min_edge, s.max_edge);
+}
+
+}  // namespace cdp::adaptive

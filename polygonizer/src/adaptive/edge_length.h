@@ -1,0 +1,23 @@
+// Target edge length from the local minimum radius of curvature (paper section 3), in the
+// paper's factor mode or as a chord-deviation tolerance, clamped to [min_edge, max_edge].
+#pragma once
+
+#include <polygonizer/adaptive_polygonizer.h>
+
+namespace cdp::adaptive {
+
+struct Sizing {
+  SizingMode mode = SizingMode::Factor;
+  double factor = 2;
+  double tolerance = 0;
+  double min_edge = 0;
+  double max_edge = 0;
+};
+
+// r_min may be +infinity (flat point): the result is then max_edge.
+double edge_length(const Sizing& sizing, double min_radius);
+
+// Longest chord of a circle of radius r whose sagitta (r - sqrt(r^2 - l^2/4)) is at most eps.
+double chord_for_deviation(double r, double eps);
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,106 @@
+// Expansion of the minimal-angle front point (paper section 5 and Figure 5): the point gets n
+// triangles spanning its front angle, with n - 1 new points rotated in the tangent plane at
+// the heuristic edge length and projected onto the surface; the new points replace it on the
+// front. When n <= 1 the angle is closed by the single triangle (prev, point, next).
+#include "tracker.h"
+#include "triangle_count.h"
+
+#include <cmath>
+
+namespace cdp::adaptive {
+
+void Tracker::close_angle(int node) {
+  const FrontNode n = fs_.nodes[node];
+  emit_triangle(fs_.nodes[n.prev].vertex, n.vertex, fs_.nodes[n.next].vertex);
+  remove_node(node);
+  fs_.link(n.prev, n.next);
+  refresh(n.prev);
+  refresh(n.next);
+}
+
+Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
+  const FrontNode n = fs_.nodes[node];
+  const int va = fs_.nodes[n.prev].vertex, vb = fs_.nodes[n.next].vertex;
+  const Vec3& p = mesh_.positions[n.vertex];
+  const double theta = n.angle;
+  const int count =
+      triangle_count(s_.rule, theta, (mesh_.positions[va] - mesh_.positions[vb]).norm(), delta);
+
+  if (count <= 1) {
+    const int q = find_closing_obstacle(node);
+    if (q >= 0) return {false, can_bridge(node, q) ? q : -1};
+    if (crosses_front(va, vb, mesh_.positions[vb], n.vertex)) return {false, -1};
+    close_angle(node);
+    return {true, -1};
+  }
+
+  // Tangent frame: e0 towards next, e1 a quarter turn counter-clockwise (towards the unmeshed side).
+  const Vec3& N = mesh_.normals[n.vertex];
+  Vec3 e0 = mesh_.positions[vb] - p;
+  e0 -= N * N.dot(e0);
+  if (e0.squaredNorm() == 0) return {false, -1};
+  e0.normalize();
+  const Vec3 e1 = N.cross(e0);
+
+  // Where Newton cannot place a point at full length (a nearby sheet, a vanishing gradient),
+  // try shorter edges before giving up on this point for now.
+  std::vector<Placed> placed;
+  for (double d = delta; d >= 0.24 * s_.sizing.min_edge && placed.size() < static_cast<std::size_t>(count - 1);
+       d *= 0.5) {
+    placed.clear();
+    for (int k = 1; k < count; ++k) {
+      const double t = k * theta / count;
+      const auto x = place_point(n.vertex, std::cos(t) * e0 + std::sin(t) * e1, d);
+      if (!x) break;
+      placed.push_back(*x);
+    }
+  }
+  if (placed.size() < static_cast<std::size_t>(count - 1)) return {false, -1};
+
+  // A new point landing close to a front point the collision test did not see (beyond
+  // collision_factor * delta of the candidate) would make a sliver or an overlap: bridge to
+  // that front point instead.
+  for (const Placed& x : placed) {
+    int hit = -1;
+    double hit_d = 0.5 * delta;
+    front_hash_.for_each_near(x.point, hit_d, [&](int q) {
+      const int vq = fs_.nodes[q].vertex;
+      if (vq == n.vertex || vq == va || vq == vb) return;
+      if (!(mesh_.normals[vq].dot(N) > 0)) return;
+      const double d = (mesh_.positions[vq] - x.point).norm();
+      if (d < hit_d || (d == hit_d && q < hit)) hit = q, hit_d = d;
+    });
+    if (hit >= 0) return {false, can_bridge(node, hit) ? hit : -1};
+    if (crosses_front(n.vertex, -1, x.point, n.vertex)) return {false, -1};
+  }
+  // The new front edges must not cross the front either.
+  if (crosses_front(vb, -1, placed.front().point, n.vertex) || crosses_front(va, -1, placed.back().point, n.vertex))
+    return {false, -1};
+
+  // Triangles (p, next, x1), (p, x1, x2), ..., (p, x_{n-1}, prev): counter-clockwise from
+  // outside; the new points run from prev's side to next's side on the front.
+  std::vector<int> vs;
+  vs.reserve(placed.size());
+  for (const Placed& x : placed) vs.push_back(add_vertex(x));
+  emit_triangle(n.vertex, vb, vs.front());
+  for (std::size_t k = 0; k + 1 < vs.size(); ++k) emit_triangle(n.vertex, vs[k], vs[k + 1]);
+  emit_triangle(n.vertex, vs.back(), va);
+
+  remove_node(node);
+  const int f = n.front;
+  int after = n.next;
+  std::vector<int> fresh;
+  for (int v : vs) {
+    const int m = insert_node(v, f);
+    fs_.link(m, after);
+    after = m;
+    fresh.push_back(m);
+  }
+  fs_.link(n.prev, after);
+  refresh(n.prev);
+  refresh(n.next);
+  for (int m : fresh) refresh(m);
+  return {true, -1};
+}
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,67 @@
+// A uniform hash grid over points identified by small integers (front nodes, mesh vertices).
+// Queries visit cells in a fixed order and cells keep insertion order, so results are
+// deterministic; callers that pick "the nearest" still break ties by id.
+#pragma once
+
+#include <polygonizer/field.h>
+
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace cdp::adaptive {
+
+class SpatialHash {
+ public:
+  explicit SpatialHash(double cell_size) : h_(cell_size), inv_h_(1.0 / cell_size) {}
+
+  double cell_size() const { return h_; }
+
+  void insert(int id, const Vec3& p) { cells_[key(cell_of(p))].push_back(id); }
+
+  void remove(int id, const Vec3& p) {
+    auto it = cells_.find(key(cell_of(p)));
+    if (it == cells_.end()) return;
+    auto& v = it->second;
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (v[i] == id) {
+        v[i] = v.back();
+        v.pop_back();
+        return;
+      }
+  }
+
+  // Calls fn(id) for every id stored in a cell overlapping the cube of half-side r around p;
+  // the caller filters by exact distance.
+  template <class Fn>
+  void for_each_near(const Vec3& p, double r, Fn&& fn) const {
+    const Cell lo = cell_of(p.array() - r), hi = cell_of(p.array() + r);
+    for (std::int64_t k = lo.k; k <= hi.k; ++k)
+      for (std::int64_t j = lo.j; j <= hi.j; ++j)
+        for (std::int64_t i = lo.i; i <= hi.i; ++i) {
+          auto it = cells_.find(key({i, j, k}));
+          if (it == cells_.end()) continue;
+          for (int id : it->second) fn(id);
+        }
+  }
+
+ private:
+  struct Cell {
+    std::int64_t i, j, k;
+  };
+  Cell cell_of(const Vec3& p) const {
+    return {static_cast<std::int64_t>(std::floor(p.x() * inv_h_)), static_cast<std::int64_t>(std::floor(p.y() * inv_h_)),
+            static_cast<std::int64_t>(std::floor(p.z() * inv_h_))};
+  }
+  static std::uint64_t key(const Cell& c) {
+    // 21 bits per axis; fields far larger than 2^20 cells wrap, which only costs speed.
+    const auto m = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffffULL; };
+    return m(c.i) | (m(c.j) << 21) | (m(c.k) << 42);
+  }
+
+  double h_, inv_h_;
+  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
+};
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,255 @@
+#include "tracker.h"
+
+#include <polygonizer/errors.h>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace cdp::adaptive {
+
+Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
+    : field_(field), s_(settings), mesh_(mesh), front_hash_(settings.sizing.max_edge),
+      vertex_hash_(settings.sizing.max_edge) {}
+
+std::optional<Tracker::Placed> Tracker::measure(const Vec3& p) const {
+  Placed out{p, {}};
+  // Timed so that the stats can show what the paper claims: curvature costs little.
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    out.curvature = curvature_at(field_, p);
+  } catch (const NoSurfaceError&) {
+    curvature_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return std::nullopt;
+  }
+  curvature_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!out.curvature.normal.allFinite()) return std::nullopt;
+  return out;
+}
+
+int Tracker::add_vertex(const Placed& placed) {
+  const Curvature& c = placed.curvature;
+  const int v = static_cast<int>(mesh_.positions.size());
+  mesh_.positions.push_back(placed.point);
+  mesh_.normals.push_back(c.normal);
+  target_.push_back(edge_length(s_.sizing, c.min_radius));
+  mac_.push_back(c.mac);
+  shape_index_.push_back(c.shape_index);
+  reach_.push_back(0);
+  vertex_hash_.insert(v, placed.point);
+  return v;
+}
+
+std::optional<Tracker::Placed> Tracker::place_point(int v, const Vec3& dir, double d) const {
+  const Vec3& origin = mesh_.positions[v];
+  ProjectionOptions po;
+  po.max_step = d;
+  po.max_travel = d;
+  po.tolerance = 1e-10 * s_.diagonal;
+  const ProjectionResult r = project_to_surface(field_, origin + d * dir, po);
+  if (!r.ok()) return std::nullopt;
+  // Newton may jump to a nearby sheet of the surface; such a point is not a neighbour of v.
+  const double dist = (r.point - origin).norm();
+  if (dist < 0.25 * d || dist > 1.75 * d) return std::nullopt;
+  auto placed = measure(r.point);
+  if (!placed || !(placed->curvature.normal.dot(mesh_.normals[v]) > 0)) return std::nullopt;
+  return placed;
+}
+
+void Tracker::emit_triangle(int a, int b, int c) {
+  mesh_.triangles.push_back({a, b, c});
+  const int t[3] = {a, b, c};
+  for (int k = 0; k < 3; ++k) {
+    const double l = (mesh_.positions[t[k]] - mesh_.positions[t[(k + 1) % 3]]).norm();
+    reach_[t[k]] = std::max(reach_[t[k]], l);
+    reach_[t[(k + 1) % 3]] = std::max(reach_[t[(k + 1) % 3]], l);
+    longest_edge_ = std::max(longest_edge_, l);
+  }
+  const Vec3& pa = mesh_.positions[a];
+  area_ += 0.5 * (mesh_.positions[b] - pa).cross(mesh_.positions[c] - pa).norm();
+  if (mesh_.triangles.size() > s_.max_triangles)
+    throw LimitExceededError("adaptive: more than " + std::to_string(s_.max_triangles) +
+                             " triangles (AdaptiveOptions::max_triangles); raise the limit, the minimum edge "
+                             "length or lower the factor");
+}
+
+int Tracker::insert_node(int vertex, int front) {
+  const int n = fs_.new_node(vertex, front);
+  front_hash_.insert(n, mesh_.positions[vertex]);
+  return n;
+}
+
+void Tracker::remove_node(int node) {
+  FrontNode& n = fs_.nodes[node];
+  front_hash_.remove(node, mesh_.positions[n.vertex]);
+  --fs_.fronts[n.front].size;
+  n.front = -1;
+  ++n.version;
+}
+
+void Tracker::refresh(int node) {
+  fs_.nodes[node].angle = front_angle(node);
+  fs_.push(node);
+}
+
+void Tracker::relabel(int start, int front) {
+  int n = start;
+  do {
+    fs_.nodes[n].front = front;
+    fs_.push(n);
+    n = fs_.nodes[n].next;
+  } while (n != start);
+}
+
+double Tracker::local_edge_length(int node) const {
+  // The paper evaluates the heuristic at the point and at both front neighbours and keeps the
+  // smallest, so that an expansion never outruns a region of higher curvature next to it.
+  const FrontNode& n = fs_.nodes[node];
+  return std::min({target_[n.vertex], target_[fs_.nodes[n.prev].vertex], target_[fs_.nodes[n.next].vertex]});
+}
+
+bool Tracker::covered(const Vec3& p) const {
+  bool hit = false;
+  vertex_hash_.for_each_near(p, longest_edge_, [&](int w) {
+    if (!hit && (mesh_.positions[w] - p).norm() <= reach_[w]) hit = true;
+  });
+  return hit;
+}
+
+bool Tracker::mesh_from_seed(const Vec3& seed) {
+  const auto seed_placed = measure(seed);
+  if (!seed_placed) return false;
+  const int c = add_vertex(*seed_placed);
+  const Vec3 n = mesh_.normals[c];
+  Vec3 axis = Vec3::UnitX();
+  if (std::abs(n.y()) < std::abs(n[0]) && std::abs(n.y()) <= std::abs(n.z())) axis = Vec3::UnitY();
+  else if (std::abs(n.z()) < std::abs(n[0]) && std::abs(n.z()) < std::abs(n.y())) axis = Vec3::UnitZ();
+  const Vec3 e0 = axis.cross(n).normalized();
+  const Vec3 e1 = n.cross(e0);
+
+  // The hexagon of Figure 5a; shrink it where Newton cannot place its corners.
+  std::vector<Placed> corners;
+  for (double d = target_[c]; d >= 0.24 * s_.sizing.min_edge && corners.size() < 6; d *= 0.5) {
+    corners.clear();
+    for (int k = 0; k < 6; ++k) {
+      const double t = k * std::numbers::pi / 3;
+      const auto p = place_point(c, std::cos(t) * e0 + std::sin(t) * e1, d);
+      if (!p) break;
+      corners.push_back(*p);
+    }
+  }
+  if (corners.size() < 6) {
+    // Keep the mesh free of an isolated vertex: the seed vertex is the last one added.
+    vertex_hash_.remove(c, mesh_.positions[c]);
+    mesh_.positions.pop_back();
+    mesh_.normals.pop_back();
+    target_.pop_back();
+    mac_.pop_back();
+    shape_index_.pop_back();
+    reach_.pop_back();
+    return false;
+  }
+  std::vector<int> v(6);
+  for (int k = 0; k < 6; ++k) v[k] = add_vertex(corners[k]);
+  for (int k = 0; k < 6; ++k) emit_triangle(c, v[k], v[(k + 1) % 6]);
+
+  const int f = fs_.new_front();
+  std::vector<int> nodes(6);
+  for (int k = 0; k < 6; ++k) nodes[k] = insert_node(v[k], f);
+  // Triangle (c, v_k, v_k+1) owns the edge v_k -> v_k+1, so the front runs the other way.
+  for (int k = 0; k < 6; ++k) fs_.link(nodes[(k + 1) % 6], nodes[k]);
+  for (int k = 0; k < 6; ++k) refresh(nodes[k]);
+  stack_.push_back(f);
+  run_fronts();
+  return true;
+}
+
+void Tracker::check_limits() {
+  if (++steps_ > s_.max_steps)
+    throw LimitExceededError("adaptive: more than " + std::to_string(s_.max_steps) +
+                             " front steps (AdaptiveOptions::max_steps) without closing the surface");
+  if (progress_ && estimated_area_ > 0 && (steps_ & 1023) == 0) {
+    const double f = std::min(0.99, area_ / estimated_area_);
+    if (f > last_progress_) {
+      last_progress_ = f;
+      progress_(f);
+    }
+  }
+}
+
+void Tracker::run_fronts() {
+  while (!stack_.empty()) {
+    int f = stack_.back();
+    stack_.pop_back();
+    while (fs_.fronts[f].alive) {
+      if (fs_.fronts[f].size <= 3) {
+        // Figure 6, line 21: the last three points form one triangle.
+        Front& fr = fs_.fronts[f];
+        if (fr.size < 3) throw std::logic_error("adaptive: a front shrank below three points");
+        const int a = fs_.pop_min(f);
+        if (a < 0) throw std::logic_error("adaptive: a front lost its queue");
+        const int b = fs_.nodes[a].next, c = fs_.nodes[b].next;
+        const int va = fs_.nodes[a].vertex, vb = fs_.nodes[b].vertex, vc = fs_.nodes[c].vertex;
+        // A three-point front through one vertex twice encloses nothing (see zip_spike).
+        if (va != vb && vb != vc && va != vc) emit_triangle(va, vb, vc);
+        remove_node(a);
+        remove_node(b);
+        remove_node(c);
+        fr.alive = false;
+        fr.heap = {};
+        break;
+      }
+      step(f);
+    }
+  }
+}
+
+bool Tracker::zip_spike(int node) {
+  // After a merge a front may pass twice through one vertex. Once the points between the two
+  // passes are used up, the front runs p -> y -> p (both sides of edge p-y are meshed) or
+  // p -> p: a loop enclosing nothing, which is cut out without a triangle.
+  FrontNode& n = fs_.nodes[node];
+  const int v = n.vertex;
+  if (fs_.nodes[n.next].vertex == v) {
+    const int prev = n.prev;
+    remove_node(node);
+    fs_.link(prev, fs_.nodes[node].next);
+    refresh(prev);
+    refresh(fs_.nodes[node].next);
+    return true;
+  }
+  if (fs_.nodes[n.prev].vertex != fs_.nodes[n.next].vertex) return false;
+  const int before = n.prev, twin = n.next, after = fs_.nodes[twin].next;
+  remove_node(node);
+  remove_node(twin);
+  fs_.link(before, after);
+  refresh(before);
+  refresh(after);
+  return true;
+}
+
+void Tracker::step(int& f) {
+  check_limits();
+  const int node = fs_.pop_min(f);
+  if (node < 0) throw std::logic_error("adaptive: a front lost its queue");
+  if (zip_spike(node)) return;
+  const double delta = local_edge_length(node);
+  int q = find_collision(node, delta);
+  if (q < 0) {
+    const ExpandOutcome r = expand(node, delta);
+    if (r.expanded) return;
+    q = r.obstacle;
+    if (q < 0) {
+      // Nothing to bridge to and no room to expand: let the other points of the front move
+      // first. max_steps bounds how often this can happen.
+      ++deferrals_;
+      fs_.push_with_key(node, fs_.nodes[node].angle + 2 * std::numbers::pi * (1 + deferrals_ % 4));
+      return;
+    }
+  }
+  if (fs_.nodes[q].front == f) split_front(node, q);
+  else f = merge_fronts(node, q);
+}
+
+}  // namespace cdp::adaptive

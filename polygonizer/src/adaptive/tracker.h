@@ -1,0 +1,136 @@
+// The state of one adaptive polygonization: the mesh being built, its fronts, the spatial
+// hashes and the counters. The operations of Figure 6 of the paper are member functions,
+// each defined in the file named after it:
+//   tracker.cpp         vertices, front bookkeeping, seed hexagon, the polygonization cycle
+//   front_angle.cpp     front angles and visibility sectors in the tangent plane
+//   collision.cpp       Self-Intersection / Front-Collision tests (which front point is hit)
+//   expand_point.cpp    expand (minimal-angle point -> n triangles and new front points)
+//   split_front.cpp     split-front (a front that runs into itself becomes two)
+//   merge_fronts.cpp    unify-front (two fronts that meet become one)
+#pragma once
+
+#include "edge_length.h"
+#include "front.h"
+#include "spatial_hash.h"
+
+#include <polygonizer/adaptive_polygonizer.h>
+#include <polygonizer/curvature.h>
+#include <polygonizer/newton_projection.h>
+
+#include <optional>
+#include <vector>
+
+namespace cdp::adaptive {
+
+// Options with every default resolved.
+struct Settings {
+  Sizing sizing;
+  TriangleCountRule rule = TriangleCountRule::Hartmann;
+  double collision_factor = 1.3;
+  std::size_t max_triangles = 0;
+  std::size_t max_steps = 0;
+  bool curvature_properties = false;
+  double diagonal = 1;
+};
+
+class Tracker {
+ public:
+  Tracker(const Field& field, const Settings& settings, Mesh& mesh);
+
+  // Meshes the component through `seed` (a point on the surface). Returns false when not even
+  // the first hexagon could be placed there (the caller tries another seed).
+  bool mesh_from_seed(const Vec3& seed);
+
+  // Whether p lies on the meshed part: within reach of a vertex (its longest incident edge).
+  bool covered(const Vec3& p) const;
+
+  void set_progress(ProgressCallback cb, double estimated_area) {
+    progress_ = std::move(cb);
+    estimated_area_ = estimated_area;
+  }
+
+  std::size_t steps() const { return steps_; }
+  std::size_t splits() const { return splits_; }
+  std::size_t merges() const { return merges_; }
+  std::size_t deferrals() const { return deferrals_; }
+  // Wall-clock time spent in curvature_at (Hessian evaluation and eigen-decomposition).
+  double curvature_seconds() const { return curvature_seconds_; }
+  const std::vector<double>& vertex_mac() const { return mac_; }
+  const std::vector<double>& vertex_shape_index() const { return shape_index_; }
+  const std::vector<double>& vertex_edge_length() const { return target_; }
+
+ private:
+  // A surface point with its curvature (one gradient_hessian evaluation), ready to become a vertex.
+  struct Placed {
+    Vec3 point;
+    Curvature curvature;
+  };
+  struct ExpandOutcome {
+    bool expanded = false;
+    int obstacle = -1;  // when not expanded: a front node to bridge to, or -1
+  };
+
+  // --- tracker.cpp
+  // Curvature at p; nothing where the gradient vanishes.
+  std::optional<Placed> measure(const Vec3& p) const;
+  int add_vertex(const Placed& placed);
+  // A new surface point about distance d from vertex v in tangent direction dir, or nothing
+  // when Newton fails or lands somewhere implausible (another sheet, far away).
+  std::optional<Placed> place_point(int v, const Vec3& dir, double d) const;
+  void emit_triangle(int a, int b, int c);
+  int insert_node(int vertex, int front);
+  void remove_node(int node);
+  void refresh(int node);  // recompute the angle and requeue
+  void relabel(int start, int front);
+  void run_fronts();
+  void step(int& front);
+  void check_limits();
+  bool zip_spike(int node);
+  double local_edge_length(int node) const;
+
+  // --- front_angle.cpp
+  double front_angle(int node) const;
+  // Angle of x around node's vertex, measured counter-clockwise from the direction of next in
+  // the tangent plane, in [0, 2 pi).
+  double sector_position(int node, const Vec3& x) const;
+  bool in_sector(int node, const Vec3& x, double margin) const;
+
+  // --- collision.cpp
+  // A front node that the expansion of `node` with edge length delta would run into, or -1.
+  int find_collision(int node, double delta) const;
+  // A front node inside the triangle (prev, node, next) or too close to its new edge, or -1.
+  int find_closing_obstacle(int node) const;
+  // Whether the segment from vertex vu to point w (vertex vw, or -1 for a point not yet in the
+  // mesh) crosses a front edge, seen in the tangent plane of frame_vertex.
+  bool crosses_front(int vu, int vw, const Vec3& w, int frame_vertex) const;
+  // Whether node and q may be joined by a bridge edge.
+  bool can_bridge(int node, int q) const;
+  // The smallest of the four angles a bridge node-q leaves at its ends.
+  double bridge_quality(int node, int q) const;
+
+  // --- expand_point.cpp
+  // Expands node with edge length delta into new triangles (Figure 6, expand), or reports the
+  // front node in the way.
+  ExpandOutcome expand(int node, double delta);
+  void close_angle(int node);
+
+  // --- split_front.cpp, merge_fronts.cpp
+  void split_front(int p, int q);
+  int merge_fronts(int p, int q);  // returns the surviving front
+
+  const Field& field_;
+  Settings s_;
+  Mesh& mesh_;
+  std::vector<double> target_, mac_, shape_index_;
+  std::vector<double> reach_;  // longest edge at each vertex: the triangles there lie within it
+  double longest_edge_ = 0;
+  FrontSet fs_;
+  SpatialHash front_hash_, vertex_hash_;
+  std::vector<int> stack_;
+  std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0;
+  double area_ = 0, estimated_area_ = 0, last_progress_ = 0;
+  mutable double curvature_seconds_ = 0;
+  ProgressCallback progress_;
+};
+
+}  // namespace cdp::adaptive
