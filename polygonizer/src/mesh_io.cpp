@@ -96,10 +96,27 @@ Mesh read_mesh(const std::filesystem::path& path) {
   TriMesh om;
   om.request_vertex_normals();
   OpenMesh::IO::Options opts = OpenMesh::IO::Options::VertexNormal;
+  // PLY only: OpenMesh's PLY reader turns every extra vertex property into a named property.
+  if (path.extension() == ".ply") opts += OpenMesh::IO::Options::Custom;
   if (!OpenMesh::IO::read_mesh(om, path.string(), opts))
     throw InvalidInputError(path.string() + ": cannot read mesh (unsupported or malformed file)");
   Mesh mesh = from_openmesh(om);
   if (!opts.check(OpenMesh::IO::Options::VertexNormal)) mesh.normals.clear();
+  // Scalar vertex properties (double or float in the file) become vertex_scalars, as written.
+  for (auto it = om.vprops_begin(); it != om.vprops_end(); ++it) {
+    if (!*it) continue;
+    const std::string name = (*it)->name();
+    std::vector<double> values;
+    values.reserve(om.n_vertices());
+    if (OpenMesh::VPropHandleT<double> hd; om.get_property_handle(hd, name)) {
+      for (auto v : om.vertices()) values.push_back(om.property(hd, v));
+    } else if (OpenMesh::VPropHandleT<float> hf; om.get_property_handle(hf, name)) {
+      for (auto v : om.vertices()) values.push_back(om.property(hf, v));
+    } else {
+      continue;
+    }
+    mesh.vertex_scalars[name] = std::move(values);
+  }
   return mesh;
 }
 

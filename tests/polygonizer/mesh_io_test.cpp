@@ -61,6 +61,21 @@ TEST(MeshIOErrors, MissingFileAndUnknownFormatAreNamed) {
   std::filesystem::remove_all(dir);
 }
 
+// Only PLY stores named vertex properties; binary and ASCII files keep them exactly.
+TEST(MeshIOScalars, PlyKeepsVertexScalars) {
+  const auto dir = std::filesystem::temp_directory_path() / ("cdp_mesh_io_scalars_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  Mesh m = tetrahedron_with_normals();
+  m.vertex_scalars["shape_index"] = {-1, -0.25, 0.5, 1};
+  for (bool binary : {true, false}) {
+    const auto path = dir / (binary ? "bin.ply" : "ascii.ply");
+    write_mesh(m, path, binary);
+    const Mesh r = read_mesh(path);
+    EXPECT_EQ(r.vertex_scalars, m.vertex_scalars) << path;
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST(MeshIOErrors, NonManifoldMeshIsRejectedByTheOpenMeshConversion) {
   Mesh m = tetrahedron_with_normals();
   m.positions.push_back({3, 0, 0});

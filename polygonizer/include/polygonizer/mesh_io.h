@@ -25,7 +25,8 @@ Mesh from_openmesh(const TriMesh& mesh);
 // Writes positions, normals (when present) and triangles; the format follows the extension.
 // Writes to a temporary file and renames it, so a failure leaves no half-written file.
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, bool binary = true);
-// Reads positions, triangles and vertex normals (when the file has them).
+// Reads positions, triangles and vertex normals (when the file has them); from PLY files also
+// the scalar (double or float) vertex properties, into vertex_scalars under their names.
 Mesh read_mesh(const std::filesystem::path& path);
 
 }  // namespace cdp
