@@ -1,0 +1,286 @@
+"""Benchmark runs (results/bench/*.json) and the statistics the dashboard applies to them.
+
+A run is the file scripts/run_benchmarks.py writes: {"schema", "context", "programs",
+"benchmarks": [{"binary", "name", "label", "time_unit", "time_kind", "threads",
+"samples": {"real_time": [...], "cpu_time": [...], "iterations": [...]},
+"counters": {name: [one value per repetition]}, "error"}]}.
+
+Noise and regressions (documented on the page too). For one benchmark in one run with n
+repetitions x_i: the run's value is the median m, and its noise the robust relative spread of a
+single repetition, s = 1.4826 * MAD(x) / m (1.4826 MAD estimates the standard deviation of
+normal data; the MAD ignores the odd repetition disturbed by another process), floored at
+NOISE_FLOOR because a MAD of three repetitions can come out as zero by chance. Between two runs,
+the change is d = ln(m_new / m_old) and the threshold t = Z * sqrt(s_old^2 + s_new^2): a
+regression when d > t (slower), an improvement when d < -t. We use the spread of single
+repetitions rather than the smaller standard error of the median on purpose: repetitions run
+back to back and miss the slower drift between runs (other jobs, clock frequency), so the
+tighter bound would flag noise.
+"""
+import datetime
+import json
+import math
+import os
+import re
+
+SCHEMA = "cdp-bench/1"
+# Benchmarks whose name contains one of these are skipped by the short (CI) mode.
+SHORT_EXCLUDE = "Scaling|Slow"
+Z = 3.0
+NOISE_FLOOR = 0.005
+UNIT_SECONDS = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
+
+
+def time_kind(name, threads=1):
+    """Which time a benchmark is judged by: wall clock for multi-threaded and manually timed
+    benchmarks (Google Benchmark stores the manual time as real_time), CPU time otherwise,
+    which other processes on a busy machine disturb less."""
+    if name.endswith("/real_time") or name.endswith("/manual_time") or (threads or 1) > 1:
+        return "real"
+    return "cpu"
+
+
+def median(xs):
+    xs = sorted(xs)
+    n = len(xs)
+    if n == 0:
+        return None
+    return xs[n // 2] if n % 2 else 0.5 * (xs[n // 2 - 1] + xs[n // 2])
+
+
+def mad(xs):
+    m = median(xs)
+    return median([abs(x - m) for x in xs]) if xs else None
+
+
+def finite(xs):
+    return [x for x in xs if isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)]
+
+
+def key(bench):
+    return bench["binary"] + ":" + bench["name"]
+
+
+def time_samples(bench):
+    """The repetitions' times in seconds (real or CPU time, see time_kind)."""
+    kind = bench.get("time_kind") or time_kind(bench["name"], bench.get("threads", 1))
+    scale = UNIT_SECONDS.get(bench.get("time_unit", "ns"), 1e-9)
+    return [x * scale for x in finite(bench.get("samples", {}).get(kind + "_time", []))]
+
+
+def relative_spread(xs):
+    """1.4826 MAD / median of single repetitions; None with fewer than two repetitions."""
+    xs = finite(xs)
+    m = median(xs)
+    if len(xs) < 2 or not m:
+        return None
+    return max(1.4826 * mad(xs) / abs(m), NOISE_FLOOR)
+
+
+def summary(bench):
+    xs = time_samples(bench)
+    return {"median": median(xs), "spread": relative_spread(xs), "n": len(xs), "min": min(xs) if xs else None,
+            "max": max(xs) if xs else None}
+
+
+def counter_median(bench, name):
+    return median(finite(bench.get("counters", {}).get(name, [])))
+
+
+def compare(old, new, z=Z):
+    """Latest (new) against previous (old) time samples in seconds: ratio new/old of the medians,
+    the threshold on |ln ratio| and a verdict: regression, improvement, same or unknown."""
+    mo, mn = median(finite(old)), median(finite(new))
+    if not mo or not mn or mo <= 0 or mn <= 0:
+        return {"ratio": None, "threshold": None, "verdict": "unknown", "why": "no valid time"}
+    so, sn = relative_spread(old), relative_spread(new)
+    ratio = mn / mo
+    if so is None or sn is None:
+        return {"ratio": ratio, "threshold": None, "verdict": "unknown", "why": "fewer than two repetitions"}
+    t = z * math.hypot(so, sn)
+    d = math.log(ratio)
+    verdict = "regression" if d > t else "improvement" if d < -t else "same"
+    return {"ratio": ratio, "threshold": math.exp(t), "verdict": verdict, "why": ""}
+
+
+def load_run(path):
+    """A run file, checked enough that the dashboard can trust its shape."""
+    try:
+        with open(path) as f:
+            run = json.load(f)
+    except ValueError as e:
+        raise ValueError("{}: not valid JSON ({})".format(path, e))
+    if not isinstance(run, dict) or run.get("schema") != SCHEMA or not isinstance(run.get("benchmarks"), list):
+        raise ValueError("{}: not a benchmark run (expected schema {!r} with a benchmarks list)".format(path, SCHEMA))
+    run.setdefault("context", {})
+    run["path"] = path
+    return run
+
+
+def utc(stamp):
+    """An ISO 8601 time as UTC "YYYYMMDDTHHMMSSZ" (sorts as text); "" when missing or unreadable."""
+    try:
+        t = datetime.datetime.fromisoformat((stamp or "").replace("Z", "+00:00"))
+    except ValueError:
+        return ""
+    if t.tzinfo is None:
+        t = t.replace(tzinfo=datetime.timezone.utc)
+    return t.astimezone(datetime.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+
+
+def sort_key(run):
+    """Commit order (by commit date), then run date."""
+    c = run["context"]
+    return (utc(c.get("commit_date")), utc(c.get("date")))
+
+
+def load_history(directory):
+    if not directory or not os.path.isdir(directory):
+        return []
+    runs = [load_run(os.path.join(directory, n)) for n in sorted(os.listdir(directory)) if n.endswith(".json")]
+    return sorted(runs, key=sort_key)
+
+
+def record_name(run):
+    """history/<commit date>-<short commit>.json: one file per commit, in commit order by name."""
+    c = run["context"]
+    date = utc(c.get("commit_date")) or utc(c.get("date")) or "undated"
+    short = (c.get("commit_short") or (c.get("commit") or "")[:7]) or "nocommit"
+    return "{}-{}.json".format(date, re.sub(r"[^0-9A-Za-z]", "", short) or "nocommit")
+
+
+def run_label(run):
+    c = run["context"]
+    s = c.get("commit_short") or "?"
+    return s + ("+" if c.get("dirty") else "")
+
+
+# ---- ratios measured inside one run ----
+
+POLYGONIZERS = ("adaptive", "mc", "mt")
+_NAME_METHODS = {"adaptive": "adaptive", "marchingcubes": "mc", "mc": "mc", "marchingtetrahedra": "mt", "mt": "mt"}
+
+
+def polygonizer_of(bench):
+    """(field, method, variant) of a polygonizer benchmark, or None. The label
+    "<field>/<method>[/<variant>]" (method adaptive, mc or mt, as bench_marching writes) wins;
+    otherwise a name "BM_<Method>/<field>/<rest>" with Method Adaptive, MC, MT, MarchingCubes or
+    MarchingTetrahedra (bench/README.md)."""
+    parts = (bench.get("label") or "").split("/")
+    if len(parts) >= 2 and parts[1] in POLYGONIZERS and parts[0]:
+        return parts[0], parts[1], "/".join(parts[2:])
+    parts = bench["name"].split("/")
+    head = parts[0][3:].lower() if parts[0].startswith("BM_") else ""
+    if head in _NAME_METHODS and len(parts) >= 2:
+        return parts[1], _NAME_METHODS[head], "/".join(parts[2:])
+    return None
+
+
+def adaptive_vs_marching(run, counter="triangles_per_second"):
+    """Per field and adaptive benchmark: its triangles per second against the fastest MT and MC
+    benchmark of the same field in the same run."""
+    by_field = {}
+    for b in run["benchmarks"]:
+        p = polygonizer_of(b)
+        v = counter_median(b, counter) if p else None
+        if p and v:
+            by_field.setdefault(p[0], {}).setdefault(p[1], []).append((v, b))
+    rows = []
+    for field in sorted(by_field):
+        m = by_field[field]
+        best = {meth: max(m[meth], key=lambda t: t[0]) for meth in ("mt", "mc") if meth in m}
+        for v, b in m.get("adaptive", []):
+            row = {"field": field, "benchmark": key(b), "adaptive": v}
+            for meth, (mv, mb) in best.items():
+                row[meth] = mv
+                row[meth + "_benchmark"] = key(mb)
+                row["vs_" + meth] = v / mv
+            rows.append(row)
+    return rows
+
+
+_BATCHED = ("values_batched", "batched", "vectorized")
+_SCALAR = ("values_scalar", "scalar")
+
+
+def _rate(b):
+    for k in sorted(b.get("counters", {})):
+        if k.endswith("per_second") or k.endswith("per_s"):
+            v = counter_median(b, k)
+            if v:
+                return v, k
+    return None, None
+
+
+def batched_vs_scalar(run):
+    """Vectorization gain: a batched benchmark against its scalar twin (names differing in one
+    component, batched/values_batched/vectorized against scalar/values_scalar), by a rate
+    counter both have, else by inverse time."""
+    benches = {key(b): b for b in run["benchmarks"] if not b.get("error")}
+    rows = []
+    for k, b in benches.items():
+        parts = k.split("/")
+        for i, p in enumerate(parts):
+            if p not in _BATCHED:
+                continue
+            for s in _SCALAR:
+                twin = benches.get("/".join(parts[:i] + [s] + parts[i + 1:]))
+                if twin is None:
+                    continue
+                (rb, cb), (rs, cs) = _rate(b), _rate(twin)
+                if rb and rs and cb == cs:
+                    gain, how = rb / rs, cb
+                else:
+                    tb, ts = summary(b)["median"], summary(twin)["median"]
+                    gain, how = (ts / tb if tb and ts else None), "time"
+                rows.append({"batched": k, "scalar": key(twin), "gain": gain, "by": how})
+    return sorted(rows, key=lambda r: r["batched"])
+
+
+PER_ITEM_COUNTERS = ("evals_per_vertex", "evaluations_per_vertex", "evaluations_per_triangle")
+
+
+def evaluations_per_item(run):
+    rows = []
+    for b in run["benchmarks"]:
+        for c in PER_ITEM_COUNTERS:
+            v = counter_median(b, c)
+            if v is not None:
+                rows.append({"benchmark": key(b), "label": b.get("label", ""), "counter": c, "value": v})
+    return rows
+
+
+# ---- export for benchmark-tracking CI actions ----
+
+def export(run):
+    """github-action-benchmark's custom formats: (smaller_is_better, bigger_is_better), each a
+    list of {name, unit, value, range, extra}. Times are medians in the benchmark's own unit;
+    rate counters (…per_second, …per_s) and the in-run ratios go to the bigger-is-better list."""
+    c = run["context"]
+    smaller, bigger = [], []
+    for b in run["benchmarks"]:
+        if b.get("error"):
+            continue
+        s = summary(b)
+        if s["median"] is None:
+            continue
+        unit = b.get("time_unit", "ns")
+        entry = {"name": key(b), "unit": unit, "value": s["median"] / UNIT_SECONDS.get(unit, 1e-9),
+                 "extra": "{} time, median of {} repetitions, commit {}".format(b.get("time_kind", "cpu"), s["n"],
+                                                                              c.get("commit_short", "?"))}
+        if s["spread"] is not None:
+            entry["range"] = "± {:.1f}%".format(100 * s["spread"])
+        smaller.append(entry)
+        for cn in sorted(b.get("counters", {})):
+            if cn.endswith("per_second") or cn.endswith("per_s"):
+                v = counter_median(b, cn)
+                if v is not None:
+                    bigger.append({"name": key(b) + " " + cn, "unit": "1/s", "value": v})
+    for r in adaptive_vs_marching(run):
+        for meth in ("mt", "mc"):
+            if "vs_" + meth in r:
+                bigger.append({"name": "ratio adaptive/{} triangles_per_second {}".format(meth, r["benchmark"]),
+                               "unit": "ratio", "value": r["vs_" + meth]})
+    for r in batched_vs_scalar(run):
+        if r["gain"]:
+            bigger.append({"name": "ratio batched/scalar " + r["batched"], "unit": "ratio", "value": r["gain"]})
+    return smaller, bigger
