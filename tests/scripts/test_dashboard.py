@@ -1,0 +1,213 @@
+#!/usr/bin/python3
+"""Tests of the benchmark scripts (scripts/bench_lib.py, record_benchmark.py, make_dashboard.py)
+on synthetic runs: regression flags, in-run ratios, history naming, the export format and the
+page with zero, one and several runs. Run by ctest (tests/CMakeLists.txt) with /usr/bin/python3."""
+import json
+import os
+import re
+import sys
+import tempfile
+import unittest
+
+sys.dont_write_bytecode = True  # keep the source tree clean when ctest runs this
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+
+import bench_lib as bl  # noqa: E402
+import make_dashboard  # noqa: E402
+import record_benchmark  # noqa: E402
+
+NOISE = [1.00, 1.02, 0.98, 1.01, 0.99]  # about 1.5% spread
+
+
+def bench(binary, name, times, unit="ms", label="", counters=None, kind="cpu"):
+    return {"binary": binary, "name": name, "label": label, "time_unit": unit, "time_kind": kind, "threads": 1,
+            "samples": {"real_time": list(times), "cpu_time": list(times), "iterations": [10] * len(times)},
+            "counters": {k: list(v) for k, v in (counters or {}).items()}, "error": None}
+
+
+def run(commit, date, slow=1.0):
+    """A synthetic run: two field evaluations (batched 2x faster than scalar), an adaptive and two
+    MT benchmarks of the same field (adaptive 2x the fastest MT), one with evaluations per vertex.
+    `slow` multiplies the batched benchmark's time."""
+    return {"schema": bl.SCHEMA,
+            "context": {"commit": commit, "commit_short": commit[:7], "commit_date": date, "date": date,
+                        "cpu": "Test CPU", "cores": 2, "mode": "full", "commit_subject": "synthetic"},
+            "programs": {"bench_fields": {"seconds": 1.0, "returncode": 0}},
+            "benchmarks": [
+                bench("bench_fields", "BM_Field/torus/values_batched", [slow * 10 * x for x in NOISE], "us",
+                      counters={"evaluations_per_second": [4e8 / slow] * 5}),
+                bench("bench_fields", "BM_Field/torus/values_scalar", [20 * x for x in NOISE], "us",
+                      counters={"evaluations_per_second": [2e8] * 5}),
+                bench("bench_adaptive", "BM_Adaptive/torus/factor:3/manual_time", [50 * x for x in NOISE], kind="real",
+                      counters={"triangles_per_second": [2e6] * 5, "evals_per_vertex": [7.5] * 5}),
+                bench("bench_marching", "BM_Marching/shape:0/method:1/traversal:0/manual_time",
+                      [40 * x for x in NOISE], label="torus/mt/continuation", kind="real",
+                      counters={"triangles_per_second": [1e6] * 5}),
+                bench("bench_marching", "BM_Marching/shape:0/method:1/traversal:1/manual_time",
+                      [80 * x for x in NOISE], label="torus/mt/grid", kind="real",
+                      counters={"triangles_per_second": [5e5] * 5}),
+            ]}
+
+
+def write_json(path, data):
+    with open(path, "w") as f:
+        json.dump(data, f)
+
+
+class Statistics(unittest.TestCase):
+    def test_twice_as_slow_is_a_regression(self):
+        c = bl.compare(NOISE, [2 * x for x in NOISE])
+        self.assertEqual(c["verdict"], "regression")
+        self.assertAlmostEqual(c["ratio"], 2.0)
+
+    def test_twice_as_fast_is_an_improvement(self):
+        self.assertEqual(bl.compare(NOISE, [0.5 * x for x in NOISE])["verdict"], "improvement")
+
+    def test_noise_level_change_is_not_flagged(self):
+        # Medians 1.00 and 1.01 with ~1.5% spread per repetition in both runs.
+        c = bl.compare(NOISE, [1.01, 0.99, 1.03, 1.00, 1.02])
+        self.assertEqual(c["verdict"], "same")
+        self.assertGreater(c["threshold"], 1.01)
+
+    def test_threshold_follows_the_spread(self):
+        # A 10% slowdown: a regression when repetitions agree to 0.5%, noise when they spread by 10%.
+        tight = [1.0, 1.005, 0.995]
+        loose = [1.0, 1.1, 0.9]
+        self.assertEqual(bl.compare(tight, [1.1 * x for x in tight])["verdict"], "regression")
+        self.assertEqual(bl.compare(loose, [1.1 * x for x in loose])["verdict"], "same")
+
+    def test_one_repetition_has_no_spread(self):
+        self.assertEqual(bl.compare([1.0], [2.0])["verdict"], "unknown")
+
+    def test_median_ignores_one_disturbed_repetition(self):
+        s = bl.summary(bench("b", "BM_X", [1.0, 1.0, 9.0, 1.0, 1.0], unit="s"))
+        self.assertEqual(s["median"], 1.0)
+        self.assertEqual(s["spread"], bl.NOISE_FLOOR)
+
+    def test_time_kind(self):
+        self.assertEqual(bl.time_kind("BM_A/1/real_time"), "real")
+        self.assertEqual(bl.time_kind("BM_A/1/manual_time"), "real")
+        self.assertEqual(bl.time_kind("BM_A/1", threads=4), "real")
+        self.assertEqual(bl.time_kind("BM_A/1"), "cpu")
+
+
+class InRunRatios(unittest.TestCase):
+    def test_adaptive_against_fastest_mt_of_the_same_field(self):
+        rows = bl.adaptive_vs_marching(run("a" * 40, "2026-01-01T00:00:00+00:00"))
+        self.assertEqual(len(rows), 1)
+        self.assertEqual(rows[0]["field"], "torus")
+        self.assertAlmostEqual(rows[0]["vs_mt"], 2.0)
+        self.assertNotIn("vs_mc", rows[0])
+
+    def test_batched_against_scalar(self):
+        rows = bl.batched_vs_scalar(run("a" * 40, "2026-01-01T00:00:00+00:00"))
+        self.assertEqual(len(rows), 1)
+        self.assertAlmostEqual(rows[0]["gain"], 2.0)
+        self.assertEqual(rows[0]["by"], "evaluations_per_second")
+
+    def test_missing_benchmarks_give_no_ratio(self):
+        r = run("a" * 40, "2026-01-01T00:00:00+00:00")
+        r["benchmarks"] = r["benchmarks"][:1]
+        self.assertEqual(bl.adaptive_vs_marching(r), [])
+        self.assertEqual(bl.batched_vs_scalar(r), [])
+
+
+class Recording(unittest.TestCase):
+    def test_one_file_per_commit(self):
+        with tempfile.TemporaryDirectory() as d:
+            latest, hist = os.path.join(d, "latest.json"), os.path.join(d, "history")
+            write_json(latest, run("0123456789abcdef" * 2 + "01234567", "2026-03-04T05:06:07+01:00"))
+            p1 = record_benchmark.record(latest, hist)
+            self.assertEqual(os.path.basename(p1), "20260304T040607Z-0123456.json")
+            # Recording the same commit again (a later run) replaces the file.
+            r = run("0123456789abcdef" * 2 + "01234567", "2026-03-04T05:06:07+01:00", slow=2.0)
+            write_json(latest, r)
+            record_benchmark.record(latest, hist)
+            self.assertEqual(os.listdir(hist), ["20260304T040607Z-0123456.json"])
+            self.assertEqual(bl.load_run(p1)["benchmarks"][0]["samples"]["cpu_time"][0], 20.0)
+            write_json(latest, run("f" * 40, "2026-03-05T00:00:00+00:00"))
+            record_benchmark.record(latest, hist)
+            self.assertEqual(len(os.listdir(hist)), 2)
+
+    def test_bad_file_is_refused(self):
+        with tempfile.TemporaryDirectory() as d:
+            bad = os.path.join(d, "bad.json")
+            write_json(bad, {"benchmarks": []})
+            with self.assertRaisesRegex(ValueError, "bad.json: not a benchmark run"):
+                record_benchmark.record(bad, os.path.join(d, "h"))
+            self.assertFalse(os.path.exists(os.path.join(d, "h")))
+
+
+class Dashboard(unittest.TestCase):
+    def make(self, runs, latest=None, table=None):
+        d = self.tmp.name
+        hist = os.path.join(d, "history")
+        os.makedirs(hist, exist_ok=True)
+        for r in runs:
+            write_json(os.path.join(hist, bl.record_name(r)), r)
+        args = ["--history", hist, "--latest", os.path.join(d, "latest.json"), "--table",
+                os.path.join(d, "table1.json"), "--out", os.path.join(d, "dash", "index.html")]
+        if latest:
+            write_json(os.path.join(d, "latest.json"), latest)
+        if table:
+            write_json(os.path.join(d, "table1.json"), table)
+        make_dashboard.main(args)
+        with open(os.path.join(d, "dash", "index.html")) as f:
+            page = f.read()
+        with open(os.path.join(d, "dash", "benchmark-action.json")) as f:
+            smaller = json.load(f)
+        with open(os.path.join(d, "dash", "benchmark-action-bigger.json")) as f:
+            bigger = json.load(f)
+        return page, smaller, bigger
+
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def test_no_runs(self):
+        page, smaller, bigger = self.make([])
+        self.assertIn("No benchmark runs yet", page)
+        self.assertEqual((smaller, bigger), ([], []))
+
+    def test_one_run(self):
+        page, smaller, _ = self.make([run("a" * 40, "2026-01-01T00:00:00+00:00")])
+        self.assertIn("Needs two runs", page)
+        self.assertGreater(page.count("data:image/png;base64,"), 0)
+        self.assertEqual(len(smaller), 5)
+
+    def test_slowdown_flagged_and_export_format(self):
+        runs = [run("a" * 40, "2026-01-01T00:00:00+00:00"), run("b" * 40, "2026-01-02T00:00:00+00:00")]
+        latest = run("c" * 40, "2026-01-03T00:00:00+00:00", slow=2.0)  # not recorded: shown as the newest run
+        table = {"environment": {"commit": "d" * 40}, "rows": [
+            {"method": "adaptive", "parameter_name": "factor", "parameter": 5, "status": "ok", "triangles": 1000,
+             "triangles_per_s": 1e5, "ratio_ls": 1.234, "phong_error": 0.4321}],
+            "paper": {"adaptive": [{"precision": 5, "ratio_ls": 1.2, "phong_error": 0.45}]}}
+        page, smaller, bigger = self.make(runs, latest, table)
+        self.assertIn("1 regression(s), 0 improvement(s), 4 within noise", page)
+        flagged = re.findall(r'<tr class="regression"><td>([^<]*)</td>', page)
+        self.assertIn("bench_fields:BM_Field/torus/values_batched", flagged)
+        self.assertNotIn("bench_fields:BM_Field/torus/values_scalar", flagged)
+        self.assertIn("0.4321"[:5], page)  # Table 1 Phong error beside the speed
+        self.assertIn("cccccc", page)
+        # github-action-benchmark's custom formats: a list of {name, unit, value}.
+        for entries in (smaller, bigger):
+            self.assertTrue(entries)
+            for e in entries:
+                self.assertIsInstance(e["name"], str)
+                self.assertIsInstance(e["unit"], str)
+                self.assertIsInstance(e["value"], (int, float))
+        times = {e["name"]: e for e in smaller}
+        self.assertAlmostEqual(times["bench_fields:BM_Field/torus/values_batched"]["value"], 20.0)
+        self.assertEqual(times["bench_fields:BM_Field/torus/values_batched"]["unit"], "us")
+        ratios = {e["name"]: e["value"] for e in bigger if e["unit"] == "ratio"}
+        self.assertAlmostEqual(ratios["ratio adaptive/mt triangles_per_second bench_adaptive:BM_Adaptive/torus/factor:3/manual_time"], 2.0)
+        self.assertAlmostEqual(ratios["ratio batched/scalar bench_fields:BM_Field/torus/values_batched"], 1.0)
+        # Self-contained: nothing but embedded images.
+        self.assertIsNone(re.search(r'(src|href)="(?!data:)', page))
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=1)
