@@ -1,0 +1,289 @@
+#include <polygonizer/errors.h>
+#include <polygonizer/models/vis.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Householder>
+#include <Eigen/QR>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace cdp {
+
+namespace {
+
+using A4 = Eigen::Array4d;
+using CMap = Eigen::Map<const A4>;
+
+// Lanes are summed in a fixed order, so every kernel gives the same bits for the same sums.
+inline double lane_sum(const A4& a) { return (a[0] + a[1]) + (a[2] + a[3]); }
+
+std::string fmt(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
+}  // namespace
+
+Vis::Vis(const OrientedPoints& points, double normal_offset, std::string source) {
+  const std::size_t n = points.positions.size();
+  if (points.normals.size() != n) throw InvalidInputError(source + ": positions and normals differ in number");
+  if (n < 4) throw InvalidInputError(source + ": a variational implicit needs at least 4 points, got " + std::to_string(n));
+  if (!(normal_offset > 0) || !std::isfinite(normal_offset))
+    throw InvalidInputError(source + ": normal_offset must be positive and finite");
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!points.positions[i].allFinite() || !points.normals[i].allFinite() ||
+        std::abs(points.normals[i].norm() - 1) > 1e-6)
+      throw InvalidInputError(source + ": point " + std::to_string(i) + " has a non-finite position or a non-unit normal");
+  }
+  // Minimum spacing of the data points, and offset points that sit nearer another data point than
+  // their own (the offset then crosses the surface and the constraints contradict each other).
+  double min_d2 = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 off = points.positions[i] + normal_offset * points.normals[i];
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j == i) continue;
+      const double d2 = (points.positions[j] - points.positions[i]).squaredNorm();
+      if (d2 == 0)
+        throw InvalidInputError(source + ": points " + std::to_string(std::min(i, j)) + " and " +
+                                std::to_string(std::max(i, j)) + " coincide (the system would be singular)");
+      min_d2 = std::min(min_d2, d2);
+      if ((points.positions[j] - off).norm() < normal_offset * (1 - 1e-9))
+        throw InvalidInputError(source + ": normal_offset " + fmt(normal_offset) + " is too large: the offset point of point " +
+                                std::to_string(i) + " is nearer to point " + std::to_string(j) + " than to its own");
+    }
+  }
+  spacing_ = std::sqrt(min_d2);
+
+  n_ = 2 * n;
+  centres_.reserve(n_);
+  values_.reserve(n_);
+  for (std::size_t i = 0; i < n; ++i) {
+    centres_.push_back(points.positions[i]);
+    values_.push_back(0.0);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    centres_.push_back(points.positions[i] + normal_offset * points.normals[i]);
+    values_.push_back(normal_offset);
+  }
+  info_.constraints = n_;
+  info_.unknowns = n_ + 4;
+  info_.normal_offset = normal_offset;
+
+  const Box box = bounding_box(centres_);
+  shift_ = box.center();
+  scale_ = 0.5 * box.diagonal();
+  inv_scale_ = 1.0 / scale_;
+  set_bounds(box.inflated(kVisBoxMargin * box.diagonal()));
+  solve(source);
+}
+
+void Vis::solve(const std::string& source) {
+  const auto start = std::chrono::steady_clock::now();
+  const Eigen::Index N = static_cast<Eigen::Index>(n_);
+  std::vector<Vec3> q(n_);
+  for (std::size_t i = 0; i < n_; ++i) q[i] = to_local(centres_[i]);
+
+  Eigen::MatrixXd phi(N, N);
+  for (Eigen::Index j = 0; j < N; ++j)
+    for (Eigen::Index i = 0; i < N; ++i) {
+      const double r = (q[i] - q[j]).norm();
+      phi(i, j) = r * r * r;
+    }
+  Eigen::MatrixXd P(N, 4);
+  for (Eigen::Index i = 0; i < N; ++i) P.row(i) << 1.0, q[i].x(), q[i].y(), q[i].z();
+  Eigen::VectorXd b(N);
+  for (Eigen::Index i = 0; i < N; ++i) b(i) = values_[i];
+
+  // P = Q [R; 0]. The linear polynomial is determined only when the points span 3-D.
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(P);
+  const Eigen::Matrix4d R = qr.matrixQR().topRows(4).triangularView<Eigen::Upper>();
+  const double rmax = R.diagonal().cwiseAbs().maxCoeff();
+  if (!(R.diagonal().cwiseAbs().minCoeff() > 1e-10 * rmax))
+    throw InvalidInputError(source + ": the points are coplanar, the system is singular (no unique linear part)");
+
+  // Q^T Phi Q; its trailing block Q2^T Phi Q2 is positive definite for distinct points.
+  phi.applyOnTheLeft(qr.householderQ().adjoint());
+  phi.applyOnTheRight(qr.householderQ());
+  Eigen::Ref<Eigen::MatrixXd> block = phi.bottomRightCorner(N - 4, N - 4);
+  const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(block);
+  if (llt.info() != Eigen::Success)
+    throw InvalidInputError(source + ": the interpolation system is singular (nearly coincident points?)");
+  info_.rcond = llt.rcond();
+  const Eigen::VectorXd qb = qr.householderQ().adjoint() * b;
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(N);
+  y.tail(N - 4) = llt.solve(qb.tail(N - 4));
+  const Eigen::VectorXd w = qr.householderQ() * y;
+
+  const std::size_t padded = (n_ + 3) / 4 * 4;
+  cx_.assign(padded, 0.0);
+  cy_.assign(padded, 0.0);
+  cz_.assign(padded, 0.0);
+  w_.assign(padded, 0.0);
+  for (std::size_t i = 0; i < n_; ++i) {
+    cx_[i] = q[i].x();
+    cy_[i] = q[i].y();
+    cz_[i] = q[i].z();
+    w_[i] = w(static_cast<Eigen::Index>(i));
+  }
+  // R a = Q1^T (b - Phi w), with Phi w from the evaluation kernel (Phi itself was overwritten).
+  Eigen::VectorXd t(N);
+  for (Eigen::Index i = 0; i < N; ++i) t(i) = b(i) - rbf_sum(q[i]);
+  const Eigen::VectorXd qt = qr.householderQ().adjoint() * t;
+  const Eigen::Vector4d a = R.triangularView<Eigen::Upper>().solve(qt.head(4));
+  a0_ = a(0);
+  a_ = a.tail(3);
+
+  double worst = 0;
+  for (std::size_t i = 0; i < n_; ++i) worst = std::max(worst, std::abs(eval_value(centres_[i]) - values_[i]));
+  info_.interpolation_residual = worst / info_.normal_offset;
+  info_.polynomial_residual = (P.transpose() * w).cwiseAbs().maxCoeff() / std::max(w.cwiseAbs().maxCoeff(), 1e-300);
+  info_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!(info_.interpolation_residual <= kVisMaxResidual))
+    throw InvalidInputError(source + ": the interpolation system is singular or ill-conditioned: residual " +
+                            fmt(info_.interpolation_residual) + " of the offset (limit " + fmt(kVisMaxResidual) + ")");
+}
+
+double Vis::rbf_sum(const Vec3& q) const {
+  A4 acc = A4::Zero();
+  const std::size_t m = w_.size();
+  for (std::size_t j = 0; j < m; j += 4) {
+    const A4 dx = q.x() - CMap(cx_.data() + j);
+    const A4 dy = q.y() - CMap(cy_.data() + j);
+    const A4 dz = q.z() - CMap(cz_.data() + j);
+    const A4 r2 = dx * dx + dy * dy + dz * dz;
+    acc += CMap(w_.data() + j) * (r2 * r2.sqrt());
+  }
+  return lane_sum(acc);
+}
+
+double Vis::eval_value(const Vec3& p) const {
+  const Vec3 q = to_local(p);
+  return rbf_sum(q) + (a0_ + a_.dot(q));
+}
+
+void Vis::eval_values(const Vec3* points, double* out, std::size_t n) const {
+  for (std::size_t i = 0; i < n; ++i) out[i] = eval_value(points[i]);
+}
+
+double Vis::eval_value_gradient(const Vec3& p, Vec3& gradient) const {
+  const Vec3 q = to_local(p);
+  A4 acc = A4::Zero(), gx = A4::Zero(), gy = A4::Zero(), gz = A4::Zero();
+  const std::size_t m = w_.size();
+  for (std::size_t j = 0; j < m; j += 4) {
+    const A4 dx = q.x() - CMap(cx_.data() + j);
+    const A4 dy = q.y() - CMap(cy_.data() + j);
+    const A4 dz = q.z() - CMap(cz_.data() + j);
+    const A4 r2 = dx * dx + dy * dy + dz * dz;
+    const A4 r = r2.sqrt();
+    const A4 w = CMap(w_.data() + j);
+    acc += w * (r2 * r);
+    const A4 wr = w * r;  // grad |d|^3 = 3 |d| d
+    gx += wr * dx;
+    gy += wr * dy;
+    gz += wr * dz;
+  }
+  gradient = (3.0 * Vec3(lane_sum(gx), lane_sum(gy), lane_sum(gz)) + a_) * inv_scale_;
+  return lane_sum(acc) + (a0_ + a_.dot(q));
+}
+
+double Vis::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const {
+  const Vec3 q = to_local(p);
+  A4 acc = A4::Zero(), gx = A4::Zero(), gy = A4::Zero(), gz = A4::Zero();
+  A4 sr = A4::Zero(), hxx = A4::Zero(), hxy = A4::Zero(), hxz = A4::Zero(), hyy = A4::Zero(), hyz = A4::Zero(),
+     hzz = A4::Zero();
+  const std::size_t m = w_.size();
+  for (std::size_t j = 0; j < m; j += 4) {
+    const A4 dx = q.x() - CMap(cx_.data() + j);
+    const A4 dy = q.y() - CMap(cy_.data() + j);
+    const A4 dz = q.z() - CMap(cz_.data() + j);
+    const A4 r2 = dx * dx + dy * dy + dz * dz;
+    const A4 r = r2.sqrt();
+    const A4 w = CMap(w_.data() + j);
+    acc += w * (r2 * r);
+    const A4 wr = w * r;
+    gx += wr * dx;
+    gy += wr * dy;
+    gz += wr * dz;
+    // Hessian of |d|^3: 3 (|d| I + d d^T / |d|), which tends to 0 at d = 0.
+    sr += wr;
+    const A4 wi = (r > 0.0).select(w / r, A4::Zero());
+    const A4 wx = wi * dx, wy = wi * dy;
+    hxx += wx * dx;
+    hxy += wx * dy;
+    hxz += wx * dz;
+    hyy += wy * dy;
+    hyz += wy * dz;
+    hzz += wi * dz * dz;
+  }
+  gradient = (3.0 * Vec3(lane_sum(gx), lane_sum(gy), lane_sum(gz)) + a_) * inv_scale_;
+  const double s = lane_sum(sr);
+  const double xy = lane_sum(hxy), xz = lane_sum(hxz), yz = lane_sum(hyz);
+  hessian << s + lane_sum(hxx), xy, xz, xy, s + lane_sum(hyy), yz, xz, yz, s + lane_sum(hzz);
+  hessian *= 3.0 * inv_scale_ * inv_scale_;
+  return lane_sum(acc) + (a0_ + a_.dot(q));
+}
+
+double Vis::value_scalar(const Vec3& p) const {
+  const Vec3 q = to_local(p);
+  double sum = 0;
+  for (std::size_t j = 0; j < n_; ++j) {
+    const double dx = q.x() - cx_[j], dy = q.y() - cy_[j], dz = q.z() - cz_[j];
+    const double r2 = dx * dx + dy * dy + dz * dz;
+    sum += w_[j] * (r2 * std::sqrt(r2));
+  }
+  return sum + (a0_ + a_.dot(q));
+}
+
+double Vis::value_gradient_scalar(const Vec3& p, Vec3& gradient) const {
+  const Vec3 q = to_local(p);
+  double sum = 0;
+  Vec3 g = Vec3::Zero();
+  for (std::size_t j = 0; j < n_; ++j) {
+    const Vec3 d(q.x() - cx_[j], q.y() - cy_[j], q.z() - cz_[j]);
+    const double r2 = d.squaredNorm();
+    const double r = std::sqrt(r2);
+    sum += w_[j] * (r2 * r);
+    g += (w_[j] * r) * d;
+  }
+  gradient = (3.0 * g + a_) * inv_scale_;
+  return sum + (a0_ + a_.dot(q));
+}
+
+double Vis::gradient_hessian_scalar(const Vec3& p, Vec3& gradient, Mat3& hessian) const {
+  const Vec3 q = to_local(p);
+  double sum = 0;
+  Vec3 g = Vec3::Zero();
+  Mat3 h = Mat3::Zero();
+  for (std::size_t j = 0; j < n_; ++j) {
+    const Vec3 d(q.x() - cx_[j], q.y() - cy_[j], q.z() - cz_[j]);
+    const double r2 = d.squaredNorm();
+    const double r = std::sqrt(r2);
+    sum += w_[j] * (r2 * r);
+    g += (w_[j] * r) * d;
+    h.diagonal().array() += w_[j] * r;
+    if (r > 0) h += (w_[j] / r) * (d * d.transpose());
+  }
+  gradient = (3.0 * g + a_) * inv_scale_;
+  hessian = 3.0 * inv_scale_ * inv_scale_ * h;
+  return sum + (a0_ + a_.dot(q));
+}
+
+std::unique_ptr<Vis> make_vis(const OrientedPoints& scan, const VisOptions& options, const std::string& source) {
+  if (options.constraints < 8 || options.constraints % 2 != 0)
+    throw InvalidInputError(source + ": constraints must be even and at least 8 (two per point), got " +
+                            std::to_string(options.constraints));
+  const std::size_t n = options.constraints / 2;
+  if (n > scan.size())
+    throw InvalidInputError(source + ": " + std::to_string(options.constraints) + " constraints need " +
+                            std::to_string(n) + " points, the scan has " + std::to_string(scan.size()));
+  if (!(options.normal_offset > 0) || !(options.normal_offset < 0.1))
+    throw InvalidInputError(source + ": normal_offset must be in (0, 0.1) of the box diagonal, got " +
+                            fmt(options.normal_offset));
+  const double d = options.normal_offset * bounding_box(scan.positions).diagonal();
+  return std::make_unique<Vis>(select_points(scan, farthest_point_subset(scan.positions, n)), d, source);
+}
+
+}  // namespace cdp
