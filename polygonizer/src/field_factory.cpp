@@ -3,6 +3,9 @@
 #include <polygonizer/models/analytic.h>
 #include <polygonizer/models/blobs.h>
 #include <polygonizer/models/expression.h>
+#include <polygonizer/models/mpu.h>
+#include <polygonizer/models/vis.h>
+#include <polygonizer/oriented_points.h>
 
 #include <map>
 #include <mutex>
@@ -73,6 +76,45 @@ std::unique_ptr<Field> build_expression(JsonReader& r) {
   }
 }
 
+// Data-driven models: "points" names a mesh file relative to the JSON file; errors from reading
+// or fitting it are reported under that key, with the mesh file named.
+std::unique_ptr<Field> build_vis(JsonReader& r) {
+  r.check_keys({"type", "bounds", "points", "constraints", "normal_offset"});
+  const std::filesystem::path path = r.file("points");
+  VisOptions options;
+  const long long constraints = r.integer("constraints", static_cast<long long>(options.constraints));
+  if (constraints < 8 || constraints % 2 != 0) r.fail("constraints", "must be even and at least 8 (two per point)");
+  options.constraints = static_cast<std::size_t>(constraints);
+  options.normal_offset = r.positive_number("normal_offset", options.normal_offset);
+  if (!(options.normal_offset < 0.1)) r.fail("normal_offset", "must be below 0.1 (a fraction of the box diagonal)");
+  try {
+    return make_vis(read_oriented_points(path), options, path.string());
+  } catch (const InvalidInputError& e) {
+    r.fail("points", e.what());
+  }
+}
+
+std::unique_ptr<Field> build_mpu(JsonReader& r) {
+  r.check_keys({"type", "bounds", "points", "max_error", "support_factor", "min_points", "max_depth"});
+  const std::filesystem::path path = r.file("points");
+  MpuOptions options;
+  options.max_error = r.positive_number("max_error", options.max_error);
+  options.support_factor = r.positive_number("support_factor", options.support_factor);
+  const long long min_points = r.integer("min_points", options.min_points);
+  if (min_points < 10) r.fail("min_points", "must be at least 10 (a general quadric has 10 coefficients)");
+  options.min_points = static_cast<int>(std::min<long long>(min_points, 1'000'000));
+  const long long max_depth = r.integer("max_depth", options.max_depth);
+  if (max_depth < 1 || max_depth > 20) r.fail("max_depth", "must be in 1..20");
+  options.max_depth = static_cast<int>(max_depth);
+  if (!(options.support_factor > 0.5 && options.support_factor <= 2))
+    r.fail("support_factor", "must be in (0.5, 2] (from 0.5 down the supports leave gaps between cells)");
+  try {
+    return std::make_unique<Mpu>(read_oriented_points(path), options, path.string());
+  } catch (const InvalidInputError& e) {
+    r.fail("points", e.what());
+  }
+}
+
 Registry& registry() {
   static Registry* reg = [] {
     auto* r = new Registry;
@@ -81,6 +123,8 @@ Registry& registry() {
     r->builders["torus"] = build_torus;
     r->builders["blobs"] = build_blobs;
     r->builders["expression"] = build_expression;
+    r->builders["vis"] = build_vis;
+    r->builders["mpu"] = build_mpu;
     for (auto& [name, builder] : compiled_model_builders()) r->builders[name] = std::move(builder);
     return r;
   }();
