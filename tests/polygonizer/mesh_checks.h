@@ -151,25 +151,31 @@ struct ShapeStats {
   double mean_ratio = 0;   // longest / shortest edge, averaged over triangles
   double std_ratio = 0;
   double min_angle_degrees = 180;
+  double thin_fraction = 0;  // share of triangles with an angle under 10 degrees
 };
 
 inline ShapeStats shape_stats(const Mesh& mesh) {
   ShapeStats s;
   double sum = 0, sum2 = 0;
+  std::size_t thin = 0;
   for (const auto& t : mesh.triangles) {
     double e[3];
+    double smallest = 180;
     for (int k = 0; k < 3; ++k) {
       const Vec3& p = mesh.positions[t[k]];
       const Vec3 u = mesh.positions[t[(k + 1) % 3]] - p, v = mesh.positions[t[(k + 2) % 3]] - p;
       e[k] = u.norm();
-      s.min_angle_degrees = std::min(s.min_angle_degrees, std::atan2(u.cross(v).norm(), u.dot(v)) * 180 / M_PI);
+      smallest = std::min(smallest, std::atan2(u.cross(v).norm(), u.dot(v)) * 180 / M_PI);
     }
+    s.min_angle_degrees = std::min(s.min_angle_degrees, smallest);
+    if (smallest < 10) ++thin;
     const double r = *std::max_element(e, e + 3) / *std::min_element(e, e + 3);
     sum += r;
     sum2 += r * r;
   }
   const double n = std::max<std::size_t>(1, mesh.triangles.size());
   s.mean_ratio = sum / n;
+  s.thin_fraction = thin / n;
   s.std_ratio = std::sqrt(std::max(0.0, sum2 / n - s.mean_ratio * s.mean_ratio));
   return s;
 }

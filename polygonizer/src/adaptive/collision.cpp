@@ -16,9 +16,33 @@ namespace {
 // Keeps bridges from running almost along a front edge.
 constexpr double kSectorMargin = 0.05;
 
+// Distance between segments p0-p1 and q0-q1 (clamped closest points; Ericson, Real-Time
+// Collision Detection, 5.1.9).
+double segment_distance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  double s = 0, t = 0;
+  if (a <= 0 && e <= 0) return r.norm();
+  if (a <= 0) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= 0) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2), denom = a * e - b * b;
+      s = denom > 0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0) t = 0, s = std::clamp(-c / a, 0.0, 1.0);
+      else if (t > 1) t = 1, s = std::clamp((b - c) / a, 0.0, 1.0);
+    }
+  }
+  return ((p0 + s * d1) - (q0 + t * d2)).norm();
+}
+
 }  // namespace
 
-bool Tracker::crosses_front(int vu, int vw, const Vec3& w_point, int frame_vertex) const {
+int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_vertex) const {
   // In the tangent plane at frame_vertex: does segment u-w cross a front edge that shares no
   // end point with it? Front edges near the segment are found from their start nodes, which
   // lie within half the segment plus the longest edge of its midpoint.
@@ -34,15 +58,21 @@ bool Tracker::crosses_front(int vu, int vw, const Vec3& w_point, int frame_verte
   };
   const Vec3 mid = 0.5 * (u_point + w_point);
   const double radius = 0.5 * (w_point - u_point).norm() + longest_edge_;
-  bool hit = false;
+  int hit = -1;
   front_hash_.for_each_near(mid, radius, [&](int r) {
-    if (hit) return;
+    if (hit >= 0) return;
     const int vr = fs_.nodes[r].vertex, vs = fs_.nodes[fs_.nodes[r].next].vertex;
     if (vr == vu || vr == vw || vs == vu || vs == vw) return;
     if (!(mesh_.normals[vr].dot(N) > 0) || !(mesh_.normals[vs].dot(N) > 0)) return;
-    const Eigen::Vector2d a = flat(mesh_.positions[vr]), b = flat(mesh_.positions[vs]);
+    const Vec3& ar = mesh_.positions[vr];
+    const Vec3& bs = mesh_.positions[vs];
+    // Only edges that pass near the segment in space count: on a thin tube or a narrow gap the
+    // far side of the surface also projects across the segment in the tangent plane.
+    const double reach = 0.25 * ((w_point - u_point).norm() + (bs - ar).norm());
+    if (segment_distance(u_point, w_point, ar, bs) > reach) return;
+    const Eigen::Vector2d a = flat(ar), b = flat(bs);
     const double o1 = orient(u, w, a), o2 = orient(u, w, b), o3 = orient(a, b, u), o4 = orient(a, b, w);
-    if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) hit = true;
+    if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) hit = r;
   });
   return hit;
 }
@@ -67,7 +97,7 @@ bool Tracker::can_bridge(int node, int q) const {
   // triangles already made.
   if (!in_sector(node, x, kSectorMargin) || !in_sector(q, p, kSectorMargin)) return false;
   (void)p;
-  return !crosses_front(n.vertex, vm, x, n.vertex);
+  return crossed_front_edge(n.vertex, vm, x, n.vertex) < 0;
 }
 
 double Tracker::bridge_quality(int node, int q) const {
@@ -79,9 +109,12 @@ double Tracker::bridge_quality(int node, int q) const {
 }
 
 int Tracker::find_collision(int node, double delta) const {
+  return find_bridge(node, s_.collision_factor * delta);
+}
+
+int Tracker::find_bridge(int node, double radius) const {
   const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
-  const double radius = s_.collision_factor * delta;
-  // Among the threatened points, the nearest one whose bridge leaves no angle below
+  // Among the front points within radius, the nearest one whose bridge leaves no angle below
   // kGoodBridge; failing that, the one whose bridge leaves the largest smallest angle.
   constexpr double kGoodBridge = 0.5;
   int best = -1;
@@ -98,6 +131,13 @@ int Tracker::find_collision(int node, double delta) const {
     best_quality = quality;
   });
   return best;
+}
+
+int Tracker::bridge_around(int node, int r) const {
+  const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
+  const double far = std::max((mesh_.positions[fs_.nodes[r].vertex] - p).norm(),
+                              (mesh_.positions[fs_.nodes[fs_.nodes[r].next].vertex] - p).norm());
+  return find_bridge(node, 1.05 * far);
 }
 
 int Tracker::find_closing_obstacle(int node) const {

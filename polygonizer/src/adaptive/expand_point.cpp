@@ -28,8 +28,12 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
 
   if (count <= 1) {
     const int q = find_closing_obstacle(node);
-    if (q >= 0) return {false, can_bridge(node, q) ? q : -1};
-    if (crosses_front(va, vb, mesh_.positions[vb], n.vertex)) return {false, -1};
+    if (q >= 0) {
+      // Bridge to the best point around, which need not be the obstacle itself.
+      return {false, find_bridge(node, 1.05 * (mesh_.positions[fs_.nodes[q].vertex] - p).norm())};
+    }
+    if (const int r = crossed_front_edge(va, vb, mesh_.positions[vb], n.vertex); r >= 0)
+      return {false, bridge_around(node, r)};
     close_angle(node);
     return {true, -1};
   }
@@ -70,12 +74,13 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
       const double d = (mesh_.positions[vq] - x.point).norm();
       if (d < hit_d || (d == hit_d && q < hit)) hit = q, hit_d = d;
     });
-    if (hit >= 0) return {false, can_bridge(node, hit) ? hit : -1};
-    if (crosses_front(n.vertex, -1, x.point, n.vertex)) return {false, -1};
+    if (hit >= 0) return {false, find_bridge(node, 1.05 * (mesh_.positions[fs_.nodes[hit].vertex] - p).norm())};
+    if (const int r = crossed_front_edge(n.vertex, -1, x.point, n.vertex); r >= 0)
+      return {false, bridge_around(node, r)};
   }
   // The new front edges must not cross the front either.
-  if (crosses_front(vb, -1, placed.front().point, n.vertex) || crosses_front(va, -1, placed.back().point, n.vertex))
-    return {false, -1};
+  for (const auto& [from, to] : {std::pair{vb, placed.front().point}, std::pair{va, placed.back().point}})
+    if (const int r = crossed_front_edge(from, -1, to, n.vertex); r >= 0) return {false, bridge_around(node, r)};
 
   // Triangles (p, next, x1), (p, x1, x2), ..., (p, x_{n-1}, prev): counter-clockwise from
   // outside; the new points run from prev's side to next's side on the front.

@@ -37,6 +37,7 @@ struct HeapEntry {
 struct Front {
   int size = 0;
   bool alive = false;
+  int stall = 0;  // deferrals since the front last advanced
   std::priority_queue<HeapEntry> heap;
 };
 

@@ -233,23 +233,51 @@ void Tracker::step(int& f) {
   check_limits();
   const int node = fs_.pop_min(f);
   if (node < 0) throw std::logic_error("adaptive: a front lost its queue");
-  if (zip_spike(node)) return;
-  const double delta = local_edge_length(node);
+  if (zip_spike(node)) {
+    fs_.fronts[f].stall = 0;
+    return;
+  }
+  // A front whose every point has been deferred in turn is stuck at this edge length (a tube
+  // thinner than the edge, a gap narrower than it): each further round retries with half the
+  // length, down to a quarter of min_edge, before giving up with an error instead of spinning.
+  const int size = std::max(fs_.fronts[f].size, 1);
+  const int rounds = fs_.fronts[f].stall / size;
+  double delta = local_edge_length(node);
+  if (rounds > 0) {
+    const double shrunk = delta * std::ldexp(1.0, -rounds);
+    if (shrunk < 0.25 * s_.sizing.min_edge && rounds > 1) {
+      const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
+      throw LimitExceededError("adaptive: a front of " + std::to_string(fs_.fronts[f].size) +
+                               " points near (" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " +
+                               std::to_string(p.z()) +
+                               ") cannot advance even at a quarter of min_edge; lower min_edge or raise the factor");
+    }
+    delta = std::max(shrunk, 0.25 * s_.sizing.min_edge);
+  }
   int q = find_collision(node, delta);
   if (q < 0) {
-    const ExpandOutcome r = expand(node, delta);
-    if (r.expanded) return;
+      const ExpandOutcome r = expand(node, delta);
+    if (r.expanded) {
+      fs_.fronts[f].stall = 0;
+      return;
+    }
     q = r.obstacle;
+    // A stuck front looks farther for a point to bridge to.
+    if (q < 0 && rounds > 0) q = find_bridge(node, 3 * s_.collision_factor * local_edge_length(node));
     if (q < 0) {
       // Nothing to bridge to and no room to expand: let the other points of the front move
-      // first. max_steps bounds how often this can happen.
+      // first.
+      // Keys grow with the front's stall count, so deferred points queue up behind every point
+      // not deferred yet and take their turns in order.
       ++deferrals_;
-      fs_.push_with_key(node, fs_.nodes[node].angle + 2 * std::numbers::pi * (1 + deferrals_ % 4));
+      const int stall = ++fs_.fronts[f].stall;
+      fs_.push_with_key(node, fs_.nodes[node].angle + 2 * std::numbers::pi * stall);
       return;
     }
   }
   if (fs_.nodes[q].front == f) split_front(node, q);
   else f = merge_fronts(node, q);
+  fs_.fronts[f].stall = 0;
 }
 
 }  // namespace cdp::adaptive

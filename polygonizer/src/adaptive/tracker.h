@@ -98,11 +98,17 @@ class Tracker {
   // --- collision.cpp
   // A front node that the expansion of `node` with edge length delta would run into, or -1.
   int find_collision(int node, double delta) const;
+  // The front node within radius that node bridges to best (the bridge leaving the largest
+  // smallest angle, nearest first among good ones), or -1.
+  int find_bridge(int node, double radius) const;
   // A front node inside the triangle (prev, node, next) or too close to its new edge, or -1.
   int find_closing_obstacle(int node) const;
-  // Whether the segment from vertex vu to point w (vertex vw, or -1 for a point not yet in the
-  // mesh) crosses a front edge, seen in the tangent plane of frame_vertex.
-  bool crosses_front(int vu, int vw, const Vec3& w, int frame_vertex) const;
+  // The start node of a front edge that the segment from vertex vu to point w (vertex vw, or -1
+  // for a point not yet in the mesh) crosses, seen in the tangent plane of frame_vertex; or -1.
+  int crossed_front_edge(int vu, int vw, const Vec3& w, int frame_vertex) const;
+  // What to do when a new edge of node's expansion would cross the front edge starting at r:
+  // the best bridge from node to a point at least as near as the far end of that edge, or -1.
+  int bridge_around(int node, int r) const;
   // Whether node and q may be joined by a bridge edge.
   bool can_bridge(int node, int q) const;
   // The smallest of the four angles a bridge node-q leaves at its ends.
