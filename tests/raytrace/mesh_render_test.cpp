@@ -60,7 +60,8 @@ TEST(MeshRender, CameraFollowsAzimuthElevationUpAndFocus) {
   };
   // Up y, azimuth 0: seen from +z, +x to the right; the big sphere left.
   Image im = render_mesh(scene, o).image;
-  const int left = 120 - 40, right = 120 + 40;  // the sphere centres are +-2 of a 2 * 4.0 wide box ... roughly
+  // Box x in [-3, 2.5], half-diagonal 3.09 over 60 px: the centres land near x = 86 and x = 164.
+  const int left = 120 - 40, right = 120 + 40;
   EXPECT_GT(column_coverage(im, left), column_coverage(im, right));
   // Azimuth 180: seen from -z, the big sphere on the right.
   o.view.azimuth_deg = 180;
