@@ -65,7 +65,13 @@ bool JsonReader::has(const std::string& key) const {
 const nlohmann::json& JsonReader::get(const std::string& key) {
   asked_.insert(key);
   auto it = object_->find(key);
-  if (it == object_->end()) fail(key, "missing required key");
+  if (it == object_->end()) {
+    // A misspelling of the missing key is the likelier mistake; name it rather than the key.
+    for (const auto& [present, value] : object_->items())
+      if (!asked_.count(present) && edit_distance(present, key) < 3)
+        fail(present, "unknown key (did you mean \"" + key + "\"?)");
+    fail(key, "missing required key");
+  }
   used_.insert(key);
   return *it;
 }

@@ -58,7 +58,8 @@ TEST(FieldFactory, UnknownAndMisspelledKeysAreNamed) {
             "<test>: centre: unknown key (did you mean \"center\"?)");
   EXPECT_EQ(error_of(R"({"type": "sphere", "radius": 1, "colour": "red"})"), "<test>: colour: unknown key");
   EXPECT_EQ(error_of(R"({"type": "torus", "major_radius": 1, "minor_radus": 0.2})"),
-            "<test>: minor_radius: missing required key");
+            "<test>: minor_radus: unknown key (did you mean \"minor_radius\"?)");
+  EXPECT_EQ(error_of(R"({"type": "torus", "major_radius": 1})"), "<test>: minor_radius: missing required key");
   EXPECT_EQ(error_of(R"({"type": "blobs", "threshold": 0.5, "blobs": [{"center": [0,0,0], "radius": 1, "strenght": 2}]})"),
             "<test>: blobs[0].strenght: unknown key (did you mean \"strength\"?)");
   EXPECT_EQ(error_of(R"({"type": "sphere", "radius": 1, "bound": [[0,0,0],[1,1,1]]})"),

@@ -1,0 +1,87 @@
+// build/bin/polygonize: every method writes a closed mesh with normals and the common STATS.json;
+// bad arguments and bad fields end with a one-line error and no output file.
+#include <gtest/gtest.h>
+
+#include <polygonizer/mesh_io.h>
+#include <polygonizer/mesh_topology.h>
+
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+#include "common/run_command.h"
+
+namespace cdp {
+namespace {
+
+constexpr const char* kTorus = R"({"type": "torus", "major_radius": 1, "minor_radius": 0.4})";
+
+nlohmann::json read_json(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+class PolygonizeApp : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(PolygonizeApp, WritesAClosedTorusAndItsStats) {
+  const std::string method = GetParam();
+  test::TempDir dir("polygonize_app_" + method);
+  const auto field = dir.write("torus.json", kTorus);
+  const std::string size = method == "adaptive" ? "--factor 2" : "--cell 0.1";
+  const auto r = test::run_app("polygonize", field.string() + " -o " + (dir.path / "out.ply").string() + " --method " +
+                                                 method + " " + size + " --stats " + (dir.path / "stats.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Mesh mesh = read_mesh(dir.path / "out.ply");
+  const MeshTopology t = analyze_topology(mesh);
+  EXPECT_TRUE(t.closed());
+  EXPECT_TRUE(t.oriented());
+  EXPECT_EQ(t.genus, 1);
+  EXPECT_EQ(mesh.normals.size(), mesh.positions.size());
+  const auto stats = read_json(dir.path / "stats.json");
+  for (const char* key : {"method", "triangles", "vertices", "components", "seconds", "field_evaluations", "splits", "merges"})
+    EXPECT_TRUE(stats.contains(key)) << key;
+  EXPECT_EQ(stats["method"], method);
+  EXPECT_EQ(stats["triangles"].get<std::size_t>(), mesh.num_triangles());
+  EXPECT_EQ(stats["components"].get<int>(), 1);
+  EXPECT_GT(stats["field_evaluations"]["total"].get<double>(), 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryMethod, PolygonizeApp, ::testing::Values("adaptive", "mc", "mt"),
+                         [](const auto& info) { return info.param; });
+
+TEST(PolygonizeAppErrors, BadArgumentsAndFieldsGiveAOneLineErrorAndNoOutput) {
+  test::TempDir dir("polygonize_app_errors");
+  const auto torus = dir.write("torus.json", kTorus);
+  const auto typo = dir.write("typo.json", R"({"type": "torus", "major_radius": 1, "minor_raduis": 0.4})");
+  const auto nan = dir.write("nan.json", R"J({"type": "expression", "value": "sqrt(-1 - x*x)", "bounds": [[-1,-1,-1],[1,1,1]]})J");
+  const auto empty = dir.write("empty.json", R"({"type": "sphere", "radius": 1, "bounds": [[5,5,5],[6,6,6]]})");
+  const std::string out = (dir.path / "out.ply").string();
+  struct Case {
+    std::string args, expected;
+  };
+  const std::vector<Case> cases = {
+      {torus.string() + " -o " + out + " --method marching", "--method"},
+      {torus.string() + " -o " + out + " --cell 0.1", "--cell does not apply"},
+      {torus.string() + " -o " + out + " --method mc --factor 2", "--factor does not apply"},
+      {torus.string() + " -o " + out + " --factor two", "--factor expects a number"},
+      {torus.string() + " -o " + out + " --factor 2 --tolerance 0.01", "either --factor or --tolerance"},
+      {torus.string() + " -o " + out + " --method mt --precision 3", "precision"},
+      {torus.string() + " -o " + (dir.path / "out.stl").string(), ".ply, .obj or .off"},
+      {(dir.path / "missing.json").string() + " -o " + out, "missing.json"},
+      {typo.string() + " -o " + out, "minor_raduis"},
+      {nan.string() + " -o " + out, ""},
+      {empty.string() + " -o " + out, ""},
+      {torus.string(), "-o"},
+  };
+  for (const auto& c : cases) {
+    const auto r = test::run_app("polygonize", c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.err.find("polygonize: "), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_LE(std::count(r.err.begin(), r.err.end(), '\n'), 6) << r.err;  // usage lines at most
+    EXPECT_FALSE(std::filesystem::exists(out)) << c.args;
+  }
+}
+
+}  // namespace
+}  // namespace cdp
