@@ -119,6 +119,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["failed_seeds"] = failed_seeds;
   st.extra["steps"] = tracker.steps();
   st.extra["deferrals"] = tracker.deferrals();
+  st.extra["forced_closures"] = tracker.forced_closures();
   st.extra["min_angle_degrees"] = min_angle_degrees(mesh);
   st.extra["edge_length"] = {{"min", s.sizing.min_edge}, {"max", s.sizing.max_edge}};
   st.extra["sizing"] = to_string(s.sizing.mode);

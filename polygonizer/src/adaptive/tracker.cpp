@@ -229,6 +229,11 @@ bool Tracker::zip_spike(int node) {
   return true;
 }
 
+namespace {
+// Fronts up to this size that are stuck get closed by ears (see step).
+constexpr int kSmallFront = 8;
+}  // namespace
+
 void Tracker::step(int& f) {
   check_limits();
   const int node = fs_.pop_min(f);
@@ -242,6 +247,19 @@ void Tracker::step(int& f) {
   // length, down to a quarter of min_edge, before giving up with an error instead of spinning.
   const int size = std::max(fs_.fronts[f].size, 1);
   const int rounds = fs_.fronts[f].stall / size;
+  if (rounds >= 2 && size <= kSmallFront) {
+    // A small hole that no expansion fits into is closed like the paper's last three points:
+    // the ear of smallest front angle first (it is below pi, since the angles of a small
+    // front sum to about (size - 2) pi).
+    int best = node;
+    for (int x = fs_.nodes[node].next; x != node; x = fs_.nodes[x].next)
+      if (fs_.nodes[x].angle < fs_.nodes[best].angle) best = x;
+    if (best != node) fs_.push(node);
+    close_angle(best);
+    ++forced_closures_;
+    fs_.fronts[f].stall = 0;
+    return;
+  }
   double delta = local_edge_length(node);
   if (rounds > 0) {
     const double shrunk = delta * std::ldexp(1.0, -rounds);

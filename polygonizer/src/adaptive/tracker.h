@@ -53,6 +53,8 @@ class Tracker {
   std::size_t splits() const { return splits_; }
   std::size_t merges() const { return merges_; }
   std::size_t deferrals() const { return deferrals_; }
+  // Small stuck fronts closed ear by ear without the expansion's tests.
+  std::size_t forced_closures() const { return forced_closures_; }
   // Wall-clock time spent in curvature_at (Hessian evaluation and eigen-decomposition).
   double curvature_seconds() const { return curvature_seconds_; }
   const std::vector<double>& vertex_mac() const { return mac_; }
@@ -133,7 +135,7 @@ class Tracker {
   FrontSet fs_;
   SpatialHash front_hash_, vertex_hash_;
   std::vector<int> stack_;
-  std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0;
+  std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0, forced_closures_ = 0;
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;
   mutable double curvature_seconds_ = 0;
   ProgressCallback progress_;
