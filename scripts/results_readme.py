@@ -34,8 +34,9 @@ def main():
             caps = json.load(f)
         parts += ["## Figures", ""]
         for fig in caps:
-            parts += ["### " + fig["title"], "", "![{}](figures/{})".format(fig["title"], fig["file"]), "",
-                      fig["caption"], ""]
+            # A figure that could not be made has no file; its caption says why.
+            image = ["![{}](figures/{})".format(fig["title"], fig["file"]), ""] if fig.get("file") else []
+            parts += ["### " + fig["title"], ""] + image + [fig["caption"], ""]
     others = sorted(d for d in os.listdir(r) if os.path.exists(os.path.join(r, d, "summary.csv")))
     if others:
         parts += ["## Experiments", "", "Per-run metrics: `results/<experiment>/runs/<run>/metrics.json`; "
