@@ -3,6 +3,7 @@
 #include "tracker.h"
 
 #include <polygonizer/adaptive_polygonizer.h>
+#include <polygonizer/curvature.h>
 #include <polygonizer/errors.h>
 #include <polygonizer/mesh_topology.h>
 #include <polygonizer/surface_seeds.h>
@@ -81,9 +82,27 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   const std::vector<SurfaceSeed> crossings = find_surface_crossings(field, seed_options);
   const double h = seed_grid_spacing(field, seed_options);
 
+  // The hash cell follows the edge length the sizing asks for at up to 64 of the crossings
+  // (their median), a deterministic sample spread over the surface.
+  adaptive::Settings settings = s;
+  {
+    std::vector<double> lengths;
+    const std::size_t stride = std::max<std::size_t>(1, crossings.size() / 64);
+    for (std::size_t i = 0; i < crossings.size(); i += stride) {
+      try {
+        lengths.push_back(adaptive::edge_length(s.sizing, curvature_at(field, crossings[i].point).min_radius));
+      } catch (const NoSurfaceError&) {
+      }
+    }
+    if (!lengths.empty()) {
+      std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+      settings.hash_cell = 2 * lengths[lengths.size() / 2];
+    }
+  }
+
   PolygonizeResult result;
   Mesh& mesh = result.mesh;
-  adaptive::Tracker tracker(field, s, mesh);
+  adaptive::Tracker tracker(field, settings, mesh);
   // Crossed grid edges per unit area average 1.5 / h^2 over all orientations.
   if (options.progress) tracker.set_progress(options.progress, crossings.size() * h * h / 1.5);
 

@@ -10,8 +10,9 @@
 namespace cdp::adaptive {
 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
-    : field_(field), s_(settings), mesh_(mesh), front_hash_(settings.sizing.max_edge),
-      vertex_hash_(settings.sizing.max_edge) {}
+    : field_(field), s_(settings), mesh_(mesh),
+      front_hash_(settings.hash_cell > 0 ? settings.hash_cell : settings.sizing.max_edge),
+      vertex_hash_(settings.hash_cell > 0 ? settings.hash_cell : settings.sizing.max_edge) {}
 
 std::optional<Tracker::Placed> Tracker::measure(const Vec3& p) const {
   Placed out{p, {}};

@@ -31,6 +31,9 @@ struct Settings {
   std::size_t max_steps = 0;
   bool curvature_properties = false;
   double diagonal = 1;
+  // Cell size of the spatial hashes: about a typical edge, so that a query visits a few cells
+  // holding a few points each whatever the density. 0: max_edge.
+  double hash_cell = 0;
 };
 
 class Tracker {

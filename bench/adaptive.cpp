@@ -1,0 +1,131 @@
+// The adaptive polygonizer: torus and tanglecube at several factors, the bunny VIS-800 of the
+// paper's Table 1 beside Marching Tetrahedra and Marching Cubes at the paper's precision, and a
+// scaling series from 10^4 to 10^6 triangles on the torus, where bookkeeping that grows faster
+// than linearly would show as a rising time per triangle. Times are the polygonizers' own
+// stats.seconds (manual time), as in STATS.json.
+#include <baselines/marching_cubes.h>
+#include <baselines/marching_tetrahedra.h>
+#include <polygonizer/adaptive_polygonizer.h>
+#include <polygonizer/field_factory.h>
+#include <polygonizer/models/analytic.h>
+#include <polygonizer/models/expression.h>
+#include <polygonizer/surface_seeds.h>
+
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+namespace {
+
+using namespace cdp;
+
+enum Shape { kTorus, kTanglecube };
+
+std::unique_ptr<Field> make_shape(Shape shape) {
+  if (shape == kTorus) return std::make_unique<Torus>(Vec3(0.01, 0.02, -0.015), 1.0, 0.4);
+  return std::make_unique<Expression>("x^4 - 5*x^2 + y^4 - 5*y^2 + z^4 - 5*z^2 + 11.8",
+                                      std::map<std::string, double>{}, Box{{-3, -3, -3}, {3, 3, 3}});
+}
+
+// Counters common to every polygonizer benchmark here. "tracking" evaluations leave out the
+// fixed cost of the seed grid, which small meshes do not amortize.
+void report(benchmark::State& state, double triangles, double vertices, double evaluations, double seed_evaluations) {
+  state.counters["triangles_per_second"] = benchmark::Counter(triangles, benchmark::Counter::kIsRate);
+  state.counters["triangles"] = triangles / static_cast<double>(state.iterations());
+  state.counters["evals_per_vertex"] = evaluations / vertices;
+  state.counters["evaluations_per_triangle"] = evaluations / triangles;
+  if (seed_evaluations >= 0) state.counters["tracking_evals_per_vertex"] = (evaluations - seed_evaluations) / vertices;
+}
+
+// Value evaluations of the sign-change grid that seeds every component, measured.
+double seed_grid_evaluations(const Field& field, int resolution) {
+  SeedOptions o;
+  o.resolution = resolution;
+  const EvaluationCounts before = field.counts();
+  find_surface_crossings(field, o);
+  return static_cast<double>((field.counts() - before).total());
+}
+
+// Returns the total polygonization time.
+double run_adaptive(benchmark::State& state, const Field& field, const AdaptiveOptions& options) {
+  double triangles = 0, vertices = 0, evaluations = 0, seeds = 0, seconds = 0;
+  const double seed_cost = seed_grid_evaluations(field, options.seed_resolution);
+  for (auto _ : state) {
+    const PolygonizeResult r = polygonize_adaptive(field, options);
+    triangles += static_cast<double>(r.stats.triangles);
+    vertices += static_cast<double>(r.stats.vertices);
+    evaluations += static_cast<double>(r.stats.field_evaluations.total());
+    seeds += seed_cost;
+    benchmark::DoNotOptimize(r.mesh.positions.data());
+    state.SetIterationTime(r.stats.seconds);
+    seconds += r.stats.seconds;
+  }
+  report(state, triangles, vertices, evaluations, seeds);
+  return seconds / triangles;
+}
+
+void BM_Adaptive(benchmark::State& state) {
+  const auto shape = static_cast<Shape>(state.range(0));
+  const double factor = static_cast<double>(state.range(1));
+  const auto field = make_shape(shape);
+  AdaptiveOptions o;
+  o.factor = factor;
+  run_adaptive(state, *field, o);
+  state.SetLabel(std::string(shape == kTorus ? "torus" : "tanglecube") + "/adaptive/factor" +
+                 std::to_string(state.range(1)));
+}
+BENCHMARK(BM_Adaptive)
+    ->ArgNames({"shape", "factor"})
+    ->ArgsProduct({{kTorus, kTanglecube}, {2, 3, 5}})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+
+// Time per triangle from 10^4 to 10^6 triangles: the factor grows so that the triangle count
+// (about proportional to factor^2) grows tenfold per step; clamps out of the way.
+void BM_AdaptiveScaling(benchmark::State& state) {
+  const auto field = make_shape(kTorus);
+  AdaptiveOptions o;
+  o.factor = static_cast<double>(state.range(0)) / 10;
+  o.min_edge = 1e-5;
+  state.counters["ns_per_triangle"] = 1e9 * run_adaptive(state, *field, o);
+  state.SetLabel("torus/adaptive/scaling");
+}
+// Factors 6.3, 20, 63 give about 10^4, 10^5, 10^6 triangles on this torus.
+BENCHMARK(BM_AdaptiveScaling)->ArgName("factor_x10")->Arg(63)->Arg(200)->Arg(630)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// Table 1 at the paper's middle setting: bunny VIS-800, adaptive factor 3 against MT and MC at
+// precision 3 (comparable triangle counts). The model is built once.
+const Field& bunny() {
+  static const std::unique_ptr<Field> field =
+      load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/bunny_vis800.json");
+  return *field;
+}
+
+void BM_PaperBunny(benchmark::State& state) {
+  const int method = static_cast<int>(state.range(0));  // 0 adaptive, 1 mt, 2 mc
+  const Field& field = bunny();
+  if (method == 0) {
+    AdaptiveOptions o;
+    o.factor = 3;
+    run_adaptive(state, field, o);
+  } else {
+    MarchingOptions o;
+    o.precision = 3;
+    double triangles = 0, vertices = 0, evaluations = 0;
+    for (auto _ : state) {
+      const PolygonizeResult r = method == 1 ? marching_tetrahedra(field, o) : marching_cubes(field, o);
+      triangles += static_cast<double>(r.stats.triangles);
+      vertices += static_cast<double>(r.stats.vertices);
+      evaluations += static_cast<double>(r.stats.field_evaluations.total());
+      benchmark::DoNotOptimize(r.mesh.positions.data());
+      state.SetIterationTime(r.stats.seconds);
+    }
+    report(state, triangles, vertices, evaluations, -1);
+  }
+  state.SetLabel(std::string("bunny_vis800/") + (method == 0 ? "adaptive" : method == 1 ? "mt" : "mc"));
+}
+BENCHMARK(BM_PaperBunny)->ArgName("method")->DenseRange(0, 2)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
