@@ -1,0 +1,72 @@
+// The data-driven models of the paper's experiments (bunny VIS with 800 constraints, horse MPU,
+// Igea VIS with 4004 constraints) polygonize into closed meshes of one component and genus 0 (the
+// scans' topology; the bunny's holes close) with every method, at a coarse resolution: no stray
+// sheets inside their boxes, no surface leaving them. Not here: the adaptive polygonizer on the
+// horse MPU, whose fronts stall at factors 1, 2 and 5 (it meshes at 3); see the model's notes in
+// polygonizer/README.md.
+#include <gtest/gtest.h>
+
+#include <baselines/marching_cubes.h>
+#include <baselines/marching_tetrahedra.h>
+#include <polygonizer/adaptive_polygonizer.h>
+#include <polygonizer/field_factory.h>
+#include <polygonizer/mesh_topology.h>
+
+#include <map>
+#include <memory>
+
+namespace cdp {
+namespace {
+
+struct Case {
+  std::string file;
+  std::string method;
+};
+
+std::ostream& operator<<(std::ostream& os, const Case& c) { return os << c.file << "/" << c.method; }
+
+// One field per file for the whole suite: the Igea solve takes seconds.
+const Field& field_of(const std::string& file) {
+  static std::map<std::string, std::unique_ptr<Field>> cache;
+  auto& f = cache[file];
+  if (!f) f = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/" + file);
+  return *f;
+}
+
+class DataDrivenMeshes : public ::testing::TestWithParam<Case> {};
+
+TEST_P(DataDrivenMeshes, ClosedOneComponentGenusZero) {
+  const Field& field = field_of(GetParam().file);
+  PolygonizeResult r;
+  if (GetParam().method == "adaptive") {
+    AdaptiveOptions o;
+    o.factor = 1;
+    r = polygonize_adaptive(field, o);
+  } else {
+    MarchingOptions o;
+    o.cell_size = field.bounds().size().maxCoeff() / 48;  // coarse
+    r = GetParam().method == "mc" ? marching_cubes(field, o) : marching_tetrahedra(field, o);
+  }
+  const MeshTopology t = analyze_topology(r.mesh);
+  RecordProperty("triangles", std::to_string(t.triangles));
+  EXPECT_TRUE(t.closed()) << t.boundary_edges << " boundary edges";
+  EXPECT_TRUE(t.edge_manifold());
+  EXPECT_TRUE(t.oriented());
+  EXPECT_GT(t.signed_volume, 0.0);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.genus, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, DataDrivenMeshes,
+                         ::testing::Values(Case{"bunny_vis800.json", "mc"}, Case{"bunny_vis800.json", "mt"},
+                                           Case{"bunny_vis800.json", "adaptive"}, Case{"horse_mpu.json", "mc"},
+                                           Case{"horse_mpu.json", "mt"},
+                                           Case{"igea_vis4004.json", "mc"}, Case{"igea_vis4004.json", "mt"},
+                                           Case{"igea_vis4004.json", "adaptive"}),
+                         [](const auto& info) {
+                           std::string name = info.param.file.substr(0, info.param.file.find('.')) + "_" + info.param.method;
+                           return name;
+                         });
+
+}  // namespace
+}  // namespace cdp
