@@ -236,7 +236,7 @@ def batched_vs_scalar(run):
     return sorted(rows, key=lambda r: r["batched"])
 
 
-PER_ITEM_COUNTERS = ("evals_per_vertex", "evaluations_per_vertex", "evaluations_per_triangle")
+PER_ITEM_COUNTERS = ("evals_per_vertex", "evaluations_per_vertex", "tracking_evals_per_vertex", "evaluations_per_triangle")
 
 
 def evaluations_per_item(run):

@@ -318,7 +318,8 @@ def series_section(runs):
                 ax.set_xlim(-0.5, len(runs) - 0.5)
                 if ys:
                     lo, hi = min(y - e for y, e in zip(ys, err)), max(y + e for y, e in zip(ys, err))
-                    ax.set_ylim(max(0, lo - 0.15 * (hi - lo + 1e-12 * hi)), hi + 0.15 * (hi - lo) + 1e-9 * hi + 1e-30)
+                    pad = max(0.15 * (hi - lo), 0.05 * abs(hi), 1e-30)  # a lone point still gets a readable axis
+                    ax.set_ylim(max(0, lo - pad), hi + pad)
                 ax.grid(alpha=0.3)
             fig.tight_layout()
             part = " ({}/{})".format(start // MAX_PANELS + 1, (len(keys) + MAX_PANELS - 1) // MAX_PANELS) \
