@@ -2,10 +2,7 @@
 
 #include <polygonizer/errors.h>
 
-#include <unistd.h>
-
-#include <fstream>
-#include <system_error>
+#include <algorithm>
 
 namespace cdp {
 
@@ -106,28 +103,6 @@ std::vector<std::uint8_t> encode_png(const Image& image) {
   put_chunk(png, "IDAT", z);
   put_chunk(png, "IEND", {});
   return png;
-}
-
-void write_png(const Image& image, const std::filesystem::path& path) {
-  const std::vector<std::uint8_t> bytes = encode_png(image);
-  std::filesystem::path tmp = path;
-  tmp.replace_filename("." + path.filename().string() + ".tmp" + std::to_string(getpid()));
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw InvalidInputError(path.string() + ": cannot write the image");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw InvalidInputError(path.string() + ": cannot write the image: " + ec.message());
-  }
 }
 
 }  // namespace cdp

@@ -2,11 +2,11 @@
 // writer here emits the simplest valid PNG: one IDAT chunk holding a zlib stream of *stored*
 // (uncompressed) deflate blocks, with the CRC-32 and Adler-32 checksums the format requires.
 // Files are about 3 bytes per pixel; scripts that keep images recompress them (matplotlib).
+// Writing the bytes to a file is the caller's job (apps/render.cpp), as everywhere in raytrace/.
 #pragma once
 
 #include <array>
 #include <cstdint>
-#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -27,10 +27,6 @@ struct Image {
 // The complete PNG file (signature, IHDR, IDAT, IEND) as bytes. Throws InvalidInputError for an
 // empty image or one whose rgb size is not 3 * width * height.
 std::vector<std::uint8_t> encode_png(const Image& image);
-
-// Writes encode_png(image) to a temporary file beside `path` and renames it, so a failure leaves
-// no half-written file. Throws InvalidInputError naming the path when it cannot write.
-void write_png(const Image& image, const std::filesystem::path& path);
 
 // CRC-32 (ISO 3309, as PNG uses it) and Adler-32 (RFC 1950), exposed for the tests.
 std::uint32_t crc32(const std::uint8_t* data, std::size_t n, std::uint32_t crc = 0);
