@@ -11,6 +11,7 @@ is skipped with its reason, printed and written as its caption; the script still
 import argparse
 import concurrent.futures
 import json
+import math
 import os
 import subprocess
 import sys
@@ -21,6 +22,7 @@ matplotlib.use("Agg")
 import matplotlib.cm  # noqa: E402
 import matplotlib.colors  # noqa: E402
 import matplotlib.image  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -139,7 +141,7 @@ def compose(panels, path):
     h, w = images[0].shape[:2]
     n = len(panels)
     bars = any("color" in s for _, s, _ in panels)
-    top, bottom = 28, (58 if bars else 4)
+    top, bottom = 28, (72 if bars else 4)
     dpi = 100
     fig = plt.figure(figsize=(n * w / dpi, (h + top + bottom) / dpi), dpi=dpi)
     H = h + top + bottom
@@ -152,9 +154,15 @@ def compose(panels, path):
         if color:
             lo, hi = color["range"]
             norm = matplotlib.colors.LogNorm(lo, hi) if color["scale"] == "log" else matplotlib.colors.Normalize(lo, hi)
-            cax = fig.add_axes([(i + 0.15) / n, 30 / H, 0.7 / n, 10 / H])
+            cax = fig.add_axes([(i + 0.15) / n, 46 / H, 0.7 / n, 10 / H])
             bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=color["map"]), cax=cax,
                                orientation="horizontal")
+            if color["scale"] == "log":
+                # Ticks at 1, 2, 5 x 10^k: a range under a decade would otherwise show one label.
+                ticks = [m * 10.0 ** k for k in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)
+                         for m in (1, 2, 5) if lo <= m * 10.0 ** k <= hi]
+                bar.set_ticks(ticks, labels=["{:g}".format(t) for t in ticks])
+                bar.ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
             bar.ax.tick_params(labelsize=7)
             bar.set_label(COLOR_LABELS.get(color["property"], color["property"]), fontsize=8)
     tmp = path + ".tmp.png"
