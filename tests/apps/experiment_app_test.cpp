@@ -1,0 +1,119 @@
+// build/bin/experiment end to end on a tiny sweep: every run polygonized and evaluated, the
+// per-run files and the summary written with plausible numbers; a failing run reported, not
+// dropped; bad experiment files refused with the key named; two runs give the same meshes.
+#include <gtest/gtest.h>
+
+#include <polygonizer/mesh_io.h>
+
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+#include "common/run_command.h"
+
+namespace cdp {
+namespace {
+
+namespace fs = std::filesystem;
+
+nlohmann::json read_json(const fs::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+constexpr const char* kSweep = R"({
+  "description": "tiny torus sweep for the tests",
+  "field": {"type": "torus", "major_radius": 1, "minor_radius": 0.4},
+  "seed": 3,
+  "runs": [
+    {"method": "adaptive", "factor": [2, 4]},
+    {"method": "mt", "cell": 0.1},
+    {"method": "mc", "cell": 0.1, "traversal": "grid"},
+    {"method": "adaptive", "factor": 3, "max_edge": 0.001, "label": "impossible"}
+  ],
+  "evaluation": {"views": 2, "resolution": 24, "projection": "orthographic"},
+  "keep_meshes": true
+})";
+
+TEST(ExperimentApp, TinySweepWritesRunsAndSummary) {
+  test::TempDir dir("experiment_app");
+  const auto file = dir.write("tiny.json", kSweep);
+  const fs::path out = dir.path / "out";
+  const auto r = test::run_app("experiment", file.string() + " --out " + out.string() + " --jobs 2");
+  // One run is meant to fail (max_edge below the default min_edge): the experiment completes
+  // (the failure is a result, reported in the summary) and says so.
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("5 runs, 1 failed"), std::string::npos) << r.err;
+  ASSERT_TRUE(fs::exists(out / "summary.json")) << r.err;
+  ASSERT_TRUE(fs::exists(out / "summary.csv"));
+  const auto summary = read_json(out / "summary.json");
+  ASSERT_EQ(summary["runs"].size(), 5u);
+  std::map<std::string, nlohmann::json> runs;
+  for (const auto& run : summary["runs"]) runs[run["id"]] = run;
+  for (const std::string id : {"adaptive_factor2", "adaptive_factor4", "mt_cell0.1", "mc_cell0.1"}) {
+    SCOPED_TRACE(id);
+    ASSERT_TRUE(runs.count(id)) << summary.dump(1);
+    const auto& run = runs[id];
+    EXPECT_EQ(run["status"], "ok") << run.value("reason", "");
+    EXPECT_TRUE(fs::exists(out / "meshes" / (id + ".ply")));
+    EXPECT_TRUE(fs::exists(out / "runs" / id / "stats.json"));
+    EXPECT_TRUE(fs::exists(out / "runs" / id / "metrics.json"));
+    const auto& m = run["metrics"];
+    EXPECT_TRUE(m["topology"]["closed"].get<bool>());
+    EXPECT_EQ(m["topology"]["genus"].get<int>(), 1);
+    // A torus of minor radius 0.4 meshed this finely: depth errors far below the radius,
+    // Phong errors of a few degrees at most.
+    EXPECT_LT(m["depth_error"]["mean"].get<double>(), 0.02);
+    EXPECT_LT(m["phong_error_deg"]["mean"].get<double>(), 10.0);
+    EXPECT_GT(run["stats"]["triangles"].get<int>(), 100);
+  }
+  // The adaptive method's edge ratio is the point of the paper: well under MT's.
+  EXPECT_LT(runs["adaptive_factor4"]["metrics"]["edge_ratio"]["mean"].get<double>(), 1.5);
+  EXPECT_GT(runs["mt_cell0.1"]["metrics"]["edge_ratio"]["mean"].get<double>(),
+            runs["adaptive_factor4"]["metrics"]["edge_ratio"]["mean"].get<double>());
+  // More triangles at the higher factor, and a lower depth error.
+  EXPECT_GT(runs["adaptive_factor4"]["stats"]["triangles"].get<int>(), runs["adaptive_factor2"]["stats"]["triangles"].get<int>());
+  // The impossible run is reported with its reason.
+  const auto& bad = runs["adaptive_impossible_factor3"];
+  EXPECT_EQ(bad["status"], "failed");
+  EXPECT_NE(bad["reason"].get<std::string>().find("min_edge"), std::string::npos) << bad.dump();
+  const std::string csv = read_text(out / "summary.csv");
+  EXPECT_NE(csv.find("adaptive_impossible_factor3,adaptive,factor,3,failed"), std::string::npos) << csv;
+
+  // A second run of the same file gives the same meshes, byte for byte.
+  const fs::path out2 = dir.path / "out2";
+  test::run_app("experiment", file.string() + " --out " + out2.string() + " --jobs 1");
+  for (const std::string id : {"adaptive_factor2", "mt_cell0.1"})
+    EXPECT_EQ(read_text(out / "meshes" / (id + ".ply")), read_text(out2 / "meshes" / (id + ".ply"))) << id;
+}
+
+TEST(ExperimentApp, BadExperimentFilesAreRefusedWithTheKeyNamed) {
+  test::TempDir dir("experiment_app_bad");
+  struct Case {
+    std::string json, expected;
+  };
+  const std::vector<Case> cases = {
+      {R"({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "adaptive", "factr": 2}]})", "factr"},
+      {R"({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "bogus", "factor": 2}]})", "method"},
+      {R"({"field": {"type": "sphere", "radius": 1}, "runs": [], "evalutaion": {}})", "evalutaion"},
+      {R"({"field": "missing_field.json", "runs": [{"method": "adaptive", "factor": 2}]})", "missing_field.json"},
+      {R"({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "mt", "cell": 0.1, "factor": 2}]})", "factor"},
+      {R"({"field": {"type": "sphere", "radius": 1}, "runs": [)", "tiny.json"},
+  };
+  for (const auto& c : cases) {
+    const auto file = dir.write("tiny.json", c.json);
+    const fs::path out = dir.path / "out";
+    const auto r = test::run_app("experiment", file.string() + " --out " + out.string());
+    EXPECT_NE(r.exit_code, 0) << c.json;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.json << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(out / "summary.json")) << c.json;
+  }
+}
+
+}  // namespace
+}  // namespace cdp
