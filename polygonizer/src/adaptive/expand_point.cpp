@@ -9,6 +9,10 @@
 
 namespace cdp::adaptive {
 
+namespace {
+constexpr double kGrowth = 1.5;
+}  // namespace
+
 void Tracker::close_angle(int node) {
   const FrontNode n = fs_.nodes[node];
   emit_triangle(fs_.nodes[n.prev].vertex, n.vertex, fs_.nodes[n.next].vertex);
@@ -86,7 +90,14 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   // outside; the new points run from prev's side to next's side on the front.
   std::vector<int> vs;
   vs.reserve(placed.size());
-  for (const Placed& x : placed) vs.push_back(add_vertex(x));
+  for (const Placed& x : placed) {
+    const int v = add_vertex(x);
+    // Grading: a new point may ask for at most kGrowth times the length it was placed at, so
+    // that a curvature estimate that drops abruptly (MPU's Hessian is only piecewise smooth)
+    // cannot put long edges right beside short ones.
+    target_[v] = std::min(target_[v], kGrowth * delta);
+    vs.push_back(v);
+  }
   emit_triangle(n.vertex, vb, vs.front());
   for (std::size_t k = 0; k + 1 < vs.size(); ++k) emit_triangle(n.vertex, vs[k], vs[k + 1]);
   emit_triangle(n.vertex, vs.back(), va);
