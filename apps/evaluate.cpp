@@ -8,6 +8,7 @@
 #include <raytrace/ground_truth_cache.h>
 #include <raytrace/phong_normal.h>
 
+#include <polygonizer/atomic_write.h>
 #include <polygonizer/errors.h>
 #include <polygonizer/field_factory.h>
 #include <polygonizer/mesh_io.h>
@@ -19,7 +20,6 @@
 #include <iostream>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -49,28 +49,6 @@ std::string read_text(const fs::path& path) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
-}
-
-void write_atomically(const fs::path& path, const std::string& text) {
-  auto tmp = path;
-  tmp += ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw cdp::InvalidInputError(path.string() + ": cannot write");
-    out << text;
-    out.close();
-    if (!out) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw cdp::InvalidInputError(path.string() + ": write failed");
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw cdp::InvalidInputError(path.string() + ": cannot rename the output into place: " + ec.message());
-  }
 }
 
 bool same_rays(const std::vector<cdp::Ray>& a, const std::vector<cdp::Ray>& b) {
@@ -137,7 +115,7 @@ int main(int argc, char** argv) {
     metrics["files"] = {{"field", field_path}, {"mesh", mesh_path}};
     metrics["rays"]["ground_truth_cached"] = cached;
     metrics["rays"]["ground_truth_seconds"] = gt_seconds;
-    write_atomically(out_path, metrics.dump(2) + "\n");
+    cdp::write_file_atomically(out_path, metrics.dump(2) + "\n");
 
     const auto& r = metrics["rays"];
     std::printf("%s: %zu triangles, %zu rays (%s), %zu surface hits\n", mesh_path.c_str(), mesh.num_triangles(),

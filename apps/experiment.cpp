@@ -4,6 +4,7 @@
 // and evaluated against the cached ground truth (build/bin/evaluate), each run an independent
 // job; then the per-run results are collected into summary.csv and summary.json. The format of
 // the experiment file is documented in experiments/README.md.
+#include <polygonizer/atomic_write.h>
 #include <polygonizer/errors.h>
 #include <polygonizer/field_factory.h>
 #include <polygonizer/json_reader.h>
@@ -244,13 +245,7 @@ std::string last_line(const fs::path& log) {
 }
 
 void write_json_atomically(const nlohmann::json& j, const fs::path& path) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << j.dump(2) << "\n";
-    if (!out) throw cdp::InvalidInputError(path.string() + ": cannot write");
-  }
-  fs::rename(tmp, path);
+  cdp::write_file_atomically(path, j.dump(2) + "\n");
 }
 
 // One run: polygonize, then evaluate. Its outcome goes to runs/ID/status.json.

@@ -4,6 +4,7 @@
 // the same STATS.json, so that experiments compare like with like.
 #include <baselines/marching_cubes.h>
 #include <baselines/marching_tetrahedra.h>
+#include <polygonizer/atomic_write.h>
 #include <polygonizer/adaptive_polygonizer.h>
 #include <polygonizer/errors.h>
 #include <polygonizer/field_factory.h>
@@ -13,7 +14,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -46,18 +46,6 @@ long parse_integer(const std::string& flag, const std::string& text) {
   if (v != std::floor(v) || std::abs(v) > 1e15)
     throw cdp::InvalidInputError(flag + " expects an integer, found \"" + text + "\"");
   return static_cast<long>(v);
-}
-
-// Writes to a temporary file beside `path` and renames it, so a failed run leaves no half file.
-void write_json_atomically(const nlohmann::json& j, const std::filesystem::path& path) {
-  const std::filesystem::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw cdp::InvalidInputError("cannot write " + path.string());
-    out << j.dump(2) << "\n";
-    if (!out.flush()) throw cdp::InvalidInputError("cannot write " + path.string());
-  }
-  std::filesystem::rename(tmp, path);
 }
 
 }  // namespace
@@ -176,7 +164,7 @@ int main(int argc, char** argv) {
     if (!stats_path.empty()) {
       nlohmann::json j = cdp::to_json(result.stats);
       j["field"] = field_path;
-      write_json_atomically(j, stats_path);
+      cdp::write_file_atomically(stats_path, j.dump(2) + "\n");
     }
     return 0;
   } catch (const std::exception& e) {

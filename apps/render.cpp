@@ -5,13 +5,13 @@
 #include <raytrace/mesh_render.h>
 #include <raytrace/png_image.h>
 
+#include <polygonizer/atomic_write.h>
 #include <polygonizer/errors.h>
 #include <polygonizer/field_factory.h>
 #include <polygonizer/mesh_io.h>
 
 #include <nlohmann/json.hpp>
 
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -48,28 +48,6 @@ std::vector<double> parse_numbers(const std::string& option, const std::string& 
                                  (count == 1 ? std::string("a number") : std::to_string(count) + " comma-separated numbers") +
                                  ", found \"" + text + "\"");
   return values;
-}
-
-// Writes to a temporary file beside `path` and renames it, so a failure leaves no partial picture.
-void write_file_atomically(const std::vector<std::uint8_t>& bytes, const std::filesystem::path& path) {
-  std::filesystem::path tmp = path;
-  tmp.replace_filename("." + path.filename().string() + ".tmp" + std::to_string(getpid()));
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw cdp::InvalidInputError(path.string() + ": cannot write the picture");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw cdp::InvalidInputError(path.string() + ": cannot write the picture: " + ec.message());
-  }
 }
 
 int parse_int(const std::string& option, const std::string& text) {
@@ -145,7 +123,11 @@ int main(int argc, char** argv) {
     }
     options.field = field.get();
     const cdp::RenderResult result = cdp::render_mesh(mesh, options);
-    write_file_atomically(cdp::encode_png(result.image), out_path);
+    {
+      const std::vector<std::uint8_t> png = cdp::encode_png(result.image);
+      cdp::write_file_atomically(out_path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()),
+                                 "the picture");
+    }
 
     nlohmann::json summary{{"output", out_path},
                            {"width", result.image.width},

@@ -35,6 +35,7 @@ adaptive::Settings resolve(const Field& field, const AdaptiveOptions& o) {
   s.sizing.tolerance = positive_or_default(o.tolerance, 1e-3 * diag);
   s.sizing.min_edge = positive_or_default(o.min_edge, 2e-3 * diag);
   s.sizing.max_edge = positive_or_default(o.max_edge, 0.1 * diag);
+  s.hash_cell = s.sizing.max_edge;  // refined from the seed crossings once they are known
   if (o.sizing == SizingMode::Factor && !(std::isfinite(o.factor) && o.factor > 0))
     throw InvalidInputError("adaptive: the factor must be a positive number, not " + std::to_string(o.factor));
   if (!std::isfinite(s.sizing.tolerance) || !std::isfinite(s.sizing.min_edge) || !std::isfinite(s.sizing.max_edge))

@@ -11,21 +11,18 @@ namespace cdp::adaptive {
 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
     : field_(field), s_(settings), mesh_(mesh),
-      front_hash_(settings.hash_cell > 0 ? settings.hash_cell : settings.sizing.max_edge),
-      vertex_hash_(settings.hash_cell > 0 ? settings.hash_cell : settings.sizing.max_edge) {}
+      front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell) {}
 
 std::optional<Tracker::Placed> Tracker::measure(const Vec3& p) const {
-  Placed out{p, {}};
   // Timed so that the stats can show what the paper claims: curvature costs little.
   const auto start = std::chrono::steady_clock::now();
+  std::optional<Placed> out;
   try {
-    out.curvature = curvature_at(field_, p);
+    out = Placed{p, curvature_at(field_, p)};
   } catch (const NoSurfaceError&) {
-    curvature_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return std::nullopt;
   }
   curvature_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (!out.curvature.normal.allFinite()) return std::nullopt;
+  if (out && !out->curvature.normal.allFinite()) out.reset();
   return out;
 }
 

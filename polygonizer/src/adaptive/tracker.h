@@ -32,8 +32,8 @@ struct Settings {
   bool curvature_properties = false;
   double diagonal = 1;
   // Cell size of the spatial hashes: about a typical edge, so that a query visits a few cells
-  // holding a few points each whatever the density. 0: max_edge.
-  double hash_cell = 0;
+  // holding a few points each whatever the density.
+  double hash_cell = 1;
 };
 
 class Tracker {
