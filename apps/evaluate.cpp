@@ -1,9 +1,9 @@
 // build/bin/evaluate FIELD.json MESH.ply [--rays N] [--views V] [--projection perspective|orthographic]
 //                    [--samples N] [--cache DIR] -o METRICS.json
 // Measures one mesh of one field: depth and Phong errors against exact ray casting (the ground
-// truth, cached in DIR when given), silhouette disagreement, triangle quality, topology and
-// distances between mesh and surface. Writes METRICS.json (schema in raytrace/README.md) and
-// prints a short summary.
+// truth, cached in DIR when given), silhouette disagreement, triangle quality, topology,
+// self-intersections and distances between mesh and surface. Writes METRICS.json (schema in
+// raytrace/README.md) and prints a short summary.
 #include <raytrace/evaluate.h>
 #include <raytrace/ground_truth_cache.h>
 #include <raytrace/phong_normal.h>
@@ -126,10 +126,12 @@ int main(int argc, char** argv) {
                 num(metrics["depth_error"]["mean"]), num(metrics["depth_error"]["relative_mean"]),
                 num(metrics["phong_error_deg"]["mean"]), num(metrics["phong_error_deg"]["std"]),
                 num(metrics["silhouette_disagreement"]));
-    std::printf("edge ratio mean %.4g std %.4g  near-equilateral %.3f  min angle %.3g deg  genus %d\n",
+    std::printf("edge ratio mean %.4g std %.4g  near-equilateral %.3f  min angle %.3g deg  genus %d  "
+                "self-intersecting pairs %zu\n",
                 num(metrics["edge_ratio"]["mean"]), num(metrics["edge_ratio"]["std"]),
                 num(metrics["near_equilateral_fraction"]), num(metrics["min_angle_deg"]["min"]),
-                metrics["topology"]["genus"].get<int>());
+                metrics["topology"]["genus"].get<int>(),
+                metrics["topology"]["self_intersections"]["pairs"].get<std::size_t>());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "evaluate: %s\n", e.what());

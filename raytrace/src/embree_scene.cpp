@@ -1,4 +1,4 @@
-// The only file of the project that calls Embree (version 3).
+// With box_overlaps.cpp, the only file of the project that calls Embree (version 3).
 #include <raytrace/embree_scene.h>
 
 #include <polygonizer/errors.h>

@@ -1,5 +1,6 @@
 #include <raytrace/embree_scene.h>
 #include <raytrace/evaluate.h>
+#include <raytrace/self_intersection.h>
 
 #include <polygonizer/errors.h>
 
@@ -49,6 +50,15 @@ nlohmann::json to_json(const MeshQuality& q) {
   return j;
 }
 
+nlohmann::json to_json(const SelfIntersectionReport& r) {
+  nlohmann::json examples = nlohmann::json::array();
+  for (const auto& [f, g] : r.examples) examples.push_back({f, g});
+  return {{"pairs", r.pairs},
+          {"examples", examples},
+          {"degenerate_triangles_skipped", r.degenerate_triangles},
+          {"candidate_pairs", r.candidate_pairs}};
+}
+
 nlohmann::json to_json(const AccuracyMetrics& a) {
   nlohmann::json j;
   j["depth_error"] = to_json(a.depth);
@@ -74,6 +84,7 @@ nlohmann::json evaluate_mesh(const Field& field, const Mesh& mesh, const GroundT
   nlohmann::json j{{"schema", kMetricsSchema}};
   j.update(to_json(accuracy));
   j.update(to_json(quality));
+  j["topology"]["self_intersections"] = to_json(find_self_intersections(mesh));
   j["normals"] = normals_source;
 
   const GroundTruthCounts c = truth.counts();

@@ -37,6 +37,10 @@ TEST(Evaluate, IcosphereOfASphereHasEveryDocumentedMetric) {
   EXPECT_EQ(j["topology"]["oriented"], true);
   EXPECT_EQ(j["topology"]["components"], 1);
   EXPECT_EQ(j["topology"]["genus"], 0);
+  EXPECT_EQ(j["topology"]["self_intersections"]["pairs"], 0);
+  EXPECT_TRUE(j["topology"]["self_intersections"]["examples"].is_array());
+  EXPECT_EQ(j["topology"]["self_intersections"]["degenerate_triangles_skipped"], 0);
+  EXPECT_GT(j["topology"]["self_intersections"]["candidate_pairs"].get<std::size_t>(), mesh.num_triangles());
   EXPECT_LT(j["vertex_distance"]["max"].get<double>(), 1e-15);
   EXPECT_EQ(j["mesh_to_surface"]["samples"], 500);
   EXPECT_GT(j["surface_to_mesh"]["points"].get<int>(), 100);
@@ -48,6 +52,27 @@ TEST(Evaluate, IcosphereOfASphereHasEveryDocumentedMetric) {
   EXPECT_LT(j["surface_to_mesh"]["max"].get<double>(), 0.01);
   EXPECT_LE(j["depth_error"]["mean"].get<double>(), j["depth_error"]["max"].get<double>());
   EXPECT_NO_THROW((void)j.dump());
+}
+
+TEST(Evaluate, SelfIntersectionsAreReportedWithExamples) {
+  const Sphere sphere(Vec3::Zero(), 1.0);
+  EvaluateOptions o;
+  o.camera.views = 1;
+  o.camera.resolution = 4;
+  o.sampling.samples = 10;
+  const GroundTruth gt = compute_ground_truth(sphere, make_camera_rays(sphere.bounds(), o.camera), o.raycast);
+  Mesh mesh = icosphere(1);
+  mesh.positions[0] = -1.5 * mesh.positions[0];  // pushed through the far side
+  const SelfIntersectionReport expected = find_self_intersections(mesh);
+  const nlohmann::json j = evaluate_mesh(sphere, mesh, gt, o);
+  const nlohmann::json& s = j["topology"]["self_intersections"];
+  EXPECT_GT(expected.pairs, 0u);
+  EXPECT_EQ(s["pairs"].get<std::size_t>(), expected.pairs);
+  ASSERT_EQ(s["examples"].size(), expected.examples.size());
+  for (std::size_t i = 0; i < expected.examples.size(); ++i) {
+    EXPECT_EQ(s["examples"][i][0].get<int>(), expected.examples[i].first);
+    EXPECT_EQ(s["examples"][i][1].get<int>(), expected.examples[i].second);
+  }
 }
 
 TEST(Evaluate, MeshWithoutNormalsIsRefused) {

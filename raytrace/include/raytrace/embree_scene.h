@@ -1,5 +1,6 @@
 // Ray-mesh intersection and closest-point queries through Embree. Every Embree call of the
-// project is in embree_scene.cpp, so moving to another Embree version touches one file.
+// project is in embree_scene.cpp and box_overlaps.cpp (rtcCollide, for self_intersection.h), so
+// moving to another Embree version touches those two files.
 #pragma once
 
 #include <raytrace/camera.h>

@@ -6,6 +6,7 @@
 #include <raytrace/camera.h>
 #include <raytrace/implicit_raycast.h>
 #include <raytrace/mesh_quality.h>
+#include <raytrace/self_intersection.h>
 #include <raytrace/surface_distance.h>
 
 #include <polygonizer/field.h>
@@ -36,5 +37,6 @@ nlohmann::json evaluate_mesh(const Field& field, const Mesh& mesh, const GroundT
 nlohmann::json to_json(const SampleStats& stats);
 nlohmann::json to_json(const MeshQuality& quality);
 nlohmann::json to_json(const AccuracyMetrics& accuracy);
+nlohmann::json to_json(const SelfIntersectionReport& report);
 
 }  // namespace cdp
