@@ -1,11 +1,12 @@
 // Independent checks of polygonizer output used by the polygonizer tests: a reference topology
-// from a simple marching-tetrahedra polygonization, a hashed triangle-triangle intersection
-// test, distances to the surface and triangle shape statistics.
+// from a simple marching-tetrahedra polygonization, the self-intersection count of
+// raytrace/self_intersection.h, distances to the surface and triangle shape statistics.
 #pragma once
 
 #include <polygonizer/field.h>
 #include <polygonizer/mesh.h>
 #include <polygonizer/mesh_topology.h>
+#include <raytrace/self_intersection.h>
 
 #include <algorithm>
 #include <cmath>
@@ -78,63 +79,9 @@ inline Mesh marching_tetrahedra_reference(const Field& field, int n) {
   return mesh;
 }
 
-// Whether segment [p, q] passes through the interior of triangle (a, b, c), with margins so
-// that touching at shared points does not count.
-inline bool segment_hits_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 d = q - p, e1 = b - a, e2 = c - a;
-  const Vec3 s = d.cross(e2);
-  const double det = e1.dot(s);
-  const double scale = e1.norm() * e2.norm() * d.norm();
-  if (std::abs(det) <= 1e-12 * scale) return false;  // parallel or degenerate: not counted
-  const Vec3 o = p - a;
-  const double u = o.dot(s) / det;
-  const Vec3 r = o.cross(e1);
-  const double v = d.dot(r) / det;
-  const double t = e2.dot(r) / det;
-  constexpr double eps = 1e-7;
-  return t > eps && t < 1 - eps && u > eps && v > eps && u + v < 1 - eps;
-}
-
-// Pairs of triangles that cross each other (not counting neighbours sharing an edge), found
-// through a hash grid of triangle bounding boxes.
-inline std::size_t count_self_intersections(const Mesh& mesh) {
-  const auto& P = mesh.positions;
-  double mean_edge = 0;
-  for (const auto& t : mesh.triangles) mean_edge += (P[t[0]] - P[t[1]]).norm();
-  mean_edge /= std::max<std::size_t>(1, mesh.triangles.size());
-  const double cell = std::max(mean_edge, 1e-12);
-  std::map<std::array<long, 3>, std::vector<int>> grid;
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    const auto& t = mesh.triangles[f];
-    Vec3 lo = P[t[0]].cwiseMin(P[t[1]]).cwiseMin(P[t[2]]), hi = P[t[0]].cwiseMax(P[t[1]]).cwiseMax(P[t[2]]);
-    for (long k = std::floor(lo.z() / cell); k <= std::floor(hi.z() / cell); ++k)
-      for (long j = std::floor(lo.y() / cell); j <= std::floor(hi.y() / cell); ++j)
-        for (long i = std::floor(lo.x() / cell); i <= std::floor(hi.x() / cell); ++i)
-          grid[{i, j, k}].push_back(static_cast<int>(f));
-  }
-  std::set<std::pair<int, int>> hits;
-  for (const auto& [key, faces] : grid)
-    for (std::size_t x = 0; x < faces.size(); ++x)
-      for (std::size_t y = x + 1; y < faces.size(); ++y) {
-        const int f = std::min(faces[x], faces[y]), g = std::max(faces[x], faces[y]);
-        const auto& A = mesh.triangles[f];
-        const auto& B = mesh.triangles[g];
-        int shared = 0;
-        for (int a : A)
-          for (int b : B) shared += a == b;
-        if (shared >= 2) continue;
-        bool hit = false;
-        for (int e = 0; e < 3 && !hit; ++e) {
-          const int a0 = A[e], a1 = A[(e + 1) % 3], b0 = B[e], b1 = B[(e + 1) % 3];
-          const bool a_touches = std::count(B.begin(), B.end(), a0) || std::count(B.begin(), B.end(), a1);
-          const bool b_touches = std::count(A.begin(), A.end(), b0) || std::count(A.begin(), A.end(), b1);
-          if (!a_touches && segment_hits_triangle(P[a0], P[a1], P[B[0]], P[B[1]], P[B[2]])) hit = true;
-          if (!b_touches && segment_hits_triangle(P[b0], P[b1], P[A[0]], P[A[1]], P[A[2]])) hit = true;
-        }
-        if (hit) hits.insert({f, g});
-      }
-  return hits.size();
-}
+// Pairs of triangles that meet anywhere other than at the vertices or the edge they share
+// (exact test, Embree broad phase: raytrace/self_intersection.h, whose rules apply).
+inline std::size_t count_self_intersections(const Mesh& mesh) { return find_self_intersections(mesh).pairs; }
 
 // Largest first-order distance |F| / |grad F| of a mesh vertex to the surface.
 inline double max_surface_distance(const Field& field, const Mesh& mesh) {
