@@ -18,18 +18,9 @@ std::string format_point(const Vec3& p) {
   return s.str();
 }
 
-struct SeedGrid {
-  Vec3 origin;
-  double h;
-  std::array<int, 3> n;  // cells per axis
-  std::vector<double> values;
-  std::size_t index(int i, int j, int k) const {
-    return (static_cast<std::size_t>(k) * (n[1] + 1) + j) * (n[0] + 1) + i;
-  }
-  Vec3 point(int i, int j, int k) const { return origin + h * Vec3(i, j, k); }
-};
+}  // namespace
 
-SeedGrid sample_grid(const Field& field, const SeedOptions& options) {
+SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options) {
   if (options.resolution < 2) throw InvalidInputError("seeding: resolution must be at least 2");
   const Box& box = field.bounds();
   if (!box.valid()) throw NoSurfaceError("seeding: the field has no valid bounding box");
@@ -37,7 +28,11 @@ SeedGrid sample_grid(const Field& field, const SeedOptions& options) {
   g.origin = box.min;
   g.h = box.size().maxCoeff() / options.resolution;
   for (int a = 0; a < 3; ++a) g.n[a] = std::max(1, static_cast<int>(std::ceil(box.size()[a] / g.h - 1e-9)));
-  const std::size_t count = static_cast<std::size_t>(g.n[0] + 1) * (g.n[1] + 1) * (g.n[2] + 1);
+  const double nodes = static_cast<double>(g.n[0] + 1) * (g.n[1] + 1) * (g.n[2] + 1);
+  if (nodes > 2147483647.0)
+    throw InvalidInputError("seeding: a grid of resolution " + std::to_string(options.resolution) +
+                            " has too many nodes");
+  const std::size_t count = static_cast<std::size_t>(nodes);
   std::vector<Vec3> points;
   points.reserve(count);
   for (int k = 0; k <= g.n[2]; ++k)
@@ -61,6 +56,8 @@ SeedGrid sample_grid(const Field& field, const SeedOptions& options) {
   }
   return g;
 }
+
+namespace {
 
 struct UnionFind {
   std::vector<int> parent;
@@ -90,7 +87,7 @@ double seed_grid_spacing(const Field& field, const SeedOptions& options) {
 namespace {
 
 std::vector<std::pair<Crossing, int>> crossings_with_clusters(const Field& field, const SeedOptions& options) {
-  const SeedGrid g = sample_grid(field, options);
+  const SeedGrid g = sample_seed_grid(field, options);
   const auto inside = [&](int i, int j, int k) { return g.values[g.index(i, j, k)] < 0; };
   const int nx = g.n[0], ny = g.n[1], nz = g.n[2];
   const auto cell_id = [&](int i, int j, int k) { return (k * ny + j) * nx + i; };

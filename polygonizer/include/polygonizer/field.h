@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 
 namespace cdp {
 
@@ -89,6 +90,21 @@ class Field {
   // A bound L with |F(a) - F(b)| <= L |a - b| inside bounds(), when the model knows one.
   // Ray casting steps by |F| / L; models without a bound let the caller estimate one.
   virtual std::optional<double> lipschitz_bound() const { return std::nullopt; }
+  // A bound that holds inside `region` (a box within bounds()); never larger than the global one.
+  // Models whose steepness is local (blobs) override it, so that a search for small components
+  // can prove most of the box empty (see the adaptive polygonizer's seeding).
+  virtual std::optional<double> lipschitz_bound(const Box& region) const {
+    (void)region;
+    return lipschitz_bound();
+  }
+
+  // An interval [lo, hi] that contains F everywhere inside `region`, for models that can bound
+  // their values (monotone kernels, interval arithmetic); nothing otherwise. Sharper than the
+  // Lipschitz bound where a model knows more; the small-component search uses both.
+  virtual std::optional<std::pair<double, double>> value_range(const Box& region) const {
+    (void)region;
+    return std::nullopt;
+  }
 
   // The minimum distance between two constraint points of a data-driven model; the paper's
   // Marching Tetrahedra "precision" convention scales this. Empty for models without points.

@@ -5,6 +5,8 @@
 
 #include <polygonizer/field.h>
 
+#include <array>
+#include <cstddef>
 #include <vector>
 
 namespace cdp {
@@ -19,6 +21,25 @@ struct SurfaceSeed {
   Vec3 point;   // see the functions below for whether it lies on the surface
   int cluster;  // crossings of one 26-connected group of crossed grid cells share a cluster id
 };
+
+// F sampled at the nodes of the seed grid: cubic cells of side h from the box's min corner, n
+// cells per axis (the last layer may reach past the box's max corner).
+struct SeedGrid {
+  Vec3 origin = Vec3::Zero();
+  double h = 1;
+  std::array<int, 3> n{1, 1, 1};
+  std::vector<double> values;  // node (i, j, k) at index(i, j, k)
+  std::size_t index(int i, int j, int k) const {
+    return (static_cast<std::size_t>(k) * (n[1] + 1) + j) * (n[0] + 1) + i;
+  }
+  Vec3 point(int i, int j, int k) const { return origin + h * Vec3(i, j, k); }
+  double value(int i, int j, int k) const { return values[index(i, j, k)]; }
+};
+
+// Samples the grid (one batched evaluation). Throws InvalidInputError for a resolution below 2
+// or a grid of more than 2^31 nodes, NoSurfaceError when F is not finite at a node or (with
+// require_closed_in_box) negative on the box's boundary.
+SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options = {});
 
 // Every grid edge with a sign change, its crossing point linearly interpolated (not on the
 // surface: cheap, for coverage checks "is this crossing already meshed?"), in a deterministic

@@ -1,5 +1,6 @@
 // polygonize_adaptive: resolves the options, finds seeds on every component, runs the tracker
 // from each seed not yet covered, and fills in the common statistics.
+#include "seeding.h"
 #include "tracker.h"
 
 #include <polygonizer/adaptive_polygonizer.h>
@@ -12,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 namespace cdp {
 
@@ -58,6 +60,48 @@ adaptive::Settings resolve(const Field& field, const AdaptiveOptions& o) {
   return s;
 }
 
+std::string format_point(const Vec3& p) {
+  std::ostringstream s;
+  s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return s.str();
+}
+
+// A triangle whose face normal is more than 120 degrees from one of its vertices' normals is no
+// chord of one sheet: with edges sized by curvature the normal turns by about 60 degrees at
+// most across a triangle (factor 1), more only on detail finer than min_edge (a needle's tip
+// closes with about 100 degrees). Measured on the wrong meshes this catches (two spheres 1e-3
+// apart, tanglecube and a 50-blob field at factor 1): 145 to 150 degrees.
+constexpr double kSpanningSheets = -0.5;
+
+// The last line of defence against a wrong mesh with exit 0: the tracker's own output must be
+// closed, oriented and manifold, each seed must have grown one component of its own (a front
+// that merged across a gap into another sheet joins two), and no triangle may span two sheets
+// (a triangle whose face points against one of its vertices' normals does). Returns the
+// components; throws NoSurfaceError naming the place otherwise.
+std::size_t check_mesh(const Mesh& mesh, std::size_t seeds) {
+  const MeshTopology t = analyze_topology(mesh);
+  const auto fail = [](const std::string& what, const Vec3& where) {
+    throw NoSurfaceError("adaptive: the mesh came out " + what + " near " + format_point(where) +
+                         "; the surface may have a feature thinner than min_edge there");
+  };
+  if (!t.closed() || !t.edge_manifold() || !t.vertex_manifold() || !t.oriented())
+    fail("with " + std::to_string(t.boundary_edges) + " boundary, " + std::to_string(t.nonmanifold_edges) +
+             " non-manifold and " + std::to_string(t.misoriented_edges) + " misoriented edges, " +
+             std::to_string(t.nonmanifold_vertices) + " non-manifold vertices",
+         mesh.positions.empty() ? Vec3::Zero() : mesh.positions.front());
+  for (const auto& tri : mesh.triangles) {
+    const Vec3& a = mesh.positions[tri[0]];
+    const Vec3 face = (mesh.positions[tri[1]] - a).cross(mesh.positions[tri[2]] - a).normalized();
+    for (int k = 0; k < 3; ++k)
+      if (!(face.dot(mesh.normals[tri[k]]) > kSpanningSheets))
+        fail("with a triangle spanning two sheets", mesh.positions[tri[k]]);
+  }
+  if (t.components != seeds)
+    fail("with " + std::to_string(t.components) + " components from " + std::to_string(seeds) + " seeds",
+         mesh.positions.front());
+  return t.components;
+}
+
 double min_angle_degrees(const Mesh& mesh) {
   double best = 180;
   for (const auto& t : mesh.triangles)
@@ -78,20 +122,30 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
 
   SeedOptions seed_options;
   seed_options.resolution = options.seed_resolution;
-  // Grid crossings (not just one seed per cluster): two components closer than a grid cell
-  // share a cluster, and the check "is this crossing meshed yet" catches the second one.
-  const std::vector<SurfaceSeed> crossings = find_surface_crossings(field, seed_options);
-  const double h = seed_grid_spacing(field, seed_options);
+  const SeedGrid grid = sample_seed_grid(field, seed_options);
 
-  // The hash cell follows the edge length the sizing asks for at up to 64 of the crossings
-  // (their median), a deterministic sample spread over the surface.
+  // The hash cell follows the edge length the sizing asks for at up to 64 grid crossings (their
+  // median), a deterministic sample spread over the surface.
   adaptive::Settings settings = s;
+  std::size_t grid_crossings = 0;
   {
+    std::vector<Vec3> points;
+    for (int k = 0; k <= grid.n[2]; ++k)
+      for (int j = 0; j <= grid.n[1]; ++j)
+        for (int i = 0; i <= grid.n[0]; ++i)
+          for (int axis = 0; axis < 3; ++axis) {
+            const int i2 = i + (axis == 0), j2 = j + (axis == 1), k2 = k + (axis == 2);
+            if (i2 > grid.n[0] || j2 > grid.n[1] || k2 > grid.n[2]) continue;
+            const double fa = grid.value(i, j, k), fb = grid.value(i2, j2, k2);
+            if ((fa < 0) == (fb < 0)) continue;
+            points.push_back(grid.point(i, j, k) + fa / (fa - fb) * (grid.point(i2, j2, k2) - grid.point(i, j, k)));
+          }
+    grid_crossings = points.size();
     std::vector<double> lengths;
-    const std::size_t stride = std::max<std::size_t>(1, crossings.size() / 64);
-    for (std::size_t i = 0; i < crossings.size(); i += stride) {
+    const std::size_t stride = std::max<std::size_t>(1, points.size() / 64);
+    for (std::size_t i = 0; i < points.size(); i += stride) {
       try {
-        lengths.push_back(adaptive::edge_length(s.sizing, curvature_at(field, crossings[i].point).min_radius));
+        lengths.push_back(adaptive::edge_length(s.sizing, curvature_at(field, points[i]).min_radius));
       } catch (const NoSurfaceError&) {
       }
     }
@@ -105,20 +159,24 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   Mesh& mesh = result.mesh;
   adaptive::Tracker tracker(field, settings, mesh);
   // Crossed grid edges per unit area average 1.5 / h^2 over all orientations.
-  if (options.progress) tracker.set_progress(options.progress, crossings.size() * h * h / 1.5);
+  if (options.progress) tracker.set_progress(options.progress, grid_crossings * grid.h * grid.h / 1.5);
 
-  ProjectionOptions seed_projection;
-  seed_projection.max_travel = 2 * h;
-  std::size_t seeds = 0, failed_seeds = 0;
-  for (const SurfaceSeed& c : crossings) {
-    if (tracker.covered(c.point)) continue;
-    const ProjectionResult r = project_to_surface(field, c.point, seed_projection);
-    if (!r.ok() || tracker.covered(r.point)) continue;
-    if (tracker.mesh_from_seed(r.point)) ++seeds;
-    else ++failed_seeds;
+  const adaptive::SeedingReport seeding =
+      adaptive::seed_every_component(field, grid, s.sizing.min_edge, settings.hash_cell, tracker, mesh);
+  if (mesh.triangles.empty() && seeding.sign_changes == 0) {
+    std::ostringstream msg;
+    msg << "adaptive: no zero crossing of the field in its box " << format_point(field.bounds().min) << " - "
+        << format_point(field.bounds().max) << " at seed resolution " << options.seed_resolution
+        << " (F is " << (grid.values[0] < 0 ? "negative" : "positive") << " everywhere sampled)";
+    throw NoSurfaceError(msg.str());
   }
   if (mesh.triangles.empty())
     throw NoSurfaceError("adaptive: the field changes sign but no seed could be meshed (vanishing gradient)");
+  if (seeding.uncovered > 0)
+    throw NoSurfaceError("adaptive: " + std::to_string(seeding.uncovered) +
+                         " sign changes of the field are not covered by the mesh, the first near " +
+                         format_point(seeding.first_uncovered) +
+                         " (a singular point or a feature thinner than min_edge?)");
 
   if (s.curvature_properties) {
     mesh.vertex_scalars["mac"] = tracker.vertex_mac();
@@ -131,12 +189,19 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.field_evaluations = field.counts() - before;
   st.triangles = mesh.num_triangles();
   st.vertices = mesh.num_vertices();
-  st.components = analyze_topology(mesh).components;
+  st.components = check_mesh(mesh, seeding.seeds);
   st.splits = tracker.splits();
   st.merges = tracker.merges();
-  st.extra["seeds"] = seeds;
+  st.extra["seeds"] = seeding.seeds;
   st.extra["curvature_seconds"] = tracker.curvature_seconds();
-  st.extra["failed_seeds"] = failed_seeds;
+  st.extra["failed_seeds"] = seeding.failed_seeds;
+  st.extra["sign_changes"] = seeding.sign_changes;
+  st.extra["covered_nearby"] = seeding.covered_nearby;
+  st.extra["below_resolution"] = seeding.below_resolution;
+  st.extra["uncovered_crossings"] = seeding.uncovered;
+  st.extra["refined_cells"] = seeding.refined_cells;
+  st.extra["unresolved_cells"] = seeding.unresolved_cells;
+  st.extra["probes"] = seeding.probes;
   st.extra["steps"] = tracker.steps();
   st.extra["deferrals"] = tracker.deferrals();
   st.extra["forced_closures"] = tracker.forced_closures();

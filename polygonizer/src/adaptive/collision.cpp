@@ -63,7 +63,7 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
     if (hit >= 0) return;
     const int vr = fs_.nodes[r].vertex, vs = fs_.nodes[fs_.nodes[r].next].vertex;
     if (vr == vu || vr == vw || vs == vu || vs == vw) return;
-    if (!(mesh_.normals[vr].dot(N) > 0) || !(mesh_.normals[vs].dot(N) > 0)) return;
+    if (!same_side(N, vr) || !same_side(N, vs)) return;
     const Vec3& ar = mesh_.positions[vr];
     const Vec3& bs = mesh_.positions[vs];
     // Only edges that pass near the segment in space count: on a thin tube or a narrow gap the
@@ -90,7 +90,7 @@ bool Tracker::can_bridge(int node, int q) const {
   if (vm == n.vertex || vm == a.vertex || vm == b.vertex || vm == fs_.nodes[a.prev].vertex ||
       vm == fs_.nodes[b.next].vertex)
     return false;
-  if (!(mesh_.normals[vm].dot(mesh_.normals[n.vertex]) > 0)) return false;
+  if (!same_side(mesh_.normals[n.vertex], vm)) return false;
   const Vec3& p = mesh_.positions[n.vertex];
   const Vec3& x = mesh_.positions[vm];
   // Each point must see the other inside its unmeshed sector, else the bridge would cross
@@ -163,7 +163,7 @@ int Tracker::find_closing_obstacle(int node) const {
     const Vec3& x = mesh_.positions[vq];
     const double d = (x - p).norm();
     if (d >= radius || d > best_d || (d == best_d && q > best)) return;
-    if (!(mesh_.normals[vq].dot(N) > 0)) return;
+    if (!same_side(N, vq)) return;
     // On p's side of line a-b, with a small tolerance so points right on the new edge count.
     if (inward.dot(x - a) * side_p < -0.05 * side_p * side_p) return;
     if (!in_sector(node, x, 0)) return;

@@ -74,7 +74,7 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     front_hash_.for_each_near(x.point, hit_d, [&](int q) {
       const int vq = fs_.nodes[q].vertex;
       if (vq == n.vertex || vq == va || vq == vb) return;
-      if (!(mesh_.normals[vq].dot(N) > 0)) return;
+      if (!same_side(N, vq)) return;
       const double d = (mesh_.positions[vq] - x.point).norm();
       if (d < hit_d || (d == hit_d && q < hit)) hit = q, hit_d = d;
     });

@@ -11,7 +11,7 @@ namespace cdp::adaptive {
 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
     : field_(field), s_(settings), mesh_(mesh),
-      front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell) {}
+      front_hash_(settings.hash_cell) {}
 
 std::optional<Tracker::Placed> Tracker::measure(const Vec3& p) const {
   // Timed so that the stats can show what the paper claims: curvature costs little.
@@ -34,8 +34,6 @@ int Tracker::add_vertex(const Placed& placed) {
   target_.push_back(edge_length(s_.sizing, c.min_radius));
   mac_.push_back(c.mac);
   shape_index_.push_back(c.shape_index);
-  reach_.push_back(0);
-  vertex_hash_.insert(v, placed.point);
   return v;
 }
 
@@ -51,7 +49,7 @@ std::optional<Tracker::Placed> Tracker::place_point(int v, const Vec3& dir, doub
   const double dist = (r.point - origin).norm();
   if (dist < 0.25 * d || dist > 1.75 * d) return std::nullopt;
   auto placed = measure(r.point);
-  if (!placed || !(placed->curvature.normal.dot(mesh_.normals[v]) > 0)) return std::nullopt;
+  if (!placed || !same_side(mesh_.normals[v], placed->curvature.normal)) return std::nullopt;
   return placed;
 }
 
@@ -59,10 +57,7 @@ void Tracker::emit_triangle(int a, int b, int c) {
   mesh_.triangles.push_back({a, b, c});
   const int t[3] = {a, b, c};
   for (int k = 0; k < 3; ++k) {
-    const double l = (mesh_.positions[t[k]] - mesh_.positions[t[(k + 1) % 3]]).norm();
-    reach_[t[k]] = std::max(reach_[t[k]], l);
-    reach_[t[(k + 1) % 3]] = std::max(reach_[t[(k + 1) % 3]], l);
-    longest_edge_ = std::max(longest_edge_, l);
+    longest_edge_ = std::max(longest_edge_, (mesh_.positions[t[k]] - mesh_.positions[t[(k + 1) % 3]]).norm());
   }
   const Vec3& pa = mesh_.positions[a];
   area_ += 0.5 * (mesh_.positions[b] - pa).cross(mesh_.positions[c] - pa).norm();
@@ -107,14 +102,6 @@ double Tracker::local_edge_length(int node) const {
   return std::min({target_[n.vertex], target_[fs_.nodes[n.prev].vertex], target_[fs_.nodes[n.next].vertex]});
 }
 
-bool Tracker::covered(const Vec3& p) const {
-  bool hit = false;
-  vertex_hash_.for_each_near(p, longest_edge_, [&](int w) {
-    if (!hit && (mesh_.positions[w] - p).norm() <= reach_[w]) hit = true;
-  });
-  return hit;
-}
-
 bool Tracker::mesh_from_seed(const Vec3& seed) {
   const auto seed_placed = measure(seed);
   if (!seed_placed) return false;
@@ -139,13 +126,11 @@ bool Tracker::mesh_from_seed(const Vec3& seed) {
   }
   if (corners.size() < 6) {
     // Keep the mesh free of an isolated vertex: the seed vertex is the last one added.
-    vertex_hash_.remove(c, mesh_.positions[c]);
     mesh_.positions.pop_back();
     mesh_.normals.pop_back();
     target_.pop_back();
     mac_.pop_back();
     shape_index_.pop_back();
-    reach_.pop_back();
     return false;
   }
   std::vector<int> v(6);

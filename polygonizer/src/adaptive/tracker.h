@@ -36,6 +36,9 @@ struct Settings {
   double hash_cell = 1;
 };
 
+// Normals whose angle is below arccos of this belong to one side of the surface (see same_side).
+inline constexpr double kSameSideCosine = 0;
+
 class Tracker {
  public:
   Tracker(const Field& field, const Settings& settings, Mesh& mesh);
@@ -43,9 +46,6 @@ class Tracker {
   // Meshes the component through `seed` (a point on the surface). Returns false when not even
   // the first hexagon could be placed there (the caller tries another seed).
   bool mesh_from_seed(const Vec3& seed);
-
-  // Whether p lies on the meshed part: within reach of a vertex (its longest incident edge).
-  bool covered(const Vec3& p) const;
 
   void set_progress(ProgressCallback cb, double estimated_area) {
     progress_ = std::move(cb);
@@ -74,6 +74,11 @@ class Tracker {
     bool expanded = false;
     int obstacle = -1;  // when not expanded: a front node to bridge to, or -1
   };
+
+  // Whether surface normals n and m (or vertex w's) belong to one side of the surface rather
+  // than to two sheets facing each other across a thin gap or wall.
+  static bool same_side(const Vec3& n, const Vec3& m) { return n.dot(m) > kSameSideCosine; }
+  bool same_side(const Vec3& n, int w) const { return same_side(n, mesh_.normals[w]); }
 
   // --- tracker.cpp
   // Curvature at p; nothing where the gradient vanishes.
@@ -133,10 +138,9 @@ class Tracker {
   Settings s_;
   Mesh& mesh_;
   std::vector<double> target_, mac_, shape_index_;
-  std::vector<double> reach_;  // longest edge at each vertex: the triangles there lie within it
   double longest_edge_ = 0;
   FrontSet fs_;
-  SpatialHash front_hash_, vertex_hash_;
+  SpatialHash front_hash_;
   std::vector<int> stack_;
   std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0, forced_closures_ = 0;
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;

@@ -57,6 +57,47 @@ Blobs::Blobs(BlobKernel kernel, double threshold, std::vector<Blob> blobs)
   set_bounds(box);
 }
 
+std::optional<double> Blobs::lipschitz_bound(const Box& region) const {
+  // Blinn's Gaussian never vanishes: every blob counts, at its steepest.
+  if (kernel_ != BlobKernel::Wyvill) return lipschitz_;
+  // Wyvill's |dk/da| = a |p(a^2)| is zero at a = 0 and a = 1 with one peak in between, so over the
+  // distances [near, far] a blob's centre has from the region it is largest at the peak or at
+  // an end.
+  constexpr double kPeak = 0.5035;
+  const auto slope = [](double a) {
+    const double s = a * a;
+    return a * std::abs(-22.0 / 9.0 * 2 + s * (68.0 / 9.0 - 24.0 / 9.0 * s));
+  };
+  double bound = 0;
+  for (const auto& b : blobs_) {
+    const Vec3 nearest = b.center.cwiseMax(region.min).cwiseMin(region.max);
+    const double a0 = (nearest - b.center).norm() / b.radius;
+    if (a0 >= 1) continue;
+    const Vec3 farthest = (b.center - region.min).cwiseAbs().cwiseMax((b.center - region.max).cwiseAbs());
+    const double a1 = std::min(1.0, farthest.norm() / b.radius);
+    const double steepest = a0 <= kPeak && kPeak <= a1 ? kernel_slope_bound(kernel_) : std::max(slope(a0), slope(a1));
+    bound += std::abs(b.strength) * steepest / b.radius;
+  }
+  return bound;
+}
+
+std::optional<std::pair<double, double>> Blobs::value_range(const Box& region) const {
+  double lo = threshold_, hi = threshold_;
+  for (const auto& b : blobs_) {
+    const Vec3 nearest = b.center.cwiseMax(region.min).cwiseMin(region.max);
+    const Vec3 farthest = (b.center - region.min).cwiseAbs().cwiseMax((b.center - region.max).cwiseAbs());
+    const double inv_r2 = 1.0 / (b.radius * b.radius);
+    const double k_near = kernel(kernel_, (nearest - b.center).squaredNorm() * inv_r2).k;
+    const double k_far = kernel(kernel_, farthest.squaredNorm() * inv_r2).k;
+    // F = T - sum s k: the term -s k lies between -s k_near and -s k_far.
+    lo -= std::max(b.strength * k_near, b.strength * k_far);
+    hi -= std::min(b.strength * k_near, b.strength * k_far);
+  }
+  // Rounding: widen by a few ulps of the largest magnitude summed.
+  const double slack = 1e-12 * (std::abs(lo) + std::abs(hi) + threshold_);
+  return std::pair{lo - slack, hi + slack};
+}
+
 double Blobs::eval_value(const Vec3& p) const {
   double sum = 0;
   for (const auto& b : blobs_) {

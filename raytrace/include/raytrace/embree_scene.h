@@ -6,6 +6,7 @@
 #include <raytrace/camera.h>
 
 #include <polygonizer/mesh.h>
+#include <polygonizer/triangle_geometry.h>  // closest_point_on_triangle, used with the queries below
 
 #include <limits>
 #include <memory>
@@ -47,8 +48,5 @@ class EmbreeScene {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-// The point of triangle (a, b, c) nearest to p (Ericson, Real-Time Collision Detection, 5.1.5).
-Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
 }  // namespace cdp

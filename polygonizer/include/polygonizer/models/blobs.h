@@ -22,6 +22,11 @@ class Blobs : public Field {
   Blobs(BlobKernel kernel, double threshold, std::vector<Blob> blobs);
   std::string type_name() const override { return "blobs"; }
   std::optional<double> lipschitz_bound() const override { return lipschitz_; }
+  // Only blobs whose support reaches the region count (Wyvill kernels vanish beyond R).
+  std::optional<double> lipschitz_bound(const Box& region) const override;
+  // Both kernels decrease with distance, so each blob's term is bounded by its values at the
+  // nearest and farthest points of the region.
+  std::optional<std::pair<double, double>> value_range(const Box& region) const override;
   const std::vector<Blob>& blobs() const { return blobs_; }
 
  protected:

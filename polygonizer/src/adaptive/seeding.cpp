@@ -1,0 +1,478 @@
+#include "seeding.h"
+
+#include <polygonizer/curvature.h>
+#include <polygonizer/errors.h>
+#include <polygonizer/newton_projection.h>
+#include <polygonizer/triangle_geometry.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <unordered_map>
+
+namespace cdp::adaptive {
+
+namespace {
+
+// Bisection halvings before Newton takes a sign change's point onto the surface: 2^-16 of the
+// segment is well inside Newton's basin on any segment the grid resolves.
+constexpr int kBisections = 16;
+// How near a triangle of the same orientation a point of the surface must lie to count as meshed,
+// in units of the triangle's longest edge. The mesh is a chord of the surface and deviates by
+// about l / (8 k) for an edge l at factor k where the curvature is resolved; where it is not (a
+// needle's tip finer than min_edge) the mesh cuts the detail off within about one edge. Two
+// different sheets of the same orientation are never that close unless a feature between them is
+// thinner than an edge.
+constexpr double kSheetReach = 1.0;
+// Bound on the cells the small-component search splits, so that a field whose bound is far too
+// loose cannot make it run for ever; cells left over count as unresolved.
+constexpr std::size_t kMaxRefinedCells = 1u << 20;
+// Steps of min_edge a surface point may be from the mesh and still belong to a meshed component.
+constexpr int kWalkSteps = 32;
+
+struct SignChange {
+  Vec3 a = Vec3::Zero(), b = Vec3::Zero();  // F(a) and F(b) differ in sign (F < 0 counts as inside)
+  double fa = 0, fb = 0;
+};
+
+struct SurfacePoint {
+  Vec3 point, normal;
+};
+
+// The surface point on a sign change: Newton from the linear interpolant; where it wanders off,
+// bisection first keeps the bracket and Newton finishes.
+std::optional<SurfacePoint> surface_point(const Field& field, const SignChange& c) {
+  const double length = (c.b - c.a).norm();
+  ProjectionOptions po;
+  po.max_travel = 2 * length;
+  ProjectionResult r = project_to_surface(field, c.a + c.fa / (c.fa - c.fb) * (c.b - c.a), po);
+  if (!r.ok()) {
+    Vec3 a = c.a, b = c.b;
+    double fa = c.fa;
+    for (int it = 0; it < kBisections; ++it) {
+      const Vec3 m = 0.5 * (a + b);
+      const double fm = field.value(m);
+      if ((fm < 0) == (fa < 0)) a = m, fa = fm;
+      else b = m;
+    }
+    po.max_travel = length;
+    po.max_step = length;
+    r = project_to_surface(field, 0.5 * (a + b), po);
+  }
+  if (!r.ok()) return std::nullopt;
+  const Vec3 g = field.gradient(r.point);
+  if (!(g.squaredNorm() > 0) || !g.allFinite()) return std::nullopt;
+  return SurfacePoint{r.point, g.normalized()};
+}
+
+// The mesh's triangles binned by the cells their bounding boxes overlap, indexed lazily: coverage
+// is asked between components, never inside the tracker's loop.
+class MeshCoverage {
+ public:
+  MeshCoverage(const Mesh& mesh, double cell) : mesh_(mesh), h_(cell), inv_h_(1 / cell) {}
+
+  void update() {
+    const auto& P = mesh_.positions;
+    for (; indexed_ < mesh_.triangles.size(); ++indexed_) {
+      const auto& t = mesh_.triangles[indexed_];
+      const Vec3 lo = P[t[0]].cwiseMin(P[t[1]]).cwiseMin(P[t[2]]);
+      const Vec3 hi = P[t[0]].cwiseMax(P[t[1]]).cwiseMax(P[t[2]]);
+      longest_ = std::max(longest_, longest_edge(t));
+      // A point exactly on a cell face belongs to the cells on both sides.
+      const double pad = 1e-9 * h_;
+      const Cell a = cell_of(lo.array() - pad), b = cell_of(hi.array() + pad);
+      for (std::int64_t k = a.k; k <= b.k; ++k)
+        for (std::int64_t j = a.j; j <= b.j; ++j)
+          for (std::int64_t i = a.i; i <= b.i; ++i) cells_[key({i, j, k})].push_back(static_cast<int>(indexed_));
+    }
+  }
+
+  // A triangle meets the segment a-b.
+  bool crosses(const Vec3& a, const Vec3& b) const {
+    const auto& P = mesh_.positions;
+    return any_in(a.cwiseMin(b), a.cwiseMax(b), [&](int f) {
+      const auto& t = mesh_.triangles[f];
+      return segment_meets_triangle(a, b, P[t[0]], P[t[1]], P[t[2]]);
+    });
+  }
+
+  // Every point of the box lies within one edge of a triangle (the triangle's longest edge), so
+  // whatever surface the box holds would count as meshed (see near_same_sheet).
+  bool explains(const Box& box) const {
+    const auto& P = mesh_.positions;
+    const Vec3 c = box.center();
+    const double hd = 0.5 * box.diagonal();
+    // A triangle that explains the box lies within its longest edge minus hd of the centre.
+    const double r = kSheetReach * longest_ - hd;
+    if (!(r > 0)) return false;
+    return any_in(c.array() - r, c.array() + r, [&](int f) {
+      const auto& t = mesh_.triangles[f];
+      const double reach = kSheetReach * longest_edge(t) - hd;
+      if (!(reach > 0)) return false;
+      // The distance to the triangle's bounding box first: a cheap lower bound.
+      const Vec3 lo = P[t[0]].cwiseMin(P[t[1]]).cwiseMin(P[t[2]]), hi = P[t[0]].cwiseMax(P[t[1]]).cwiseMax(P[t[2]]);
+      if ((c - c.cwiseMax(lo).cwiseMin(hi)).norm() > reach) return false;
+      return (closest_point_on_triangle(c, P[t[0]], P[t[1]], P[t[2]]) - c).norm() <= reach;
+    });
+  }
+
+  // The nearest point within r of a triangle facing the way `normal` does.
+  std::optional<Vec3> nearest_same_sheet(const Vec3& x, const Vec3& normal, double r) const {
+    const auto& P = mesh_.positions;
+    std::optional<Vec3> best;
+    double best_d = r;
+    any_in(x.array() - r, x.array() + r, [&](int f) {
+      const auto& t = mesh_.triangles[f];
+      if (!((P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).dot(normal) > 0)) return false;
+      const Vec3 y = closest_point_on_triangle(x, P[t[0]], P[t[1]], P[t[2]]);
+      const double d = (y - x).norm();
+      if (d < best_d) best_d = d, best = y;
+      return false;
+    });
+    return best;
+  }
+
+  // A triangle facing the way `normal` does (any length) lies within kSheetReach times its
+  // longest edge of x.
+  bool near_same_sheet(const Vec3& x, const Vec3& normal) const {
+    const auto& P = mesh_.positions;
+    const double r = kSheetReach * longest_;
+    return any_in(x.array() - r, x.array() + r, [&](int f) {
+      const auto& t = mesh_.triangles[f];
+      if (!((P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).dot(normal) > 0)) return false;
+      return (closest_point_on_triangle(x, P[t[0]], P[t[1]], P[t[2]]) - x).norm() <= kSheetReach * longest_edge(t);
+    });
+  }
+
+ private:
+  struct Cell {
+    std::int64_t i, j, k;
+  };
+  Cell cell_of(const Vec3& p) const {
+    return {static_cast<std::int64_t>(std::floor(p.x() * inv_h_)), static_cast<std::int64_t>(std::floor(p.y() * inv_h_)),
+            static_cast<std::int64_t>(std::floor(p.z() * inv_h_))};
+  }
+  static std::uint64_t key(const Cell& c) {
+    const auto m = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffffULL; };
+    return m(c.i) | (m(c.j) << 21) | (m(c.k) << 42);
+  }
+  double longest_edge(const std::array<int, 3>& t) const {
+    const auto& P = mesh_.positions;
+    return std::max({(P[t[0]] - P[t[1]]).norm(), (P[t[1]] - P[t[2]]).norm(), (P[t[2]] - P[t[0]]).norm()});
+  }
+  template <class Pred>
+  bool any_in(const Vec3& lo, const Vec3& hi, Pred&& pred) const {
+    const Cell a = cell_of(lo), b = cell_of(hi);
+    for (std::int64_t k = a.k; k <= b.k; ++k)
+      for (std::int64_t j = a.j; j <= b.j; ++j)
+        for (std::int64_t i = a.i; i <= b.i; ++i) {
+          const auto it = cells_.find(key({i, j, k}));
+          if (it == cells_.end()) continue;
+          for (int f : it->second)
+            if (pred(f)) return true;
+        }
+    return false;
+  }
+
+  const Mesh& mesh_;
+  double h_, inv_h_;
+  double longest_ = 0;
+  std::size_t indexed_ = 0;
+  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
+};
+
+class Seeder {
+ public:
+  Seeder(const Field& field, const SeedGrid& grid, double min_edge, double cell, Tracker& tracker, const Mesh& mesh)
+      : field_(field), grid_(grid), min_edge_(min_edge), tracker_(tracker), cover_(mesh, std::max(cell, grid.h)) {}
+
+  SeedingReport run() {
+    grid_sign_changes();
+    if (field_.lipschitz_bound()) search_small_components();
+    else probe_local_minima();
+    seed_deferred();
+    recheck();
+    return report_;
+  }
+
+ private:
+  // A place the surface passes, checked again after the run.
+  struct Witness {
+    SignChange change;
+    bool has_segment;
+    std::optional<SurfacePoint> at;
+  };
+
+  void start_from(const SurfacePoint& x) {
+    if (tracker_.mesh_from_seed(x.point)) ++report_.seeds;
+    else ++report_.failed_seeds;
+  }
+
+  // Whether the surface leads from x to the mesh within kWalkSteps steps of min_edge: a point of
+  // a meshed component whose detail is finer than min_edge (a needle's tip that the mesh cuts
+  // off) rather than a new component. Each step moves in the tangent plane towards the nearest
+  // triangle of the same orientation and goes back onto the surface by Newton; it fails as soon
+  // as the normal turns by 90 degrees or more (another sheet) or the mesh comes no nearer.
+  bool walks_to_mesh(SurfacePoint x) const {
+    const double step = min_edge_;
+    ProjectionOptions po;
+    po.max_travel = step;
+    po.max_step = step;
+    for (int it = 0; it < kWalkSteps; ++it) {
+      if (cover_.near_same_sheet(x.point, x.normal)) return true;
+      const auto y = cover_.nearest_same_sheet(x.point, x.normal, (kWalkSteps - it) * step);
+      if (!y) return false;
+      const Vec3 towards = *y - x.point;
+      const double before = towards.norm();
+      // Along the surface; straight at the mesh where the tangent plane faces it (a tip).
+      Vec3 d = towards - x.normal * x.normal.dot(towards);
+      if (!(d.norm() > 0.1 * before)) d = towards;
+      const ProjectionResult r = project_to_surface(field_, x.point + std::min(step, before) * d.normalized(), po);
+      if (!r.ok()) return false;
+      const Vec3 g = field_.gradient(r.point);
+      if (!(g.squaredNorm() > 0) || !g.allFinite() || !(g.normalized().dot(x.normal) > 0)) return false;
+      if (!((*y - r.point).norm() < before)) return false;
+      x = {r.point, g.normalized()};
+    }
+    return cover_.near_same_sheet(x.point, x.normal);
+  }
+
+  void visit(const SignChange& c) {
+    ++report_.sign_changes;
+    cover_.update();
+    if (cover_.crosses(c.a, c.b)) return;
+    // Before paying for the surface point: the linear interpolant and the segment's direction
+    // from inside to outside usually settle it.
+    const double t = c.fa / (c.fa - c.fb);
+    const Vec3 outward = c.fa < 0 ? Vec3(c.b - c.a) : Vec3(c.a - c.b);
+    if (cover_.near_same_sheet(c.a + t * (c.b - c.a), outward)) {
+      ++report_.covered_nearby;
+      return;
+    }
+    const auto x = surface_point(field_, c);
+    unsure_.push_back({c, true, x});
+    if (!x) return;
+    if (cover_.near_same_sheet(x->point, x->normal)) {
+      ++report_.covered_nearby;
+      return;
+    }
+    if (walks_to_mesh(*x)) {
+      ++report_.below_resolution;
+      return;
+    }
+    consider_seed(*x);
+  }
+
+  // Seeds where the surface is curved more tightly than min_edge can resolve (a needle's tip)
+  // wait until every other seed has been meshed: started there, a component cannot grow out of
+  // the detail and would close over it, apart from the rest of its sheet.
+  void consider_seed(const SurfacePoint& x) {
+    if (!deferring_) {
+      start_from(x);
+      return;
+    }
+    double radius = 0;
+    try {
+      radius = curvature_at(field_, x.point).min_radius;
+    } catch (const NoSurfaceError&) {
+    }
+    if (radius >= min_edge_) start_from(x);
+    else deferred_.push_back(x);
+  }
+
+  void seed_deferred() {
+    deferring_ = false;
+    for (const SurfacePoint& x : deferred_) {
+      cover_.update();
+      if (cover_.near_same_sheet(x.point, x.normal)) continue;
+      if (walks_to_mesh(x)) {
+        ++report_.below_resolution;
+        continue;
+      }
+      start_from(x);
+    }
+  }
+
+  void grid_sign_changes() {
+    const auto& n = grid_.n;
+    for (int k = 0; k <= n[2]; ++k)
+      for (int j = 0; j <= n[1]; ++j)
+        for (int i = 0; i <= n[0]; ++i)
+          for (int axis = 0; axis < 3; ++axis) {
+            const int i2 = i + (axis == 0), j2 = j + (axis == 1), k2 = k + (axis == 2);
+            if (i2 > n[0] || j2 > n[1] || k2 > n[2]) continue;
+            const double fa = grid_.value(i, j, k), fb = grid_.value(i2, j2, k2);
+            if ((fa < 0) == (fb < 0)) continue;
+            visit({grid_.point(i, j, k), grid_.point(i2, j2, k2), fa, fb});
+          }
+  }
+
+  // --- fields with a Lipschitz bound: refine the cells that may hold surface.
+  // Corner c of a cell is (c & 1, c >> 1 & 1, c >> 2 & 1) in units of the cell's side.
+  static Vec3 corner_point(const Box& box, int c) {
+    return {c & 1 ? box.max.x() : box.min.x(), c & 2 ? box.max.y() : box.min.y(), c & 4 ? box.max.z() : box.min.z()};
+  }
+
+  void search_small_components() {
+    const auto& n = grid_.n;
+    struct Candidate {
+      Box box;
+      std::array<double, 8> corners;
+    };
+    std::vector<Candidate> candidates;
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j)
+        for (int i = 0; i < n[0]; ++i) {
+          Candidate c{{grid_.point(i, j, k), grid_.point(i + 1, j + 1, k + 1)}, {}};
+          for (int v = 0; v < 8; ++v) c.corners[v] = grid_.value(i + (v & 1), j + (v >> 1 & 1), k + (v >> 2 & 1));
+          if (!one_sign(c.corners) || proved_empty_by_corners(c.box, c.corners)) continue;
+          candidates.push_back(c);
+        }
+    std::vector<Vec3> centres;
+    for (const Candidate& c : candidates) centres.push_back(c.box.center());
+    std::vector<double> values(centres.size());
+    field_.values(centres.data(), values.data(), centres.size());
+    for (std::size_t i = 0; i < candidates.size(); ++i) search_cell(candidates[i].box, candidates[i].corners, values[i]);
+  }
+
+  static bool one_sign(const std::array<double, 8>& f) {
+    for (double v : f)
+      if ((v < 0) != (f[0] < 0)) return false;
+    return true;
+  }
+
+  // The model's value range excludes zero, or some corner is farther from zero than the
+  // Lipschitz bound allows across the whole cell.
+  bool proved_empty_by_corners(const Box& box, const std::array<double, 8>& f) const {
+    if (const auto range = field_.value_range(box); range && (range->first > 0 || range->second < 0)) return true;
+    const double L = *field_.lipschitz_bound(box);
+    double largest = 0;
+    for (double v : f) largest = std::max(largest, std::abs(v));
+    return largest > L * box.diagonal();
+  }
+
+  void search_cell(const Box& box, const std::array<double, 8>& corners, double centre) {
+    if ((centre < 0) != (corners[0] < 0)) {  // a component inside the cell, around its centre
+      visit({box.center(), box.min, centre, corners[0]});
+      return;
+    }
+    if (std::abs(centre) > *field_.lipschitz_bound(box) * 0.5 * box.diagonal()) return;  // no zero here
+    cover_.update();
+    if (cover_.explains(box)) return;  // what passes here is the meshed surface
+    if (0.5 * box.size().maxCoeff() < min_edge_ || report_.refined_cells >= kMaxRefinedCells) {
+      ++report_.unresolved_cells;
+      return;
+    }
+    ++report_.refined_cells;
+    // The 3 x 3 x 3 lattice of the cell (its corners and centre are known) and the 8 centres of
+    // its children, in one batch.
+    const Vec3 step = 0.5 * box.size();
+    const auto lattice_point = [&](int a, int b, int c) { return Vec3(box.min + step.cwiseProduct(Vec3(a, b, c))); };
+    std::array<double, 27> lattice;
+    std::vector<Vec3> points;
+    std::vector<int> slots;
+    for (int c = 0; c < 3; ++c)
+      for (int b = 0; b < 3; ++b)
+        for (int a = 0; a < 3; ++a) {
+          const int s = a + 3 * b + 9 * c;
+          if (a != 1 && b != 1 && c != 1) lattice[s] = corners[(a / 2) | (b / 2) << 1 | (c / 2) << 2];
+          else if (a == 1 && b == 1 && c == 1) lattice[s] = centre;
+          else points.push_back(lattice_point(a, b, c)), slots.push_back(s);
+        }
+    for (int child = 0; child < 8; ++child)
+      points.push_back(lattice_point(child & 1, child >> 1 & 1, child >> 2 & 1) + 0.5 * step);
+    std::vector<double> values(points.size());
+    field_.values(points.data(), values.data(), points.size());
+    for (std::size_t s = 0; s < slots.size(); ++s) lattice[slots[s]] = values[s];
+
+    for (int child = 0; child < 8; ++child) {
+      const int ca = child & 1, cb = child >> 1 & 1, cc = child >> 2 & 1;
+      const Box sub{lattice_point(ca, cb, cc), lattice_point(ca + 1, cb + 1, cc + 1)};
+      std::array<double, 8> f;
+      for (int v = 0; v < 8; ++v) f[v] = lattice[(ca + (v & 1)) + 3 * (cb + (v >> 1 & 1)) + 9 * (cc + (v >> 2 & 1))];
+      if (one_sign(f)) {
+        if (!proved_empty_by_corners(sub, f)) search_cell(sub, f, values[slots.size() + child]);
+        continue;
+      }
+      // The twelve edges of the child: from corner v along each axis where that bit is 0.
+      for (int v = 0; v < 8; ++v)
+        for (int axis = 0; axis < 3; ++axis) {
+          const int w = v | 1 << axis;
+          if (w == v || (f[v] < 0) == (f[w] < 0)) continue;
+          visit({corner_point(sub, v), corner_point(sub, w), f[v], f[w]});
+        }
+    }
+  }
+
+  // --- fields without a bound: Newton from the local minima of |F| on the grid.
+  void probe_local_minima() {
+    const auto& n = grid_.n;
+    ProjectionOptions po;
+    po.max_travel = 2 * grid_.h;
+    po.max_step = 0.5 * grid_.h;
+    for (int k = 0; k <= n[2]; ++k)
+      for (int j = 0; j <= n[1]; ++j)
+        for (int i = 0; i <= n[0]; ++i) {
+          const double v = grid_.value(i, j, k);
+          if (v == 0 || !strict_local_minimum(i, j, k)) continue;
+          ++report_.probes;
+          const ProjectionResult r = project_to_surface(field_, grid_.point(i, j, k), po);
+          if (!r.ok()) continue;
+          const Vec3 g = field_.gradient(r.point);
+          if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
+          const SurfacePoint x{r.point, g.normalized()};
+          cover_.update();
+          if (cover_.near_same_sheet(x.point, x.normal) || walks_to_mesh(x)) continue;
+          unsure_.push_back({{}, false, x});
+          consider_seed(x);
+        }
+  }
+
+  // |F| at node (i, j, k) below that of its 26 neighbours, all of the same sign (ties go to the
+  // lower node index, so that a plateau yields one probe).
+  bool strict_local_minimum(int i, int j, int k) const {
+    const auto& n = grid_.n;
+    const double v = grid_.value(i, j, k);
+    const std::size_t self = grid_.index(i, j, k);
+    for (int dk = -1; dk <= 1; ++dk)
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          const int a = i + di, b = j + dj, c = k + dk;
+          if ((di == 0 && dj == 0 && dk == 0) || a < 0 || b < 0 || c < 0 || a > n[0] || b > n[1] || c > n[2]) continue;
+          const double u = grid_.value(a, b, c);
+          if ((u < 0) != (v < 0)) return false;
+          if (std::abs(u) < std::abs(v) || (std::abs(u) == std::abs(v) && grid_.index(a, b, c) < self)) return false;
+        }
+    return true;
+  }
+
+  void recheck() {
+    cover_.update();
+    for (const Witness& w : unsure_) {
+      if (w.has_segment && cover_.crosses(w.change.a, w.change.b)) continue;
+      if (w.at && (cover_.near_same_sheet(w.at->point, w.at->normal) || walks_to_mesh(*w.at))) continue;
+      if (report_.uncovered++ == 0) report_.first_uncovered = w.at ? w.at->point : 0.5 * (w.change.a + w.change.b);
+    }
+  }
+
+  const Field& field_;
+  const SeedGrid& grid_;
+  double min_edge_;
+  Tracker& tracker_;
+  MeshCoverage cover_;
+  std::vector<Witness> unsure_;
+  std::vector<SurfacePoint> deferred_;
+  bool deferring_ = true;
+  SeedingReport report_;
+};
+
+}  // namespace
+
+SeedingReport seed_every_component(const Field& field, const SeedGrid& grid, double min_edge, double cell,
+                                   Tracker& tracker, const Mesh& mesh) {
+  return Seeder(field, grid, min_edge, cell, tracker, mesh).run();
+}
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,56 @@
+// The seeding guarantee of the adaptive polygonizer: every component of the surface inside the
+// box is meshed once, and a run that cannot keep that promise says so.
+//
+//  1. Sign changes. F is sampled on the seed grid; every grid edge whose ends differ in sign is
+//     a place the surface crosses. Coverage, not proximity, decides whether it is meshed: a sign
+//     change that a mesh triangle crosses is meshed. One that no triangle crosses is meshed too
+//     when a triangle facing the same way lies within one of its own (longest) edges of the
+//     surface point there (the mesh is a chord of the surface and can pass a grid node on the
+//     other side of where the surface does), or when a walk along the surface in steps of
+//     min_edge reaches such a triangle (detail finer than min_edge, a needle's tip, that the
+//     mesh stops short of: `below_resolution`). Anything else starts a new component, from a
+//     point whose curvature min_edge resolves first (seeds in unresolvable detail wait).
+//     Opposite orientation is never "the same sheet": the inner sphere of a hollow ball, the
+//     second of two spheres 1e-3 apart.
+//  2. Small and thin components, which no grid edge sees. With a Lipschitz bound L (analytic
+//     models, blobs) a grid cell without a sign change may hold surface only where
+//     |F(centre)| <= L * half-diagonal (models that bound their values over a box, blobs, prove
+//     more cells empty); such a cell, unless every point of it lies within one edge of a
+//     triangle, is split into eight, down to min_edge, until a sign change is found or every
+//     part is proved empty (`refined_cells`; cells still undecided at min_edge are
+//     `unresolved_cells`, which includes the band next to the meshed surface). Without a bound
+//     (expressions, VIS, MPU) Newton's method starts from every grid node where |F| is a strict
+//     local minimum among its 26 neighbours of the same sign (a component between grid nodes
+//     pulls |F| down around it); this finds isolated small components but proves nothing.
+//  3. After the run every sign change found is checked again; `uncovered` must be 0, else the
+//     polygonization fails with an error naming the place.
+#pragma once
+
+#include "tracker.h"
+
+#include <polygonizer/surface_seeds.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace cdp::adaptive {
+
+struct SeedingReport {
+  std::size_t sign_changes = 0;      // grid edges and refined-cell segments where F changes sign
+  std::size_t seeds = 0;             // components started
+  std::size_t failed_seeds = 0;      // surface points where not even a hexagon fitted
+  std::size_t covered_nearby = 0;    // sign changes no triangle crosses, but a triangle of the sheet is near
+  std::size_t below_resolution = 0;  // sign changes on meshed components, in detail finer than min_edge
+  std::size_t refined_cells = 0;     // cells split by the small-component search
+  std::size_t unresolved_cells = 0;  // cells at min_edge that may still hold surface (thinner than min_edge)
+  std::size_t probes = 0;            // Newton probes from local minima of |F| (fields without a bound)
+  std::size_t uncovered = 0;         // sign changes not meshed after the run: 0 on success
+  Vec3 first_uncovered = Vec3::Zero();
+};
+
+// Meshes every component through `tracker` (which appends to `mesh`). `cell` sizes the index of
+// triangles the coverage tests use: about a typical edge (never below the grid's cell). Deterministic.
+SeedingReport seed_every_component(const Field& field, const SeedGrid& grid, double min_edge, double cell,
+                                   Tracker& tracker, const Mesh& mesh);
+
+}  // namespace cdp::adaptive
