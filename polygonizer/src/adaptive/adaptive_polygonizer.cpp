@@ -158,8 +158,11 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   PolygonizeResult result;
   Mesh& mesh = result.mesh;
   adaptive::Tracker tracker(field, settings, mesh);
-  // Crossed grid edges per unit area average 1.5 / h^2 over all orientations.
-  if (options.progress) tracker.set_progress(options.progress, grid_crossings * grid.h * grid.h / 1.5);
+  // Crossed grid edges per unit area average 1.5 / h^2 over all orientations (Crofton); with
+  // fewer than kMeasuredCrossings the surface is too small for the grid to measure.
+  constexpr std::size_t kMeasuredCrossings = 64;
+  if (grid_crossings >= kMeasuredCrossings) tracker.set_estimated_area(grid_crossings * grid.h * grid.h / 1.5);
+  if (options.progress) tracker.set_progress(options.progress);
 
   const adaptive::SeedingReport seeding =
       adaptive::seed_every_component(field, grid, s.sizing.min_edge, settings.hash_cell, tracker, mesh);
@@ -205,6 +208,8 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["steps"] = tracker.steps();
   st.extra["deferrals"] = tracker.deferrals();
   st.extra["forced_closures"] = tracker.forced_closures();
+  st.extra["crease_points"] = tracker.crease_points();
+  st.extra["over_mesh_rejections"] = tracker.over_mesh();
   st.extra["min_angle_degrees"] = min_angle_degrees(mesh);
   st.extra["edge_length"] = {{"min", s.sizing.min_edge}, {"max", s.sizing.max_edge}};
   st.extra["sizing"] = to_string(s.sizing.mode);

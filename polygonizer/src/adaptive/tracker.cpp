@@ -9,9 +9,23 @@
 
 namespace cdp::adaptive {
 
+namespace {
+// Newton leaves points within 1e-10 of the diagonal from the surface, hence from a crease they
+// landed on; a probe this far away is clear of that and still on the crease's two pieces.
+constexpr double kCreaseProbe = 1e-7;
+// Gradients more than 10 degrees apart across such a probe mean a crease, not curvature.
+constexpr double kCreaseCosine = 0.985;
+// A placement walks on when Newton lands less than this share of the step from where it
+// started, in up to kWalkLegs legs (a cube's crease takes three: onto the crease, off it, on).
+constexpr double kShortLanding = 0.75;
+constexpr int kWalkLegs = 4;
+// A new point this close to a finished vertex (in units of the step) lies on finished mesh.
+constexpr double kOverMesh = 0.3;
+}  // namespace
+
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
     : field_(field), s_(settings), mesh_(mesh),
-      front_hash_(settings.hash_cell) {}
+      front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell) {}
 
 std::optional<Tracker::Placed> Tracker::measure(const Vec3& p) const {
   // Timed so that the stats can show what the paper claims: curvature costs little.
@@ -34,23 +48,83 @@ int Tracker::add_vertex(const Placed& placed) {
   target_.push_back(edge_length(s_.sizing, c.min_radius));
   mac_.push_back(c.mac);
   shape_index_.push_back(c.shape_index);
+  front_refs_.push_back(0);
+  vertex_hash_.insert(v, placed.point);
   return v;
 }
 
 std::optional<Tracker::Placed> Tracker::place_point(int v, const Vec3& dir, double d) const {
+  // Walk d along the surface in direction dir: a straight step in the tangent plane, then Newton.
+  // Where Newton lands on a crease well short of d (the projection does not cross creases), the
+  // walk goes on from there in the tangent plane of the crease point with what is left of d, at
+  // most kWalkLegs legs, so that fronts fold over creases instead of piling points onto them.
   const Vec3& origin = mesh_.positions[v];
   ProjectionOptions po;
-  po.max_step = d;
-  po.max_travel = d;
   po.tolerance = 1e-10 * s_.diagonal;
-  const ProjectionResult r = project_to_surface(field_, origin + d * dir, po);
-  if (!r.ok()) return std::nullopt;
+  Vec3 at = origin, normal = mesh_.normals[v], heading = dir;
+  double left = d;
+  std::optional<Placed> placed;
+  for (int leg = 0; leg < kWalkLegs; ++leg) {
+    po.max_step = left;
+    po.max_travel = left;
+    const ProjectionResult r = project_to_surface(field_, at + left * heading, po);
+    if (!r.ok()) return std::nullopt;
+    placed = measure(r.point);
+    if (!placed) return std::nullopt;
+    bool on_crease = false;
+    if (!same_side(normal, placed->curvature.normal)) {
+      // Across a crease of a CSG shape the gradient turns at once; a point on the crease gets
+      // the mean of the normals on both sides, so that both sides see it as theirs.
+      const auto crease = crease_normal(r.point, placed->curvature.normal);
+      if (!crease || !same_side(normal, *crease)) return std::nullopt;
+      placed->curvature.normal = *crease;
+      ++crease_points_;
+      on_crease = true;
+    }
+    const double moved = (r.point - at).norm();
+    left -= moved;
+    at = r.point;
+    if (!on_crease || left <= (1 - kShortLanding) * d || leg + 1 == kWalkLegs) break;
+    normal = placed->curvature.normal;
+    heading -= normal * normal.dot(heading);
+    if (!(heading.squaredNorm() > 1e-12)) break;
+    heading.normalize();
+  }
   // Newton may jump to a nearby sheet of the surface; such a point is not a neighbour of v.
-  const double dist = (r.point - origin).norm();
+  const double dist = (at - origin).norm();
   if (dist < 0.25 * d || dist > 1.75 * d) return std::nullopt;
-  auto placed = measure(r.point);
-  if (!placed || !same_side(mesh_.normals[v], placed->curvature.normal)) return std::nullopt;
+  if (over_finished_mesh(placed->point, placed->curvature.normal, d)) return std::nullopt;
   return placed;
+}
+
+bool Tracker::over_finished_mesh(const Vec3& x, const Vec3& normal, double d) const {
+  // A new point next to a vertex that has left every front lies on finished mesh: a front has
+  // run over it and would go on meshing the surface again. Refused, such placements turn a
+  // runaway front into a stalled one, which the stall bounds end with an error naming the place.
+  const double r = kOverMesh * d;
+  bool hit = false;
+  vertex_hash_.for_each_near(x, r, [&](int w) {
+    if (!hit && front_refs_[w] == 0 && (mesh_.positions[w] - x).norm() < r && same_side(normal, w)) hit = true;
+  });
+  if (hit) ++over_mesh_;
+  return hit;
+}
+
+std::optional<Vec3> Tracker::crease_normal(const Vec3& x, const Vec3& n) const {
+  // On a crease of max(f, g) (or min) the gradient at x is one side's; a step just inside or
+  // just outside along it makes the other side's piece the active one.
+  const double eps = kCreaseProbe * s_.diagonal;
+  Vec3 best = n;
+  for (const double side : {-1.0, 1.0}) {
+    const Vec3 g = field_.gradient(x + side * eps * n);
+    if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
+    const Vec3 u = g.normalized();
+    if (u.dot(n) < best.dot(n)) best = u;
+  }
+  if (!(best.dot(n) < kCreaseCosine)) return std::nullopt;
+  const Vec3 mean = n + best;
+  if (!(mean.squaredNorm() > 1e-6)) return std::nullopt;
+  return mean.normalized();
 }
 
 void Tracker::emit_triangle(int a, int b, int c) {
@@ -61,6 +135,11 @@ void Tracker::emit_triangle(int a, int b, int c) {
   }
   const Vec3& pa = mesh_.positions[a];
   area_ += 0.5 * (mesh_.positions[b] - pa).cross(mesh_.positions[c] - pa).norm();
+  if (estimated_area_ > 0 && area_ > kAreaBound * estimated_area_)
+    throw LimitExceededError("adaptive: the mesh covers more than " + std::to_string(static_cast<int>(kAreaBound)) +
+                             " times the area the seed grid measures; a front is running over finished mesh near (" +
+                             std::to_string(pa.x()) + ", " + std::to_string(pa.y()) + ", " + std::to_string(pa.z()) +
+                             ")");
   if (mesh_.triangles.size() > s_.max_triangles)
     throw LimitExceededError("adaptive: more than " + std::to_string(s_.max_triangles) +
                              " triangles (AdaptiveOptions::max_triangles); raise the limit, the minimum edge "
@@ -69,12 +148,14 @@ void Tracker::emit_triangle(int a, int b, int c) {
 
 int Tracker::insert_node(int vertex, int front) {
   const int n = fs_.new_node(vertex, front);
+  ++front_refs_[vertex];
   front_hash_.insert(n, mesh_.positions[vertex]);
   return n;
 }
 
 void Tracker::remove_node(int node) {
   FrontNode& n = fs_.nodes[node];
+  --front_refs_[n.vertex];
   front_hash_.remove(node, mesh_.positions[n.vertex]);
   --fs_.fronts[n.front].size;
   n.front = -1;
@@ -131,6 +212,8 @@ bool Tracker::mesh_from_seed(const Vec3& seed) {
     target_.pop_back();
     mac_.pop_back();
     shape_index_.pop_back();
+    front_refs_.pop_back();
+    vertex_hash_.remove(c, mesh_.positions.back());
     return false;
   }
   std::vector<int> v(6);

@@ -36,6 +36,11 @@ struct Settings {
   double hash_cell = 1;
 };
 
+// How many times the grid's measure of the area the mesh may cover before the run is stopped
+// as a runaway (Crofton's estimate from the grid's crossed edges is within about 2x on surfaces
+// the grid resolves).
+inline constexpr double kAreaBound = 8;
+
 // Normals whose angle is below arccos of this belong to one side of the surface (see same_side).
 inline constexpr double kSameSideCosine = 0;
 
@@ -47,10 +52,10 @@ class Tracker {
   // the first hexagon could be placed there (the caller tries another seed).
   bool mesh_from_seed(const Vec3& seed);
 
-  void set_progress(ProgressCallback cb, double estimated_area) {
-    progress_ = std::move(cb);
-    estimated_area_ = estimated_area;
-  }
+  void set_progress(ProgressCallback cb) { progress_ = std::move(cb); }
+  // The surface's area as the seed grid measures it (0: unknown). Progress is reported against
+  // it, and a mesh whose area passes kAreaBound times it has a front running over finished mesh.
+  void set_estimated_area(double area) { estimated_area_ = area; }
 
   std::size_t steps() const { return steps_; }
   std::size_t splits() const { return splits_; }
@@ -58,6 +63,10 @@ class Tracker {
   std::size_t deferrals() const { return deferrals_; }
   // Small stuck fronts closed ear by ear without the expansion's tests.
   std::size_t forced_closures() const { return forced_closures_; }
+  // Points placed on a crease, with the mean normal of its two sides.
+  std::size_t crease_points() const { return crease_points_; }
+  // Placements refused because they landed on finished mesh.
+  std::size_t over_mesh() const { return over_mesh_; }
   // Wall-clock time spent in curvature_at (Hessian evaluation and eigen-decomposition).
   double curvature_seconds() const { return curvature_seconds_; }
   const std::vector<double>& vertex_mac() const { return mac_; }
@@ -87,6 +96,11 @@ class Tracker {
   // A new surface point about distance d from vertex v in tangent direction dir, or nothing
   // when Newton fails or lands somewhere implausible (another sheet, far away).
   std::optional<Placed> place_point(int v, const Vec3& dir, double d) const;
+  // The mean of the normals on both sides when x lies on a crease (the gradient at x is n),
+  // nothing elsewhere. Two value_gradient evaluations.
+  std::optional<Vec3> crease_normal(const Vec3& x, const Vec3& n) const;
+  // Whether x (with its normal, placed at step d) lies on finished mesh (counted).
+  bool over_finished_mesh(const Vec3& x, const Vec3& normal, double d) const;
   void emit_triangle(int a, int b, int c);
   int insert_node(int vertex, int front);
   void remove_node(int node);
@@ -140,11 +154,13 @@ class Tracker {
   std::vector<double> target_, mac_, shape_index_;
   double longest_edge_ = 0;
   FrontSet fs_;
-  SpatialHash front_hash_;
+  SpatialHash front_hash_, vertex_hash_;
+  std::vector<int> front_refs_;  // front nodes of each vertex: 0 once it is finished
   std::vector<int> stack_;
   std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0, forced_closures_ = 0;
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;
   mutable double curvature_seconds_ = 0;
+  mutable std::size_t crease_points_ = 0, over_mesh_ = 0;
   ProgressCallback progress_;
 };
 
