@@ -321,13 +321,34 @@ class Seeder {
       Box box;
       std::array<double, 8> corners;
     };
+    const auto cell_id = [&](int i, int j, int k) { return (static_cast<std::size_t>(k) * n[1] + j) * n[0] + i; };
+    const auto corners_of = [&](int i, int j, int k) {
+      std::array<double, 8> f;
+      for (int v = 0; v < 8; ++v) f[v] = grid_.value(i + (v & 1), j + (v >> 1 & 1), k + (v >> 2 & 1));
+      return f;
+    };
+    std::vector<char> crossed(static_cast<std::size_t>(n[0]) * n[1] * n[2]);
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j)
+        for (int i = 0; i < n[0]; ++i) crossed[cell_id(i, j, k)] = !one_sign(corners_of(i, j, k));
+    const auto next_to_crossed = [&](int i, int j, int k) {
+      for (int c = std::max(k - 1, 0); c <= std::min(k + 1, n[2] - 1); ++c)
+        for (int b = std::max(j - 1, 0); b <= std::min(j + 1, n[1] - 1); ++b)
+          for (int a = std::max(i - 1, 0); a <= std::min(i + 1, n[0] - 1); ++a)
+            if (crossed[cell_id(a, b, c)]) return true;
+      return false;
+    };
     std::vector<Candidate> candidates;
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
         for (int i = 0; i < n[0]; ++i) {
-          Candidate c{{grid_.point(i, j, k), grid_.point(i + 1, j + 1, k + 1)}, {}};
-          for (int v = 0; v < 8; ++v) c.corners[v] = grid_.value(i + (v & 1), j + (v >> 1 & 1), k + (v >> 2 & 1));
-          if (!one_sign(c.corners) || proved_empty_by_corners(c.box, c.corners)) continue;
+          // Cells the grid sees crossed, and their neighbours, are the seeded surface's: a
+          // component that near another is found where it crosses a grid edge, not here (the
+          // band around the surface would otherwise be refined everywhere, at several times the
+          // cost of the polygonization on cheap fields).
+          if (crossed[cell_id(i, j, k)] || next_to_crossed(i, j, k)) continue;
+          Candidate c{{grid_.point(i, j, k), grid_.point(i + 1, j + 1, k + 1)}, corners_of(i, j, k)};
+          if (proved_empty_by_corners(c.box, c.corners)) continue;
           candidates.push_back(c);
         }
     std::vector<Vec3> centres;
@@ -366,34 +387,59 @@ class Seeder {
       return;
     }
     ++report_.refined_cells;
-    // The 3 x 3 x 3 lattice of the cell (its corners and centre are known) and the 8 centres of
-    // its children, in one batch.
+    // The 3 x 3 x 3 lattice of the cell (its corners and centre are known) and the centres of its
+    // children, evaluated in one batch for the children the known samples do not prove empty
+    // (child c has the cell's corner c and centre as opposite corners).
     const Vec3 step = 0.5 * box.size();
     const auto lattice_point = [&](int a, int b, int c) { return Vec3(box.min + step.cwiseProduct(Vec3(a, b, c))); };
+    const auto slot = [](int a, int b, int c) { return a + 3 * b + 9 * c; };
+    const auto child_box = [&](int child) {
+      const int ca = child & 1, cb = child >> 1 & 1, cc = child >> 2 & 1;
+      return Box{lattice_point(ca, cb, cc), lattice_point(ca + 1, cb + 1, cc + 1)};
+    };
     std::array<double, 27> lattice;
+    std::array<bool, 27> known{};
+    for (int v = 0; v < 8; ++v) {
+      const int s = slot(2 * (v & 1), 2 * (v >> 1 & 1), 2 * (v >> 2 & 1));
+      lattice[s] = corners[v], known[s] = true;
+    }
+    lattice[slot(1, 1, 1)] = centre, known[slot(1, 1, 1)] = true;
+    std::array<bool, 8> open{};
+    std::array<double, 8> child_centre{};
     std::vector<Vec3> points;
-    std::vector<int> slots;
-    for (int c = 0; c < 3; ++c)
-      for (int b = 0; b < 3; ++b)
-        for (int a = 0; a < 3; ++a) {
-          const int s = a + 3 * b + 9 * c;
-          if (a != 1 && b != 1 && c != 1) lattice[s] = corners[(a / 2) | (b / 2) << 1 | (c / 2) << 2];
-          else if (a == 1 && b == 1 && c == 1) lattice[s] = centre;
-          else points.push_back(lattice_point(a, b, c)), slots.push_back(s);
-        }
-    for (int child = 0; child < 8; ++child)
-      points.push_back(lattice_point(child & 1, child >> 1 & 1, child >> 2 & 1) + 0.5 * step);
+    std::vector<int> targets;  // a lattice slot, or -1 - child for a child's centre
+    for (int child = 0; child < 8; ++child) {
+      const Box sub = child_box(child);
+      const double largest = std::max(std::abs(corners[child]), std::abs(centre));
+      const auto range = field_.value_range(sub);
+      if (largest > *field_.lipschitz_bound(sub) * sub.diagonal() || (range && (range->first > 0 || range->second < 0)))
+        continue;
+      open[child] = true;
+      for (int v = 0; v < 8; ++v) {
+        const int a = (child & 1) + (v & 1), b = (child >> 1 & 1) + (v >> 1 & 1), c = (child >> 2 & 1) + (v >> 2 & 1);
+        if (known[slot(a, b, c)]) continue;
+        known[slot(a, b, c)] = true;
+        points.push_back(lattice_point(a, b, c));
+        targets.push_back(slot(a, b, c));
+      }
+      points.push_back(sub.center());
+      targets.push_back(-1 - child);
+    }
     std::vector<double> values(points.size());
     field_.values(points.data(), values.data(), points.size());
-    for (std::size_t s = 0; s < slots.size(); ++s) lattice[slots[s]] = values[s];
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (targets[i] >= 0) lattice[targets[i]] = values[i];
+      else child_centre[-1 - targets[i]] = values[i];
+    }
 
     for (int child = 0; child < 8; ++child) {
+      if (!open[child]) continue;
       const int ca = child & 1, cb = child >> 1 & 1, cc = child >> 2 & 1;
-      const Box sub{lattice_point(ca, cb, cc), lattice_point(ca + 1, cb + 1, cc + 1)};
+      const Box sub = child_box(child);
       std::array<double, 8> f;
-      for (int v = 0; v < 8; ++v) f[v] = lattice[(ca + (v & 1)) + 3 * (cb + (v >> 1 & 1)) + 9 * (cc + (v >> 2 & 1))];
+      for (int v = 0; v < 8; ++v) f[v] = lattice[slot(ca + (v & 1), cb + (v >> 1 & 1), cc + (v >> 2 & 1))];
       if (one_sign(f)) {
-        if (!proved_empty_by_corners(sub, f)) search_cell(sub, f, values[slots.size() + child]);
+        if (!proved_empty_by_corners(sub, f)) search_cell(sub, f, child_centre[child]);
         continue;
       }
       // The twelve edges of the child: from corner v along each axis where that bit is 0.
