@@ -1,0 +1,543 @@
+// The exact triangle-triangle test and a hash-grid broad phase (triangle_intersection.h).
+// The test is built on two orientation predicates, each evaluated in double with Shewchuk's error
+// bound (Adaptive Precision Floating-Point Arithmetic and Fast Robust Geometric Predicates, 1997)
+// and, when the bound cannot certify the sign, again with exact expansion arithmetic, so its sign
+// is exact as long as no product overflows or underflows (every coordinate 0 or between about
+// 1e-50 and 1e100 in magnitude).
+#include <polygonizer/triangle_intersection.h>
+
+#include <polygonizer/errors.h>
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string>
+
+namespace cdp {
+
+namespace {
+
+// ---- Exact arithmetic: expansions are sums of doubles, non-overlapping, in increasing
+// magnitude, without zeros except a lone 0 for zero (Shewchuk's representation).
+using Expansion = std::vector<double>;
+
+constexpr double kEpsilon = 0x1p-53;  // half an ulp of 1
+constexpr double kOrient2dBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;
+constexpr double kOrient3dBound = (7.0 + 56.0 * kEpsilon) * kEpsilon;
+
+void two_sum(double a, double b, double& x, double& y) {
+  x = a + b;
+  const double bv = x - a, av = x - bv;
+  y = (a - av) + (b - bv);
+}
+
+// a - b as an expansion of at most two terms.
+Expansion difference(double a, double b) {
+  const double x = a - b;
+  const double bv = a - x, av = x + bv;
+  const double y = (a - av) + (bv - b);
+  if (y == 0.0) return {x};
+  return {y, x};
+}
+
+// e + b (Shewchuk's GROW-EXPANSION with zero elimination).
+Expansion grow(const Expansion& e, double b) {
+  Expansion h;
+  h.reserve(e.size() + 1);
+  double q = b;
+  for (double c : e) {
+    double sum, err;
+    two_sum(q, c, sum, err);
+    q = sum;
+    if (err != 0.0) h.push_back(err);
+  }
+  if (q != 0.0 || h.empty()) h.push_back(q);
+  return h;
+}
+
+Expansion add(Expansion e, const Expansion& f) {
+  for (double c : f) e = grow(e, c);
+  return e;
+}
+
+Expansion negate(Expansion e) {
+  for (double& c : e) c = -c;
+  return e;
+}
+
+// e * b (SCALE-EXPANSION with zero elimination; products split exactly by fma).
+Expansion scale(const Expansion& e, double b) {
+  Expansion h;
+  h.reserve(2 * e.size());
+  double q = e[0] * b;
+  double err = std::fma(e[0], b, -q);
+  if (err != 0.0) h.push_back(err);
+  for (std::size_t i = 1; i < e.size(); ++i) {
+    const double p1 = e[i] * b;
+    const double p0 = std::fma(e[i], b, -p1);
+    double sum;
+    two_sum(q, p0, sum, err);
+    if (err != 0.0) h.push_back(err);
+    two_sum(p1, sum, q, err);
+    if (err != 0.0) h.push_back(err);
+  }
+  if (q != 0.0 || h.empty()) h.push_back(q);
+  return h;
+}
+
+Expansion multiply(const Expansion& e, const Expansion& f) {
+  Expansion h{0.0};
+  for (double c : f) h = add(std::move(h), scale(e, c));
+  return h;
+}
+
+// The sign of a non-overlapping expansion is the sign of its largest component.
+int sign(const Expansion& e) {
+  for (auto it = e.rbegin(); it != e.rend(); ++it)
+    if (*it != 0.0) return *it > 0.0 ? 1 : -1;
+  return 0;
+}
+
+// ---- Predicates.
+
+// The sign of det [a-d; b-d; c-d]: which side of the plane through a, b, c the point d is on
+// (zero: the four points are coplanar).
+int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const double adx = a.x() - d.x(), bdx = b.x() - d.x(), cdx = c.x() - d.x();
+  const double ady = a.y() - d.y(), bdy = b.y() - d.y(), cdy = c.y() - d.y();
+  const double adz = a.z() - d.z(), bdz = b.z() - d.z(), cdz = c.z() - d.z();
+  const double bdxcdy = bdx * cdy, cdxbdy = cdx * bdy;
+  const double cdxady = cdx * ady, adxcdy = adx * cdy;
+  const double adxbdy = adx * bdy, bdxady = bdx * ady;
+  const double det = adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) + cdz * (adxbdy - bdxady);
+  const double permanent = (std::abs(bdxcdy) + std::abs(cdxbdy)) * std::abs(adz) +
+                           (std::abs(cdxady) + std::abs(adxcdy)) * std::abs(bdz) +
+                           (std::abs(adxbdy) + std::abs(bdxady)) * std::abs(cdz);
+  const double bound = kOrient3dBound * permanent;
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  // The same determinant, exactly.
+  const Expansion eadx = difference(a.x(), d.x()), ebdx = difference(b.x(), d.x()), ecdx = difference(c.x(), d.x());
+  const Expansion eady = difference(a.y(), d.y()), ebdy = difference(b.y(), d.y()), ecdy = difference(c.y(), d.y());
+  const Expansion eadz = difference(a.z(), d.z()), ebdz = difference(b.z(), d.z()), ecdz = difference(c.z(), d.z());
+  const auto minor = [](const Expansion& p, const Expansion& q, const Expansion& r, const Expansion& s) {
+    return add(multiply(p, q), negate(multiply(r, s)));  // p q - r s
+  };
+  Expansion sum = multiply(eadz, minor(ebdx, ecdy, ecdx, ebdy));
+  sum = add(std::move(sum), multiply(ebdz, minor(ecdx, eady, eadx, ecdy)));
+  sum = add(std::move(sum), multiply(ecdz, minor(eadx, ebdy, ebdx, eady)));
+  return sign(sum);
+}
+
+// The orientation of a, b, c projected onto the two axes other than `drop` (the axes (drop+1)%3
+// and (drop+2)%3, in that order): positive counter-clockwise, zero collinear.
+int orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int drop) {
+  const int i = (drop + 1) % 3, j = (drop + 2) % 3;
+  const double acx = a[i] - c[i], bcx = b[i] - c[i], acy = a[j] - c[j], bcy = b[j] - c[j];
+  const double left = acx * bcy, right = acy * bcx;
+  const double det = left - right;
+  const double bound = kOrient2dBound * (std::abs(left) + std::abs(right));
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  const Expansion exact = add(multiply(difference(a[i], c[i]), difference(b[j], c[j])),
+                              negate(multiply(difference(a[j], c[j]), difference(b[i], c[i]))));
+  return sign(exact);
+}
+
+using Tri = std::array<Vec3, 3>;
+
+// The axis to drop so that the projection of the (non-degenerate) triangle is non-degenerate,
+// preferring the largest component of its normal; -1 for a degenerate triangle. All incidences
+// between points of the triangle's plane survive this projection (it is an affine bijection).
+int projection_axis(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 n = (b - a).cross(c - a).cwiseAbs();
+  int order[3] = {0, 1, 2};
+  std::sort(order, order + 3, [&](int p, int q) { return n[p] > n[q]; });
+  for (int k : order)
+    if (orient2d(a, b, c, k) != 0) return k;
+  return -1;
+}
+
+// r, collinear with p and q in the projection, lies on the closed segment [p, q].
+bool between(const Vec3& p, const Vec3& q, const Vec3& r, int drop) {
+  for (int axis : {(drop + 1) % 3, (drop + 2) % 3})
+    if (r[axis] < std::min(p[axis], q[axis]) || r[axis] > std::max(p[axis], q[axis])) return false;
+  return true;
+}
+
+// Closed segments [p1, p2] and [q1, q2] of one plane meet (projected with `drop`).
+bool segments_meet_2d(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2, int drop) {
+  const int d1 = orient2d(q1, q2, p1, drop), d2 = orient2d(q1, q2, p2, drop);
+  const int d3 = orient2d(p1, p2, q1, drop), d4 = orient2d(p1, p2, q2, drop);
+  if (d1 * d2 < 0 && d3 * d4 < 0) return true;
+  return (d1 == 0 && between(q1, q2, p1, drop)) || (d2 == 0 && between(q1, q2, p2, drop)) ||
+         (d3 == 0 && between(p1, p2, q1, drop)) || (d4 == 0 && between(p1, p2, q2, drop));
+}
+
+// p lies in the closed triangle t of its plane.
+bool point_in_triangle_2d(const Vec3& p, const Tri& t, int drop) {
+  const int s0 = orient2d(t[0], t[1], p, drop), s1 = orient2d(t[1], t[2], p, drop), s2 = orient2d(t[2], t[0], p, drop);
+  const bool negative = s0 < 0 || s1 < 0 || s2 < 0, positive = s0 > 0 || s1 > 0 || s2 > 0;
+  return !(negative && positive);
+}
+
+// Two closed triangles of one plane meet.
+bool coplanar_triangles_meet(const Tri& a, const Tri& b, int drop) {
+  for (int e = 0; e < 3; ++e)
+    for (int f = 0; f < 3; ++f)
+      if (segments_meet_2d(a[e], a[(e + 1) % 3], b[f], b[(f + 1) % 3], drop)) return true;
+  // No boundaries cross: either one triangle holds the other or they are apart.
+  return point_in_triangle_2d(a[0], b, drop) || point_in_triangle_2d(b[0], a, drop);
+}
+
+// The closed segment [p, q] meets the closed (non-degenerate) triangle t.
+bool segment_meets_closed_triangle(const Vec3& p, const Vec3& q, const Tri& t) {
+  const int sp = orient3d(t[0], t[1], t[2], p), sq = orient3d(t[0], t[1], t[2], q);
+  if (sp * sq > 0) return false;
+  if (sp == 0 && sq == 0) {  // the segment lies in the triangle's plane
+    const int drop = projection_axis(t[0], t[1], t[2]);
+    if (point_in_triangle_2d(p, t, drop) || point_in_triangle_2d(q, t, drop)) return true;
+    for (int e = 0; e < 3; ++e)
+      if (segments_meet_2d(p, q, t[e], t[(e + 1) % 3], drop)) return true;
+    return false;
+  }
+  // The line through p and q crosses the plane at one point of [p, q]: that point lies in the
+  // closed triangle when the line passes no edge on the wrong side.
+  const int s0 = orient3d(p, q, t[0], t[1]), s1 = orient3d(p, q, t[1], t[2]), s2 = orient3d(p, q, t[2], t[0]);
+  const bool negative = s0 < 0 || s1 < 0 || s2 < 0, positive = s0 > 0 || s1 > 0 || s2 > 0;
+  return !(negative && positive);
+}
+
+// All three vertices of a strictly on one side of the plane of b.
+bool separated_by_plane(const Tri& a, const Tri& b) {
+  const int s0 = orient3d(b[0], b[1], b[2], a[0]), s1 = orient3d(b[0], b[1], b[2], a[1]),
+            s2 = orient3d(b[0], b[1], b[2], a[2]);
+  return (s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0);
+}
+
+// Closed non-degenerate triangles without shared vertices meet.
+bool triangles_meet(const Tri& a, const Tri& b) {
+  if (separated_by_plane(a, b) || separated_by_plane(b, a)) return false;
+  if (orient3d(b[0], b[1], b[2], a[0]) == 0 && orient3d(b[0], b[1], b[2], a[1]) == 0 &&
+      orient3d(b[0], b[1], b[2], a[2]) == 0)
+    return coplanar_triangles_meet(a, b, projection_axis(a[0], a[1], a[2]));
+  // Different planes: the intersection is a segment of their common line whose end points lie
+  // on the triangles' boundaries, so it is empty unless an edge of one meets the other.
+  for (int e = 0; e < 3; ++e)
+    if (segment_meets_closed_triangle(a[e], a[(e + 1) % 3], b) || segment_meets_closed_triangle(b[e], b[(e + 1) % 3], a))
+      return true;
+  return false;
+}
+
+// d - v lies in the closed cone at v spanned by u1 - v and u2 - v (an angle below pi), in the
+// projection `drop` of their common plane.
+bool in_cone(const Vec3& d, const Vec3& v, const Vec3& u1, const Vec3& u2, int drop) {
+  const int s = orient2d(v, u1, u2, drop);
+  return orient2d(v, u1, d, drop) * s >= 0 && orient2d(v, d, u2, drop) * s >= 0;
+}
+
+}  // namespace
+
+// The exact test for two non-degenerate triangles (see the header for the rules).
+bool nondegenerate_triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
+  int shared = 0, ia[3], ib[3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (a[i] == b[j]) {
+        ia[shared] = i;
+        ib[shared] = j;
+        ++shared;
+      }
+  if (shared == 0) return triangles_meet(a, b);
+  if (shared >= 3) return true;  // the same triangle twice
+  if (shared == 2) {
+    // Edge (u, w) shared, third vertices p and q. Different planes meet only along the edge's
+    // line; in one plane the triangles overlap when p and q lie on the same side of the edge.
+    const Vec3& u = a[ia[0]];
+    const Vec3& w = a[ia[1]];
+    const Vec3& p = a[3 - ia[0] - ia[1]];
+    const Vec3& q = b[3 - ib[0] - ib[1]];
+    if (orient3d(u, w, p, q) != 0) return false;
+    const int drop = projection_axis(u, w, p);
+    return orient2d(u, w, p, drop) == orient2d(u, w, q, drop);
+  }
+  // One shared vertex v; the other vertices a1, a2 and b1, b2.
+  const Vec3& v = a[ia[0]];
+  const Vec3& a1 = a[(ia[0] + 1) % 3];
+  const Vec3& a2 = a[(ia[0] + 2) % 3];
+  const Vec3& b1 = b[(ib[0] + 1) % 3];
+  const Vec3& b2 = b[(ib[0] + 2) % 3];
+  if (orient3d(v, b1, b2, a1) == 0 && orient3d(v, b1, b2, a2) == 0) {
+    // One plane: near v each triangle is its angle at v, and the intersection is convex, so the
+    // triangles meet beyond v when the angles overlap, i.e. when a side of one lies in the other.
+    const int drop = projection_axis(v, a1, a2);
+    return in_cone(a1, v, b1, b2, drop) || in_cone(a2, v, b1, b2, drop) || in_cone(b1, v, a1, a2, drop) ||
+           in_cone(b2, v, a1, a2, drop);
+  }
+  // Different planes: the common line passes through v, and each triangle's part of it runs from
+  // v to a point of the opposite side, so they meet beyond v when an opposite side meets the
+  // other triangle (which it cannot do at v).
+  return segment_meets_closed_triangle(a1, a2, b) || segment_meets_closed_triangle(b1, b2, a);
+}
+
+namespace {
+
+Tri corners(const Mesh& mesh, int f) {
+  const auto& t = mesh.triangles[static_cast<std::size_t>(f)];
+  return {mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]};
+}
+
+bool boxes_overlap(const Box& p, const Box& q) {
+  return p.min.x() <= q.max.x() && q.min.x() <= p.max.x() && p.min.y() <= q.max.y() && q.min.y() <= p.max.y() &&
+         p.min.z() <= q.max.z() && q.min.z() <= p.max.z();
+}
+
+// The intersecting pairs as they are found: their number and the max_pairs lexicographically
+// smallest (a max-heap), so memory stays bounded however many pairs there are.
+class PairCollector {
+ public:
+  explicit PairCollector(std::size_t max_pairs) : max_pairs_(max_pairs) {}
+  void add(int f, int g) {
+    ++count_;
+    if (max_pairs_ == 0) return;
+    const std::pair<int, int> p(f, g);
+    if (smallest_.size() < max_pairs_) {
+      smallest_.push_back(p);
+      std::push_heap(smallest_.begin(), smallest_.end());
+    } else if (p < smallest_.front()) {
+      std::pop_heap(smallest_.begin(), smallest_.end());
+      smallest_.back() = p;
+      std::push_heap(smallest_.begin(), smallest_.end());
+    }
+  }
+  std::size_t count() const { return count_; }
+  std::vector<std::pair<int, int>> sorted_pairs() {
+    std::sort_heap(smallest_.begin(), smallest_.end());
+    return std::move(smallest_);
+  }
+
+ private:
+  std::size_t max_pairs_;
+  std::size_t count_ = 0;
+  std::vector<std::pair<int, int>> smallest_;
+};
+
+// A triangle whose box spans more than this many cells along an axis is "large": it is tested
+// against every triangle instead of being put in the grid (at most kMaxSpan^3 cells each).
+constexpr int kMaxSpan = 4;
+
+std::uint64_t cell_hash(int x, int y, int z) {
+  std::uint64_t k = static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ull ^
+                    static_cast<std::uint64_t>(y) * 0xC2B2AE3D27D4EB4Full ^
+                    static_cast<std::uint64_t>(z) * 0x165667B19E3779F9ull;
+  k ^= k >> 31;
+  k *= 0xBF58476D1CE4E5B9ull;
+  k ^= k >> 29;
+  return k;
+}
+
+// Every intersecting pair of the triangles with non-empty boxes, each pair tested once.
+//
+// Cells are cubes of side h, at least the median longest edge; a triangle whose box spans more
+// than kMaxSpan cells along an axis is large, and h grows (to a third of the extent of the
+// (16 + sqrt n)-th widest triangle) so that few are. Every other triangle is entered in each cell
+// its box touches (at most kMaxSpan^3), the cells hashed into about as many buckets as entries
+// (counting sort by bucket, so each bucket lists its triangles in increasing order). Visiting the
+// triangles f in order and, for each cell c of f, the triangles g > f of c's bucket, the pair is
+// tested only when the boxes overlap and c is the cell of the lower corner of their intersection:
+// that cell holds both triangles, so each overlapping pair is tested exactly once, even when
+// distinct cells share a bucket. Large triangles are tested against all others (two large ones
+// from the lower index): at most about (16 + sqrt n) n box comparisons.
+void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollector& out) {
+  std::vector<int> live;
+  for (std::size_t f = 0; f < boxes.size(); ++f)
+    if ((boxes[f].min.array() <= boxes[f].max.array()).all()) live.push_back(static_cast<int>(f));
+  const std::size_t n = live.size();
+  if (n < 2) return;
+
+  // Cell size: the median longest edge, grown so that at most about 16 + sqrt(n) triangles are
+  // wider than kMaxSpan - 1 cells.
+  std::vector<double> sizes(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Tri t = corners(mesh, live[k]);
+    sizes[k] = std::sqrt(std::max({(t[1] - t[0]).squaredNorm(), (t[2] - t[1]).squaredNorm(), (t[0] - t[2]).squaredNorm()}));
+  }
+  std::nth_element(sizes.begin(), sizes.begin() + static_cast<std::ptrdiff_t>(n / 2), sizes.end());
+  double h = sizes[n / 2];
+  const auto max_large = static_cast<std::size_t>(16.0 + std::sqrt(static_cast<double>(n)));
+  Box all{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
+  for (std::size_t k = 0; k < n; ++k) {
+    const Box& b = boxes[static_cast<std::size_t>(live[k])];
+    sizes[k] = b.size().maxCoeff();
+    all.min = all.min.cwiseMin(b.min);
+    all.max = all.max.cwiseMax(b.max);
+  }
+  if (n > max_large) {
+    std::nth_element(sizes.begin(), sizes.begin() + static_cast<std::ptrdiff_t>(max_large), sizes.end(), std::greater<>());
+    h = std::max(h, sizes[max_large] / static_cast<double>(kMaxSpan - 1));
+  }
+  // Cell coordinates fit in int (at most 2^30 cells along an axis).
+  h = std::max(h, all.size().maxCoeff() * 0x1p-30);
+  if (!(h > 0.0) || !std::isfinite(h)) h = 1.0;
+  sizes = {};
+
+  // The cell of a coordinate is monotone in it, so a box's cells hold every point of the box, and
+  // the cell of the larger of two coordinates is the larger of their cells.
+  const Vec3 origin = all.min;
+  const auto cell = [&](double x, int axis) { return static_cast<int>(std::floor((x - origin[axis]) / h)); };
+  struct CellRange {
+    int lo[3], hi[3];
+  };
+  std::vector<CellRange> ranges(boxes.size());
+  std::vector<int> large;
+  std::vector<unsigned char> is_large(boxes.size(), 0);
+  std::size_t entries = 0;
+  for (const int f : live) {
+    const Box& b = boxes[static_cast<std::size_t>(f)];
+    CellRange& r = ranges[static_cast<std::size_t>(f)];
+    for (int a = 0; a < 3; ++a) {
+      r.lo[a] = cell(b.min[a], a);
+      r.hi[a] = cell(b.max[a], a);
+    }
+    if (r.hi[0] - r.lo[0] >= kMaxSpan || r.hi[1] - r.lo[1] >= kMaxSpan || r.hi[2] - r.lo[2] >= kMaxSpan) {
+      large.push_back(f);
+      is_large[static_cast<std::size_t>(f)] = 1;
+    } else {
+      entries += static_cast<std::size_t>(r.hi[0] - r.lo[0] + 1) * static_cast<std::size_t>(r.hi[1] - r.lo[1] + 1) *
+                 static_cast<std::size_t>(r.hi[2] - r.lo[2] + 1);
+    }
+  }
+  if (entries >= std::numeric_limits<std::uint32_t>::max())
+    throw LimitExceededError("self-intersections: too many triangles for the hash grid");
+
+  // Buckets: a power of two, at least the number of entries; counting sort of the entries.
+  int bits = 0;
+  while ((std::size_t{1} << bits) < entries) ++bits;
+  const std::size_t buckets = std::size_t{1} << bits;
+  const auto bucket_of = [&](int x, int y, int z) {
+    // Blocks of 8 x 8 x 8 cells hashed to runs of 512 consecutive buckets: neighbouring cells
+    // share cache lines, and distinct blocks collide only at random.
+    const std::uint64_t local = static_cast<std::uint64_t>((x & 7) | (y & 7) << 3 | (z & 7) << 6);
+    return static_cast<std::size_t>((cell_hash(x >> 3, y >> 3, z >> 3) << 9 | local) & (buckets - 1));
+  };
+  const auto for_each_cell = [&](int f, const auto& visit) {
+    const CellRange& r = ranges[static_cast<std::size_t>(f)];
+    for (int z = r.lo[2]; z <= r.hi[2]; ++z)
+      for (int y = r.lo[1]; y <= r.hi[1]; ++y)
+        for (int x = r.lo[0]; x <= r.hi[0]; ++x) visit(x, y, z, bucket_of(x, y, z));
+  };
+  // Counts, then their running sums (the end of each bucket), then filled backwards from the last
+  // triangle: start[b] ends at the beginning of bucket b, its triangles in increasing order.
+  std::vector<std::uint32_t> start(buckets + 1, 0);
+  for (const int f : live)
+    if (!is_large[static_cast<std::size_t>(f)]) for_each_cell(f, [&](int, int, int, std::size_t b) { ++start[b]; });
+  for (std::size_t b = 1; b <= buckets; ++b) start[b] += start[b - 1];
+  std::vector<int> members(entries);
+  for (auto it = live.rbegin(); it != live.rend(); ++it)
+    if (!is_large[static_cast<std::size_t>(*it)])
+      for_each_cell(*it, [&](int, int, int, std::size_t b) { members[--start[b]] = *it; });
+
+  const auto test = [&](int f, int g) {  // f < g
+    if (nondegenerate_triangles_intersect(corners(mesh, f), corners(mesh, g))) out.add(f, g);
+  };
+  for (const int f : live) {
+    if (is_large[static_cast<std::size_t>(f)]) continue;
+    const Box& p = boxes[static_cast<std::size_t>(f)];
+    const CellRange& rf = ranges[static_cast<std::size_t>(f)];
+    for_each_cell(f, [&](int x, int y, int z, std::size_t b) {
+      // The bucket lists its triangles in increasing order; one with several cells in the bucket
+      // appears several times, consecutively.
+      const auto first = members.begin() + start[b], last = members.begin() + start[b + 1];
+      int previous = f;
+      for (auto it = std::upper_bound(first, last, f); it != last; ++it) {
+        const int g = *it;
+        if (g == previous) continue;
+        previous = g;
+        const Box& q = boxes[static_cast<std::size_t>(g)];
+        if (!boxes_overlap(p, q)) continue;
+        const CellRange& rg = ranges[static_cast<std::size_t>(g)];
+        if (std::max(rf.lo[0], rg.lo[0]) != x || std::max(rf.lo[1], rg.lo[1]) != y || std::max(rf.lo[2], rg.lo[2]) != z)
+          continue;
+        test(f, g);
+      }
+    });
+  }
+  for (const int f : large) {
+    const Box& p = boxes[static_cast<std::size_t>(f)];
+    for (const int g : live) {
+      if (g == f || (is_large[static_cast<std::size_t>(g)] && g < f)) continue;
+      if (!boxes_overlap(p, boxes[static_cast<std::size_t>(g)])) continue;
+      test(std::min(f, g), std::max(f, g));
+    }
+  }
+}
+
+}  // namespace
+
+bool triangle_is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return projection_axis(a, b, c) < 0;
+}
+
+bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
+  for (const Tri* t : {&a, &b})
+    for (const Vec3& p : *t)
+      if (!p.allFinite()) throw InvalidInputError("triangles_intersect: a vertex position is not finite");
+  if (triangle_is_degenerate(a[0], a[1], a[2]) || triangle_is_degenerate(b[0], b[1], b[2])) return false;
+  return nondegenerate_triangles_intersect(a, b);
+}
+
+bool triangles_intersect(const Mesh& mesh, int f, int g) {
+  const auto n = static_cast<long long>(mesh.triangles.size());
+  if (f < 0 || f >= n || g < 0 || g >= n || f == g)
+    throw InvalidInputError("triangles_intersect: expects two different triangles of the mesh");
+  const auto nv = static_cast<long long>(mesh.positions.size());
+  for (int h : {f, g})
+    for (int i : mesh.triangles[static_cast<std::size_t>(h)])
+      if (i < 0 || i >= nv) throw InvalidInputError("triangles_intersect: a triangle index is out of range");
+  return triangles_intersect(corners(mesh, f), corners(mesh, g));
+}
+
+std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate, const char* what) {
+  if (mesh.triangles.size() > static_cast<std::size_t>(INT_MAX))
+    throw InvalidInputError(std::string(what) + ": too many triangles");
+  const auto nv = static_cast<long long>(mesh.positions.size());
+  for (const auto& t : mesh.triangles)
+    for (int i : t)
+      if (i < 0 || i >= nv) throw InvalidInputError(std::string(what) + ": a triangle index is out of range");
+  for (const auto& t : mesh.triangles)
+    for (int i : t)
+      if (!mesh.positions[static_cast<std::size_t>(i)].allFinite())
+        throw InvalidInputError(std::string(what) + ": a vertex position is not finite");
+  std::size_t skipped = 0;
+  std::vector<Box> boxes(mesh.triangles.size());
+  for (std::size_t f = 0; f < boxes.size(); ++f) {
+    const Tri t = corners(mesh, static_cast<int>(f));
+    if (triangle_is_degenerate(t[0], t[1], t[2])) {
+      boxes[f] = {Vec3::Ones(), Vec3::Zero()};
+      ++skipped;
+      continue;
+    }
+    boxes[f] = {t[0].cwiseMin(t[1]).cwiseMin(t[2]), t[0].cwiseMax(t[1]).cwiseMax(t[2])};
+  }
+  if (degenerate) *degenerate = skipped;
+  return boxes;
+}
+
+std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs) {
+  const std::vector<Box> boxes = triangle_boxes_for_intersection(mesh, nullptr, "self_intersecting_pairs");
+  PairCollector out(max_pairs);
+  hash_grid_pairs(mesh, boxes, out);
+  return out.sorted_pairs();
+}
+
+std::size_t count_self_intersecting_pairs(const Mesh& mesh) {
+  const std::vector<Box> boxes = triangle_boxes_for_intersection(mesh, nullptr, "count_self_intersecting_pairs");
+  PairCollector out(0);
+  hash_grid_pairs(mesh, boxes, out);
+  return out.count();
+}
+
+}  // namespace cdp

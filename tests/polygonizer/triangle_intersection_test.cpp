@@ -1,0 +1,272 @@
+// Checks polygonizer/triangle_intersection.h: the hash-grid broad phase with the exact test gives
+// the same pairs as raytrace's find_self_intersections (Embree broad phase) and as brute force on
+// random soups of triangles of very different sizes, on overlapping spheres and on meshes with
+// huge triangles; degenerate and duplicate triangles follow the documented rules; the first
+// max_pairs pairs and the count agree; invalid meshes throw. (The exact test's own rules are
+// checked case by case in tests/raytrace/self_intersection_test.cpp.)
+#include <polygonizer/triangle_intersection.h>
+
+#include <polygonizer/errors.h>
+#include <raytrace/reference_meshes.h>
+#include <raytrace/self_intersection.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace cdp {
+namespace {
+
+using Pairs = std::vector<std::pair<int, int>>;
+constexpr std::size_t kAll = std::numeric_limits<std::size_t>::max();
+
+Pairs brute_force_pairs(const Mesh& mesh) {
+  Pairs out;
+  const int n = static_cast<int>(mesh.triangles.size());
+  for (int f = 0; f < n; ++f)
+    for (int g = f + 1; g < n; ++g)
+      if (triangles_intersect(mesh, f, g)) out.emplace_back(f, g);
+  return out;
+}
+
+Pairs embree_pairs(const Mesh& mesh) { return find_self_intersections(mesh, kAll).examples; }
+
+Mesh merged(const Mesh& a, const Mesh& b) {
+  Mesh m = a;
+  const int offset = static_cast<int>(a.positions.size());
+  m.positions.insert(m.positions.end(), b.positions.begin(), b.positions.end());
+  for (auto t : b.triangles) m.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  return m;
+}
+
+void add_triangle(Mesh& m, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const int base = static_cast<int>(m.positions.size());
+  m.positions.insert(m.positions.end(), {a, b, c});
+  m.triangles.push_back({base, base + 1, base + 2});
+}
+
+// Triangles in the cube [0, 2]^3 whose sizes vary log-uniformly by a factor 100 (0.004 to 0.4);
+// some continue the previous triangle (sharing one or two of its vertices, at its size), some
+// have a vertex on a common plane, and with `grid` every coordinate is a multiple of 1/256
+// (touching, collinear, coplanar and degenerate cases).
+Mesh varied_soup(std::uint64_t seed, int triangles, bool grid) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), sym(-1.0, 1.0);
+  Mesh m;
+  double size = 0.0;
+  for (int t = 0; t < triangles; ++t) {
+    int shared = 0;
+    Vec3 centre;
+    if (t > 0 && unit(rng) < 0.4) {
+      shared = unit(rng) < 0.5 ? 1 : 2;
+      centre = m.positions[static_cast<std::size_t>(m.triangles.back()[0])];
+    } else {
+      centre = 2.0 * Vec3(unit(rng), unit(rng), unit(rng));
+      size = 0.004 * std::pow(100.0, unit(rng));
+    }
+    std::array<int, 3> tri;
+    for (int k = 0; k < 3; ++k) {
+      if (k < shared) {
+        tri[k] = m.triangles.back()[static_cast<std::size_t>(k)];
+        continue;
+      }
+      Vec3 p = centre + size * Vec3(sym(rng), sym(rng), sym(rng));
+      if (unit(rng) < 0.1) p.z() = 1.0;
+      if (grid) p = (p * 256.0).array().round() / 256.0;
+      m.positions.push_back(p);
+      tri[k] = static_cast<int>(m.positions.size()) - 1;
+    }
+    m.triangles.push_back(tri);
+  }
+  return m;
+}
+
+TEST(TriangleIntersection, IcosphereAndTetrahedronHaveNone) {
+  EXPECT_TRUE(self_intersecting_pairs(icosphere(4)).empty());
+  EXPECT_EQ(count_self_intersecting_pairs(icosphere(4)), 0u);
+  EXPECT_EQ(count_self_intersecting_pairs(regular_tetrahedron()), 0u);
+  EXPECT_EQ(count_self_intersecting_pairs(merged(icosphere(2), icosphere(2, Vec3(3.0, 0.0, 0.0)))), 0u);
+}
+
+TEST(TriangleIntersection, OverlappingIcospheresMatchEmbree) {
+  for (const Vec3& offset : {Vec3(0.5, 0.0, 0.0), Vec3(0.31, 0.7, -0.2), Vec3(0.0, 0.0, 1.7)}) {
+    const Mesh m = merged(icosphere(3), icosphere(3, offset, 0.8));
+    const Pairs expected = embree_pairs(m);
+    EXPECT_GT(expected.size(), 10u);
+    EXPECT_EQ(self_intersecting_pairs(m, kAll), expected);
+    EXPECT_EQ(count_self_intersecting_pairs(m), expected.size());
+  }
+  // Smaller spheres: also against brute force.
+  const Mesh m = merged(icosphere(2), icosphere(2, Vec3(0.5, 0.0, 0.0)));
+  EXPECT_EQ(self_intersecting_pairs(m, kAll), brute_force_pairs(m));
+}
+
+TEST(TriangleIntersection, RandomSoupsOfVariedSizesMatchEmbree) {
+  for (std::uint64_t seed = 1; seed <= 6; ++seed)
+    for (bool grid : {false, true}) {
+      const Mesh m = varied_soup(seed, 3000, grid);
+      const Pairs expected = embree_pairs(m);
+      EXPECT_GT(expected.size(), 1000u) << "seed " << seed;
+      EXPECT_EQ(self_intersecting_pairs(m, kAll), expected) << "seed " << seed << (grid ? " grid" : "");
+      EXPECT_EQ(count_self_intersecting_pairs(m), expected.size());
+    }
+}
+
+TEST(TriangleIntersection, RandomSoupsMatchBruteForce) {
+  for (std::uint64_t seed = 11; seed <= 12; ++seed)
+    for (bool grid : {false, true}) {
+      const Mesh m = varied_soup(seed, 800, grid);
+      const Pairs expected = brute_force_pairs(m);
+      EXPECT_GT(expected.size(), 10u);
+      EXPECT_EQ(self_intersecting_pairs(m, kAll), expected) << "seed " << seed << (grid ? " grid" : "");
+    }
+}
+
+// A 30 x 30 array of small upright triangles, each crossing the plane z = 0 (and apart from each
+// other), with one huge triangle in that plane inserted at index `huge_at`.
+Mesh huge_over_small(int huge_at) {
+  Mesh m;
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j) {
+      if (static_cast<int>(m.triangles.size()) == huge_at)
+        add_triangle(m, Vec3(-1, -1, 0), Vec3(3, -1, 0), Vec3(-1, 3, 0));
+      const double x = (i + 0.5) / 30.0, y = (j + 0.5) / 30.0;
+      add_triangle(m, Vec3(x - 0.01, y, -0.01), Vec3(x + 0.01, y, -0.01), Vec3(x, y + 0.005, 0.01));
+    }
+  if (static_cast<int>(m.triangles.size()) == huge_at) add_triangle(m, Vec3(-1, -1, 0), Vec3(3, -1, 0), Vec3(-1, 3, 0));
+  return m;
+}
+
+TEST(TriangleIntersection, OneHugeTriangleCrossingManySmallOnes) {
+  for (int huge_at : {0, 450, 900}) {
+    const Mesh m = huge_over_small(huge_at);
+    Pairs expected;
+    for (int f = 0; f <= 900; ++f)
+      if (f != huge_at) expected.emplace_back(std::min(f, huge_at), std::max(f, huge_at));
+    EXPECT_EQ(self_intersecting_pairs(m, kAll), expected) << huge_at;
+    EXPECT_EQ(embree_pairs(m), expected);
+    EXPECT_EQ(count_self_intersecting_pairs(m), 900u);
+  }
+  // Lifted by a hair above the small triangles' tops: no contact.
+  Mesh m = huge_over_small(450);
+  for (int k = 0; k < 3; ++k) m.positions[static_cast<std::size_t>(3 * 450 + k)].z() = std::nextafter(0.01, 1.0);
+  EXPECT_EQ(count_self_intersecting_pairs(m), 0u);
+  // Lowered to touch their top vertices exactly: every one touches.
+  for (int k = 0; k < 3; ++k) m.positions[static_cast<std::size_t>(3 * 450 + k)].z() = 0.01;
+  EXPECT_EQ(count_self_intersecting_pairs(m), 900u);
+}
+
+TEST(TriangleIntersection, ManyLargeTrianglesMatchBruteForce) {
+  // More large triangles than the broad phase keeps out of the grid: the cell grows.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), wide(-2.0, 3.0);
+  Mesh m = varied_soup(21, 400, false);
+  for (int k = 0; k < 80; ++k)
+    add_triangle(m, Vec3(wide(rng), wide(rng), unit(rng)), Vec3(wide(rng), wide(rng), unit(rng)),
+                 Vec3(wide(rng), wide(rng), unit(rng)));
+  const Pairs expected = brute_force_pairs(m);
+  EXPECT_GT(expected.size(), 1000u);
+  EXPECT_EQ(self_intersecting_pairs(m, kAll), expected);
+  EXPECT_EQ(embree_pairs(m), expected);
+}
+
+TEST(TriangleIntersection, TinyTrianglesFarApart) {
+  // Cells sized from 1e-6 triangles over a 1e9 extent: the cell grows to keep coordinates small.
+  Mesh m;
+  for (double x : {0.0, 1e9})
+    for (int k = 0; k < 2; ++k)
+      add_triangle(m, Vec3(x, 0, 0), Vec3(x + 1e-6, k * 1e-7, 0), Vec3(x + 0.5e-6, 0.5e-6, 1e-7 - k * 2e-7));
+  EXPECT_EQ(self_intersecting_pairs(m, kAll), embree_pairs(m));
+  EXPECT_EQ(self_intersecting_pairs(m, kAll), brute_force_pairs(m));
+}
+
+TEST(TriangleIntersection, FirstPairsInOrderAndCount) {
+  const Mesh m = merged(icosphere(3), icosphere(3, Vec3(0.5, 0.2, 0.1)));
+  const Pairs all = self_intersecting_pairs(m, kAll);
+  ASSERT_GT(all.size(), 20u);
+  EXPECT_TRUE(std::is_sorted(all.begin(), all.end()));
+  for (const auto& [f, g] : all) EXPECT_LT(f, g);
+  EXPECT_EQ(self_intersecting_pairs(m), Pairs(all.begin(), all.begin() + 16));  // the default
+  EXPECT_EQ(self_intersecting_pairs(m, 5), Pairs(all.begin(), all.begin() + 5));
+  EXPECT_TRUE(self_intersecting_pairs(m, 0).empty());
+  EXPECT_EQ(self_intersecting_pairs(m, all.size() + 10), all);
+  EXPECT_EQ(count_self_intersecting_pairs(m), all.size());
+  EXPECT_EQ(self_intersecting_pairs(m, kAll), all);  // deterministic
+}
+
+TEST(TriangleIntersection, DuplicateTrianglesCount) {
+  Mesh m = regular_tetrahedron();
+  m.triangles.push_back(m.triangles[0]);
+  const auto t = m.triangles[1];
+  m.triangles.push_back({t[0], t[2], t[1]});  // reversed
+  EXPECT_EQ(self_intersecting_pairs(m), (Pairs{{0, 4}, {1, 5}}));
+  // The same triangle under other indices at bit-identical positions.
+  Mesh copy;
+  add_triangle(copy, Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0));
+  add_triangle(copy, Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 0));
+  EXPECT_EQ(self_intersecting_pairs(copy), (Pairs{{0, 1}}));
+}
+
+TEST(TriangleIntersection, DegenerateTrianglesTakePartInNoPair) {
+  // A zero-area needle through a face, a triangle with a repeated vertex, and a duplicated
+  // degenerate triangle: none is reported (find_self_intersections counts them as skipped).
+  Mesh m;
+  m.positions = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0.5, 0.5, -1), Vec3(0.5, 0.5, 1), Vec3(0.5, 0.5, 0)};
+  m.triangles = {{0, 1, 2}, {3, 4, 5}, {0, 0, 4}, {3, 4, 5}};
+  EXPECT_TRUE(self_intersecting_pairs(m, kAll).empty());
+  EXPECT_EQ(find_self_intersections(m).degenerate_triangles, 3u);
+  std::size_t degenerate = 0;
+  const std::vector<Box> boxes = triangle_boxes_for_intersection(m, &degenerate);
+  EXPECT_EQ(degenerate, 3u);
+  EXPECT_TRUE((boxes[0].min.array() <= boxes[0].max.array()).all());
+  EXPECT_TRUE((boxes[1].min.array() > boxes[1].max.array()).any());
+  // The same needle one ulp off the line has area and crosses the face.
+  m.positions[5].x() = std::nextafter(0.5, 1.0);
+  EXPECT_EQ(self_intersecting_pairs(m, kAll), (Pairs{{0, 1}, {0, 3}, {1, 3}}));
+}
+
+TEST(TriangleIntersection, SharedVerticesAndEdgesFollowTheRules) {
+  // A flat fold over a shared edge counts; an ordinary dihedral angle does not; the same point
+  // under two indices is a shared vertex.
+  Mesh fold;
+  fold.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0.3, 1, 0), Vec3(0.6, 0.5, 0), Vec3(0.5, -0.5, 0.5)};
+  fold.triangles = {{0, 1, 2}, {1, 0, 3}, {1, 0, 4}};
+  EXPECT_EQ(self_intersecting_pairs(fold), (Pairs{{0, 1}}));
+  Mesh fan;
+  fan.positions = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0, 0, 0), Vec3(-1, 0, 1), Vec3(0, -1, 1)};
+  fan.triangles = {{0, 1, 2}, {3, 4, 5}};
+  EXPECT_TRUE(self_intersecting_pairs(fan).empty());
+}
+
+TEST(TriangleIntersection, EmptyAndTinyMeshes) {
+  EXPECT_TRUE(self_intersecting_pairs(Mesh{}).empty());
+  EXPECT_EQ(count_self_intersecting_pairs(Mesh{}), 0u);
+  Mesh one;
+  add_triangle(one, Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0));
+  EXPECT_TRUE(self_intersecting_pairs(one).empty());
+}
+
+TEST(TriangleIntersection, InvalidMeshesThrow) {
+  Mesh m = regular_tetrahedron();
+  m.triangles.push_back({0, 1, 4});
+  EXPECT_THROW(self_intersecting_pairs(m), InvalidInputError);
+  EXPECT_THROW(count_self_intersecting_pairs(m), InvalidInputError);
+  m.triangles.back() = {0, -1, 2};
+  EXPECT_THROW(self_intersecting_pairs(m), InvalidInputError);
+  m = regular_tetrahedron();
+  m.positions[2].y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(self_intersecting_pairs(m), InvalidInputError);
+  m.positions[2].y() = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(count_self_intersecting_pairs(m), InvalidInputError);
+  // An unused non-finite position is not an error.
+  m = regular_tetrahedron();
+  m.positions.push_back(Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
+  EXPECT_TRUE(self_intersecting_pairs(m).empty());
+  EXPECT_THROW(triangles_intersect(m, 0, 0), InvalidInputError);
+  EXPECT_THROW(triangles_intersect(m, 0, 4), InvalidInputError);
+}
+
+}  // namespace
+}  // namespace cdp
