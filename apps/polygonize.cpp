@@ -10,9 +10,7 @@
 #include <polygonizer/field_factory.h>
 #include <polygonizer/mesh_io.h>
 #include <polygonizer/progress.h>
-#include <raytrace/self_intersection.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -162,21 +160,6 @@ int main(int argc, char** argv) {
       result = method == "mc" ? cdp::marching_cubes(*field, o) : cdp::marching_tetrahedra(*field, o);
     }
 
-    if (method == "adaptive") {
-      // The library checks topology and orientation; intersections need the Embree broad
-      // phase, which the core does without (see polygonizer/README.md).
-      const auto start = std::chrono::steady_clock::now();
-      const cdp::SelfIntersectionReport x = cdp::find_self_intersections(result.mesh, 1);
-      result.stats.extra["self_intersections"] = x.pairs;
-      result.stats.extra["self_intersection_seconds"] =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      if (x.pairs > 0) {
-        const cdp::Vec3& p = result.mesh.positions[result.mesh.triangles[x.examples.front().first][0]];
-        throw cdp::NoSurfaceError("adaptive: the mesh intersects itself (" + std::to_string(x.pairs) +
-                                  " pairs of triangles, the first near (" + std::to_string(p.x()) + ", " +
-                                  std::to_string(p.y()) + ", " + std::to_string(p.z()) + "))");
-      }
-    }
     cdp::write_mesh(result.mesh, out_path);
     if (!stats_path.empty()) {
       nlohmann::json j = cdp::to_json(result.stats);

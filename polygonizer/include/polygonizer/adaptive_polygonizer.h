@@ -54,6 +54,10 @@ struct AdaptiveOptions {
   // checks that every component was meshed. Components smaller than about one cell can be
   // missed; raise this to catch them.
   int seed_resolution = 32;
+  // Checks the finished mesh for intersecting triangles (self_intersecting_pairs: about 1 us per
+  // triangle) and throws NoSurfaceError naming the place when two intersect. On by default: a
+  // mesh that is wrong without saying so is worse than a slower run.
+  bool check_self_intersections = true;
   // Adds vertex_scalars "mac" (maximum absolute curvature) and "shape_index" to the mesh.
   bool curvature_properties = false;
   // Bounds; hitting one throws LimitExceededError. 0: derived from the box and min_edge
@@ -65,7 +69,11 @@ struct AdaptiveOptions {
   ProgressCallback progress;
 };
 
-// Throws NoSurfaceError when the field has no surface in its box (or it leaves the box),
+// The result is closed, oriented, manifold and outward, one component per component of the
+// surface the seeding found, and (with check_self_intersections) free of intersections; a run
+// that cannot deliver that throws instead.
+// Throws NoSurfaceError when the field has no surface in its box (or it leaves the box), or when
+// the finished mesh fails the checks above (naming the place),
 // LimitExceededError when a bound is hit, InvalidInputError for invalid options.
 // stats.extra holds "seeds" (seeds meshed from), "steps", "min_angle_degrees", "edge_length"
 // ({"min", "max"} after clamping), "triangle_count_rule" and "sizing".

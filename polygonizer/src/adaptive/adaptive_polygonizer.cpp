@@ -8,6 +8,7 @@
 #include <polygonizer/errors.h>
 #include <polygonizer/mesh_topology.h>
 #include <polygonizer/surface_seeds.h>
+#include <polygonizer/triangle_intersection.h>
 
 #include <algorithm>
 #include <chrono>
@@ -67,12 +68,13 @@ std::string format_point(const Vec3& p) {
 }
 
 // The last line of defence against a wrong mesh with exit 0: the tracker's own output must be
-// closed, oriented and manifold, and each seed must have grown one component of its own (a
-// front that merged across a gap into another sheet joins two). Returns the components; throws
+// closed, oriented and manifold, each seed must have grown one component of its own (a front
+// that merged across a gap into another sheet joins two), and (unless the caller opts out) no two
+// triangles may intersect (fronts that crossed each other). Returns the components; throws
 // NoSurfaceError naming the place otherwise. (A test of triangles against the vertex normals
 // was tried and dropped: the MPU models' correct meshes have triangles whose face turns more
 // than 120 degrees from a noisy vertex normal.)
-std::size_t check_mesh(const Mesh& mesh, std::size_t seeds) {
+std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersections) {
   const MeshTopology t = analyze_topology(mesh);
   const auto fail = [](const std::string& what, const Vec3& where) {
     throw NoSurfaceError("adaptive: the mesh came out " + what + " near " + format_point(where) +
@@ -86,6 +88,12 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds) {
   if (t.components != seeds)
     fail("with " + std::to_string(t.components) + " components from " + std::to_string(seeds) + " seeds",
          mesh.positions.front());
+  if (check_intersections) {
+    const auto pairs = self_intersecting_pairs(mesh, 1);
+    if (!pairs.empty())
+      fail("intersecting itself (" + std::to_string(count_self_intersecting_pairs(mesh)) + " pairs of triangles)",
+           mesh.positions[mesh.triangles[pairs.front().first][0]]);
+  }
   return t.components;
 }
 
@@ -174,7 +182,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   }
 
   PolygonizeStats& st = result.stats;
-  st.components = check_mesh(mesh, seeding.seeds);
+  st.components = check_mesh(mesh, seeding.seeds, options.check_self_intersections);
   st.method = "adaptive";
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   st.field_evaluations = field.counts() - before;
