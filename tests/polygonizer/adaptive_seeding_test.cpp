@@ -7,6 +7,7 @@
 #include <polygonizer/errors.h>
 #include <polygonizer/mesh_topology.h>
 
+#include <memory>
 #include <random>
 #include <sstream>
 
@@ -60,16 +61,22 @@ TEST(AdaptiveSeeding, OffCentreCavityAndAThinShell) {
   }
 }
 
-TEST(AdaptiveSeeding, FiftyTinyBlobsComeOutWholeEachOnce) {
-  // Blobs of radius 0.1 (surface radius about 0.063) in a 10-unit box: far below the seed grid's
-  // cell of 0.31, found by refining the cells the blobs' value range does not prove empty.
+// `count` Wyvill blobs of radius 0.1 (surface radius about 0.063) at random in a 10-unit box.
+std::unique_ptr<Blobs> tiny_blobs(int count) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-4.5, 4.5);
   std::vector<Blob> blobs;
-  for (int i = 0; i < 50; ++i) blobs.push_back({Vec3(u(rng), u(rng), u(rng)), 0.1, 1.0});
-  Blobs field(BlobKernel::Wyvill, 0.3, blobs);
-  field.set_bounds({Vec3::Constant(-5), Vec3::Constant(5)});
-  for (double k : {1.0, 3.0}) expect_components(field, at_factor(k), 50, 0, "factor " + std::to_string(k));
+  for (int i = 0; i < count; ++i) blobs.push_back({Vec3(u(rng), u(rng), u(rng)), 0.1, 1.0});
+  auto field = std::make_unique<Blobs>(BlobKernel::Wyvill, 0.3, blobs);
+  field->set_bounds({Vec3::Constant(-5), Vec3::Constant(5)});
+  return field;
+}
+
+TEST(AdaptiveSeeding, FiftyTinyBlobsComeOutWholeEachOnce) {
+  // Far below the seed grid's cell of 0.31: found by refining the cells the blobs' value range
+  // does not prove empty.
+  const auto field = tiny_blobs(50);
+  for (double k : {1.0, 3.0}) expect_components(*field, at_factor(k), 50, 0, "factor " + std::to_string(k));
 }
 
 TEST(AdaptiveSeeding, ThinTorusAndNeedleAreFound) {
@@ -126,14 +133,9 @@ TEST(AdaptiveSeeding, SmallBlobWithoutABoundIsFoundByAProbe) {
 }
 
 TEST(AdaptiveSeeding, SameMeshBitForBitWithTheSearch) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-4.5, 4.5);
-  std::vector<Blob> blobs;
-  for (int i = 0; i < 20; ++i) blobs.push_back({Vec3(u(rng), u(rng), u(rng)), 0.1, 1.0});
-  Blobs field(BlobKernel::Wyvill, 0.3, blobs);
-  field.set_bounds({Vec3::Constant(-5), Vec3::Constant(5)});
-  const auto a = polygonize_adaptive(field, at_factor(2));
-  const auto b = polygonize_adaptive(field, at_factor(2));
+  const auto field = tiny_blobs(20);
+  const auto a = polygonize_adaptive(*field, at_factor(2));
+  const auto b = polygonize_adaptive(*field, at_factor(2));
   ASSERT_EQ(a.mesh.triangles, b.mesh.triangles);
   ASSERT_EQ(a.mesh.positions, b.mesh.positions);
 }

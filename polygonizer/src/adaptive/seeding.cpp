@@ -1,4 +1,5 @@
 #include "seeding.h"
+#include "spatial_hash.h"
 
 #include <polygonizer/curvature.h>
 #include <polygonizer/errors.h>
@@ -8,9 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdint>
 #include <optional>
-#include <unordered_map>
 
 namespace cdp::adaptive {
 
@@ -71,7 +70,7 @@ std::optional<SurfacePoint> surface_point(const Field& field, const SignChange& 
 // is asked between components, never inside the tracker's loop.
 class MeshCoverage {
  public:
-  MeshCoverage(const Mesh& mesh, double cell) : mesh_(mesh), h_(cell), inv_h_(1 / cell) {}
+  MeshCoverage(const Mesh& mesh, double cell) : mesh_(mesh), h_(cell), cells_(cell) {}
 
   void update() {
     const auto& P = mesh_.positions;
@@ -82,10 +81,7 @@ class MeshCoverage {
       longest_ = std::max(longest_, longest_edge(t));
       // A point exactly on a cell face belongs to the cells on both sides.
       const double pad = 1e-9 * h_;
-      const Cell a = cell_of(lo.array() - pad), b = cell_of(hi.array() + pad);
-      for (std::int64_t k = a.k; k <= b.k; ++k)
-        for (std::int64_t j = a.j; j <= b.j; ++j)
-          for (std::int64_t i = a.i; i <= b.i; ++i) cells_[key({i, j, k})].push_back(static_cast<int>(indexed_));
+      cells_.insert_box(static_cast<int>(indexed_), lo.array() - pad, hi.array() + pad);
     }
   }
 
@@ -147,40 +143,20 @@ class MeshCoverage {
   }
 
  private:
-  struct Cell {
-    std::int64_t i, j, k;
-  };
-  Cell cell_of(const Vec3& p) const {
-    return {static_cast<std::int64_t>(std::floor(p.x() * inv_h_)), static_cast<std::int64_t>(std::floor(p.y() * inv_h_)),
-            static_cast<std::int64_t>(std::floor(p.z() * inv_h_))};
-  }
-  static std::uint64_t key(const Cell& c) {
-    const auto m = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1fffffULL; };
-    return m(c.i) | (m(c.j) << 21) | (m(c.k) << 42);
-  }
   double longest_edge(const std::array<int, 3>& t) const {
     const auto& P = mesh_.positions;
     return std::max({(P[t[0]] - P[t[1]]).norm(), (P[t[1]] - P[t[2]]).norm(), (P[t[2]] - P[t[0]]).norm()});
   }
   template <class Pred>
   bool any_in(const Vec3& lo, const Vec3& hi, Pred&& pred) const {
-    const Cell a = cell_of(lo), b = cell_of(hi);
-    for (std::int64_t k = a.k; k <= b.k; ++k)
-      for (std::int64_t j = a.j; j <= b.j; ++j)
-        for (std::int64_t i = a.i; i <= b.i; ++i) {
-          const auto it = cells_.find(key({i, j, k}));
-          if (it == cells_.end()) continue;
-          for (int f : it->second)
-            if (pred(f)) return true;
-        }
-    return false;
+    return cells_.any_in(lo, hi, pred);
   }
 
   const Mesh& mesh_;
-  double h_, inv_h_;
+  double h_;
   double longest_ = 0;
   std::size_t indexed_ = 0;
-  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
+  SpatialHash cells_;
 };
 
 class Seeder {

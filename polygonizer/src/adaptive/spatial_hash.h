@@ -1,4 +1,5 @@
-// A uniform hash grid over points identified by small integers (front nodes, mesh vertices).
+// A uniform hash grid over points identified by small integers (front nodes, mesh vertices),
+// or over boxes (triangles, for the seeding's coverage tests).
 // Queries visit cells in a fixed order and cells keep insertion order, so results are
 // deterministic; callers that pick "the nearest" still break ties by id.
 #pragma once
@@ -32,18 +33,38 @@ class SpatialHash {
       }
   }
 
+  // Stores id in every cell the box [lo, hi] overlaps (for objects with an extent: triangles).
+  void insert_box(int id, const Vec3& lo, const Vec3& hi) {
+    const Cell a = cell_of(lo), b = cell_of(hi);
+    for (std::int64_t k = a.k; k <= b.k; ++k)
+      for (std::int64_t j = a.j; j <= b.j; ++j)
+        for (std::int64_t i = a.i; i <= b.i; ++i) cells_[key({i, j, k})].push_back(id);
+  }
+
   // Calls fn(id) for every id stored in a cell overlapping the cube of half-side r around p;
   // the caller filters by exact distance.
   template <class Fn>
   void for_each_near(const Vec3& p, double r, Fn&& fn) const {
-    const Cell lo = cell_of(p.array() - r), hi = cell_of(p.array() + r);
-    for (std::int64_t k = lo.k; k <= hi.k; ++k)
-      for (std::int64_t j = lo.j; j <= hi.j; ++j)
-        for (std::int64_t i = lo.i; i <= hi.i; ++i) {
+    any_in(p.array() - r, p.array() + r, [&](int id) {
+      fn(id);
+      return false;
+    });
+  }
+
+  // Whether pred(id) holds for an id stored in a cell overlapping the box [lo, hi]; stops at the
+  // first (an id stored in several cells may be asked more than once).
+  template <class Pred>
+  bool any_in(const Vec3& lo, const Vec3& hi, Pred&& pred) const {
+    const Cell a = cell_of(lo), b = cell_of(hi);
+    for (std::int64_t k = a.k; k <= b.k; ++k)
+      for (std::int64_t j = a.j; j <= b.j; ++j)
+        for (std::int64_t i = a.i; i <= b.i; ++i) {
           auto it = cells_.find(key({i, j, k}));
           if (it == cells_.end()) continue;
-          for (int id : it->second) fn(id);
+          for (int id : it->second)
+            if (pred(id)) return true;
         }
+    return false;
   }
 
  private:
