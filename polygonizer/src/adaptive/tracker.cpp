@@ -207,13 +207,13 @@ bool Tracker::mesh_from_seed(const Vec3& seed) {
   }
   if (corners.size() < 6) {
     // Keep the mesh free of an isolated vertex: the seed vertex is the last one added.
+    vertex_hash_.remove(c, mesh_.positions[c]);
     mesh_.positions.pop_back();
     mesh_.normals.pop_back();
     target_.pop_back();
     mac_.pop_back();
     shape_index_.pop_back();
     front_refs_.pop_back();
-    vertex_hash_.remove(c, mesh_.positions.back());
     return false;
   }
   std::vector<int> v(6);
