@@ -45,7 +45,7 @@ double segment_distance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Ve
 int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_vertex) const {
   // In the tangent plane at frame_vertex: does segment u-w cross a front edge that shares no
   // end point with it? Front edges near the segment are found from their start nodes, which
-  // lie within half the segment plus the longest edge of its midpoint.
+  // lie within half the segment plus the longest front edge of its midpoint.
   const Vec3& N = mesh_.normals[frame_vertex];
   Vec3 e0 = N.unitOrthogonal();
   const Vec3 e1 = N.cross(e0);
@@ -57,7 +57,7 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
     return ab.x() * ac.y() - ab.y() * ac.x();
   };
   const Vec3 mid = 0.5 * (u_point + w_point);
-  const double radius = 0.5 * (w_point - u_point).norm() + longest_edge_;
+  const double radius = 0.5 * (w_point - u_point).norm() + longest_front_edge();
   int hit = -1;
   front_hash_.for_each_near(mid, radius, [&](int r) {
     if (hit >= 0) return;

@@ -17,7 +17,7 @@ void Tracker::close_angle(int node) {
   const FrontNode n = fs_.nodes[node];
   emit_triangle(fs_.nodes[n.prev].vertex, n.vertex, fs_.nodes[n.next].vertex);
   remove_node(node);
-  fs_.link(n.prev, n.next);
+  link(n.prev, n.next);
   refresh(n.prev);
   refresh(n.next);
 }
@@ -108,11 +108,11 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   std::vector<int> fresh;
   for (int v : vs) {
     const int m = insert_node(v, f);
-    fs_.link(m, after);
+    link(m, after);
     after = m;
     fresh.push_back(m);
   }
-  fs_.link(n.prev, after);
+  link(n.prev, after);
   refresh(n.prev);
   refresh(n.next);
   for (int m : fresh) refresh(m);

@@ -20,10 +20,10 @@ int Tracker::merge_fronts(int p, int q) {
   const int c = fs_.nodes[q].prev;
   const int q2 = insert_node(fs_.nodes[q].vertex, keep);
   const int p2 = insert_node(fs_.nodes[p].vertex, keep);
-  fs_.link(p, q);
-  fs_.link(c, q2);
-  fs_.link(q2, p2);
-  fs_.link(p2, b);
+  link(p, q);
+  link(c, q2);
+  link(q2, p2);
+  link(p2, b);
 
   // Nodes of the absorbed front: q .. c when it was g, b .. a and p when it was f.
   const int first = keep_f ? q : b, last = keep_f ? c : p;

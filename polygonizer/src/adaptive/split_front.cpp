@@ -16,10 +16,10 @@ void Tracker::split_front(int p, int q) {
   const int d = fs_.nodes[q].next;
   const int p2 = insert_node(fs_.nodes[p].vertex, f);
   const int q2 = insert_node(fs_.nodes[q].vertex, f);
-  fs_.link(q, p);
-  fs_.link(a, p2);
-  fs_.link(p2, q2);
-  fs_.link(q2, d);
+  link(q, p);
+  link(a, p2);
+  link(p2, q2);
+  link(q2, d);
 
   // Walk both loops in step to find the shorter one; only that one moves to a new front, so
   // the relabelling costs the size of the smaller part.

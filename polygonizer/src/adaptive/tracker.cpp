@@ -129,10 +129,6 @@ std::optional<Vec3> Tracker::crease_normal(const Vec3& x, const Vec3& n) const {
 
 void Tracker::emit_triangle(int a, int b, int c) {
   mesh_.triangles.push_back({a, b, c});
-  const int t[3] = {a, b, c};
-  for (int k = 0; k < 3; ++k) {
-    longest_edge_ = std::max(longest_edge_, (mesh_.positions[t[k]] - mesh_.positions[t[(k + 1) % 3]]).norm());
-  }
   const Vec3& pa = mesh_.positions[a];
   area_ += 0.5 * (mesh_.positions[b] - pa).cross(mesh_.positions[c] - pa).norm();
   if (estimated_area_ > 0 && area_ > kAreaBound * estimated_area_)
@@ -144,6 +140,20 @@ void Tracker::emit_triangle(int a, int b, int c) {
     throw LimitExceededError("adaptive: more than " + std::to_string(s_.max_triangles) +
                              " triangles (AdaptiveOptions::max_triangles); raise the limit, the minimum edge "
                              "length or lower the factor");
+}
+
+void Tracker::link(int a, int b) {
+  fs_.link(a, b);
+  front_edges_.emplace((mesh_.positions[fs_.nodes[a].vertex] - mesh_.positions[fs_.nodes[b].vertex]).norm(), a, b);
+}
+
+double Tracker::longest_front_edge() const {
+  while (!front_edges_.empty()) {
+    const auto& [length, a, b] = front_edges_.top();
+    if (fs_.nodes[a].front >= 0 && fs_.nodes[a].next == b) return length;
+    front_edges_.pop();
+  }
+  return 0;
 }
 
 int Tracker::insert_node(int vertex, int front) {
@@ -224,7 +234,7 @@ bool Tracker::mesh_from_seed(const Vec3& seed) {
   std::vector<int> nodes(6);
   for (int k = 0; k < 6; ++k) nodes[k] = insert_node(v[k], f);
   // Triangle (c, v_k, v_k+1) owns the edge v_k -> v_k+1, so the front runs the other way.
-  for (int k = 0; k < 6; ++k) fs_.link(nodes[(k + 1) % 6], nodes[k]);
+  for (int k = 0; k < 6; ++k) link(nodes[(k + 1) % 6], nodes[k]);
   for (int k = 0; k < 6; ++k) refresh(nodes[k]);
   stack_.push_back(f);
   run_fronts();
@@ -280,7 +290,7 @@ bool Tracker::zip_spike(int node) {
   if (fs_.nodes[n.next].vertex == v) {
     const int prev = n.prev;
     remove_node(node);
-    fs_.link(prev, fs_.nodes[node].next);
+    link(prev, fs_.nodes[node].next);
     refresh(prev);
     refresh(fs_.nodes[node].next);
     return true;
@@ -289,7 +299,7 @@ bool Tracker::zip_spike(int node) {
   const int before = n.prev, twin = n.next, after = fs_.nodes[twin].next;
   remove_node(node);
   remove_node(twin);
-  fs_.link(before, after);
+  link(before, after);
   refresh(before);
   refresh(after);
   return true;

@@ -18,6 +18,8 @@
 #include <polygonizer/newton_projection.h>
 
 #include <optional>
+#include <queue>
+#include <tuple>
 #include <vector>
 
 namespace cdp::adaptive {
@@ -103,6 +105,10 @@ class Tracker {
   bool over_finished_mesh(const Vec3& x, const Vec3& normal, double d) const;
   void emit_triangle(int a, int b, int c);
   int insert_node(int vertex, int front);
+  // fs_.link, and the new front edge a -> b into the record of front edge lengths.
+  void link(int a, int b);
+  // The longest edge on any front now (edges that left the fronts are dropped lazily).
+  double longest_front_edge() const;
   void remove_node(int node);
   void refresh(int node);  // recompute the angle and requeue
   void relabel(int start, int front);
@@ -152,7 +158,9 @@ class Tracker {
   Settings s_;
   Mesh& mesh_;
   std::vector<double> target_, mac_, shape_index_;
-  double longest_edge_ = 0;
+  // Front edges by length (length, start node, end node), a max-heap with lazy deletion: an
+  // entry is stale once its start node has left the fronts or links elsewhere.
+  mutable std::priority_queue<std::tuple<double, int, int>> front_edges_;
   FrontSet fs_;
   SpatialHash front_hash_, vertex_hash_;
   std::vector<int> front_refs_;  // front nodes of each vertex: 0 once it is finished
