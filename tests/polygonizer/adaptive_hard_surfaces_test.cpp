@@ -179,8 +179,8 @@ std::vector<Case> all_cases() {
 #endif
     const bool random = surfaces[s].name.rfind("random_blobs", 0) == 0;
     for (double k : random ? std::vector<double>{1, 2, 5} : std::vector<double>{1, 2, 3, 5}) {
-      // Left out: a front runs away there and takes minutes to reach the area bound (the
-      // crossing test's radius grows with the longest edge of the whole mesh; see the README).
+      // Left out: a front runs away there and takes minutes to reach the area bound (see the
+      // known limits in polygonizer/README.md).
       if (surfaces[s].name == "gyroid_ball" && k == 5) continue;
       out.push_back({s, k});
     }
