@@ -16,30 +16,17 @@
 #include <limits>
 #include <random>
 
+#include "common/intersection_helpers.h"
+
 namespace cdp {
 namespace {
 
-using Pairs = std::vector<std::pair<int, int>>;
+using test::brute_force_pairs;
+using test::merged;
+using test::Pairs;
 constexpr std::size_t kAll = std::numeric_limits<std::size_t>::max();
 
-Pairs brute_force_pairs(const Mesh& mesh) {
-  Pairs out;
-  const int n = static_cast<int>(mesh.triangles.size());
-  for (int f = 0; f < n; ++f)
-    for (int g = f + 1; g < n; ++g)
-      if (triangles_intersect(mesh, f, g)) out.emplace_back(f, g);
-  return out;
-}
-
 Pairs embree_pairs(const Mesh& mesh) { return find_self_intersections(mesh, kAll).examples; }
-
-Mesh merged(const Mesh& a, const Mesh& b) {
-  Mesh m = a;
-  const int offset = static_cast<int>(a.positions.size());
-  m.positions.insert(m.positions.end(), b.positions.begin(), b.positions.end());
-  for (auto t : b.triangles) m.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-  return m;
-}
 
 void add_triangle(Mesh& m, const Vec3& a, const Vec3& b, const Vec3& c) {
   const int base = static_cast<int>(m.positions.size());

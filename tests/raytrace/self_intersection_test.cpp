@@ -14,28 +14,14 @@
 #include <map>
 #include <random>
 
+#include "common/intersection_helpers.h"
+
 namespace cdp {
 namespace {
 
-using Pairs = std::vector<std::pair<int, int>>;
-
-// Every pair f < g decided by the same exact test, without the broad phase.
-Pairs brute_force_pairs(const Mesh& mesh) {
-  Pairs out;
-  const int n = static_cast<int>(mesh.triangles.size());
-  for (int f = 0; f < n; ++f)
-    for (int g = f + 1; g < n; ++g)
-      if (triangles_intersect(mesh, f, g)) out.emplace_back(f, g);
-  return out;
-}
-
-Mesh merged(const Mesh& a, const Mesh& b) {
-  Mesh m = a;
-  const int offset = static_cast<int>(a.positions.size());
-  m.positions.insert(m.positions.end(), b.positions.begin(), b.positions.end());
-  for (auto t : b.triangles) m.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-  return m;
-}
+using test::brute_force_pairs;
+using test::merged;
+using test::Pairs;
 
 // A mesh of loose triangles given by their corners (no shared indices).
 Mesh soup(const std::vector<std::array<Vec3, 3>>& tris) {
