@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
 
 #include "common/run_command.h"
@@ -48,6 +50,39 @@ TEST_P(PolygonizeApp, WritesAClosedTorusAndItsStats) {
 
 INSTANTIATE_TEST_SUITE_P(EveryMethod, PolygonizeApp, ::testing::Values("adaptive", "mc", "mt"),
                          [](const auto& info) { return info.param; });
+
+TEST(PolygonizeApp, AdaptiveKeepsTheInnerSphereOfAHollowBallAndSaysNothingIsUncovered) {
+  // The case that lost its inner sphere with exit 0 (robustness issue): the program's mesh has
+  // both spheres, and its stats say every sign change of the seed grid was meshed.
+  test::TempDir dir("polygonize_app_hollow");
+  const auto field = dir.write("hollow.json", R"J({"type": "expression",
+      "value": "max(sqrt(x^2+y^2+z^2)-1.25, 0.75-sqrt(x^2+y^2+z^2))", "bounds": [[-2,-2,-2],[2,2,2]]})J");
+  const auto r = test::run_app("polygonize", field.string() + " -o " + (dir.path / "out.ply").string() +
+                                                 " --factor 1 --stats " + (dir.path / "stats.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const MeshTopology t = analyze_topology(read_mesh(dir.path / "out.ply"));
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.components, 2u);
+  const auto stats = read_json(dir.path / "stats.json");
+  EXPECT_EQ(stats["components"].get<int>(), 2);
+  EXPECT_EQ(stats["seeds"].get<int>(), 2);
+  EXPECT_EQ(stats["uncovered_crossings"].get<int>(), 0);
+  EXPECT_GT(stats["sign_changes"].get<int>(), 0);
+}
+
+TEST(PolygonizeApp, AdaptiveRunThatCannotFinishIsAnErrorWithoutOutput) {
+  // A run stopped by a bound: a one-line error, no mesh file and no stats file.
+  test::TempDir dir("polygonize_app_limit");
+  const auto field = dir.write("torus.json", kTorus);
+  const auto out = dir.path / "out.ply", stats = dir.path / "stats.json";
+  const auto r = test::run_app("polygonize", field.string() + " -o " + out.string() + " --factor 3 --max-triangles 50 "
+                                             "--stats " + stats.string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("polygonize: adaptive: "), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_FALSE(std::filesystem::exists(stats));
+}
 
 TEST(PolygonizeAppErrors, BadArgumentsAndFieldsGiveAOneLineErrorAndNoOutput) {
   test::TempDir dir("polygonize_app_errors");
