@@ -117,21 +117,16 @@ std::vector<std::pair<Crossing, int>> crossings_with_clusters(const Field& field
   std::vector<std::pair<Crossing, int>> out;
   std::vector<int> cluster_number(crossed.size(), -1);
   int next_cluster = 0;
-  for (int k = 0; k <= nz; ++k)
-    for (int j = 0; j <= ny; ++j)
-      for (int i = 0; i <= nx; ++i)
-        for (int axis = 0; axis < 3; ++axis) {
-          int i2 = i + (axis == 0), j2 = j + (axis == 1), k2 = k + (axis == 2);
-          if (i2 > nx || j2 > ny || k2 > nz) continue;
-          if (inside(i, j, k) == inside(i2, j2, k2)) continue;
-          // Any cell containing this edge is crossed; take the one with the smallest indices.
-          const int ci = std::min(i, nx - 1), cj = std::min(j, ny - 1), ck = std::min(k, nz - 1);
-          const int root = clusters.find(cell_id(ci, cj, ck));
-          if (cluster_number[root] < 0) cluster_number[root] = next_cluster++;
-          Crossing c{g.point(i, j, k), g.point(i2, j2, k2), g.values[g.index(i, j, k)],
-                     g.values[g.index(i2, j2, k2)], cell_id(ci, cj, ck)};
-          out.emplace_back(c, cluster_number[root]);
-        }
+  g.for_each_sign_change([&](const std::array<int, 3>& a, const std::array<int, 3>& b) {
+    const auto [i, j, k] = a;
+    // Any cell containing this edge is crossed; take the one with the smallest indices.
+    const int ci = std::min(i, nx - 1), cj = std::min(j, ny - 1), ck = std::min(k, nz - 1);
+    const int root = clusters.find(cell_id(ci, cj, ck));
+    if (cluster_number[root] < 0) cluster_number[root] = next_cluster++;
+    Crossing c{g.point(i, j, k), g.point(b[0], b[1], b[2]), g.value(i, j, k), g.value(b[0], b[1], b[2]),
+               cell_id(ci, cj, ck)};
+    out.emplace_back(c, cluster_number[root]);
+  });
   if (out.empty()) {
     std::ostringstream msg;
     msg << "seeding: no zero crossing of the field in its box " << format_point(field.bounds().min) << " - "

@@ -34,6 +34,20 @@ struct SeedGrid {
   }
   Vec3 point(int i, int j, int k) const { return origin + h * Vec3(i, j, k); }
   double value(int i, int j, int k) const { return values[index(i, j, k)]; }
+  // Calls fn(a, b) with the end nodes a = {i, j, k}, b of every grid edge whose values differ in
+  // sign (F < 0 counts as inside), nodes in index order, then axes x, y, z.
+  template <class Fn>
+  void for_each_sign_change(Fn&& fn) const {
+    for (int k = 0; k <= n[2]; ++k)
+      for (int j = 0; j <= n[1]; ++j)
+        for (int i = 0; i <= n[0]; ++i)
+          for (int axis = 0; axis < 3; ++axis) {
+            const std::array<int, 3> a{i, j, k}, b{i + (axis == 0), j + (axis == 1), k + (axis == 2)};
+            if (b[0] > n[0] || b[1] > n[1] || b[2] > n[2]) continue;
+            if ((value(i, j, k) < 0) == (value(b[0], b[1], b[2]) < 0)) continue;
+            fn(a, b);
+          }
+  }
 };
 
 // Samples the grid (one batched evaluation). Throws InvalidInputError for a resolution below 2

@@ -125,16 +125,11 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   std::size_t grid_crossings = 0;
   {
     std::vector<Vec3> points;
-    for (int k = 0; k <= grid.n[2]; ++k)
-      for (int j = 0; j <= grid.n[1]; ++j)
-        for (int i = 0; i <= grid.n[0]; ++i)
-          for (int axis = 0; axis < 3; ++axis) {
-            const int i2 = i + (axis == 0), j2 = j + (axis == 1), k2 = k + (axis == 2);
-            if (i2 > grid.n[0] || j2 > grid.n[1] || k2 > grid.n[2]) continue;
-            const double fa = grid.value(i, j, k), fb = grid.value(i2, j2, k2);
-            if ((fa < 0) == (fb < 0)) continue;
-            points.push_back(grid.point(i, j, k) + fa / (fa - fb) * (grid.point(i2, j2, k2) - grid.point(i, j, k)));
-          }
+    grid.for_each_sign_change([&](const std::array<int, 3>& a, const std::array<int, 3>& b) {
+      const double fa = grid.value(a[0], a[1], a[2]), fb = grid.value(b[0], b[1], b[2]);
+      const Vec3 pa = grid.point(a[0], a[1], a[2]);
+      points.push_back(pa + fa / (fa - fb) * (grid.point(b[0], b[1], b[2]) - pa));
+    });
     grid_crossings = points.size();
     std::vector<double> lengths;
     const std::size_t stride = std::max<std::size_t>(1, points.size() / 64);

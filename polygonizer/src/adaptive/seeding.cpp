@@ -272,17 +272,10 @@ class Seeder {
   }
 
   void grid_sign_changes() {
-    const auto& n = grid_.n;
-    for (int k = 0; k <= n[2]; ++k)
-      for (int j = 0; j <= n[1]; ++j)
-        for (int i = 0; i <= n[0]; ++i)
-          for (int axis = 0; axis < 3; ++axis) {
-            const int i2 = i + (axis == 0), j2 = j + (axis == 1), k2 = k + (axis == 2);
-            if (i2 > n[0] || j2 > n[1] || k2 > n[2]) continue;
-            const double fa = grid_.value(i, j, k), fb = grid_.value(i2, j2, k2);
-            if ((fa < 0) == (fb < 0)) continue;
-            visit({grid_.point(i, j, k), grid_.point(i2, j2, k2), fa, fb});
-          }
+    grid_.for_each_sign_change([&](const std::array<int, 3>& a, const std::array<int, 3>& b) {
+      visit({grid_.point(a[0], a[1], a[2]), grid_.point(b[0], b[1], b[2]), grid_.value(a[0], a[1], a[2]),
+             grid_.value(b[0], b[1], b[2])});
+    });
   }
 
   // --- fields with a Lipschitz bound: refine the cells that may hold surface.
