@@ -1,16 +1,34 @@
 // OpenMesh's readers and writers register themselves through MeshIO.hh, which must come first.
 #include <OpenMesh/Core/IO/MeshIO.hh>
 
+#include "mesh_formats/mesh_formats.h"
+
+#include <polygonizer/atomic_write.h>
 #include <polygonizer/errors.h>
 #include <polygonizer/mesh_io.h>
 
-#include <unistd.h>
-
+#include <cctype>
+#include <fstream>
+#include <iterator>
+#include <sstream>
 #include <system_error>
 
 namespace cdp {
 
 namespace {
+
+// OpenMesh's own log lines ("[OBJWriter] : write file", "[PLYWriter] : cannot write to stream")
+// would interleave with the programs' one-line messages; failures reach the caller as
+// exceptions instead. Done once, before the first use of OpenMesh's readers or writers.
+void silence_openmesh() {
+  static const bool done = [] {
+    omlog().disable();
+    omout().disable();
+    omerr().disable();
+    return true;
+  }();
+  (void)done;
+}
 
 OpenMesh::Vec3d to_om(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 Vec3 from_om(const OpenMesh::Vec3d& v) { return {v[0], v[1], v[2]}; }
@@ -18,6 +36,7 @@ Vec3 from_om(const OpenMesh::Vec3d& v) { return {v[0], v[1], v[2]}; }
 }  // namespace
 
 TriMesh to_openmesh(const Mesh& mesh) {
+  silence_openmesh();
   TriMesh om;
   std::vector<TriMesh::VertexHandle> vh;
   vh.reserve(mesh.positions.size());
@@ -64,60 +83,65 @@ Mesh from_openmesh(const TriMesh& om) {
   return mesh;
 }
 
+namespace {
+
+std::string extension_of(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+}  // namespace
+
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, bool binary) {
-  TriMesh om = to_openmesh(mesh);
-  OpenMesh::IO::Options opts;
-  if (mesh.normals.size() == mesh.positions.size()) opts += OpenMesh::IO::Options::VertexNormal;
-  const std::string ext = path.extension().string();
-  if (binary && (ext == ".ply" || ext == ".stl" || ext == ".off")) opts += OpenMesh::IO::Options::Binary;
-  if (ext == ".ply" && !mesh.vertex_scalars.empty()) opts += OpenMesh::IO::Options::Custom;
-  // Write next to the target and rename, so that a failure never leaves a half-written file.
-  std::filesystem::path tmp = path;
-  std::string tmp_name = ".";
-  tmp_name += path.stem().string();
-  tmp_name += ".tmp" + std::to_string(getpid()) + ext;
-  tmp.replace_filename(tmp_name);
-  if (!OpenMesh::IO::write_mesh(om, tmp.string(), opts)) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw InvalidInputError(path.string() + ": cannot write mesh (unsupported extension or unwritable folder)");
+  const std::string ext = extension_of(path);
+  std::string bytes;
+  if (ext == ".ply") {
+    bytes = formats::write_ply(mesh, binary);
+  } else if (ext == ".obj") {
+    bytes = formats::write_obj(mesh);
+  } else if (ext == ".off") {
+    bytes = formats::write_off(mesh);
+  } else if (ext == ".stl") {
+    // STL is float32 by definition; OpenMesh writes it.
+    silence_openmesh();
+    TriMesh om = to_openmesh(mesh);
+    OpenMesh::IO::Options opts;
+    if (binary) opts += OpenMesh::IO::Options::Binary;
+    std::ostringstream out;
+    if (!OpenMesh::IO::write_mesh(om, out, ".stl", opts))
+      throw InvalidInputError(path.string() + ": cannot write mesh (OpenMesh's STL writer failed)");
+    bytes = out.str();
+  } else {
+    throw InvalidInputError(path.string() + ": cannot write mesh: unsupported extension \"" + ext +
+                            "\" (.ply, .obj, .off or .stl)");
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw InvalidInputError(path.string() + ": cannot write mesh: " + ec.message());
-  }
+  write_file_atomically(path, bytes, "mesh");
 }
 
 Mesh read_mesh(const std::filesystem::path& path) {
+  const std::string name = path.string();
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw InvalidInputError(path.string() + ": file not found");
-  TriMesh om;
-  om.request_vertex_normals();
-  OpenMesh::IO::Options opts = OpenMesh::IO::Options::VertexNormal;
-  // PLY only: OpenMesh's PLY reader turns every extra vertex property into a named property.
-  if (path.extension() == ".ply") opts += OpenMesh::IO::Options::Custom;
-  if (!OpenMesh::IO::read_mesh(om, path.string(), opts))
-    throw InvalidInputError(path.string() + ": cannot read mesh (unsupported or malformed file)");
-  Mesh mesh = from_openmesh(om);
-  if (!opts.check(OpenMesh::IO::Options::VertexNormal)) mesh.normals.clear();
-  // Scalar vertex properties (double or float in the file) become vertex_scalars, as written.
-  for (auto it = om.vprops_begin(); it != om.vprops_end(); ++it) {
-    if (!*it) continue;
-    const std::string name = (*it)->name();
-    std::vector<double> values;
-    values.reserve(om.n_vertices());
-    if (OpenMesh::VPropHandleT<double> hd; om.get_property_handle(hd, name)) {
-      for (auto v : om.vertices()) values.push_back(om.property(hd, v));
-    } else if (OpenMesh::VPropHandleT<float> hf; om.get_property_handle(hf, name)) {
-      for (auto v : om.vertices()) values.push_back(om.property(hf, v));
-    } else {
-      continue;
-    }
-    mesh.vertex_scalars[name] = std::move(values);
+  const auto status = std::filesystem::status(path, ec);
+  if (!std::filesystem::exists(status)) throw InvalidInputError(name + ": file not found");
+  if (std::filesystem::is_directory(status)) throw InvalidInputError(name + ": is a directory, not a mesh file");
+  const std::string ext = extension_of(path);
+  if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl")
+    throw InvalidInputError(name + ": unsupported mesh format \"" + ext + "\" (.ply, .obj, .off or .stl)");
+  if (ext == ".stl") {
+    silence_openmesh();
+    TriMesh om;
+    if (!OpenMesh::IO::read_mesh(om, name)) throw InvalidInputError(name + ": cannot read mesh (malformed STL file)");
+    Mesh mesh = from_openmesh(om);
+    formats::check_mesh(mesh, name);
+    return mesh;
   }
-  return mesh;
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad() || !in.is_open()) throw InvalidInputError(name + ": cannot read the file");
+  if (ext == ".ply") return formats::read_ply(bytes, name);
+  if (ext == ".obj") return formats::read_obj(bytes, name);
+  return formats::read_off(bytes, name);
 }
 
 }  // namespace cdp

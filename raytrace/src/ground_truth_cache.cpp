@@ -1,5 +1,6 @@
 #include <raytrace/ground_truth_cache.h>
 
+#include <polygonizer/atomic_write.h>
 #include <polygonizer/errors.h>
 
 #include <cstdint>
@@ -7,7 +8,6 @@
 #include <cstring>
 #include <fstream>
 #include <type_traits>
-#include <unistd.h>
 
 namespace cdp {
 
@@ -36,12 +36,13 @@ nlohmann::json raycast_json(const RaycastOptions& o) {
 // Fixed-size little-endian-as-stored PODs; the files are a cache for this machine kind.
 class Writer {
  public:
-  explicit Writer(std::ofstream& out) : out_(out) {}
+  explicit Writer(std::string& out) : out_(out) {}
   template <class T>
   void put(const T& v) {
     static_assert(std::is_trivially_copyable_v<T>);
-    out_.write(reinterpret_cast<const char*>(&v), sizeof(T));
+    out_.append(reinterpret_cast<const char*>(&v), sizeof(T));
   }
+  void put_bytes(const char* p, std::size_t n) { out_.append(p, n); }
   void put_vec(const Vec3& v) {
     put(v.x());
     put(v.y());
@@ -49,7 +50,7 @@ class Writer {
   }
 
  private:
-  std::ofstream& out_;
+  std::string& out_;
 };
 
 class Reader {
@@ -103,46 +104,32 @@ void save_ground_truth(const GroundTruth& truth, const std::filesystem::path& di
   std::filesystem::create_directories(dir, ec);
   if (ec) throw InvalidInputError(dir.string() + ": cannot create the cache folder: " + ec.message());
   const auto path = ground_truth_path(dir, key);
-  auto tmp = path;
-  tmp += ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InvalidInputError(tmp.string() + ": cannot write");
-    Writer w(out);
-    out.write(kMagic, sizeof kMagic);
-    w.put(static_cast<std::uint32_t>(key.size()));
-    out.write(key.data(), static_cast<std::streamsize>(key.size()));
-    const RaycastSetup& s = truth.setup;
-    w.put_vec(s.box.min);
-    w.put_vec(s.box.max);
-    w.put(s.lipschitz);
-    w.put(static_cast<std::uint8_t>(s.lipschitz_from_model));
-    w.put(s.min_step);
-    w.put(s.tangent_tolerance);
-    w.put(static_cast<std::uint64_t>(truth.rays.size()));
-    for (std::size_t i = 0; i < truth.rays.size(); ++i) {
-      const Ray& r = truth.rays[i];
-      const SurfaceHit& h = truth.hits[i];
-      w.put_vec(r.origin);
-      w.put_vec(r.direction);
-      w.put(static_cast<std::uint8_t>(h.status));
-      w.put(h.flags);
-      w.put(h.steps);
-      w.put(h.t);
-      w.put_vec(h.normal);
-    }
-    out.write(kMagic, sizeof kMagic);  // end marker: a complete file ends with it
-    out.close();
-    if (!out) {
-      std::filesystem::remove(tmp, ec);
-      throw InvalidInputError(tmp.string() + ": write failed");
-    }
+  std::string bytes;
+  Writer w(bytes);
+  w.put_bytes(kMagic, sizeof kMagic);
+  w.put(static_cast<std::uint32_t>(key.size()));
+  w.put_bytes(key.data(), key.size());
+  const RaycastSetup& s = truth.setup;
+  w.put_vec(s.box.min);
+  w.put_vec(s.box.max);
+  w.put(s.lipschitz);
+  w.put(static_cast<std::uint8_t>(s.lipschitz_from_model));
+  w.put(s.min_step);
+  w.put(s.tangent_tolerance);
+  w.put(static_cast<std::uint64_t>(truth.rays.size()));
+  for (std::size_t i = 0; i < truth.rays.size(); ++i) {
+    const Ray& r = truth.rays[i];
+    const SurfaceHit& h = truth.hits[i];
+    w.put_vec(r.origin);
+    w.put_vec(r.direction);
+    w.put(static_cast<std::uint8_t>(h.status));
+    w.put(h.flags);
+    w.put(h.steps);
+    w.put(h.t);
+    w.put_vec(h.normal);
   }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw InvalidInputError(path.string() + ": cannot rename the cache file into place");
-  }
+  w.put_bytes(kMagic, sizeof kMagic);  // end marker: a complete file ends with it
+  write_file_atomically(path, bytes, "the ground-truth cache");
 }
 
 std::optional<GroundTruth> load_ground_truth(const std::filesystem::path& dir, const std::string& key) {

@@ -1,6 +1,7 @@
 // Writing a file so that a failure never leaves a half-written one: the contents go to a hidden
-// temporary file beside the target, which is then renamed over it. Every program's output goes
-// through here (meshes through mesh_io, which does the same around OpenMesh's writer).
+// temporary file beside the target, are flushed to the disk, and the temporary is then renamed
+// over the target. Every program's output goes through here (meshes, statistics, metrics, ground
+// truth caches, pictures, experiment tables).
 #pragma once
 
 #include <filesystem>
@@ -8,8 +9,13 @@
 
 namespace cdp {
 
-// Throws InvalidInputError "PATH: cannot write[ WHAT][: reason]", leaving neither the target
+// Throws InvalidInputError "PATH: cannot write[ WHAT]: reason" (reason from errno: "No space
+// left on device", "File too large", "Permission denied", ...), leaving neither the target
 // changed nor the temporary file behind.
 void write_file_atomically(const std::filesystem::path& path, std::string_view contents, std::string_view what = {});
+
+// For a signal handler: removes the temporary file a write in progress has open, if any. Only
+// async-signal-safe calls (unlink), so that an interrupted program leaves nothing hidden behind.
+void remove_pending_temporary_file() noexcept;
 
 }  // namespace cdp

@@ -1,5 +1,6 @@
-// Mesh files through OpenMesh (PLY, OBJ, OFF, STL, by extension), and conversion to and from
-// OpenMesh's TriMesh for users who want its half-edge structure.
+// Mesh files (PLY, OBJ, OFF, STL, by extension), and conversion to and from OpenMesh's TriMesh
+// for users who want its half-edge structure. PLY, OBJ and OFF are read and written here in
+// double precision (OpenMesh 9 passes coordinates through float); STL goes through OpenMesh.
 #pragma once
 
 #include <polygonizer/mesh.h>
@@ -22,11 +23,18 @@ using TriMesh = OpenMesh::TriMesh_ArrayKernelT<OpenMeshTraits>;
 TriMesh to_openmesh(const Mesh& mesh);
 Mesh from_openmesh(const TriMesh& mesh);
 
-// Writes positions, normals (when present) and triangles; the format follows the extension.
-// Writes to a temporary file and renames it, so a failure leaves no half-written file.
+// Writes positions, normals (when present), triangles and, to PLY, the vertex scalars; the
+// format follows the extension. PLY is binary little-endian float64 (ASCII with binary =
+// false), OBJ and OFF are text with the shortest decimals that read back as the same doubles:
+// reading a written mesh gives it back bit for bit. Goes through write_file_atomically: a
+// failure (full disk, unwritable folder) throws InvalidInputError "PATH: cannot write mesh:
+// reason" and leaves no file behind.
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, bool binary = true);
-// Reads positions, triangles and vertex normals (when the file has them); from PLY files also
-// the scalar (double or float) vertex properties, into vertex_scalars under their names.
+// Reads positions, triangles (polygons become fans) and vertex normals (when the file has them
+// for every vertex); from PLY files also every other scalar vertex property, into
+// vertex_scalars under its name. Throws InvalidInputError "PATH: problem" for a missing file, a
+// directory, an unknown extension, a malformed or truncated file, a count the file cannot hold,
+// a non-finite coordinate, a face index out of range, and a mesh without faces.
 Mesh read_mesh(const std::filesystem::path& path);
 
 }  // namespace cdp
