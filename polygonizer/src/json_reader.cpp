@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 namespace cdp {
@@ -211,16 +212,36 @@ void JsonReader::finish(const std::vector<std::string>& known) const {
 }
 
 nlohmann::json read_json_file(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InvalidInputError(path.string() + ": is a folder, not a JSON file");
   std::ifstream in(path);
   if (!in) throw InvalidInputError(path.string() + ": cannot open file");
+  // A key given twice in one object is an error: nlohmann keeps the last value silently, and a
+  // field whose "radius" is written twice is a mistake to point at, not to guess about. One set
+  // of keys per open object.
+  std::vector<std::set<std::string>> keys;
+  std::string duplicate;
+  const nlohmann::json::parser_callback_t check = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+    using Event = nlohmann::json::parse_event_t;
+    if (event == Event::object_start) keys.emplace_back();
+    else if (event == Event::object_end && !keys.empty()) keys.pop_back();
+    else if (event == Event::key && !keys.empty() && !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty())
+      duplicate = parsed.get<std::string>();
+    return true;
+  };
+  nlohmann::json j;
   try {
-    return nlohmann::json::parse(in, nullptr, true, /*ignore_comments=*/false);
-  } catch (const nlohmann::json::parse_error& e) {
+    j = nlohmann::json::parse(in, check, true, /*ignore_comments=*/false);
+  } catch (const nlohmann::json::exception& e) {
+    // parse_error (syntax) and out_of_range (a number like 1e999 that overflows a double).
     std::string msg = e.what();
     // nlohmann's message starts with "[json.exception.parse_error.101] "; keep what follows.
     if (auto pos = msg.find("] "); pos != std::string::npos) msg = msg.substr(pos + 2);
     throw InvalidInputError(path.string() + ": malformed JSON: " + msg);
   }
+  if (in.bad()) throw InvalidInputError(path.string() + ": cannot read file");
+  if (!duplicate.empty()) throw InvalidInputError(path.string() + ": the key \"" + duplicate + "\" appears twice in one object");
+  return j;
 }
 
 }  // namespace cdp

@@ -29,9 +29,17 @@ SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options) {
   g.h = box.size().maxCoeff() / options.resolution;
   for (int a = 0; a < 3; ++a) g.n[a] = std::max(1, static_cast<int>(std::ceil(box.size()[a] / g.h - 1e-9)));
   const double nodes = static_cast<double>(g.n[0] + 1) * (g.n[1] + 1) * (g.n[2] + 1);
-  if (nodes > 2147483647.0)
-    throw InvalidInputError("seeding: a grid of resolution " + std::to_string(options.resolution) +
-                            " has too many nodes");
+  // A node costs 32 bytes while sampling (its point and its value): 2^26 nodes is about 2 GB,
+  // a resolution of about 400 on a cubic box, far above what seeding needs (default 32).
+  constexpr double kMaxNodes = 67108864.0;
+  if (nodes > kMaxNodes) {
+    const double scale = std::cbrt(kMaxNodes / nodes);
+    throw InvalidInputError("seeding: a grid of resolution " + std::to_string(options.resolution) + " has " +
+                            std::to_string(static_cast<long long>(nodes)) + " nodes, more than the " +
+                            std::to_string(static_cast<long long>(kMaxNodes)) +
+                            " (about 2 GB) allowed; use a resolution of at most " +
+                            std::to_string(std::max(2, static_cast<int>(options.resolution * scale) - 1)));
+  }
   const std::size_t count = static_cast<std::size_t>(nodes);
   std::vector<Vec3> points;
   points.reserve(count);
@@ -45,14 +53,26 @@ SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options) {
       throw NoSurfaceError("seeding: the field is not finite (" + std::to_string(g.values[i]) + ") at " +
                            format_point(points[i]));
   if (options.require_closed_in_box) {
+    std::size_t boundary_nodes = 0, negative = 0;
+    std::array<int, 3> first_negative{};
     for (int k = 0; k <= g.n[2]; ++k)
       for (int j = 0; j <= g.n[1]; ++j)
         for (int i = 0; i <= g.n[0]; ++i) {
           const bool boundary = i == 0 || j == 0 || k == 0 || i == g.n[0] || j == g.n[1] || k == g.n[2];
-          if (boundary && g.values[g.index(i, j, k)] < 0)
-            throw NoSurfaceError("seeding: the surface leaves the box (F < 0 at boundary point " +
-                                 format_point(g.point(i, j, k)) + "); give larger \"bounds\"");
+          if (!boundary) continue;
+          ++boundary_nodes;
+          if (g.values[g.index(i, j, k)] < 0 && negative++ == 0) first_negative = {i, j, k};
         }
+    // Negative on the whole boundary: the usual cause is a field written with the opposite sign
+    // convention (positive inside), for which larger bounds would not help.
+    if (negative == boundary_nodes && (g.values.empty() || *std::max_element(g.values.begin(), g.values.end()) > 0))
+      throw NoSurfaceError("seeding: F < 0 on the whole boundary of the box and F > 0 inside: the field looks "
+                           "inverted (the convention is F < 0 inside, F > 0 outside); negate it, or give larger "
+                           "\"bounds\" if the surface really encloses the box");
+    if (negative > 0)
+      throw NoSurfaceError("seeding: the surface leaves the box (F < 0 at boundary point " +
+                           format_point(g.point(first_negative[0], first_negative[1], first_negative[2])) +
+                           "); give larger \"bounds\"");
   }
   return g;
 }

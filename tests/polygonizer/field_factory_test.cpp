@@ -131,5 +131,30 @@ TEST_F(FieldFiles, MissingAndMalformedFilesAreNamed) {
   EXPECT_THROW(load_field(misspelled), InvalidInputError);
 }
 
+TEST_F(FieldFiles, DuplicateKeysOverflowingNumbersAndFoldersAreNamedErrors) {
+  const auto message = [](const std::filesystem::path& path) {
+    try {
+      load_field(path);
+    } catch (const InvalidInputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  // A key given twice, at the top or nested: nlohmann keeps the last value silently.
+  EXPECT_EQ(message(write("twice.json", R"({"type": "sphere", "radius": 1, "radius": 2})")),
+            (dir_ / "twice.json").string() + ": the key \"radius\" appears twice in one object");
+  EXPECT_NE(message(write("nested.json", R"({"type": "sphere", "radius": 1, "center": [0, 0, 0],
+                                             "bounds": {"a": 1, "a": 2}})")).find("\"a\" appears twice"),
+            std::string::npos);
+  // The same key in two different objects is fine.
+  EXPECT_EQ(message(write("two_objects.json", R"({"type": "blobs", "blobs": [{"center": [0, 0, 0], "radius": 1},
+                                                   {"center": [0.5, 0, 0], "radius": 1}]})")).find("twice"),
+            std::string::npos);
+  const std::string overflow = message(write("overflow.json", R"({"type": "sphere", "radius": 1e999})"));
+  EXPECT_EQ(overflow.rfind((dir_ / "overflow.json").string() + ": malformed JSON: number overflow", 0), 0u) << overflow;
+  std::filesystem::create_directories(dir_ / "folder.json");
+  EXPECT_EQ(message(dir_ / "folder.json"), (dir_ / "folder.json").string() + ": is a folder, not a JSON file");
+}
+
 }  // namespace
 }  // namespace cdp
