@@ -65,8 +65,10 @@ struct AdaptiveOptions {
   // 5e7; max_steps = 4 max_triangles + 10^4).
   std::size_t max_triangles = 0;
   std::size_t max_steps = 0;
-  // Called now and then with an estimate of the fraction done.
+  // Called now and then with an estimate of the fraction of the meshing done.
   ProgressCallback progress;
+  // Called on entering each phase: "sampling the seed grid", "meshing", "checking the mesh".
+  PhaseCallback phase;
 };
 
 // The result is closed, oriented, manifold and outward, one component per component of the

@@ -115,6 +115,10 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   const auto start = std::chrono::steady_clock::now();
   const EvaluationCounts before = field.counts();
 
+  const auto enter = [&](const char* phase) {
+    if (options.phase) options.phase(phase);
+  };
+  enter("sampling the seed grid");
   SeedOptions seed_options;
   seed_options.resolution = options.seed_resolution;
   const SeedGrid grid = sample_seed_grid(field, seed_options);
@@ -154,6 +158,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   if (grid_crossings >= kMeasuredCrossings) tracker.set_estimated_area(grid_crossings * grid.h * grid.h / 1.5);
   if (options.progress) tracker.set_progress(options.progress);
 
+  enter("meshing");
   const adaptive::SeedingReport seeding =
       adaptive::seed_every_component(field, grid, s.sizing.min_edge, settings.hash_cell, tracker, mesh);
   if (mesh.triangles.empty() && seeding.sign_changes == 0) {
@@ -176,6 +181,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     mesh.vertex_scalars["shape_index"] = tracker.vertex_shape_index();
   }
 
+  enter("checking the mesh");
   PolygonizeStats& st = result.stats;
   st.components = check_mesh(mesh, seeding.seeds, options.check_self_intersections);
   st.method = "adaptive";
@@ -196,6 +202,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["unresolved_cells"] = seeding.unresolved_cells;
   st.extra["probes"] = seeding.probes;
   st.extra["steps"] = tracker.steps();
+  st.extra["search_visits"] = tracker.search_visits();
   st.extra["deferrals"] = tracker.deferrals();
   st.extra["forced_closures"] = tracker.forced_closures();
   st.extra["crease_points"] = tracker.crease_points();

@@ -18,6 +18,9 @@ class SpatialHash {
   explicit SpatialHash(double cell_size) : h_(cell_size), inv_h_(1.0 / cell_size) {}
 
   double cell_size() const { return h_; }
+  // Ids looked at by the searches so far (an upper bound; a search stopping early counts its
+  // whole last cell): the cost of the searches, which the tracker bounds.
+  std::uint64_t visits() const { return visits_; }
 
   void insert(int id, const Vec3& p) { cells_[key(cell_of(p))].push_back(id); }
 
@@ -61,6 +64,7 @@ class SpatialHash {
         for (std::int64_t i = a.i; i <= b.i; ++i) {
           auto it = cells_.find(key({i, j, k}));
           if (it == cells_.end()) continue;
+          visits_ += it->second.size();
           for (int id : it->second)
             if (pred(id)) return true;
         }
@@ -68,6 +72,7 @@ class SpatialHash {
   }
 
  private:
+  mutable std::uint64_t visits_ = 0;
   struct Cell {
     std::int64_t i, j, k;
   };

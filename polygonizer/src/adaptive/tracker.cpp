@@ -245,13 +245,30 @@ void Tracker::check_limits() {
   if (++steps_ > s_.max_steps)
     throw LimitExceededError("adaptive: more than " + std::to_string(s_.max_steps) +
                              " front steps (AdaptiveOptions::max_steps) without closing the surface");
-  if (progress_ && estimated_area_ > 0 && (steps_ & 1023) == 0) {
+  // Every 64 steps: cheap next to a step, and often enough that a run whose steps have become
+  // slow still shows it is moving (the reporter decides how often to print).
+  if (progress_ && estimated_area_ > 0 && (steps_ & 63) == 0) {
     const double f = std::min(0.99, area_ / estimated_area_);
     if (f > last_progress_) {
       last_progress_ = f;
       progress_(f);
     }
   }
+}
+
+void Tracker::check_search_budget(int node) {
+  if (steps_ % kSearchWindow != 0) return;
+  const std::uint64_t visits = search_visits();
+  const std::uint64_t in_window = visits - window_visits_;
+  window_visits_ = visits;
+  if (in_window <= kSearchVisitsPerStep * kSearchWindow) return;
+  const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
+  throw LimitExceededError("adaptive: the fronts' neighbour searches looked at " + std::to_string(in_window / kSearchWindow) +
+                           " points a step over the last " + std::to_string(kSearchWindow) + " steps (bound " +
+                           std::to_string(kSearchVisitsPerStep) + "), near (" + std::to_string(p.x()) + ", " +
+                           std::to_string(p.y()) + ", " + std::to_string(p.z()) +
+                           "): edges far shorter than elsewhere crowd the search cells there, or a front is "
+                           "running over finished mesh; raise min_edge");
 }
 
 void Tracker::run_fronts() {
@@ -314,6 +331,7 @@ void Tracker::step(int& f) {
   check_limits();
   const int node = fs_.pop_min(f);
   if (node < 0) throw std::logic_error("adaptive: a front lost its queue");
+  check_search_budget(node);
   if (zip_spike(node)) {
     fs_.fronts[f].stall = 0;
     return;

@@ -43,6 +43,16 @@ struct Settings {
 // the grid resolves).
 inline constexpr double kAreaBound = 8;
 
+// The bound on the cost of the neighbour searches: points looked at per front step, averaged
+// over windows of kSearchWindow steps. Surfaces the method meshes take 40-130 over a whole run
+// (bunny VIS-800, torus, tanglecube, Chmutov, 50 blobs at factors 1 and 3); a window far above
+// it has edges much shorter than the hash cells somewhere (a min_edge far below the typical
+// edge, at a near-singular point) or a front running over finished mesh, and would go on for
+// hours; it is stopped with an error naming the place instead. A window rather than the whole
+// run, so that a run that degenerates late is stopped soon after.
+inline constexpr std::uint64_t kSearchVisitsPerStep = 5000;
+inline constexpr std::uint64_t kSearchWindow = 4096;
+
 // Normals whose angle is below arccos of this belong to one side of the surface (see same_side).
 inline constexpr double kSameSideCosine = 0;
 
@@ -60,6 +70,11 @@ class Tracker {
   void set_estimated_area(double area) { estimated_area_ = area; }
 
   std::size_t steps() const { return steps_; }
+  // Points looked at by the spatial searches (front and vertex hashes).
+  std::uint64_t search_visits() const { return front_hash_.visits() + vertex_hash_.visits(); }
+  // Throws LimitExceededError, naming the place of `node`, when the searches have cost more than
+  // kSearchVisitsPerStep a step.
+  void check_search_budget(int node);
   std::size_t splits() const { return splits_; }
   std::size_t merges() const { return merges_; }
   std::size_t deferrals() const { return deferrals_; }
@@ -165,6 +180,7 @@ class Tracker {
   SpatialHash front_hash_, vertex_hash_;
   std::vector<int> front_refs_;  // front nodes of each vertex: 0 once it is finished
   std::vector<int> stack_;
+  std::uint64_t window_visits_ = 0;  // search_visits() at the start of the current window
   std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0, forced_closures_ = 0;
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;
   mutable double curvature_seconds_ = 0;
