@@ -1,5 +1,7 @@
 // build/bin/curvature FIELD.json --at x,y,z
 // Projects the point onto the surface and prints the curvature measures there as one JSON object.
+#include "support/app_support.h"
+
 #include <polygonizer/curvature.h>
 #include <polygonizer/errors.h>
 #include <polygonizer/field_factory.h>
@@ -29,11 +31,15 @@ nlohmann::json vec(const cdp::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 }  // namespace
 
 int main(int argc, char** argv) {
+  cdp::app::install_signal_handling();
   try {
     std::string field_path, at;
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
-      if (arg == "--at" && i + 1 < argc) at = argv[++i];
+      if (arg == "--at" && i + 1 < argc) {
+        if (!at.empty()) throw cdp::InvalidInputError("--at given twice");
+        at = argv[++i];
+      }
       else if (arg == "-h" || arg == "--help") {
         std::cout << kUsage << "\n";
         return 0;

@@ -4,6 +4,8 @@
 // truth, cached in DIR when given), silhouette disagreement, triangle quality, topology,
 // self-intersections and distances between mesh and surface. Writes METRICS.json (schema in
 // raytrace/README.md) and prints a short summary.
+#include "support/app_support.h"
+
 #include <raytrace/evaluate.h>
 #include <raytrace/ground_truth_cache.h>
 #include <raytrace/phong_normal.h>
@@ -18,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -27,7 +30,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: evaluate FIELD.json MESH.ply [--rays N] [--views V] [--projection perspective|orthographic] "
-    "[--samples N] [--cache DIR] -o METRICS.json";
+    "[--samples N] [--cache DIR] [--quiet | --progress] -o METRICS.json";
 
 long long parse_count(const std::string& option, const std::string& text, long long lo, long long hi) {
   std::size_t used = 0;
@@ -44,6 +47,8 @@ long long parse_count(const std::string& option, const std::string& text, long l
 }
 
 std::string read_text(const fs::path& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw cdp::InvalidInputError(path.string() + ": is a folder, not a field file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw cdp::InvalidInputError(path.string() + ": cannot open");
   std::stringstream ss;
@@ -61,18 +66,25 @@ bool same_rays(const std::vector<cdp::Ray>& a, const std::vector<cdp::Ray>& b) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  cdp::app::install_signal_handling();
   try {
     std::string field_path, mesh_path, out_path, cache_dir;
+    bool quiet = false, progress_lines = false;
     cdp::EvaluateOptions options;
+    std::set<std::string> seen;
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
       auto value = [&]() -> std::string {
         if (i + 1 >= argc) throw cdp::InvalidInputError(arg + " needs a value; " + kUsage);
+        // Each option once: a second value would silently replace the first.
+        if (!seen.insert(arg).second) throw cdp::InvalidInputError(arg + " given twice");
         return argv[++i];
       };
-      if (arg == "--rays") options.camera.resolution = static_cast<int>(parse_count(arg, value(), 1, 8192));
+      if (arg == "--quiet") quiet = true;
+      else if (arg == "--progress") progress_lines = true;
+      else if (arg == "--rays") options.camera.resolution = static_cast<int>(parse_count(arg, value(), 1, 8192));
       else if (arg == "--views") options.camera.views = static_cast<int>(parse_count(arg, value(), 1, 10000));
-      else if (arg == "--samples") options.sampling.samples = static_cast<std::size_t>(parse_count(arg, value(), 0, 100000000));
+      else if (arg == "--samples") options.sampling.samples = static_cast<std::size_t>(parse_count(arg, value(), 1, 100000000));
       else if (arg == "--projection") options.camera.projection = cdp::parse_projection(value());
       else if (arg == "--cache") cache_dir = value();
       else if (arg == "-o") out_path = value();
@@ -81,10 +93,16 @@ int main(int argc, char** argv) {
         return 0;
       } else if (!arg.empty() && arg[0] != '-' && field_path.empty()) field_path = arg;
       else if (!arg.empty() && arg[0] != '-' && mesh_path.empty()) mesh_path = arg;
+      else if (!arg.empty() && arg[0] != '-') throw cdp::InvalidInputError("a third file \"" + arg + "\"; " + kUsage);
       else throw cdp::InvalidInputError("unexpected argument \"" + arg + "\"; " + kUsage);
     }
     if (field_path.empty() || mesh_path.empty() || out_path.empty()) throw cdp::InvalidInputError(kUsage);
+    if (quiet && progress_lines) throw cdp::InvalidInputError("give either --quiet or --progress, not both");
+    cdp::app::check_output_paths({{"-o", out_path}}, {field_path, mesh_path});
+    cdp::app::ProgressReporter reporter("evaluate", fs::path(mesh_path).filename().string(),
+                                        cdp::app::progress_mode(quiet, progress_lines));
 
+    reporter.phase("reading the field and the mesh");
     const std::string field_text = read_text(field_path);
     const auto field = cdp::load_field(field_path);
     cdp::Mesh mesh = cdp::read_mesh(mesh_path);
@@ -106,16 +124,19 @@ int main(int argc, char** argv) {
       cached = truth.has_value();
     }
     if (!truth) {
+      reporter.phase("casting rays at the implicit surface");
       truth = cdp::compute_ground_truth(*field, std::move(rays), options.raycast);
       if (!cache_dir.empty()) cdp::save_ground_truth(*truth, cache_dir, key);
     }
     const double gt_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+    reporter.phase("measuring the mesh");
     nlohmann::json metrics = cdp::evaluate_mesh(*field, mesh, *truth, options, normals_source, key);
     metrics["files"] = {{"field", field_path}, {"mesh", mesh_path}};
     metrics["rays"]["ground_truth_cached"] = cached;
     metrics["rays"]["ground_truth_seconds"] = gt_seconds;
-    cdp::write_file_atomically(out_path, metrics.dump(2) + "\n");
+    reporter.phase("writing " + out_path);
+    cdp::write_file_atomically(out_path, metrics.dump(2) + "\n", "metrics");
 
     const auto& r = metrics["rays"];
     std::printf("%s: %zu triangles, %zu rays (%s), %zu surface hits\n", mesh_path.c_str(), mesh.num_triangles(),

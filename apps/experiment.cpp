@@ -4,6 +4,8 @@
 // and evaluated against the cached ground truth (build/bin/evaluate), each run an independent
 // job; then the per-run results are collected into summary.csv and summary.json. The format of
 // the experiment file is documented in experiments/README.md.
+#include "support/app_support.h"
+
 #include <polygonizer/atomic_write.h>
 #include <polygonizer/errors.h>
 #include <polygonizer/field_factory.h>
@@ -32,6 +34,10 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: experiment EXPERIMENT.json [--out DIR] [--jobs N] [--list | --commands | --run ID | --summarize]";
+
+// Exit status when the experiment ran but some of its runs failed (their rows in the tables say
+// why); 1 stays "the experiment itself could not run" (a bad file, bad options).
+constexpr int kSomeRunsFailed = 2;
 
 struct Run {
   std::string id;
@@ -152,6 +158,12 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
     }
     known.push_back("label");
     const std::string label = run.string("label", "");
+    // The label becomes part of file and folder names under --out: letters, digits, '_', '-'
+    // and inner dots only, so that no label can name a path elsewhere ("../x", "/tmp/x").
+    constexpr std::size_t kMaxLabel = 64;
+    if (label.size() > kMaxLabel || label.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.") != std::string::npos ||
+        (!label.empty() && (label.front() == '.' || label.back() == '.')) || label.find("..") != std::string::npos)
+      run.fail("label", "must be at most 64 letters, digits, '_', '-' or inner '.', not \"" + label + "\"");
     run.finish(known);
     for (double v : values) {
       Run x;
@@ -227,12 +239,19 @@ int spawn_and_wait(const std::vector<std::string>& argv, const fs::path& log) {
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   pid_t pid;
-  const int rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  int rc = 0;
+  {
+    // Signals wait until the child is registered, so that an interrupt reaches it too.
+    cdp::app::BlockSignals block;
+    rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+    if (rc == 0) cdp::app::register_child(pid);
+  }
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) return -1;
   int status = 0;
   while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
+  cdp::app::unregister_child(pid);
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
 }
 
@@ -288,8 +307,9 @@ const nlohmann::json& at(const nlohmann::json& j, const std::string& pointer) {
   return j.contains(ptr) ? j.at(ptr) : null;
 }
 
-// summary.json keeps everything per run; summary.csv the columns of the tables.
-void summarize(const Experiment& e, const Paths& p) {
+// summary.json keeps everything per run; summary.csv the columns of the tables. Returns the
+// number of runs that did not succeed (failed or not executed).
+int summarize(const Experiment& e, const Paths& p) {
   static const std::vector<std::pair<std::string, std::string>> columns = {
       {"triangles", "/stats/triangles"},
       {"vertices", "/stats/vertices"},
@@ -353,14 +373,16 @@ void summarize(const Experiment& e, const Paths& p) {
     summary["runs"].push_back(run);
   }
   write_json_atomically(summary, p.out / "summary.json");
-  const fs::path tmp = p.out / "summary.csv.tmp";
-  std::ofstream(tmp) << csv.str();
-  fs::rename(tmp, p.out / "summary.csv");
+  cdp::write_file_atomically(p.out / "summary.csv", csv.str(), "the summary table");
+  int failed = 0;
+  for (const auto& run : summary["runs"]) failed += run["status"] != "ok";
+  return failed;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  cdp::app::install_signal_handling();
   try {
     fs::path file, out;
     int jobs = std::max(1u, std::thread::hardware_concurrency());
@@ -395,25 +417,31 @@ int main(int argc, char** argv) {
     const Experiment e = read_experiment(file, out);
 
     Paths p{out, out / "field.json", out.parent_path() / "cache"};
+    // The read-only modes write nothing.
     if (mode == "list") {
       for (const auto& r : e.runs) std::cout << r.id << "\n";
       return 0;
     }
-    fs::create_directories(out);
-    write_json_atomically(e.field, p.field);
     if (mode == "commands") {
       for (const auto& r : e.runs) std::cout << join_command({argv[0], file.string(), "--out", out.string(), "--run", r.id}) << "\n";
       return 0;
     }
-    if (mode == "summarize") {
-      summarize(e, p);
-      return 0;
-    }
+    const Run* only = nullptr;
     if (mode == "run") {
       for (const auto& r : e.runs)
-        if (r.id == run_id) return execute_run(e, p, r) ? 0 : 1;
-      throw cdp::InvalidInputError(file.string() + ": no run \"" + run_id + "\" (see --list)");
+        if (r.id == run_id) only = &r;
+      if (!only) throw cdp::InvalidInputError(file.string() + ": no run \"" + run_id + "\" (see --list)");
     }
+    if (mode == "summarize") {
+      const int not_ok = summarize(e, p);
+      if (not_ok > 0)
+        std::fprintf(stderr, "experiment %s: %d of %zu runs did not succeed (see %s)\n", e.name.c_str(), not_ok,
+                     e.runs.size(), (out / "summary.csv").c_str());
+      return not_ok > 0 ? kSomeRunsFailed : 0;
+    }
+    fs::create_directories(out);
+    write_json_atomically(e.field, p.field);
+    if (only) return execute_run(e, p, *only) ? 0 : kSomeRunsFailed;
 
     // Everything: the first run alone, so that it computes and caches the ground truth that all
     // runs share; then the rest in parallel (each single-threaded apart from the evaluation); then
@@ -442,11 +470,11 @@ int main(int argc, char** argv) {
     for (int j = 0; j < std::min<int>(jobs, static_cast<int>(e.runs.size())); ++j)
       pool.emplace_back(worker, e.runs.size());
     for (auto& t : pool) t.join();
-    summarize(e, p);
+    const int not_ok = summarize(e, p);
     std::fprintf(stderr, "experiment %s: %zu runs, %d failed, %.1f s; summary in %s\n", e.name.c_str(), e.runs.size(),
-                 failed.load(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                 not_ok, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                  (out / "summary.csv").c_str());
-    return 0;
+    return not_ok > 0 ? kSomeRunsFailed : 0;
   } catch (const std::exception& ex) {
     std::fprintf(stderr, "experiment: %s\n", ex.what());
     return 1;

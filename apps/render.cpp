@@ -2,6 +2,8 @@
 // A picture of a mesh ray cast with Embree: shading, wireframe, colour maps of vertex scalars,
 // principal-direction glyphs of a field. Prints one JSON line describing what it drew (the
 // colour map and range, so a script can draw a matching colour bar).
+#include "support/app_support.h"
+
 #include <raytrace/mesh_render.h>
 #include <raytrace/png_image.h>
 
@@ -18,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -59,14 +62,18 @@ int parse_int(const std::string& option, const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  cdp::app::install_signal_handling();
   try {
     std::string mesh_path, out_path, field_path, color = "none", range;
     cdp::RenderOptions options;
+    std::set<std::string> seen;
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
       const bool has_value = i + 1 < argc;
       auto value = [&]() -> std::string {
         if (!has_value) throw cdp::InvalidInputError(arg + " needs a value; " + kUsage);
+        // Each option once: a second value would silently replace the first.
+        if (!seen.insert(arg).second) throw cdp::InvalidInputError(arg + " given twice");
         return argv[++i];
       };
       if (arg == "-h" || arg == "--help") {
@@ -94,6 +101,9 @@ int main(int argc, char** argv) {
       else throw cdp::InvalidInputError("unexpected argument \"" + arg + "\"; " + kUsage);
     }
     if (mesh_path.empty() || out_path.empty()) throw cdp::InvalidInputError(kUsage);
+    std::vector<std::filesystem::path> inputs{mesh_path};
+    if (!field_path.empty()) inputs.push_back(field_path);
+    cdp::app::check_output_paths({{"-o", out_path}}, inputs);
     if (std::filesystem::path(out_path).extension() != ".png")
       throw cdp::InvalidInputError(out_path + ": the output must be a .png file");
     if (color.empty()) throw cdp::InvalidInputError("--color needs a property name or none");

@@ -14,13 +14,19 @@ PY = sys.executable or "/usr/bin/python3"
 EXPERIMENTS = ["table1", "torus", "blobs_example", "double_torus"]
 
 
-def step(title, cmd):
+# experiment's exit status when it ran but some of its runs failed: the tables show those runs
+# as failed with their reasons, so the reproduction goes on and reports them at the end.
+SOME_RUNS_FAILED = 2
+
+
+def step(title, cmd, tolerate=()):
     t0 = time.time()
     print("reproduce: " + title, flush=True)
     r = subprocess.run(cmd, cwd=ROOT)
-    if r.returncode != 0:
+    if r.returncode != 0 and r.returncode not in tolerate:
         sys.exit("reproduce: step failed ({}): {}".format(r.returncode, " ".join(cmd)))
     print("reproduce: {} done in {:.0f} s".format(title, time.time() - t0), flush=True)
+    return r.returncode
 
 
 def main():
@@ -31,15 +37,21 @@ def main():
     a = ap.parse_args()
     start = time.time()
     exe = os.path.join(a.build, "bin", "experiment")
+    with_failures = []
     for name in a.only or EXPERIMENTS:
-        step("experiment " + name, [exe, os.path.join("experiments", name + ".json"), "--jobs", str(a.jobs),
-                                    "--out", os.path.join("results", name)])
+        code = step("experiment " + name, [exe, os.path.join("experiments", name + ".json"), "--jobs", str(a.jobs),
+                                           "--out", os.path.join("results", name)], tolerate=(SOME_RUNS_FAILED,))
+        if code == SOME_RUNS_FAILED:
+            with_failures.append(name)
     step("Table 1 and claims", [PY, "scripts/table1.py", "--build", a.build])
     step("plots", [PY, "scripts/plots.py"])
     if os.path.exists(os.path.join(ROOT, "scripts", "figures.py")):
         step("figures", [PY, "scripts/figures.py", "--build", a.build, "--jobs", str(a.jobs)])
     step("results/README.md", [PY, "scripts/results_readme.py", "--seconds", str(round(time.time() - start))])
     print("reproduce: finished in {:.1f} min".format((time.time() - start) / 60))
+    if with_failures:
+        sys.exit("reproduce: runs failed in " + ", ".join(with_failures) +
+                 " (listed as failed, with their reasons, in results/NAME/summary.csv and the tables)")
 
 
 if __name__ == "__main__":

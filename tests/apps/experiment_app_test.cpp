@@ -46,8 +46,8 @@ TEST(ExperimentApp, TinySweepWritesRunsAndSummary) {
   const fs::path out = dir.path / "out";
   const auto r = test::run_app("experiment", file.string() + " --out " + out.string() + " --jobs 2");
   // One run is meant to fail (max_edge below the default min_edge): the experiment completes
-  // (the failure is a result, reported in the summary) and says so.
-  EXPECT_EQ(r.exit_code, 0) << r.err;
+  // (the failure is a result, reported in the summary), says so, and exits with status 2.
+  EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("5 runs, 1 failed"), std::string::npos) << r.err;
   ASSERT_TRUE(fs::exists(out / "summary.json")) << r.err;
   ASSERT_TRUE(fs::exists(out / "summary.csv"));
@@ -113,6 +113,44 @@ TEST(ExperimentApp, BadExperimentFilesAreRefusedWithTheKeyNamed) {
     EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.json << "\n" << r.err;
     EXPECT_FALSE(fs::exists(out / "summary.json")) << c.json;
   }
+}
+
+TEST(ExperimentApp, FailedRunsMakeANonZeroExitAndReadOnlyModesWriteNothing) {
+  test::TempDir dir("experiment_app_status");
+  const auto file = dir.write("doomed.json", R"({"field": {"type": "sphere", "radius": 1},
+    "runs": [{"method": "adaptive", "factor": [2, 3], "max_edge": 0.0001}],
+    "evaluation": {"views": 1, "resolution": 8}})");
+  const fs::path out = dir.path / "out";
+  for (const std::string mode : {"--list", "--commands", "--run nope"}) {
+    const auto r = test::run_app("experiment", file.string() + " --out " + out.string() + " " + mode);
+    EXPECT_EQ(r.exit_code, mode == "--run nope" ? 1 : 0) << mode << r.err;
+    EXPECT_FALSE(fs::exists(out)) << mode << " wrote " << out;
+  }
+  // Every run fails: the tables list the failures, and the exit status says so.
+  const auto r = test::run_app("experiment", file.string() + " --out " + out.string() + " --jobs 1");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("2 runs, 2 failed"), std::string::npos) << r.err;
+  EXPECT_NE(read_text(out / "summary.csv").find(",failed,"), std::string::npos);
+  EXPECT_EQ(test::run_app("experiment", file.string() + " --out " + out.string() + " --summarize").exit_code, 2);
+  EXPECT_EQ(test::run_app("experiment", file.string() + " --out " + out.string() + " --run adaptive_factor2").exit_code, 2);
+}
+
+TEST(ExperimentApp, LabelsCannotNamePathsOutsideTheOutputFolder) {
+  test::TempDir dir("experiment_app_labels");
+  const fs::path out = dir.path / "a" / "b" / "out";
+  for (const std::string label : {"../../../elsewhere/X", "/tmp/X", "..", ".hidden", "a b", "x/y"}) {
+    const auto file = dir.write("labels.json", R"({"field": {"type": "sphere", "radius": 1},
+      "runs": [{"method": "mt", "cell": 0.2, "label": ")" + label + R"("}], "evaluation": {"views": 1, "resolution": 8}})");
+    const auto r = test::run_app("experiment", file.string() + " --out " + out.string());
+    EXPECT_EQ(r.exit_code, 1) << label;
+    EXPECT_NE(r.err.find("label"), std::string::npos) << label << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(dir.path / "a")) << label;
+    EXPECT_FALSE(fs::exists(dir.path / "elsewhere")) << label;
+  }
+  // A plain label is fine.
+  const auto file = dir.write("labels.json", R"({"field": {"type": "sphere", "radius": 1},
+    "runs": [{"method": "mt", "cell": 0.2, "label": "coarse-1.5"}], "evaluation": {"views": 1, "resolution": 8}})");
+  EXPECT_EQ(test::run_app("experiment", file.string() + " --out " + out.string() + " --list").out, "mt_coarse-1.5_cell0.2\n");
 }
 
 }  // namespace

@@ -78,7 +78,7 @@ TEST(PolygonizeApp, AdaptiveRunThatCannotFinishIsAnErrorWithoutOutput) {
   const auto r = test::run_app("polygonize", field.string() + " -o " + out.string() + " --factor 3 --max-triangles 50 "
                                              "--stats " + stats.string());
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.err.find("polygonize: adaptive: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("polygonize: " + field.string() + ": adaptive: "), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_FALSE(std::filesystem::exists(out));
   EXPECT_FALSE(std::filesystem::exists(stats));

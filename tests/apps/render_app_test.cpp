@@ -110,7 +110,7 @@ TEST_F(RenderApp, BadInputGivesOneLineAndNoPicture) {
       {m + " -o " + png("bad.ppm"), png("bad.ppm") + ": the output must be a .png file"},
       {m + " -o " + out + " --bogus", "unexpected argument \"--bogus\"; usage: render MESH -o OUT.png"},
       {m + " -o " + out + " --width", "--width needs a value; usage: render MESH -o OUT.png"},
-      {m + " -o " + png("no/such/folder.png"), png("no/such/folder.png") + ": cannot write the picture"},
+      {m + " -o " + png("no/such/folder.png"), png("no/such/folder.png") + ": the folder " + png("no/such") + " does not exist"},
   };
   for (const auto& c : cases) {
     const auto r = test::run_app("render", c.args);

@@ -56,3 +56,31 @@ struct TempDir {
 };
 
 }  // namespace cdp::test
+
+namespace cdp::test {
+
+// Runs a whole shell command line (for what run_app cannot say: a `ulimit` before the program).
+inline CommandResult run_shell(const std::string& command) {
+  static int counter = 0;
+  const auto err_path = std::filesystem::temp_directory_path() /
+                        ("cdp_shell_stderr_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
+  CommandResult r;
+  FILE* pipe = popen(("(" + command + ") 2>" + err_path.string()).c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf{};
+  std::size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err_path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  r.err = ss.str();
+  std::filesystem::remove(err_path);
+  return r;
+}
+
+// The program path for a build/bin program.
+inline std::string bin(const std::string& program) { return std::string(CDP_BIN_DIR) + "/" + program; }
+
+}  // namespace cdp::test

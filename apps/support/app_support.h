@@ -1,0 +1,87 @@
+// What every program shares and no library should have: signals, checks of the paths a command
+// line names, number options, and progress reports on the terminal or in a log. Programs only;
+// the libraries stay free of terminal output and process control.
+#pragma once
+
+#include <polygonizer/progress.h>
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace cdp::app {
+
+// SIGINT, SIGTERM and SIGHUP remove the temporary file of a write in progress, pass the signal
+// on to the child processes registered below, and end the program by that signal (status
+// 128 + N in a shell). SIGXFSZ (a file size limit) is ignored, so that the write that exceeds
+// the limit fails with EFBIG and is reported like a full disk rather than killing the program.
+void install_signal_handling();
+
+// A child process to pass signals on to, between its start and its end. Start children with
+// signals blocked (BlockSignals) and register them before unblocking, so that no signal falls
+// between the start and the registration.
+void register_child(pid_t pid);
+void unregister_child(pid_t pid);
+
+class BlockSignals {
+ public:
+  BlockSignals();
+  ~BlockSignals();
+  BlockSignals(const BlockSignals&) = delete;
+  BlockSignals& operator=(const BlockSignals&) = delete;
+
+ private:
+  unsigned char saved_[128];  // a sigset_t, kept opaque here
+};
+
+// Checks the files a command will write before any work starts: each output's folder exists
+// and is writable, no output is a folder, no two outputs are the same file, and no output is one
+// of the inputs. Throws InvalidInputError "PATH: problem". `outputs` pairs an option name
+// ("-o", "--stats") with its path.
+void check_output_paths(const std::vector<std::pair<std::string, std::filesystem::path>>& outputs,
+                        const std::vector<std::filesystem::path>& inputs);
+
+// Option values: the whole text must be a finite number (an integer within [lo, hi]); else
+// InvalidInputError "FLAG expects ..., found "TEXT"".
+double parse_number(const std::string& flag, const std::string& text);
+long long parse_integer(const std::string& flag, const std::string& text, long long lo, long long hi);
+
+// Progress of a long run on standard error. Bar: a bar redrawn in place, only on an interactive
+// terminal (the default). Lines: one line per phase and then one every few seconds, for logs and
+// CI (`--progress`). None: silent (`--quiet`).
+class ProgressReporter {
+ public:
+  enum class Mode { None, Bar, Lines };
+  ProgressReporter(std::string program, std::string label, Mode mode);
+  ~ProgressReporter();  // clears the bar if it drew one
+
+  // Starts a named phase ("seeding", "meshing", "writing out.ply"); fractions restart at 0.
+  void phase(const std::string& name);
+  void update(double fraction);
+  ProgressCallback callback() {
+    return [this](double f) { update(f); };
+  }
+  PhaseCallback phase_callback() {
+    return [this](const std::string& name) { phase(name); };
+  }
+
+ private:
+  double elapsed() const;
+  void clear_bar();
+
+  std::string program_, label_, phase_;
+  Mode mode_;
+  bool drawn_ = false;
+  int last_permille_ = -1;
+  double last_line_ = -1;
+  std::chrono::steady_clock::time_point start_;
+};
+
+// The mode from the flags: --quiet wins, then --progress, then a bar when stderr is a terminal.
+ProgressReporter::Mode progress_mode(bool quiet, bool lines);
+
+}  // namespace cdp::app
