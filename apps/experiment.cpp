@@ -23,6 +23,7 @@
 #include <iomanip>
 #include <iostream>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -387,11 +388,18 @@ int main(int argc, char** argv) {
     fs::path file, out;
     int jobs = std::max(1u, std::thread::hardware_concurrency());
     std::string mode = "all", run_id;
+    std::set<std::string> seen;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       auto value = [&]() -> std::string {
         if (i + 1 >= argc) throw cdp::InvalidInputError(a + " needs a value; " + kUsage);
+        // Each option once: a second value would silently replace the first.
+        if (!seen.insert(a).second) throw cdp::InvalidInputError(a + " given twice");
         return argv[++i];
+      };
+      const auto set_mode = [&](const std::string& m) {
+        if (mode != "all") throw cdp::InvalidInputError("give one of --list, --commands, --run and --summarize");
+        mode = m;
       };
       if (a == "--out") out = value();
       else if (a == "--jobs") {
@@ -402,10 +410,10 @@ int main(int argc, char** argv) {
           jobs = 0;
         }
         if (jobs < 1) throw cdp::InvalidInputError("--jobs expects a positive integer, found \"" + v + "\"");
-      } else if (a == "--list") mode = "list";
-      else if (a == "--commands") mode = "commands";
-      else if (a == "--summarize") mode = "summarize";
-      else if (a == "--run") mode = "run", run_id = value();
+      } else if (a == "--list") set_mode("list");
+      else if (a == "--commands") set_mode("commands");
+      else if (a == "--summarize") set_mode("summarize");
+      else if (a == "--run") set_mode("run"), run_id = value();
       else if (a == "-h" || a == "--help") {
         std::cout << kUsage << "\n";
         return 0;

@@ -135,6 +135,19 @@ TEST(ExperimentApp, FailedRunsMakeANonZeroExitAndReadOnlyModesWriteNothing) {
   EXPECT_EQ(test::run_app("experiment", file.string() + " --out " + out.string() + " --run adaptive_factor2").exit_code, 2);
 }
 
+TEST(ExperimentApp, OptionsGivenTwiceOrTwoModesAreErrors) {
+  test::TempDir dir("experiment_app_options");
+  const auto file = dir.write("e.json", R"({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "mt", "cell": 0.2}]})");
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"--out a --out b --list", "--out given twice"},
+           {"--list --commands", "give one of --list, --commands, --run and --summarize"},
+           {"--jobs 1 --jobs 2 --list", "--jobs given twice"}}) {
+    const auto r = test::run_app("experiment", file.string() + " " + args);
+    EXPECT_EQ(r.exit_code, 1) << args;
+    EXPECT_EQ(r.err, "experiment: " + expected + "\n") << args;
+  }
+}
+
 TEST(ExperimentApp, LabelsCannotNamePathsOutsideTheOutputFolder) {
   test::TempDir dir("experiment_app_labels");
   const fs::path out = dir.path / "a" / "b" / "out";
