@@ -142,6 +142,42 @@ inline void expect_topology_both_traversals(MarchingMethod method, const Field& 
     for (const Vec3& n : r->mesh.normals) EXPECT_NEAR(n.norm(), 1.0, 1e-9);
   }
   EXPECT_EQ(triangle_set(cont.mesh), triangle_set(grid.mesh));
+  // One seed per component, each found by the seeds alone; every grid sign change reached.
+  EXPECT_EQ(cont.stats.extra.at("completion_starts").get<std::size_t>(), 0u);
+  EXPECT_EQ(cont.stats.extra.at("unreached_sign_changes").get<std::size_t>(), 0u);
+  EXPECT_GT(cont.stats.extra.at("sign_changes").get<std::size_t>(), 0u);
+}
+
+// A spherical shell 0.2 thick: two sheets, 0.2 apart, inside one cluster of seed-grid cells.
+inline constexpr const char* kThinShell =
+    R"({"type": "expression", "value": "abs(sqrt(x^2+y^2+z^2)-1)-0.1", "bounds": [[-1.5,-1.5,-1.5],[1.5,1.5,1.5]]})";
+
+// Random Wyvill blobs (the hard-surface suite's random_blobs_16 and _12, rounded) with three and
+// two components, two of which come within a seed cell of each other.
+inline constexpr const char* kCloseBlobs3 =
+    R"({"type": "blobs", "kernel": "wyvill", "threshold": 0.3, "blobs": [)"
+    R"({"center": [0.02232, 1.571, 0.246], "radius": 0.9511}, {"center": [-1.315, 0.3848, -0.3526], "radius": 0.7637},)"
+    R"( {"center": [0.8625, 0.7516, 0.8446], "radius": 0.7065}]})";
+inline constexpr const char* kCloseBlobs2 =
+    R"({"type": "blobs", "kernel": "wyvill", "threshold": 0.3, "blobs": [)"
+    R"({"center": [1.12, -0.5955, 0.6642], "radius": 0.9859}, {"center": [1.415, -0.7914, 0.3487], "radius": 0.9835},)"
+    R"( {"center": [0.8659, 0.02968, -1.011], "radius": 1.163}, {"center": [0.4053, 1.269, -1.216], "radius": 1.044}]})";
+
+// A field whose seeds miss components (one seed per cluster of crossed seed-grid cells, and a
+// cluster can hold several): the continuation still meshes them all, as the grid traversal does.
+inline void expect_continuation_finds_what_the_seeds_miss(MarchingMethod method, const Field& field, double cell,
+                                                          std::size_t components) {
+  const PolygonizeResult cont = method(field, marching_options(cell, Traversal::Continuation));
+  const PolygonizeResult grid = method(field, marching_options(cell, Traversal::Grid));
+  EXPECT_EQ(analyze_topology(cont.mesh).components, components);
+  EXPECT_EQ(cont.stats.components, components);
+  EXPECT_TRUE(triangle_set(cont.mesh) == triangle_set(grid.mesh))
+      << cont.mesh.num_triangles() << " triangles from the continuation, " << grid.mesh.num_triangles() << " from the grid";
+  EXPECT_LT(cont.stats.extra.at("seeds").get<std::size_t>(), components);  // the case is what it claims
+  EXPECT_EQ(cont.stats.extra.at("starts").get<std::size_t>(), components);
+  EXPECT_EQ(cont.stats.extra.at("completion_starts").get<std::size_t>(),
+            components - cont.stats.extra.at("seeds").get<std::size_t>());
+  EXPECT_EQ(cont.stats.extra.at("unreached_sign_changes").get<std::size_t>(), 0u);
 }
 
 // Relative area errors at the given cells (continuation), for checking convergence.

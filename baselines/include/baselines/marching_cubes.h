@@ -14,7 +14,9 @@ namespace cdp {
 // gradient; closed, oriented and edge-manifold when the surface lies inside the box.
 // stats.method = "mc"; stats.extra holds "traversal", "cell_size", "precision" (if given),
 // "lattice_cells", "root_tolerance", "cubes_visited", "cubes_crossed", "root_evaluations",
-// "face_ambiguity", and for the continuation "seeds", "unresolved_seeds", "starts".
+// "face_ambiguity", and for the continuation "seeds", "unresolved_seeds", "starts", "sign_changes",
+// "completion_starts", "unreached_sign_changes" (0 unless the lattice is too coarse for some of
+// the surface the seed grid sees), "completion_evaluations".
 // Throws InvalidInputError for invalid options, NoSurfaceError when no cube is crossed or the
 // surface leaves the box (with require_closed_in_box), LimitExceededError at a bound.
 PolygonizeResult marching_cubes(const Field& field, const MarchingOptions& options = {});
