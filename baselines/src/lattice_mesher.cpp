@@ -2,6 +2,7 @@
 
 #include "edge_root.h"
 #include "flat_map.h"
+#include "short_edge_collapse.h"
 
 #include <polygonizer/errors.h>
 #include <polygonizer/mesh_topology.h>
@@ -19,6 +20,23 @@
 namespace cdp::marching {
 
 namespace {
+
+// Bits of a visited cube's value that hold its triangle count (at most 6 tetrahedra x 2, or
+// a Marching Cubes case with a fanned 12-gon: well below 256).
+constexpr int kTriangleRangeBits = 8;
+
+// A seed-grid crossing the mesh does not cover is located to this fraction of a cell, enough to
+// name the cube the surface passes through there (give or take a neighbour, which the search
+// for a crossed cube around it looks at anyway).
+constexpr double kSignChangeRootTolerance = 0.125;
+
+// Mesh edges shorter than this fraction of a cell are collapsed. A root next to a lattice
+// corner (the surface passing within a hair of it, or through it: F = 0 there on creased and
+// signed-distance fields) puts vertices on all the corner's crossed edges within that hair of
+// each other, and the triangles between them have edge ratios up to 10^6. A hundredth of a cell
+// bounds the ratio by about (sqrt(3) + 0.01) / 0.01 < 175 while touching about 1 % of the
+// vertices (0.5 % in Marching Cubes, 1.5 % in Marching Tetrahedra on random blobs).
+constexpr double kShortEdge = 0.01;
 
 using Key = std::uint64_t;
 using Cell = std::array<long, 3>;
@@ -57,10 +75,14 @@ class LatticeMesher {
   void run_continuation();
 
   Mesh mesh;
+  // Per vertex, a name independent of the traversal: the lattice edge it lies on, or for a
+  // centre vertex its cube and polygon (top bit set).
+  std::vector<Key> vertex_keys;
   double h_ = 0, tolerance_ = 0;
   MarchingLattice lattice_;
   std::size_t cubes_visited = 0, cubes_crossed = 0, seed_search_cubes = 0, open_boundary_faces = 0;
   std::size_t root_evaluations = 0, corner_evaluations = 0, centre_vertices = 0, starts = 0, seeds = 0, unresolved_seeds = 0;
+  std::size_t sign_changes = 0, completion_starts = 0, unreached_sign_changes = 0, completion_evaluations = 0;
 
  private:
   Key point_key(long i, long j, long k) const {
@@ -92,7 +114,9 @@ class LatticeMesher {
   int vertex(const Cell& c, LocalEdge e, const std::array<double, 8>& f);
   int centre_vertex(const Cell& c, int polygon, const std::array<double, 8>& f);
   std::optional<Cell> crossed_cube_near(const Vec3& p);
-  void follow(const Cell& start, std::size_t cluster, std::size_t clusters);
+  bool follow(const Cell& start, std::size_t cluster, std::size_t clusters);
+  int mesh_crossings(const Vec3& a, const Vec3& b, int axis);
+  void complete_from_sign_changes(const SeedGrid& grid, std::size_t clusters);
   void count_cube() {
     if (++cubes_visited > options_.max_cubes)
       throw LimitExceededError(std::string(method_) + ": more than max_cubes = " + std::to_string(options_.max_cubes) +
@@ -106,7 +130,9 @@ class LatticeMesher {
   std::array<long, 3> n_{};
   FlatMap<double> corner_cache_;
   FlatMap<int> edge_vertex_;
-  FlatMap<char> visited_;
+  // Visited cubes; once meshed, the value is the cube's triangles (kTriangleRangeBits of
+  // count below the index of the first), which are contiguous in mesh.triangles.
+  FlatMap<std::uint64_t> visited_;
   CubeMesh cube_mesh_;
   std::vector<int> centre_ids_;
   double progress_reported_ = 0;
@@ -164,6 +190,7 @@ int LatticeMesher::vertex(const Cell& c, LocalEdge e, const std::array<double, 8
   const EdgeRoot root = find_edge_root(field_, point(ia, ja, ka), f[e.a], pb, f[e.b], tolerance_);
   root_evaluations += root.evaluations;
   mesh.positions.push_back(root.point);
+  vertex_keys.push_back(key);
   return static_cast<int>(mesh.positions.size()) - 1;
 }
 
@@ -183,6 +210,7 @@ int LatticeMesher::centre_vertex(const Cell& c, int polygon, const std::array<do
   const ProjectionResult projected = project_to_surface(field_, mean, po);
   id = static_cast<int>(mesh.positions.size());
   mesh.positions.push_back(projected.ok() ? projected.point : mean);
+  vertex_keys.push_back(Key{1} << 63 | cell_key(c) << 4 | static_cast<Key>(polygon));
   ++centre_vertices;
   return id;
 }
@@ -260,8 +288,8 @@ std::optional<Cell> LatticeMesher::crossed_cube_near(const Vec3& p) {
 // Bloomenthal's continuation from one crossed cube: a cube's neighbour across a face with a
 // sign change is crossed too, so a breadth-first walk over such faces visits every cube of the
 // polygonized component and no other.
-void LatticeMesher::follow(const Cell& start, std::size_t cluster, std::size_t clusters) {
-  if (!visited_.emplace(cell_key(start), 1).second) return;
+bool LatticeMesher::follow(const Cell& start, std::size_t cluster, std::size_t clusters) {
+  if (!visited_.emplace(cell_key(start), 0).second) return false;
   ++starts;
   std::deque<Cell> queue{start};
   std::size_t done = 0;
@@ -272,12 +300,14 @@ void LatticeMesher::follow(const Cell& start, std::size_t cluster, std::size_t c
     const std::array<double, 8> f = cached_corners(c);
     const int mask = crossed_faces(f);
     check_boundary(c, mask);
+    const std::size_t first = mesh.triangles.size();
     mesh_cube(c, f);
+    *visited_.find(cell_key(c)) = static_cast<std::uint64_t>(first) << kTriangleRangeBits | (mesh.triangles.size() - first);
     for (int face = 0; face < 6; ++face) {
       if (!((mask >> face) & 1)) continue;
       Cell nb = c;
       nb[face / 2] += face % 2 == 0 ? -1 : 1;
-      if (in_lattice(nb) && visited_.emplace(cell_key(nb), 1).second) queue.push_back(nb);
+      if (in_lattice(nb) && visited_.emplace(cell_key(nb), 0).second) queue.push_back(nb);
     }
     if (options_.progress && ++done % 4096 == 0) {
       const double local = static_cast<double>(done) / static_cast<double>(done + queue.size());
@@ -285,13 +315,105 @@ void LatticeMesher::follow(const Cell& start, std::size_t cluster, std::size_t c
       options_.progress(progress_reported_);
     }
   }
+  return true;
+}
+
+// Whether a triangle crosses the open segment a -> b, parallel to `axis` with a below b: 1 it
+// does, 0 it does not, -1 undecided (the segment ends on the triangle, or runs along one of its
+// edges parallel to the axis). The seed grid and the lattice share their origin, so the segment
+// often lies in a lattice plane and passes exactly through triangle edges in that plane; a
+// segment through an edge is moved off it symbolically (by (e, e^2) across the axis, e -> 0,
+// Edelsbrunner & Muecke's simulation of simplicity), which puts it inside exactly one of the
+// two triangles sharing the edge whenever the mesh does cross there, so no crossing is counted
+// twice or lost.
+int segment_crosses_triangle(const Vec3& a, const Vec3& b, int axis, const std::array<const Vec3*, 3>& p) {
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  double w[3];  // w[i]: twice the signed area of (p[i+1], p[i+2], a) projected: p[i]'s weight
+  int sign[3];
+  for (int i = 0; i < 3; ++i) {
+    const Vec3& s = *p[(i + 1) % 3];
+    const Vec3& t = *p[(i + 2) % 3];
+    const double du = t[u] - s[u], dv = t[v] - s[v];
+    w[i] = du * (a[v] - s[v]) - dv * (a[u] - s[u]);
+    // The perturbed area is w - dv e + du e^2: its sign is w's, else -dv's, else du's.
+    sign[i] = w[i] != 0 ? (w[i] > 0 ? 1 : -1) : dv != 0 ? (dv < 0 ? 1 : -1) : du != 0 ? (du > 0 ? 1 : -1) : 0;
+  }
+  if (sign[0] == 0 || sign[1] == 0 || sign[2] == 0) return -1;
+  if (sign[0] != sign[1] || sign[1] != sign[2]) return 0;
+  const double x = (w[0] * (*p[0])[axis] + w[1] * (*p[1])[axis] + w[2] * (*p[2])[axis]) / (w[0] + w[1] + w[2]);
+  if (x > a[axis] && x < b[axis]) return 1;
+  return x < a[axis] || x > b[axis] ? 0 : -1;
+}
+
+// How many triangles of the mesh cross the seed-grid edge a -> b (parallel to `axis`, a below
+// b); -1 when undecided. A triangle lies in the closed box of the cube that made it, or within
+// half a cell of it for a fan around a projected centre vertex, so the cubes within one cell of
+// the edge hold every triangle that can cross it.
+int LatticeMesher::mesh_crossings(const Vec3& a, const Vec3& b, int axis) {
+  Cell lo, hi;
+  for (int q = 0; q < 3; ++q) {
+    const auto index = [&](double x) { return static_cast<long>(std::floor((x - lattice_.origin[q]) / h_)); };
+    lo[q] = std::max(0L, index(a[q]) - 1);
+    hi[q] = std::min(n_[q] - 1, index(b[q]) + 1);
+  }
+  int crossings = 0;
+  for (long k = lo[2]; k <= hi[2]; ++k)
+    for (long j = lo[1]; j <= hi[1]; ++j)
+      for (long i = lo[0]; i <= hi[0]; ++i) {
+        const std::uint64_t* range = visited_.find(cell_key({i, j, k}));
+        if (!range) continue;
+        const std::size_t first = *range >> kTriangleRangeBits, count = *range & ((1u << kTriangleRangeBits) - 1);
+        for (std::size_t t = first; t < first + count; ++t) {
+          const auto& tri = mesh.triangles[t];
+          const int c = segment_crosses_triangle(
+              a, b, axis, {&mesh.positions[tri[0]], &mesh.positions[tri[1]], &mesh.positions[tri[2]]});
+          if (c < 0) return -1;
+          crossings += c;
+        }
+      }
+  return crossings;
+}
+
+// The seeds give one start per 26-connected cluster of crossed seed-grid cells, and a cluster can
+// hold several components (the two sheets of a thin shell, blobs closer than a seed cell), which
+// the walks from the seeds then never reach. Every sign change of the seed grid is a place the
+// surface crosses: it is reached when the mesh crosses its grid edge an odd number of times
+// (the mesh separates the edge's two nodes, as the surface does). Coverage rather than
+// proximity, so a second sheet near the first still counts as missing. Anything else, which
+// includes the mesh passing a grid node on the other side of where the surface does, is looked
+// at where the surface crosses the edge: the crossed cube nearest that point (the cube holding
+// it first) is either visited, or starts a walk. A sign change with no crossed cube near it lies
+// in detail the lattice does not resolve: `unreached_sign_changes`. Costs no evaluation while
+// the mesh covers every sign change.
+void LatticeMesher::complete_from_sign_changes(const SeedGrid& grid, std::size_t clusters) {
+  grid.for_each_sign_change([&](const std::array<int, 3>& ia, const std::array<int, 3>& ib) {
+    ++sign_changes;
+    const Vec3 a = grid.point(ia[0], ia[1], ia[2]), b = grid.point(ib[0], ib[1], ib[2]);
+    const int axis = ia[0] != ib[0] ? 0 : ia[1] != ib[1] ? 1 : 2;
+    const int crossings = mesh_crossings(a, b, axis);
+    if (crossings > 0 && crossings % 2 == 1) return;
+    const double fa = grid.value(ia[0], ia[1], ia[2]), fb = grid.value(ib[0], ib[1], ib[2]);
+    const EdgeRoot root = find_edge_root(field_, a, fa, b, fb, kSignChangeRootTolerance * h_);
+    completion_evaluations += root.evaluations;
+    const Vec3& p = root.point;
+    const Vec3 top = point(n_[0], n_[1], n_[2]);
+    for (int q = 0; q < 3; ++q)
+      if (p[q] < lattice_.origin[q] || p[q] > top[q]) return;  // outside the lattice: clipped, not missed
+    const std::optional<Cell> c = crossed_cube_near(p);
+    if (!c) {
+      ++unreached_sign_changes;
+      return;
+    }
+    if (follow(*c, clusters - 1, clusters)) ++completion_starts;
+  });
 }
 
 void LatticeMesher::run_continuation() {
   SeedOptions seed_options;
   seed_options.resolution = options_.seed_resolution;
   seed_options.require_closed_in_box = options_.require_closed_in_box;
-  const std::vector<SurfaceSeed> found = find_surface_seeds(field_, seed_options);
+  const SeedGrid grid = sample_seed_grid(field_, seed_options);
+  const std::vector<SurfaceSeed> found = find_surface_seeds(field_, grid, seed_options.resolution);
   seeds = found.size();
   for (std::size_t s = 0; s < found.size(); ++s) {
     const std::optional<Cell> start = crossed_cube_near(found[s].point);
@@ -301,6 +423,7 @@ void LatticeMesher::run_continuation() {
     }
     follow(*start, s, found.size());
   }
+  complete_from_sign_changes(grid, found.size());
 }
 
 }  // namespace
@@ -312,6 +435,7 @@ PolygonizeResult run_marching(const Field& field, const MarchingOptions& options
   LatticeMesher lm(field, options, method, mesher);
   if (options.traversal == Traversal::Grid) lm.run_grid();
   else lm.run_continuation();
+  const CollapseReport collapse = collapse_short_edges(lm.mesh, lm.vertex_keys, kShortEdge * lm.h_);
   if (lm.mesh.triangles.empty())
     throw NoSurfaceError(std::string(method) + ": no cube of the lattice (cell " + std::to_string(lm.h_) +
                          ") is crossed by the surface; it is absent or smaller than a cell");
@@ -336,12 +460,19 @@ PolygonizeResult run_marching(const Field& field, const MarchingOptions& options
   st.extra["corner_evaluations"] = lm.corner_evaluations;
   st.extra["root_evaluations"] = lm.root_evaluations;
   st.extra["centre_vertices"] = lm.centre_vertices;
+  st.extra["collapsed_edges"] = collapse.collapsed_edges;
+  st.extra["dropped_components"] = collapse.dropped_components;
+  st.extra["short_edges_left"] = collapse.short_edges_left;
   if (options.traversal == Traversal::Continuation) {
     st.extra["seed_resolution"] = options.seed_resolution;
     st.extra["seeds"] = lm.seeds;
     st.extra["unresolved_seeds"] = lm.unresolved_seeds;
     st.extra["starts"] = lm.starts;
     st.extra["seed_search_cubes"] = lm.seed_search_cubes;
+    st.extra["sign_changes"] = lm.sign_changes;
+    st.extra["completion_starts"] = lm.completion_starts;
+    st.extra["unreached_sign_changes"] = lm.unreached_sign_changes;
+    st.extra["completion_evaluations"] = lm.completion_evaluations;
   }
   if (!options.require_closed_in_box) st.extra["open_boundary_faces"] = lm.open_boundary_faces;
   result.mesh = std::move(lm.mesh);

@@ -106,8 +106,7 @@ double seed_grid_spacing(const Field& field, const SeedOptions& options) {
 
 namespace {
 
-std::vector<std::pair<Crossing, int>> crossings_with_clusters(const Field& field, const SeedOptions& options) {
-  const SeedGrid g = sample_seed_grid(field, options);
+std::vector<std::pair<Crossing, int>> crossings_with_clusters(const SeedGrid& g, const Field& field, int resolution) {
   const auto inside = [&](int i, int j, int k) { return g.values[g.index(i, j, k)] < 0; };
   const int nx = g.n[0], ny = g.n[1], nz = g.n[2];
   const auto cell_id = [&](int i, int j, int k) { return (k * ny + j) * nx + i; };
@@ -150,7 +149,7 @@ std::vector<std::pair<Crossing, int>> crossings_with_clusters(const Field& field
   if (out.empty()) {
     std::ostringstream msg;
     msg << "seeding: no zero crossing of the field in its box " << format_point(field.bounds().min) << " - "
-        << format_point(field.bounds().max) << " at resolution " << options.resolution
+        << format_point(field.bounds().max) << " at resolution " << resolution
         << " (F is " << (g.values[0] < 0 ? "negative" : "positive") << " everywhere sampled)";
     throw NoSurfaceError(msg.str());
   }
@@ -161,7 +160,7 @@ std::vector<std::pair<Crossing, int>> crossings_with_clusters(const Field& field
 
 std::vector<SurfaceSeed> find_surface_crossings(const Field& field, const SeedOptions& options) {
   std::vector<SurfaceSeed> out;
-  for (const auto& [c, cluster] : crossings_with_clusters(field, options)) {
+  for (const auto& [c, cluster] : crossings_with_clusters(sample_seed_grid(field, options), field, options.resolution)) {
     const double t = c.fa / (c.fa - c.fb);
     out.push_back({c.a + t * (c.b - c.a), cluster});
   }
@@ -169,12 +168,16 @@ std::vector<SurfaceSeed> find_surface_crossings(const Field& field, const SeedOp
 }
 
 std::vector<SurfaceSeed> find_surface_seeds(const Field& field, const SeedOptions& options) {
-  const auto crossings = crossings_with_clusters(field, options);
+  return find_surface_seeds(field, sample_seed_grid(field, options), options.resolution);
+}
+
+std::vector<SurfaceSeed> find_surface_seeds(const Field& field, const SeedGrid& grid, int resolution) {
+  const auto crossings = crossings_with_clusters(grid, field, resolution);
   int n_clusters = 0;
   for (const auto& c : crossings) n_clusters = std::max(n_clusters, c.second + 1);
   std::vector<char> done(n_clusters, 0);
   std::vector<SurfaceSeed> seeds;
-  const double h = seed_grid_spacing(field, options);
+  const double h = grid.h;
   ProjectionOptions popt;
   popt.max_travel = 2 * h;
   for (const auto& [c, cluster] : crossings) {

@@ -17,6 +17,8 @@
 namespace cdp {
 namespace {
 
+using test::expect_continuation_finds_what_the_seeds_miss;
+using test::expect_no_degenerate_triangles;
 using test::expect_topology_both_traversals;
 
 TEST(MarchingCubes, SphereIsOneClosedGenusZeroMeshFromBothTraversals) {
@@ -37,6 +39,34 @@ TEST(MarchingCubes, TanglecubeHasGenusFive) {
 TEST(MarchingCubes, SeparateBlobsGiveOneComponentEach) {
   const auto blobs = test::three_separate_blobs();
   expect_topology_both_traversals(marching_cubes, *blobs, 0.12, 3, 0);
+}
+
+TEST(MarchingCubes, NoDegenerateTrianglesWhereTheSurfacePassesThroughLatticeCorners) {
+  {
+    SCOPED_TRACE("three tori joined by min");
+    expect_no_degenerate_triangles(marching_cubes, *test::field_from_json(test::kThreeTori), 0.05, 1, 3);
+  }
+  {
+    SCOPED_TRACE("thin shell");  // F = 0 at lattice corners on both spheres
+    expect_no_degenerate_triangles(marching_cubes, *test::field_from_json(test::kThinShell), 0.05, 2, 0);
+  }
+}
+
+// Both sheets of the shell and every blob lie in one cluster of crossed seed-grid cells, whose
+// single seed reaches one component only (issue 13: 1 of 2 on the shell).
+TEST(MarchingCubes, ContinuationMeshesEveryComponentTheSeedsMiss) {
+  {
+    SCOPED_TRACE("thin shell");
+    expect_continuation_finds_what_the_seeds_miss(marching_cubes, *test::field_from_json(test::kThinShell), 0.05, 2);
+  }
+  {
+    SCOPED_TRACE("three blobs");
+    expect_continuation_finds_what_the_seeds_miss(marching_cubes, *test::field_from_json(test::kCloseBlobs3), 0.1, 3);
+  }
+  {
+    SCOPED_TRACE("two blobs");
+    expect_continuation_finds_what_the_seeds_miss(marching_cubes, *test::field_from_json(test::kCloseBlobs2), 0.1, 2);
+  }
 }
 
 TEST(MarchingCubes, EveryCaseOfRandomFieldsClosesUpUnderEveryAmbiguityRule) {
@@ -111,6 +141,37 @@ TEST(MarchingCubes, ContinuationEvaluatesOnlyNearTheSurfaceAndIsDeterministic) {
   const PolygonizeResult again = marching_cubes(sphere, test::marching_options(0.02, Traversal::Continuation));
   EXPECT_EQ(again.mesh.positions, cont.mesh.positions);
   EXPECT_EQ(again.mesh.triangles, cont.mesh.triangles);
+}
+
+// A sphere of radius 0.06 around a seed-grid node (cell 0.125) falls between the corners of a
+// lattice of cell 0.35: the six grid edges around that node change sign, and no cube of the
+// lattice is crossed near them. The mesh cannot hold it; the statistics say so.
+TEST(MarchingCubes, ContinuationReportsSignChangesTheLatticeCannotReach) {
+  const auto field = test::field_from_json(
+      R"json({"type": "expression", "value": "min(sqrt(x^2+y^2+z^2)-1, sqrt((x-1.625)^2+(y-1.625)^2+(z-1.625)^2)-0.06)",
+              "bounds": [[-2, -2, -2], [2, 2, 2]]})json");
+  const PolygonizeResult r = marching_cubes(*field, test::marching_options(0.35, Traversal::Continuation));
+  EXPECT_EQ(r.stats.components, 1u);
+  EXPECT_EQ(r.stats.extra.at("unreached_sign_changes").get<std::size_t>(), 6u);
+  EXPECT_EQ(r.stats.extra.at("completion_starts").get<std::size_t>(), 0u);
+}
+
+// A sphere of radius h/250 around a lattice corner: Marching Cubes cuts an octahedron with
+// edges of h/180 around the corner, too small for any triangle of the collapse length; it is
+// removed, and counted.
+TEST(MarchingCubes, PiecesBelowTheCollapseLengthAreDroppedAndCounted) {
+  const auto field = test::field_from_json(
+      R"json({"type": "expression", "value": "min(sqrt(x^2+y^2+z^2)-1, sqrt((x-1.5)^2+(y-1.5)^2+(z-1.5)^2)-0.0005)",
+              "bounds": [[-2, -2, -2], [2, 2, 2]]})json");
+  for (Traversal tr : {Traversal::Continuation, Traversal::Grid}) {
+    SCOPED_TRACE(to_string(tr));
+    const PolygonizeResult r = marching_cubes(*field, test::marching_options(0.125, tr));
+    const MeshTopology t = analyze_topology(r.mesh);
+    test::expect_closed_manifold(t);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(r.stats.components, 1u);
+    EXPECT_EQ(r.stats.extra.at("dropped_components").get<std::size_t>(), 1u);
+  }
 }
 
 TEST(MarchingCubes, PrecisionNeedsAVariationalModel) {

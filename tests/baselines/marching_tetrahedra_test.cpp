@@ -16,6 +16,8 @@
 namespace cdp {
 namespace {
 
+using test::expect_continuation_finds_what_the_seeds_miss;
+using test::expect_no_degenerate_triangles;
 using test::expect_topology_both_traversals;
 
 TEST(MarchingTetrahedra, SphereIsOneClosedGenusZeroMeshFromBothTraversals) {
@@ -36,6 +38,34 @@ TEST(MarchingTetrahedra, TanglecubeHasGenusFive) {
 TEST(MarchingTetrahedra, SeparateBlobsGiveOneComponentEach) {
   const auto blobs = test::three_separate_blobs();
   expect_topology_both_traversals(marching_tetrahedra, *blobs, 0.12, 3, 0);
+}
+
+TEST(MarchingTetrahedra, NoDegenerateTrianglesWhereTheSurfacePassesThroughLatticeCorners) {
+  {
+    SCOPED_TRACE("three tori joined by min");
+    expect_no_degenerate_triangles(marching_tetrahedra, *test::field_from_json(test::kThreeTori), 0.05, 1, 3);
+  }
+  {
+    SCOPED_TRACE("thin shell");  // F = 0 at lattice corners on both spheres
+    expect_no_degenerate_triangles(marching_tetrahedra, *test::field_from_json(test::kThinShell), 0.05, 2, 0);
+  }
+}
+
+// Both sheets of the shell and every blob lie in one cluster of crossed seed-grid cells, whose
+// single seed reaches one component only (issue 13: 1 of 2 on the shell).
+TEST(MarchingTetrahedra, ContinuationMeshesEveryComponentTheSeedsMiss) {
+  {
+    SCOPED_TRACE("thin shell");
+    expect_continuation_finds_what_the_seeds_miss(marching_tetrahedra, *test::field_from_json(test::kThinShell), 0.05, 2);
+  }
+  {
+    SCOPED_TRACE("three blobs");
+    expect_continuation_finds_what_the_seeds_miss(marching_tetrahedra, *test::field_from_json(test::kCloseBlobs3), 0.1, 3);
+  }
+  {
+    SCOPED_TRACE("two blobs");
+    expect_continuation_finds_what_the_seeds_miss(marching_tetrahedra, *test::field_from_json(test::kCloseBlobs2), 0.1, 2);
+  }
 }
 
 TEST(MarchingTetrahedra, RandomFieldsGiveClosedManifoldMeshes) {

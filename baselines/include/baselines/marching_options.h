@@ -14,7 +14,9 @@ namespace cdp {
 enum class Traversal {
   // Bloomenthal's continuation: start from the cubes of the surface seeds and follow the surface
   // from cube to cube through faces it crosses; only cubes near the surface cost evaluations.
-  // A component the seed grid misses is not meshed (see SeedOptions).
+  // Then every sign change of the seed grid the mesh does not cover starts a walk too, so a
+  // component the seeds miss (several can share one seed cluster) is still meshed; the mesh is
+  // the grid traversal's whenever every component crosses an edge of the seed grid.
   Continuation,
   // Every cube of the lattice over the field's box, slab by slab.
   Grid,

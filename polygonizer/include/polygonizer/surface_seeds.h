@@ -64,6 +64,9 @@ std::vector<SurfaceSeed> find_surface_crossings(const Field& field, const SeedOp
 // One seed per cluster, on the surface (bisected along its grid edge, then Newton-projected);
 // the first crossing of the cluster whose projection converges. Same errors as above.
 std::vector<SurfaceSeed> find_surface_seeds(const Field& field, const SeedOptions& options = {});
+// The same from a grid already sampled (with `resolution`, named in errors), for callers that
+// also use the grid's values and should not pay for sampling it twice.
+std::vector<SurfaceSeed> find_surface_seeds(const Field& field, const SeedGrid& grid, int resolution);
 
 // Grid spacing the functions above use for a field and options.
 double seed_grid_spacing(const Field& field, const SeedOptions& options = {});
