@@ -168,7 +168,7 @@ int main(int argc, char** argv) {
         // 0 means "the default" inside the library; on the command line it is a mistake.
         if (!(o.cell_size > 0)) throw cdp::InvalidInputError("--cell must be positive, not " + *v);
       }
-      if (auto v = get("--precision")) o.precision = static_cast<int>(parse_integer("--precision", *v, 1, kIntMax));
+      if (auto v = get("--precision")) o.precision = static_cast<int>(parse_integer("--precision", *v, 0, 5));
       if (auto v = get("--traversal")) {
         if (*v == "continuation") o.traversal = cdp::Traversal::Continuation;
         else if (*v == "grid") o.traversal = cdp::Traversal::Grid;

@@ -349,6 +349,7 @@ TEST(Faults, BadFilesAndOptionsGetPreciseOneLineMessages) {
       {"polygonize", torus.string() + " -o " + out + " --seed-resolution 1000000", "use a resolution of at most"},
       {"polygonize", torus.string() + " -o " + out + " --seed-resolution 2147483648", "between 2 and 2147483647"},
       {"polygonize", torus.string() + " -o " + out + " --method mc --cell 0", "--cell must be positive"},
+      {"polygonize", torus.string() + " -o " + out + " --method mt --precision 6", "--precision must be between 0 and 5"},
       {"polygonize", torus.string() + " -o " + out + " -o " + out, "-o given twice"},
       {"polygonize", torus.string() + " -o " + out + " --factor 3 --max-triangles 20", torus.string() + ": adaptive:"},
       {"evaluate", torus.string() + " " + lying.string() + " -o " + metrics, "too short"},
