@@ -111,7 +111,12 @@ int main(int argc, char** argv) {
     }
     const double gt_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-    nlohmann::json metrics = cdp::evaluate_mesh(*field, mesh, *truth, options, normals_source, key);
+    nlohmann::json metrics;
+    try {
+      metrics = cdp::evaluate_mesh(*field, mesh, *truth, options, normals_source, key);
+    } catch (const cdp::InvalidInputError& e) {
+      throw cdp::InvalidInputError(mesh_path + ": " + e.what());  // what is wrong is the mesh
+    }
     metrics["files"] = {{"field", field_path}, {"mesh", mesh_path}};
     metrics["rays"]["ground_truth_cached"] = cached;
     metrics["rays"]["ground_truth_seconds"] = gt_seconds;

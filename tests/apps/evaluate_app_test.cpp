@@ -1,0 +1,55 @@
+// build/bin/evaluate measures a mesh against its field, and refuses meshes it cannot measure
+// with one line naming the mesh file, exit code 1 and no metrics file.
+#include <gtest/gtest.h>
+
+#include <raytrace/reference_meshes.h>
+
+#include <polygonizer/mesh_io.h>
+
+#include <nlohmann/json.hpp>
+
+#include "common/run_command.h"
+
+#include <filesystem>
+#include <fstream>
+
+namespace cdp {
+namespace {
+
+constexpr const char* kFewRays = " --rays 8 --views 2 --samples 100";
+
+struct EvaluateApp : public ::testing::Test {
+  test::TempDir dir{"evaluate_app"};
+  std::filesystem::path field = dir.write("sphere.json", R"({"type": "sphere", "radius": 1})");
+  std::filesystem::path metrics = dir.path / "metrics.json";
+  std::string args(const std::filesystem::path& mesh) const {
+    return field.string() + " " + mesh.string() + " -o " + metrics.string() + kFewRays;
+  }
+  void expect_refused(const std::filesystem::path& mesh, const std::string& message) const {
+    const auto r = test::run_app("evaluate", args(mesh));
+    EXPECT_EQ(r.exit_code, 1) << mesh;
+    EXPECT_EQ(r.err, "evaluate: " + mesh.string() + ": " + message + "\n");
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    EXPECT_FALSE(std::filesystem::exists(metrics)) << mesh;
+  }
+};
+
+TEST_F(EvaluateApp, IcosphereOfTheSphereHasSmallErrors) {
+  const auto mesh = dir.path / "ico.ply";
+  write_mesh(icosphere(3), mesh);
+  const auto r = test::run_app("evaluate", args(mesh));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(metrics);
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_GT(j["depth_error"]["count"].get<int>(), 0);
+  EXPECT_LT(j["depth_error"]["mean"].get<double>(), 0.01);
+}
+
+TEST_F(EvaluateApp, MeshThatNoRayHitsIsAnErrorNotAPerfectScore) {
+  const auto mesh = dir.path / "far.ply";
+  write_mesh(icosphere(1, Vec3(10, 10, 10)), mesh);
+  expect_refused(mesh, "no ray hits the mesh (28 of 128 rays hit the surface)");
+}
+
+}  // namespace
+}  // namespace cdp
