@@ -51,5 +51,25 @@ TEST_F(EvaluateApp, MeshThatNoRayHitsIsAnErrorNotAPerfectScore) {
   expect_refused(mesh, "no ray hits the mesh (28 of 128 rays hit the surface)");
 }
 
+// These were all scored as perfect (0 triangles read), with OpenMesh's own lines on stderr, or
+// ended in std::bad_alloc. read_mesh's other refusals: tests/polygonizer/mesh_io_test.cpp.
+TEST_F(EvaluateApp, BrokenMeshFilesGiveOneLineNamingTheFile) {
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 1000000000000\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n";
+  const struct {
+    std::string file, text, message;
+  } cases[] = {
+      {"garbage.obj", "not a mesh at all\n", "the mesh has no triangles"},
+      {"nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "line 1: \"nan\" is not a finite number"},
+      {"index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n",
+       "a face has an out-of-range vertex index (the file has 3 vertices)"},
+      {"huge.ply", ply,
+       "the header declares 1000000000000 vertices and 1 faces, which need at least 3000000000004 numbers, but "
+       "the file holds only 3"},
+  };
+  for (const auto& c : cases) expect_refused(dir.write(c.file, c.text), c.message);
+}
+
 }  // namespace
 }  // namespace cdp

@@ -27,6 +27,8 @@ Mesh from_openmesh(const TriMesh& mesh);
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, bool binary = true);
 // Reads positions, triangles and vertex normals (when the file has them); from PLY files also
 // the scalar (double or float) vertex properties, into vertex_scalars under their names.
+// Throws InvalidInputError "FILE: problem" for anything it cannot read whole (polygonizer/README.md).
+// Redirects std::cerr while OpenMesh reads: not to be called concurrently.
 Mesh read_mesh(const std::filesystem::path& path);
 
 }  // namespace cdp
