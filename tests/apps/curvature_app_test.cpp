@@ -57,6 +57,7 @@ TEST(CurvatureAppErrors, SphereAnswerMatchesTheClosedForm) {
 TEST(CurvatureAppErrors, BadInputGivesOneLineAndExitCodeOne) {
   test::TempDir dir("curvature_app_errors");
   const auto typo = dir.write("typo.json", R"({"type": "sphere", "radius": 1, "centre": [0,0,0]})");
+  const auto huge = dir.write("huge.json", R"({"type": "sphere", "radius": 1e160})");
   const auto flat = dir.write("flat.json",
                               R"({"type": "expression", "value": "x^2 + y^2 + z^2 - 1", "bounds": [[-2,-2,-2],[2,2,2]]})");
   const struct {
@@ -66,6 +67,8 @@ TEST(CurvatureAppErrors, BadInputGivesOneLineAndExitCodeOne) {
       {(dir.path / "missing.json").string() + " --at 1,0,0", (dir.path / "missing.json").string() + ": cannot open file"},
       {flat.string() + " --at 1,zero,0", "--at expects three numbers x,y,z, found \"1,zero,0\""},
       {flat.string() + " --at 0,0,0", flat.string() + ": cannot project 0,0,0 onto the surface: the gradient vanishes"},
+      {huge.string() + " --at 1,0,0", huge.string() + ": cannot project 1,0,0 onto the surface: the field's box is too "
+                                                      "large (or too small) for double precision"},
       {flat.string(), "usage: curvature FIELD.json --at x,y,z"},
   };
   for (const auto& c : cases) {
