@@ -95,7 +95,12 @@ int main(int argc, char** argv) {
     }
 
     const auto start = std::chrono::steady_clock::now();
-    std::vector<cdp::Ray> rays = cdp::make_camera_rays(field->bounds(), options.camera);
+    std::vector<cdp::Ray> rays;
+    try {
+      rays = cdp::make_camera_rays(field->bounds(), options.camera);
+    } catch (const cdp::InvalidInputError& e) {
+      throw cdp::InvalidInputError(field_path + ": " + e.what());  // the rays are fitted to the field's box
+    }
     const std::string key = cdp::ground_truth_key(field_text, options.camera, options.raycast);
     std::optional<cdp::GroundTruth> truth;
     bool cached = false;

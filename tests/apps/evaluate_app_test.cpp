@@ -71,5 +71,27 @@ TEST_F(EvaluateApp, BrokenMeshFilesGiveOneLineNamingTheFile) {
   for (const auto& c : cases) expect_refused(dir.write(c.file, c.text), c.message);
 }
 
+// Both aborted on an Embree assertion (NaN rays; rays starting beyond Embree's float range).
+TEST_F(EvaluateApp, FieldsTooLargeForTheRaysAreErrors) {
+  const auto mesh = dir.path / "ico.ply";
+  write_mesh(icosphere(1), mesh);
+  const auto huge = dir.write("huge.json", R"({"type": "sphere", "radius": 1e160})");
+  const auto large = dir.write("large.json", R"({"type": "sphere", "radius": 1e18})");
+  const struct {
+    std::filesystem::path field;
+    std::string message;
+  } cases[] = {
+      {huge, huge.string() + ": camera: the field's box is too large for double precision (its diagonal overflows)"},
+      {large, mesh.string() + ": EmbreeScene: ray 0 is not finite or starts more than 1e18 from the mesh's centre, "
+                              "out of Embree's float range"},
+  };
+  for (const auto& c : cases) {
+    const auto r = test::run_app("evaluate", c.field.string() + " " + mesh.string() + " -o " + metrics.string() + kFewRays);
+    EXPECT_EQ(r.exit_code, 1) << c.field;
+    EXPECT_EQ(r.err, "evaluate: " + c.message + "\n");
+    EXPECT_FALSE(std::filesystem::exists(metrics));
+  }
+}
+
 }  // namespace
 }  // namespace cdp
