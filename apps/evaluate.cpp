@@ -113,7 +113,12 @@ int main(int argc, char** argv) {
     }
 
     const auto start = std::chrono::steady_clock::now();
-    std::vector<cdp::Ray> rays = cdp::make_camera_rays(field->bounds(), options.camera);
+    std::vector<cdp::Ray> rays;
+    try {
+      rays = cdp::make_camera_rays(field->bounds(), options.camera);
+    } catch (const cdp::InvalidInputError& e) {
+      throw cdp::InvalidInputError(field_path + ": " + e.what());  // the rays are fitted to the field's box
+    }
     const std::string key = cdp::ground_truth_key(field_text, options.camera, options.raycast);
     std::optional<cdp::GroundTruth> truth;
     bool cached = false;
@@ -131,7 +136,12 @@ int main(int argc, char** argv) {
     const double gt_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     reporter.phase("measuring the mesh");
-    nlohmann::json metrics = cdp::evaluate_mesh(*field, mesh, *truth, options, normals_source, key);
+    nlohmann::json metrics;
+    try {
+      metrics = cdp::evaluate_mesh(*field, mesh, *truth, options, normals_source, key);
+    } catch (const cdp::InvalidInputError& e) {
+      throw cdp::InvalidInputError(mesh_path + ": " + e.what());  // what is wrong is the mesh
+    }
     metrics["files"] = {{"field", field_path}, {"mesh", mesh_path}};
     metrics["rays"]["ground_truth_cached"] = cached;
     metrics["rays"]["ground_truth_seconds"] = gt_seconds;

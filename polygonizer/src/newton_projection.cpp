@@ -11,6 +11,8 @@ const char* to_string(ProjectionStatus status) {
     case ProjectionStatus::VanishingGradient: return "the gradient vanishes";
     case ProjectionStatus::TooFar: return "the point moved farther than the travel limit";
     case ProjectionStatus::NotFinite: return "the field is not finite";
+    case ProjectionStatus::OutOfRange: return "the field's box is too large (or too small) for double precision";
+    case ProjectionStatus::NoProgress: return "the Newton step no longer moves the point in double precision";
   }
   return "unknown";
 }
@@ -23,6 +25,12 @@ ProjectionResult project_to_surface(const Field& field, const Vec3& start, const
 
   ProjectionResult r;
   r.point = start;
+  // An infinite tolerance (a box whose diagonal overflows, as for a sphere of radius 1e160)
+  // would accept the start point, however far from the surface, as converged.
+  if (!(tol > 0 && std::isfinite(tol) && std::isfinite(max_step) && std::isfinite(max_travel))) {
+    r.status = ProjectionStatus::OutOfRange;
+    return r;
+  }
   Vec3 g;
   for (r.iterations = 0; r.iterations <= options.max_iterations; ++r.iterations) {
     const double f = field.value_gradient(r.point, g);
@@ -45,6 +53,11 @@ ProjectionResult project_to_surface(const Field& field, const Vec3& start, const
     Vec3 step = -(f / g2) * g;
     const double len = step.norm();
     if (len > max_step) step *= max_step / len;
+    // A step that rounds to nothing would repeat until the iteration limit: say so now.
+    if (r.point + step == r.point) {
+      r.status = ProjectionStatus::NoProgress;
+      return r;
+    }
     r.point += step;
     if ((r.point - start).norm() > max_travel) {
       r.status = ProjectionStatus::TooFar;

@@ -63,8 +63,9 @@ AccuracyMetrics compute_accuracy(const GroundTruth& truth, const std::vector<Mes
   a.depth = sample_stats(depth);
   a.phong_deg = sample_stats(phong);
   a.depth_relative_mean = a.depth.mean / truth.setup.box.diagonal();
-  a.silhouette_disagreement =
-      a.compared ? static_cast<double>(a.surface_only + a.mesh_only) / static_cast<double>(a.compared) : 0.0;
+  a.silhouette_disagreement = a.compared ? static_cast<double>(a.surface_only + a.mesh_only) /
+                                               static_cast<double>(a.compared)
+                                         : SampleStats::kNone;
   return a;
 }
 

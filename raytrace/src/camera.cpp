@@ -56,6 +56,10 @@ std::vector<Ray> make_camera_rays(const Box& box, const CameraOptions& o) {
   if (!box.valid()) throw InvalidInputError("camera: the field's box is empty or not finite");
   const Vec3 center = box.center();
   const double radius = 0.5 * box.diagonal();
+  // A finite box can still have a diagonal that overflows (a sphere of radius 1e160): the eye
+  // would be infinitely far and every ray NaN.
+  if (!std::isfinite(o.distance * radius))
+    throw InvalidInputError("camera: the field's box is too large for double precision (its diagonal overflows)");
   const double eye_distance = o.distance * radius;
   const int n = o.resolution;
   std::vector<Ray> rays;

@@ -22,6 +22,10 @@ void record_error(void* user, RTCError code, const char* message) {
 }
 
 constexpr unsigned kRayBlock = 256;
+// Embree works in float and takes nothing farther than FLT_LARGE (about 1.8e18) from the scene's
+// centre: it aborts on such a ray (an assertion) and silently drops such a triangle.
+constexpr double kMaxReach = 1e18;
+constexpr const char* kMaxReachText = "1e18";
 
 }  // namespace
 
@@ -58,6 +62,9 @@ EmbreeScene::EmbreeScene(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
     for (int i : t)
       if (i < 0 || i >= nv) throw InvalidInputError("EmbreeScene: a triangle index is out of range");
   if (nv > 0) {
+    if (!(0.5 * box.diagonal() <= kMaxReach))
+      throw InvalidInputError(std::string("EmbreeScene: the mesh is too large for Embree's float range (vertices more "
+                                          "than ") + kMaxReachText + " from its centre)");
     m.center = box.center();
     m.query_margin = 1e-6 * (box.diagonal() + box.max.cwiseAbs().maxCoeff());
   }
@@ -93,6 +100,10 @@ EmbreeScene::~EmbreeScene() = default;
 
 std::vector<MeshHit> EmbreeScene::intersect(const std::vector<Ray>& rays) const {
   const Impl& m = *impl_;
+  for (std::size_t i = 0; i < rays.size(); ++i)
+    if (!rays[i].direction.allFinite() || !((rays[i].origin - m.center).norm() <= kMaxReach))
+      throw InvalidInputError("EmbreeScene: ray " + std::to_string(i) + " is not finite or starts more than " +
+                              kMaxReachText + " from the mesh's centre, out of Embree's float range");
   std::vector<MeshHit> hits(rays.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kRayBlock), [&](const tbb::blocked_range<std::size_t>& r) {
     RTCIntersectContext context;

@@ -65,7 +65,7 @@ nlohmann::json to_json(const AccuracyMetrics& a) {
   j["depth_error"]["relative_mean"] = number(a.depth_relative_mean);
   j["phong_error_deg"] = to_json(a.phong_deg);
   j["phong_error_deg"]["undefined"] = a.phong_undefined;
-  j["silhouette_disagreement"] = a.silhouette_disagreement;
+  j["silhouette_disagreement"] = number(a.silhouette_disagreement);
   j["silhouette_counts"] = {{"compared", a.compared}, {"surface_only", a.surface_only}, {"mesh_only", a.mesh_only},
                             {"both_hit", a.both_hit}, {"neither", a.neither}, {"excluded", a.excluded}};
   return j;
@@ -76,8 +76,16 @@ nlohmann::json evaluate_mesh(const Field& field, const Mesh& mesh, const GroundT
                              const std::string& cache_key) {
   if (mesh.normals.size() != mesh.positions.size())
     throw InvalidInputError("evaluate: the mesh needs one normal per vertex");
+  if (mesh.triangles.empty()) throw InvalidInputError("the mesh has no triangles");
   const EmbreeScene scene(mesh);
   const std::vector<MeshHit> mesh_hits = scene.intersect(truth.rays);
+  const GroundTruthCounts c = truth.counts();
+  std::size_t mesh_hit_count = 0;
+  for (const MeshHit& h : mesh_hits) mesh_hit_count += h.hit();
+  // Every accuracy measure would be over zero samples: a mesh nowhere near the field's surface.
+  if (mesh_hit_count == 0)
+    throw InvalidInputError("no ray hits the mesh (" + std::to_string(c.hits) + " of " +
+                            std::to_string(truth.rays.size()) + " rays hit the surface)");
   const AccuracyMetrics accuracy = compute_accuracy(truth, mesh_hits, mesh);
   const MeshQuality quality = compute_mesh_quality(mesh, options.quality);
 
@@ -87,9 +95,6 @@ nlohmann::json evaluate_mesh(const Field& field, const Mesh& mesh, const GroundT
   j["topology"]["self_intersections"] = to_json(find_self_intersections(mesh));
   j["normals"] = normals_source;
 
-  const GroundTruthCounts c = truth.counts();
-  std::size_t mesh_hit_count = 0;
-  for (const MeshHit& h : mesh_hits) mesh_hit_count += h.hit();
   nlohmann::json rays = to_json(options.camera);
   rays["count"] = truth.rays.size();
   rays["cache_key"] = cache_key;
@@ -117,7 +122,8 @@ nlohmann::json evaluate_mesh(const Field& field, const Mesh& mesh, const GroundT
   const SampleStats sm = surface_to_mesh_distance(truth, scene);
   j["surface_to_mesh"] = {{"mean", number(sm.mean)}, {"max", number(sm.max)}, {"points", sm.count},
                           {"method", "distance from every ground-truth ray hit to the nearest mesh point"}};
-  j["hausdorff_estimate"] = number(std::max(ms.max, sm.max));
+  // fmax: a side without samples (--samples 0) leaves the other side's maximum.
+  j["hausdorff_estimate"] = number(std::fmax(ms.max, sm.max));
   return j;
 }
 

@@ -57,6 +57,9 @@ TEST(CurvatureAppErrors, SphereAnswerMatchesTheClosedForm) {
 TEST(CurvatureAppErrors, BadInputGivesOneLineAndExitCodeOne) {
   test::TempDir dir("curvature_app_errors");
   const auto typo = dir.write("typo.json", R"({"type": "sphere", "radius": 1, "centre": [0,0,0]})");
+  const auto huge = dir.write("huge.json", R"({"type": "sphere", "radius": 1e160})");
+  const auto deep = dir.write("deep.json", R"({"type": "expression", "bounds": [[-1,-1,-1],[1,1,1]], "value": ")" +
+                                               std::string(4000, '(') + "x" + std::string(4000, ')') + "\"}");
   const auto flat = dir.write("flat.json",
                               R"({"type": "expression", "value": "x^2 + y^2 + z^2 - 1", "bounds": [[-2,-2,-2],[2,2,2]]})");
   const struct {
@@ -64,8 +67,12 @@ TEST(CurvatureAppErrors, BadInputGivesOneLineAndExitCodeOne) {
   } cases[] = {
       {typo.string() + " --at 1,0,0", typo.string() + ": centre: unknown key (did you mean \"center\"?)"},
       {(dir.path / "missing.json").string() + " --at 1,0,0", (dir.path / "missing.json").string() + ": cannot open file"},
+      {deep.string() + " --at 1,0,0", deep.string() + ": value: expression: formula nested too deeply (more than 256 "
+                                                      "levels of parentheses, calls, signs and exponents) at position 257"},
       {flat.string() + " --at 1,zero,0", "--at expects three numbers x,y,z, found \"1,zero,0\""},
       {flat.string() + " --at 0,0,0", flat.string() + ": cannot project 0,0,0 onto the surface: the gradient vanishes"},
+      {huge.string() + " --at 1,0,0", huge.string() + ": cannot project 1,0,0 onto the surface: the field's box is too "
+                                                      "large (or too small) for double precision"},
       {flat.string(), "usage: curvature FIELD.json --at x,y,z"},
   };
   for (const auto& c : cases) {

@@ -91,6 +91,15 @@ TEST_F(RenderApp, OtherPngReadersAcceptTheFile) {
   EXPECT_EQ(out, "33 21 RGB\n");
 }
 
+// --azimuth 1e308 aborted on an Embree assertion: its angle in radians overflowed.
+TEST_F(RenderApp, HugeAzimuthAndVerticalViewsDraw) {
+  for (const char* view : {"--azimuth 1e308", "--elevation 90", "--elevation -90 --up z"}) {
+    const auto r = test::run_app("render", mesh_path.string() + " -o " + png("v.png") + " --width 30 --height 30 " + view);
+    ASSERT_EQ(r.exit_code, 0) << view << ": " << r.err;
+    EXPECT_GT(nlohmann::json::parse(r.out)["coverage"].get<double>(), 0.1) << view;
+  }
+}
+
 TEST_F(RenderApp, BadInputGivesOneLineAndNoPicture) {
   Mesh empty;
   empty.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
@@ -111,6 +120,10 @@ TEST_F(RenderApp, BadInputGivesOneLineAndNoPicture) {
       {m + " -o " + out + " --bogus", "unexpected argument \"--bogus\"; usage: render MESH -o OUT.png"},
       {m + " -o " + out + " --width", "--width needs a value; usage: render MESH -o OUT.png"},
       {m + " -o " + png("no/such/folder.png"), png("no/such/folder.png") + ": the folder " + png("no/such") + " does not exist"},
+      // These three aborted on an Embree assertion (exit 134).
+      {m + " -o " + out + " --focus 1e20,0,0", "focus is too far from the mesh (1e+20 from its centre"},
+      {m + " -o " + out + " --zoom 1e-300", "zoom 1e-300 is too small for a 800 x 800 picture"},
+      {m + " -o " + out + " --zoom 1e300", "zoom 1e+300 is too large for a 800 x 800 picture"},
   };
   for (const auto& c : cases) {
     const auto r = test::run_app("render", c.args);

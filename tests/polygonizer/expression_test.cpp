@@ -65,5 +65,27 @@ TEST(Expression, RejectsFormulasTooDeepForItsStack) {
   EXPECT_NE(error_of(deep).find("nested too deeply"), std::string::npos);
 }
 
+std::string repeat(const std::string& s, int n) {
+  std::string r;
+  for (int i = 0; i < n; ++i) r += s;
+  return r;
+}
+
+// Each of these once overflowed the call stack (exit 139) in the recursive parser or in the
+// recursive walks of the formula tree; nesting up to the limits still evaluates.
+TEST(Expression, RejectsNestingThatWouldOverflowTheCallStack) {
+  const std::string levels = "formula nested too deeply (more than 256 levels of parentheses, calls, signs and exponents)";
+  EXPECT_EQ(error_of(repeat("(", 100000) + "x" + repeat(")", 100000)), "expression: " + levels + " at position 257");
+  EXPECT_EQ(error_of(repeat("sin(", 100000) + "x" + repeat(")", 100000)),
+            "expression: " + levels + " at position 1025");
+  EXPECT_EQ(error_of(repeat("-", 100000) + "x"), "expression: " + levels + " at position 257");
+  EXPECT_EQ(error_of("x" + repeat("^1", 100000)), "expression: " + levels + " at position 513");
+  EXPECT_EQ(error_of(repeat("x+", 1000000) + "x"),
+            "expression: formula nested too deeply (more than 10000 operations in a row) at position 20002");
+  EXPECT_DOUBLE_EQ(eval(repeat("(", 200) + "x" + repeat(")", 200)), 0.5);
+  EXPECT_DOUBLE_EQ(eval(repeat("-", 200) + "x"), 0.5);
+  EXPECT_DOUBLE_EQ(eval(repeat("x+", 9999) + "x"), 5000);
+}
+
 }  // namespace
 }  // namespace cdp

@@ -156,5 +156,22 @@ TEST_F(FieldFiles, DuplicateKeysOverflowingNumbersAndFoldersAreNamedErrors) {
   EXPECT_EQ(message(dir_ / "folder.json"), (dir_ / "folder.json").string() + ": is a folder, not a JSON file");
 }
 
+// nlohmann's parser keeps its own stack and its values are destroyed without recursion, so a
+// field file nested 100000 deep is an error like any other (kept so that it stays that way).
+TEST_F(FieldFiles, DeeplyNestedJsonIsAnErrorNotACrash) {
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  for (const auto& [text, message] :
+       {std::pair{deep, "expected a JSON object, found an array"},
+        std::pair{R"({"type": "sphere", "radius": )" + deep + "}", "radius: expected a number, found an array"}}) {
+    const auto path = write("deep.json", text);
+    try {
+      load_field(path);
+      ADD_FAILURE() << message;
+    } catch (const InvalidInputError& e) {
+      EXPECT_EQ(std::string(e.what()), path.string() + ": " + message);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace cdp

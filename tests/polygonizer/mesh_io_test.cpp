@@ -6,6 +6,7 @@
 #include <polygonizer/mesh_io.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -177,7 +178,7 @@ TEST(MeshIOReaders, MalformedFilesAreErrorsNamingTheFileAndTheProblem) {
       {"index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "index.obj:4: a face refers to vertex 4 of 3"},
       {"vertex.obj", "v 0 0\n", "a vertex needs three numbers"},
       {"inf.obj", "v 0 0 inf\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "not a finite number"},
-      {"nofaces.obj", "v 0 0 0\n", "no faces"},
+      {"nofaces.obj", "v 0 0 0\n", "no triangles"},
       {"garbage.off", "hello\n", "not an OFF file"},
       {"counts.off", "OFF\n3\n", "the vertex and face counts"},
       {"huge.off", "OFF\n1000000000 1 0\n0 0 0\n", "too short for them"},
@@ -197,6 +198,74 @@ TEST(MeshIOReaders, MalformedFilesAreErrorsNamingTheFileAndTheProblem) {
     }
   }
   EXPECT_THROW(read_mesh(dir), InvalidInputError);  // a folder
+  std::filesystem::remove_all(dir);
+}
+
+// A binary little-endian PLY of double vertices and int triangles; `declared` vertices in the header.
+std::string binary_ply(const std::vector<Vec3>& vertices, const std::vector<std::array<int, 3>>& faces,
+                       std::size_t declared) {
+  std::string s = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(declared) +
+                  "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
+                  std::to_string(faces.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+  auto put = [&s](const void* p, std::size_t n) { s.append(static_cast<const char*>(p), n); };
+  for (const Vec3& v : vertices) put(v.data(), 3 * sizeof(double));
+  for (const auto& f : faces) {
+    const unsigned char three = 3;
+    put(&three, 1);
+    put(f.data(), 3 * sizeof(int));
+  }
+  return s;
+}
+
+// Each file once gave a smaller or empty mesh (read as a perfect one by evaluate), a stray
+// OpenMesh line on stderr, or std::bad_alloc; each is now an error saying what is wrong.
+TEST(MeshIOErrors, FilesThatCannotBeReadWholeAreRefusedWithTheProblemNamed) {
+  const auto dir = std::filesystem::temp_directory_path() / ("cdp_mesh_io_bad_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Vec3> tri = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  const std::string ply_header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string face_header = "element face %\nproperty list uchar int vertex_indices\nend_header\n";
+  auto faces = [&](int n) { return face_header.substr(0, 13) + std::to_string(n) + face_header.substr(14); };
+  const struct {
+    std::string file, text, message;
+  } cases[] = {
+      {"garbage.obj", "this is not a mesh\n", "garbage.obj:1: unknown OBJ statement \"this\""},
+      {"garbage.off", "garbage garbage\n", "garbage.off:1: not an OFF file"},
+      {"nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "vertex 1 has a coordinate that is not a finite number"},
+      {"inf.off", "OFF\n3 1 0\n0 0 0\n1e999 0 0\n0 1 0\n3 0 1 2\n", "inf.off:4: a vertex: \"1e999\" is not a number"},
+      {"nan.ply", binary_ply({{0, 0, 0}, {1, nan, 0}, {0, 1, 0}}, {{0, 1, 2}}, 3),
+       "vertex 1 has a coordinate that is not a finite number"},
+      {"index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n",
+       "index.obj:4: a face refers to vertex 7 of 3"},
+      {"index.ply", binary_ply(tri, {{0, 1, 2}, {0, 1, 5}}, 3),
+       "face 1 refers to vertex 5 of 3"},
+      {"points.ply", ply_header + "end_header\n0 0 0\n1 0 0\n0 1 0\n", "the mesh has no triangles"},
+      {"header_only.ply", ply_header + faces(1),
+       "the header declares 3 vertex records but the file is too short for them"},
+      {"truncated.ply", ply_header + faces(2) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+       "the data ends early (face 1)"},
+      {"huge.ply", binary_ply(tri, {{0, 1, 2}}, 1000000000000),
+       "the header declares 1000000000000 vertex records but the file is too short for them"},
+  };
+  for (const auto& c : cases) {
+    const auto path = dir / c.file;
+    std::ofstream(path, std::ios::binary) << c.text;
+    testing::internal::CaptureStderr();
+    try {
+      (void)read_mesh(path);
+      ADD_FAILURE() << c.file << " was read";
+    } catch (const InvalidInputError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(path.string(), 0), 0u) << what;
+      EXPECT_NE(what.find(c.message), std::string::npos) << c.file << ": " << what;
+    }
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), "") << c.file << ": nothing of the library on stderr";
+  }
+  // The same data, whole, reads.
+  std::ofstream(dir / "whole.ply", std::ios::binary) << binary_ply(tri, {{0, 1, 2}}, 3);
+  EXPECT_EQ(read_mesh(dir / "whole.ply").triangles.size(), 1u);
   std::filesystem::remove_all(dir);
 }
 

@@ -62,5 +62,23 @@ TEST(NewtonProjection, ReportsNonFiniteFields) {
   EXPECT_EQ(r.status, ProjectionStatus::NotFinite);
 }
 
+// The box of a sphere of radius 1e160 has an infinite diagonal, hence an infinite default
+// tolerance: the start point was returned as converged, 1e160 away from the surface.
+TEST(NewtonProjection, ReportsABoxTooLargeForDoublePrecision) {
+  const Sphere huge(Vec3::Zero(), 1e160);
+  const ProjectionResult r = project_to_surface(huge, Vec3(1, 0, 0));
+  EXPECT_EQ(r.status, ProjectionStatus::OutOfRange);
+  EXPECT_FALSE(r.ok());
+}
+
+// Near x = 1e20 doubles are 16384 apart, far coarser than the tolerance (1e-10 of the box
+// diagonal, 3.8 here): the step rounds to nothing, which is reported at once.
+TEST(NewtonProjection, ReportsAStepThatCannotMoveThePoint) {
+  const Sphere far(Vec3(1e20, 0, 0), 1e10);
+  const ProjectionResult r = project_to_surface(far, Vec3(1e20 + 1e10 + 3e5, 0, 0));
+  EXPECT_EQ(r.status, ProjectionStatus::NoProgress);
+  EXPECT_LT(r.iterations, 5);
+}
+
 }  // namespace
 }  // namespace cdp

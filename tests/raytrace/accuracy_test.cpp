@@ -26,7 +26,10 @@ TEST(Accuracy, SampleStatsArePopulationStatistics) {
   EXPECT_DOUBLE_EQ(s.std, std::sqrt((4.0 + 1.0 + 0.0 + 9.0) / 4.0));
   EXPECT_EQ(s.max, 6.0);
   EXPECT_EQ(s.min, 1.0);
-  EXPECT_EQ(sample_stats({}).count, 0u);
+  // No samples is no measurement: NaN (null in the metrics JSON), never a perfect zero.
+  const SampleStats none = sample_stats({});
+  EXPECT_EQ(none.count, 0u);
+  EXPECT_TRUE(std::isnan(none.mean) && std::isnan(none.std) && std::isnan(none.min) && std::isnan(none.max));
 }
 
 TEST(Accuracy, IcosphereErrorsConvergeQuadratically) {
@@ -129,6 +132,22 @@ TEST(Accuracy, SilhouetteCountsRaysHittingOnlyOneSide) {
   EXPECT_EQ(a.surface_only + a.both_hit + a.neither, a.compared);
   EXPECT_DOUBLE_EQ(a.silhouette_disagreement, static_cast<double>(a.surface_only) / a.compared);
   EXPECT_NEAR(static_cast<double>(a.surface_only), static_cast<double>(a.both_hit), 15.0);
+}
+
+TEST(Accuracy, RaysHittingOnlyTheMeshLeaveTheErrorsUndefinedNotZero) {
+  // A square in a corner of the box, off the sphere: every ray hitting it misses the surface.
+  const Sphere sphere(Vec3::Zero(), 1.0);
+  Mesh corner;
+  corner.positions = {Vec3(0.8, 0.8, 0), Vec3(1.1, 0.8, 0), Vec3(1.1, 1.1, 0), Vec3(0.8, 1.1, 0)};
+  corner.triangles = {{0, 1, 2}, {0, 2, 3}};
+  corner.normals.assign(4, Vec3::UnitZ());
+  const PlaneCase pc;
+  const AccuracyMetrics a = measure(sphere, corner, pc.camera);
+  ASSERT_GT(a.mesh_only, 0u);
+  EXPECT_EQ(a.both_hit, 0u);
+  EXPECT_GT(a.surface_only, 0u);
+  EXPECT_TRUE(std::isnan(a.depth.mean) && std::isnan(a.depth_relative_mean) && std::isnan(a.phong_deg.mean));
+  EXPECT_DOUBLE_EQ(a.silhouette_disagreement, 1.0 - static_cast<double>(a.neither) / a.compared);
 }
 
 }  // namespace

@@ -97,6 +97,9 @@ TEST(Camera, RejectsBadOptions) {
   o.directions = {Vec3::Zero()};
   EXPECT_THROW(make_camera_rays(kBox, o), InvalidInputError);
   EXPECT_THROW(make_camera_rays(Box{}, CameraOptions{}), InvalidInputError);
+  // A finite box whose diagonal overflows (a sphere of radius 1e160) once gave NaN rays.
+  EXPECT_THROW(make_camera_rays(Box{Vec3::Constant(-1e160), Vec3::Constant(1e160)}, CameraOptions{}),
+               InvalidInputError);
   EXPECT_THROW(parse_projection("fisheye"), InvalidInputError);
   EXPECT_EQ(parse_projection("orthographic"), Projection::Orthographic);
 }

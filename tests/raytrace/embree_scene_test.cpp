@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 namespace cdp {
@@ -88,6 +89,26 @@ TEST(EmbreeScene, EmptyMeshMissesAndBadIndicesThrow) {
   Mesh bad = icosphere(0);
   bad.triangles[0][1] = 99;
   EXPECT_THROW(EmbreeScene{bad}, InvalidInputError);
+}
+
+// Embree aborts (an assertion) on such rays and silently drops such triangles: errors instead.
+TEST(EmbreeScene, RaysAndMeshesBeyondEmbreesFloatRangeAreErrors) {
+  const EmbreeScene scene(icosphere(1));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Ray& ray : {Ray{Vec3(0, 0, -1e19), Vec3::UnitZ()}, Ray{Vec3(nan, 0, -5), Vec3::UnitZ()},
+                         Ray{Vec3(0, 0, -5), Vec3(0, 0, nan)}}) {
+    try {
+      (void)scene.intersect({Ray{Vec3(0, 0, -5), Vec3::UnitZ()}, ray});
+      ADD_FAILURE() << ray.origin.transpose();
+    } catch (const InvalidInputError& e) {
+      EXPECT_EQ(std::string(e.what()),
+                "EmbreeScene: ray 1 is not finite or starts more than 1e18 from the mesh's centre, out of Embree's "
+                "float range");
+    }
+  }
+  EXPECT_NO_THROW((void)scene.intersect({Ray{Vec3(0, 0, -9e17), Vec3::UnitZ()}})) << "within the range";
+  EXPECT_THROW(EmbreeScene{icosphere(1, Vec3::Zero(), 1e19)}, InvalidInputError);
+  EXPECT_NO_THROW(EmbreeScene{icosphere(1, Vec3(1e30, 0, 0), 1.0)}) << "far from the origin is fine: it is shifted";
 }
 
 }  // namespace

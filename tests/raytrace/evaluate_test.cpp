@@ -86,5 +86,29 @@ TEST(Evaluate, MeshWithoutNormalsIsRefused) {
   EXPECT_THROW(evaluate_mesh(sphere, mesh, gt, o), InvalidInputError);
 }
 
+// Every accuracy measure of these would be over zero samples, once reported as a perfect 0.
+TEST(Evaluate, MeshWithoutTrianglesOrWithoutAnyRayHittingItIsRefused) {
+  const Sphere sphere(Vec3::Zero(), 1.0);
+  EvaluateOptions o;
+  o.camera.views = 2;
+  o.camera.resolution = 8;
+  o.sampling.samples = 10;
+  const GroundTruth gt = compute_ground_truth(sphere, make_camera_rays(sphere.bounds(), o.camera), o.raycast);
+  ASSERT_GT(gt.counts().hits, 0u);
+  Mesh empty = icosphere(1);
+  empty.triangles.clear();
+  const Mesh far = icosphere(1, Vec3(10, 10, 10));
+  for (const auto& [mesh, message] : {std::pair{empty, std::string("the mesh has no triangles")},
+                                      std::pair{far, "no ray hits the mesh (" + std::to_string(gt.counts().hits) +
+                                                         " of 128 rays hit the surface)"}}) {
+    try {
+      (void)evaluate_mesh(sphere, mesh, gt, o);
+      ADD_FAILURE() << message;
+    } catch (const InvalidInputError& e) {
+      EXPECT_EQ(std::string(e.what()), message);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace cdp

@@ -9,7 +9,9 @@
 
 #include "common/test_fields.h"
 
+#include <cmath>
 #include <numbers>
+#include <optional>
 
 namespace cdp {
 namespace {
@@ -187,6 +189,56 @@ TEST(MeshRender, BadOptionsAndMeshesAreErrors) {
   RenderOptions o;
   EXPECT_THROW(render_mesh(Mesh{}, o), InvalidInputError);
   EXPECT_THROW(parse_up_axis("w"), InvalidInputError);
+}
+
+// These once aborted in Embree (NaN or out-of-range rays) or drew one ray over and over.
+TEST(MeshRender, CamerasThatCannotDrawTheMeshAreErrors) {
+  const Mesh sphere = icosphere(1);  // bounding radius sqrt(3)
+  const struct {
+    double zoom;
+    std::optional<Vec3> focus;
+    std::string message;
+  } cases[] = {
+      {1e-300, {}, "zoom 1e-300 is too small for a 40 x 20 picture: the mesh would span less than a pixel"},
+      {0.04, {}, "zoom 0.04 is too small for a 40 x 20 picture: the mesh would span less than a pixel"},
+      {1e300, {}, "zoom 1e+300 is too large for a 40 x 20 picture: its pixels would be finer than float ray casting resolves"},
+      {1e20, {}, "zoom 1e+20 is too large for a 40 x 20 picture: its pixels would be finer than float ray casting resolves"},
+      {1, Vec3(1e20, 0, 0), "focus is too far from the mesh (1e+20 from its centre, whose bounding radius is 1.73205): "
+                            "the picture's pixels would be finer than float ray casting resolves there"},
+  };
+  for (const auto& c : cases) {
+    RenderOptions o;
+    o.view.width = 40;
+    o.view.height = 20;
+    o.view.zoom = c.zoom;
+    o.view.focus = c.focus;
+    try {
+      (void)render_mesh(sphere, o);
+      ADD_FAILURE() << c.message;
+    } catch (const InvalidInputError& e) {
+      EXPECT_EQ(std::string(e.what()), c.message);
+    }
+  }
+}
+
+// The azimuth is taken modulo 360 (exactly), so a huge one is an angle like any other, and the
+// camera looks straight down the up axis at elevation +-90.
+TEST(MeshRender, AnyFiniteAzimuthAndTheVerticalViewsDraw) {
+  const Mesh sphere = icosphere(2);
+  RenderOptions o;
+  o.view.width = o.view.height = 24;
+  auto image = [&](double azimuth, double elevation) {
+    o.view.azimuth_deg = azimuth;
+    o.view.elevation_deg = elevation;
+    const RenderResult r = render_mesh(sphere, o);
+    EXPECT_GT(r.coverage, 0.1) << azimuth << " " << elevation;
+    return r.image.rgb;
+  };
+  EXPECT_EQ(image(1e308, 0), image(std::fmod(1e308, 360.0), 0));
+  EXPECT_EQ(image(-1e300, 10), image(std::fmod(-1e300, 360.0), 10));
+  EXPECT_EQ(image(400, 20), image(40, 20));
+  (void)image(0, 90);
+  (void)image(0, -90);
 }
 
 }  // namespace

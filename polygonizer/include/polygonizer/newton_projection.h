@@ -16,7 +16,10 @@ struct ProjectionOptions {
   double max_travel = 0;
 };
 
-enum class ProjectionStatus { Converged, MaxIterations, VanishingGradient, TooFar, NotFinite };
+// OutOfRange: the field's box diagonal, which sets the default tolerance and limits, overflows
+// (or vanishes), so no result could be trusted. NoProgress: the Newton step rounds to nothing
+// (the point's coordinates are too coarse in floating point for the tolerance).
+enum class ProjectionStatus { Converged, MaxIterations, VanishingGradient, TooFar, NotFinite, OutOfRange, NoProgress };
 
 struct ProjectionResult {
   Vec3 point = Vec3::Zero();

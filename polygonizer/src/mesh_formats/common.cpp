@@ -17,6 +17,10 @@ void check_mesh(const Mesh& mesh, const std::string& name) {
   for (std::size_t i = 0; i < mesh.positions.size(); ++i)
     if (!mesh.positions[i].allFinite())
       throw InvalidInputError(name + ": vertex " + std::to_string(i) + " has a coordinate that is not a finite number");
+  // Normals feed the Phong error and the shading: a NaN there would score or draw as nonsense.
+  for (std::size_t i = 0; i < mesh.normals.size(); ++i)
+    if (!mesh.normals[i].allFinite())
+      throw InvalidInputError(name + ": vertex " + std::to_string(i) + " has a normal that is not a finite number");
   const auto nv = static_cast<long long>(mesh.positions.size());
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
     for (int k = 0; k < 3; ++k)

@@ -2,6 +2,7 @@
 #include <polygonizer/errors.h>
 #include <polygonizer/models/expression.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -22,6 +23,12 @@ struct Instruction {
 
 // Deep enough for any formula a person writes; the evaluator keeps its stack in a fixed array.
 constexpr int kMaxStack = 64;
+// The parser recurses once per level of parentheses, calls, signs and exponents (4000 levels of
+// parentheses overflowed the default 8 MB stack), and emitting and destroying the formula tree
+// recurse once per level of its height (a sum of 300000 terms overflowed it). Both limits are
+// far beyond any formula a person writes and leave a wide margin for sanitizer builds' frames.
+constexpr int kMaxNesting = 256;
+constexpr int kMaxHeight = 10000;
 
 struct ExpressionProgram {
   std::vector<Instruction> code;
@@ -67,6 +74,7 @@ struct Node {
   Op op;
   double constant = 0;
   std::vector<Node> args;
+  int height = 1;  // of the tree below, this node included
   bool is_constant() const { return op == Op::Const; }
 };
 
@@ -110,15 +118,22 @@ class Parser {
     }
   }
 
-  static Node binary(Op op, Node a, Node b) {
-    Node n{op, 0, {}};
-    n.args.push_back(std::move(a));
-    n.args.push_back(std::move(b));
-    return fold(std::move(n));
+  Node binary(Op op, Node a, Node b) {
+    std::vector<Node> args;
+    args.push_back(std::move(a));
+    args.push_back(std::move(b));
+    return node(op, std::move(args));
   }
-  static Node unary_node(Op op, Node a) {
-    Node n{op, 0, {}};
-    n.args.push_back(std::move(a));
+  Node unary_node(Op op, Node a) {
+    std::vector<Node> args;
+    args.push_back(std::move(a));
+    return node(op, std::move(args));
+  }
+  Node node(Op op, std::vector<Node> args) {
+    Node n{op, 0, std::move(args)};
+    for (const auto& a : n.args) n.height = std::max(n.height, a.height + 1);
+    if (n.height > kMaxHeight)
+      error("formula nested too deeply (more than " + std::to_string(kMaxHeight) + " operations in a row)");
     return fold(std::move(n));
   }
   // Constant subtrees become one constant; x^c becomes PowConst so that negative bases with
@@ -132,7 +147,7 @@ class Parser {
       return Node{Op::Const, p.run(0.0, 0.0, 0.0), {}};
     }
     if (n.op == Op::Pow && n.args[1].is_constant()) {
-      Node r{Op::PowConst, n.args[1].constant, {}};
+      Node r{Op::PowConst, n.args[1].constant, {}, n.height};
       r.args.push_back(std::move(n.args[0]));
       return r;
     }
@@ -155,7 +170,16 @@ class Parser {
       else return n;
     }
   }
+  // Every level of nesting passes here: parentheses and calls (through expr), signs, exponents.
   Node unary() {
+    if (++nesting_ > kMaxNesting)
+      error("formula nested too deeply (more than " + std::to_string(kMaxNesting) +
+            " levels of parentheses, calls, signs and exponents)");
+    Node n = signed_power();
+    --nesting_;
+    return n;
+  }
+  Node signed_power() {
     if (accept('-')) return unary_node(Op::Neg, unary());
     if (accept('+')) return unary();
     return power();
@@ -219,8 +243,7 @@ class Parser {
       error(name + " takes " + std::to_string(it->second.second) + " argument(s), found " +
             std::to_string(args.size()));
     }
-    Node n{it->second.first, 0, std::move(args)};
-    return fold(std::move(n));
+    return node(it->second.first, std::move(args));
   }
 
  public:
@@ -233,6 +256,7 @@ class Parser {
   const std::string& s_;
   const std::map<std::string, double>& params_;
   std::size_t pos_ = 0;
+  int nesting_ = 0;
 };
 
 int stack_depth(const std::vector<Instruction>& code) {

@@ -7,12 +7,16 @@
 
 #include <polygonizer/mesh.h>
 
+#include <limits>
+
 namespace cdp {
 
-// Mean, population standard deviation (divide by n) and maximum of n values; zero when n = 0.
+// Mean, population standard deviation (divide by n) and maximum of n values. NaN when n = 0
+// (null in JSON): no samples is no measurement, and a zero would read as a perfect score.
 struct SampleStats {
   std::size_t count = 0;
-  double mean = 0.0, std = 0.0, max = 0.0, min = 0.0;
+  static constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+  double mean = kNone, std = kNone, max = kNone, min = kNone;
 };
 SampleStats sample_stats(const std::vector<double>& values);
 
@@ -27,7 +31,7 @@ struct AccuracyMetrics {
   // Rays hitting both where the angle is undefined (a zero field gradient, or vertex normals that
   // cancel in the blend): left out of phong_deg and counted here.
   std::size_t phong_undefined = 0;
-  double silhouette_disagreement = 0.0;  // (surface_only + mesh_only) / compared
+  double silhouette_disagreement = 0.0;  // (surface_only + mesh_only) / compared; NaN when none is
 };
 
 // `mesh` must have normals (the ones the Phong normals blend). Throws InvalidInputError when the

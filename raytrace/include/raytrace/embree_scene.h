@@ -33,13 +33,15 @@ struct ClosestPoint {
 // depth errors are not floored by float rounding (about 1e-7 of the distance).
 class EmbreeScene {
  public:
-  // Throws InvalidInputError on out-of-range indices or non-finite positions.
+  // Throws InvalidInputError on out-of-range indices, non-finite positions or a mesh extending
+  // beyond Embree's float range (1e18 from its centre), whose triangles Embree would drop.
   explicit EmbreeScene(const Mesh& mesh);
   ~EmbreeScene();
   EmbreeScene(const EmbreeScene&) = delete;
   EmbreeScene& operator=(const EmbreeScene&) = delete;
 
-  // The first hit of every ray (t >= 0), in parallel over blocks of rays.
+  // The first hit of every ray (t >= 0), in parallel over blocks of rays. Throws InvalidInputError
+  // (where Embree would abort) on a non-finite ray or one starting beyond its float range.
   std::vector<MeshHit> intersect(const std::vector<Ray>& rays) const;
   // The nearest point of the mesh to every point (rtcPointQuery), in parallel.
   std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points) const;

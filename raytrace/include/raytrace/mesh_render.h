@@ -25,7 +25,7 @@ UpAxis parse_up_axis(const std::string& name);
 // it towards the up axis.
 struct ViewOptions {
   int width = 800, height = 800;  // pixels, each in [1, 8192]
-  double azimuth_deg = 0.0;
+  double azimuth_deg = 0.0;       // any finite value, taken modulo 360
   double elevation_deg = 0.0;     // in [-90, 90]
   UpAxis up = UpAxis::Y;
   // The picture's shorter side spans the mesh's bounding sphere (half the box diagonal) divided
@@ -68,7 +68,9 @@ struct RenderResult {
 };
 
 // Throws InvalidInputError on bad options, a mesh without triangles, a missing colour property
-// (or one whose size is not the vertex count), or directions without a field.
+// (or one whose size is not the vertex count), directions without a field, or a camera that
+// float ray casting cannot draw (the mesh under a pixel; pixels finer than 1e-6 of the rays'
+// distance from the mesh's centre, from too large a zoom or too far a focus).
 RenderResult render_mesh(const Mesh& mesh, const RenderOptions& options);
 
 // Sets mesh.vertex_scalars "mac" and "shape_index" from curvature_at(field, vertex) (in
