@@ -53,7 +53,15 @@ int main(int argc, char** argv) {
     if (!proj.ok())
       throw cdp::NoSurfaceError(field_path + ": cannot project " + at + " onto the surface: " +
                                 cdp::to_string(proj.status));
-    const cdp::Curvature c = cdp::curvature_at(*field, proj.point);
+    cdp::Curvature c;
+    try {
+      c = cdp::curvature_at(*field, proj.point);
+    } catch (const cdp::NoSurfaceError& e) {
+      // The library's message starts with its own name, which is also this program's.
+      std::string why = e.what();
+      if (why.rfind("curvature: ", 0) == 0) why.erase(0, 11);
+      throw cdp::NoSurfaceError(field_path + ": no curvature at the projected point: " + why);
+    }
     nlohmann::json out;
     out["projected"] = vec(proj.point);
     out["normal"] = vec(c.normal);

@@ -24,8 +24,9 @@ Curvature curvature_from_derivatives(const Vec3& gradient, const Mat3& hessian) 
   const double g = gradient.norm();
   if (!(g > 0) || !std::isfinite(g) || !hessian.allFinite()) {
     std::ostringstream msg;
-    msg << "curvature: gradient " << (std::isfinite(g) && hessian.allFinite() ? "vanishes" : "is not finite")
-        << " (|grad F| = " << g << ")";
+    if (!std::isfinite(g)) msg << "curvature: the gradient is not finite (|grad F| = " << g << ")";
+    else if (!hessian.allFinite()) msg << "curvature: the Hessian is not finite (|grad F| = " << g << ")";
+    else msg << "curvature: the gradient vanishes (|grad F| = " << g << ")";
     throw NoSurfaceError(msg.str());
   }
   Curvature c;

@@ -58,6 +58,7 @@ TEST(CurvatureAppErrors, BadInputGivesOneLineAndExitCodeOne) {
   test::TempDir dir("curvature_app_errors");
   const auto typo = dir.write("typo.json", R"({"type": "sphere", "radius": 1, "centre": [0,0,0]})");
   const auto huge = dir.write("huge.json", R"({"type": "sphere", "radius": 1e160})");
+  const auto tiny = dir.write("tiny.json", R"({"type": "sphere", "radius": 1e-150})");
   const auto deep = dir.write("deep.json", R"({"type": "expression", "bounds": [[-1,-1,-1],[1,1,1]], "value": ")" +
                                                std::string(4000, '(') + "x" + std::string(4000, ')') + "\"}");
   const auto flat = dir.write("flat.json",
@@ -73,6 +74,10 @@ TEST(CurvatureAppErrors, BadInputGivesOneLineAndExitCodeOne) {
       {flat.string() + " --at 0,0,0", flat.string() + ": cannot project 0,0,0 onto the surface: the gradient vanishes"},
       {huge.string() + " --at 1,0,0", huge.string() + ": cannot project 1,0,0 onto the surface: the field's box is too "
                                                       "large (or too small) for double precision"},
+      // The Hessian of a sphere of radius 1e-150 overflows (1/r): said so, with the file, once.
+      {tiny.string() + " --at 1e-150,0,0", tiny.string() + ": no curvature at the projected point: the Hessian is not "
+                                                           "finite (|grad F| = 1)"},
+      {flat.string() + " --at 1,0,0 --at 2,0,0", "--at given twice"},
       {flat.string(), "usage: curvature FIELD.json --at x,y,z"},
   };
   for (const auto& c : cases) {
