@@ -3,7 +3,8 @@
 # apt-get update runs only when something is missing. Run as root (or with sudo available).
 set -euo pipefail
 pkgs=(cmake g++ make libeigen3-dev libembree-dev libtbb-dev libopenmesh-dev
-      nlohmann-json3-dev libbenchmark-dev libgtest-dev python3-matplotlib)
+      nlohmann-json3-dev libbenchmark-dev libgtest-dev python3-matplotlib
+      libcli11-dev libstb-dev pybind11-dev python3-pybind11 python3-dev python3-numpy python3-pytest)
 if [ "${1:-}" = "--browser" ]; then pkgs+=(chromium); fi
 missing=()
 for p in "${pkgs[@]}"; do
