@@ -32,7 +32,7 @@ namespace {
 using namespace cdp;
 
 const std::string kFieldsDir = std::string(CDP_SOURCE_DIR) + "/experiments/fields/";
-const std::string kDataDir = std::string(CDP_SOURCE_DIR) + "/../shared/data/";
+const std::string kDataDir = std::string(CDP_SOURCE_DIR) + "/data/";
 
 const Field& field(const std::string& name) {
   static std::map<std::string, std::unique_ptr<Field>> cache;

@@ -6,7 +6,7 @@ import platform
 import subprocess
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-PAPER_TABLE = os.path.join(ROOT, "..", "shared", "paper", "table1.json")
+PAPER_TABLE = os.path.join(ROOT, "data", "paper_table1.json")
 
 
 def load_summary(name, results=None):

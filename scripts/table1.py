@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """results/table1.{md,csv,json} and results/claims.md from results/table1/summary.json.
 
-Our measured values stand beside the paper's (../shared/paper/table1.json); the claims of the
+Our measured values stand beside the paper's (data/paper_table1.json); the claims of the
 paper's section 8 and conclusion are stated as tests on the measured numbers.
 """
 import argparse

@@ -150,13 +150,13 @@ TEST(Mpu, LoadsFromJsonAndReportsBadKeys) {
     return "";
   };
   EXPECT_NE(error_of(R"({"type": "mpu", "points": "missing.ply"})").find("missing.ply"), std::string::npos);
-  EXPECT_NE(error_of(R"({"type": "mpu", "points": "../../../shared/data/bunny.ply", "min_points": 5})")
+  EXPECT_NE(error_of(R"({"type": "mpu", "points": "../../data/bunny.ply", "min_points": 5})")
                 .find("min_points"),
             std::string::npos);
-  EXPECT_NE(error_of(R"({"type": "mpu", "points": "../../../shared/data/bunny.ply", "support_factor": 0.4})")
+  EXPECT_NE(error_of(R"({"type": "mpu", "points": "../../data/bunny.ply", "support_factor": 0.4})")
                 .find("support_factor"),
             std::string::npos);
-  EXPECT_NE(error_of(R"({"type": "mpu", "points": "../../../shared/data/bunny.ply", "max_eror": 0.01})")
+  EXPECT_NE(error_of(R"({"type": "mpu", "points": "../../data/bunny.ply", "max_eror": 0.01})")
                 .find("max_eror"),
             std::string::npos);
 }

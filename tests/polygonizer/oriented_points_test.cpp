@@ -40,7 +40,7 @@ TEST(OrientedPoints, LargerFacesWeighMore) {
 }
 
 TEST(OrientedPoints, BunnyScanHasOutwardUnitNormals) {
-  const OrientedPoints pts = read_oriented_points(std::string(CDP_SOURCE_DIR) + "/../shared/data/bunny.ply");
+  const OrientedPoints pts = read_oriented_points(std::string(CDP_SOURCE_DIR) + "/data/bunny.ply");
   EXPECT_GT(pts.size(), 34000u);
   EXPECT_LE(pts.size(), 35947u);
   const Vec3 centre = bounding_box(pts.positions).center();

@@ -202,13 +202,13 @@ TEST(Vis, JsonErrorsNameTheProblem) {
     return "";
   };
   EXPECT_NE(error_of(R"({"type": "vis", "points": "nope.ply"})").find("nope.ply"), std::string::npos);
-  EXPECT_NE(error_of(R"({"type": "vis", "points": "../../../shared/data/bunny.ply", "constraints": 801})")
+  EXPECT_NE(error_of(R"({"type": "vis", "points": "../../data/bunny.ply", "constraints": 801})")
                 .find("constraints"),
             std::string::npos);
-  EXPECT_NE(error_of(R"({"type": "vis", "points": "../../../shared/data/bunny.ply", "constraints": 200000})")
+  EXPECT_NE(error_of(R"({"type": "vis", "points": "../../data/bunny.ply", "constraints": 200000})")
                 .find("the scan has"),
             std::string::npos);
-  EXPECT_NE(error_of(R"({"type": "vis", "points": "../../../shared/data/bunny.ply", "normal_ofset": 0.01})")
+  EXPECT_NE(error_of(R"({"type": "vis", "points": "../../data/bunny.ply", "normal_ofset": 0.01})")
                 .find("normal_ofset"),
             std::string::npos);
 }
