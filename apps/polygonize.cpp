@@ -11,6 +11,7 @@
 #include <polygonizer/errors.h>
 #include <polygonizer/field_factory.h>
 #include <polygonizer/mesh_io.h>
+#include <polygonizer/polygonize_stats_json.h>
 
 #include <cmath>
 #include <cstdio>

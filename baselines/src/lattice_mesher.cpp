@@ -429,7 +429,7 @@ void LatticeMesher::run_continuation() {
 }  // namespace
 
 PolygonizeResult run_marching(const Field& field, const MarchingOptions& options, const char* method,
-                              const CubeMesher& mesher, const nlohmann::json& extra) {
+                              const CubeMesher& mesher, const std::map<std::string, StatValue>& extra) {
   const auto t0 = std::chrono::steady_clock::now();
   const EvaluationCounts before = field.counts();
   LatticeMesher lm(field, options, method, mesher);
@@ -453,7 +453,7 @@ PolygonizeResult run_marching(const Field& field, const MarchingOptions& options
   st.extra["traversal"] = to_string(options.traversal);
   st.extra["cell_size"] = lm.h_;
   if (options.precision >= 0) st.extra["precision"] = options.precision;
-  st.extra["lattice_cells"] = {lm.lattice_.cells[0], lm.lattice_.cells[1], lm.lattice_.cells[2]};
+  st.extra["lattice_cells"] = std::vector<long long>{lm.lattice_.cells[0], lm.lattice_.cells[1], lm.lattice_.cells[2]};
   st.extra["root_tolerance"] = lm.tolerance_;
   st.extra["cubes_visited"] = lm.cubes_visited;
   st.extra["cubes_crossed"] = lm.cubes_crossed;

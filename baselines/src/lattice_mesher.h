@@ -39,6 +39,6 @@ using CubeMesher = std::function<void(const std::array<double, 8>& f, CubeMesh& 
 // Runs the traversal of the options over the lattice, meshing each visited cube with `mesher`.
 // `method` names the method in errors and statistics; `extra` is merged into stats.extra.
 PolygonizeResult run_marching(const Field& field, const MarchingOptions& options, const char* method,
-                              const CubeMesher& mesher, const nlohmann::json& extra);
+                              const CubeMesher& mesher, const std::map<std::string, StatValue>& extra);
 
 }  // namespace cdp::marching

@@ -1,6 +1,14 @@
-#include <polygonizer/polygonize_stats.h>
+#include <polygonizer/polygonize_stats_json.h>
 
 namespace cdp {
+
+namespace {
+
+nlohmann::json value_json(const StatValue& v) {
+  return std::visit([](const auto& x) { return nlohmann::json(x); }, v.variant());
+}
+
+}  // namespace
 
 nlohmann::json to_json(const PolygonizeStats& s) {
   nlohmann::json j;
@@ -15,7 +23,15 @@ nlohmann::json to_json(const PolygonizeStats& s) {
                             {"total", s.field_evaluations.total()}};
   j["splits"] = s.splits;
   j["merges"] = s.merges;
-  for (const auto& [k, v] : s.extra.items()) j[k] = v;
+  for (const auto& [name, v] : s.extra) {
+    nlohmann::json* at = &j;
+    std::size_t start = 0;
+    for (std::size_t dot = name.find('.'); dot != std::string::npos; dot = name.find('.', start)) {
+      at = &(*at)[name.substr(start, dot - start)];
+      start = dot + 1;
+    }
+    (*at)[name.substr(start)] = value_json(v);
+  }
   return j;
 }
 

@@ -208,7 +208,8 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["crease_points"] = tracker.crease_points();
   st.extra["over_mesh_rejections"] = tracker.over_mesh();
   st.extra["min_angle_degrees"] = min_angle_degrees(mesh);
-  st.extra["edge_length"] = {{"min", s.sizing.min_edge}, {"max", s.sizing.max_edge}};
+  st.extra["edge_length.min"] = s.sizing.min_edge;
+  st.extra["edge_length.max"] = s.sizing.max_edge;
   st.extra["sizing"] = to_string(s.sizing.mode);
   if (s.sizing.mode == SizingMode::Factor) st.extra["factor"] = s.sizing.factor;
   else st.extra["tolerance"] = s.sizing.tolerance;
