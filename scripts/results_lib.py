@@ -60,6 +60,10 @@ def run_row(run):
         "evaluations_per_triangle": ev / tri if ev and tri else None,
         "evaluations_per_vertex": ev / verts if ev and verts else None,
         "curvature_seconds": number(get(st, "curvature_seconds")),
+        "hessian_seconds": number(get(st, "hessian_seconds")),
+        "hessian_evaluations": number(get(st, "field_evaluations", "gradient_hessian")),
+        "shares_at_most": get(m, "edge_ratio", "share_at_most"),
+        "self_intersections": get(m, "topology", "self_intersections", "pairs"),
         "seconds": sec,
         "ratio_ls": number(get(m, "edge_ratio", "mean")),
         "deviation": number(get(m, "edge_ratio", "std")),
@@ -118,7 +122,10 @@ def environment(build_dir):
         env["compiler"] = compiler
     try:
         env["commit"] = subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"],
+        # results/ itself is rewritten by the run being described: only the rest of the tree
+        # says whether the code that produced it was committed.
+        dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
+                                ":(exclude)results"],
                                capture_output=True, text=True).stdout.strip()
         env["dirty"] = bool(dirty)
     except OSError:

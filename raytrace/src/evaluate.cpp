@@ -26,6 +26,9 @@ nlohmann::json to_json(const MeshQuality& q) {
   j["edge_ratio"] = to_json(q.edge_ratio);
   j["edge_ratio"]["histogram"] = {{"edges", q.histogram_edges}, {"counts", q.histogram_counts},
                                   {"overflow", q.histogram_overflow}};
+  // Keys are the thresholds as written ("1.25"), so that scripts read them without rounding.
+  for (std::size_t i = 0; i < q.share_thresholds.size(); ++i)
+    j["edge_ratio"]["share_at_most"][nlohmann::json(q.share_thresholds[i]).dump()] = q.shares_at_most[i];
   j["near_equilateral_fraction"] = q.near_equilateral_fraction;
   j["near_equilateral_definition"] = "longest / shortest edge <= " + nlohmann::json(q.near_equilateral_ratio).dump();
   j["min_angle_deg"] = to_json(q.min_angle_deg);

@@ -49,6 +49,11 @@ MeshQuality compute_mesh_quality(const Mesh& mesh, const MeshQualityOptions& opt
     // 2 r_in / r_circ = 16 A^2 / (perimeter * la * lb * lc).
     radius_ratios.push_back(16.0 * area * area / ((la + lb + lc) * la * lb * lc));
   }
+  q.share_thresholds = options.share_thresholds;
+  for (const double t : q.share_thresholds) {
+    const auto n = std::count_if(ratios.begin(), ratios.end(), [t](double r) { return r <= t; });
+    q.shares_at_most.push_back(ratios.empty() ? 0.0 : static_cast<double>(n) / static_cast<double>(ratios.size()));
+  }
   q.edge_ratio = sample_stats(ratios);
   q.near_equilateral_fraction = ratios.empty() ? 0.0 : static_cast<double>(near_equilateral) / static_cast<double>(ratios.size());
   q.min_angle_deg = sample_stats(min_angles);

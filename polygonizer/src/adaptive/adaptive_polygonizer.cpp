@@ -193,6 +193,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.merges = tracker.merges();
   st.extra["seeds"] = seeding.seeds;
   st.extra["curvature_seconds"] = tracker.curvature_seconds();
+  st.extra["hessian_seconds"] = tracker.hessian_seconds();
   st.extra["failed_seeds"] = seeding.failed_seeds;
   st.extra["sign_changes"] = seeding.sign_changes;
   st.extra["covered_nearby"] = seeding.covered_nearby;

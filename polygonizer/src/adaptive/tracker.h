@@ -85,7 +85,10 @@ class Tracker {
   // Placements refused because they landed on finished mesh.
   std::size_t over_mesh() const { return over_mesh_; }
   // Wall-clock time spent in curvature_at (Hessian evaluation and eigen-decomposition).
+  // Time in curvature: the Hessian evaluations and the eigen-decomposition together, and the
+  // evaluations alone.
   double curvature_seconds() const { return curvature_seconds_; }
+  double hessian_seconds() const { return hessian_seconds_; }
   const std::vector<double>& vertex_mac() const { return mac_; }
   const std::vector<double>& vertex_shape_index() const { return shape_index_; }
   const std::vector<double>& vertex_edge_length() const { return target_; }
@@ -183,7 +186,7 @@ class Tracker {
   std::uint64_t window_visits_ = 0;  // search_visits() at the start of the current window
   std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0, forced_closures_ = 0;
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;
-  mutable double curvature_seconds_ = 0;
+  mutable double curvature_seconds_ = 0, hessian_seconds_ = 0;
   mutable std::size_t crease_points_ = 0, over_mesh_ = 0;
   ProgressCallback progress_;
 };

@@ -17,6 +17,10 @@ struct MeshQualityOptions {
   // Histogram of edge ratios: bins [edges[i], edges[i+1]); larger ratios go to `overflow`.
   // Default: 1.0, 1.1, ..., 3.0.
   std::vector<double> histogram_edges;
+  // Shares of triangles with longest / shortest edge at or below each of these: the paper's
+  // "about 50% equilateral" is undefined, and its own means and deviations are consistent with
+  // some thresholds only (scripts/table1.py judges the claim at those).
+  std::vector<double> share_thresholds = {1.1, 1.2, 1.25, 1.3};
 };
 
 struct MeshQuality {
@@ -28,6 +32,8 @@ struct MeshQuality {
   std::vector<double> histogram_edges;
   std::vector<std::size_t> histogram_counts;
   std::size_t histogram_overflow = 0;
+  std::vector<double> share_thresholds;   // as in the options
+  std::vector<double> shares_at_most;     // of the non-degenerate triangles, one per threshold
   SampleStats min_angle_deg;    // smallest angle of each triangle
   SampleStats radius_ratio;     // 2 r_in / r_circ: 1 equilateral, 0 degenerate
   SampleStats edge_length;      // over triangle sides (each shared edge counted per triangle)
