@@ -3,7 +3,7 @@
 //   build/bin/bench_raytrace --benchmark_min_time=0.05
 #include <raytrace/embree_scene.h>
 #include <raytrace/implicit_raycast.h>
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <polygonizer/models/analytic.h>
 #include <polygonizer/models/expression.h>

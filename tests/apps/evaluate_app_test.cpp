@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <polygonizer/mesh_io.h>
 

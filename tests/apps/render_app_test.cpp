@@ -1,7 +1,7 @@
 // build/bin/render writes real PNG pictures of meshes and fails cleanly on bad input.
 #include <gtest/gtest.h>
 
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <polygonizer/mesh_io.h>
 

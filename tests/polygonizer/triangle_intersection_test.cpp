@@ -7,7 +7,7 @@
 #include <polygonizer/triangle_intersection.h>
 
 #include <polygonizer/errors.h>
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 #include <raytrace/self_intersection.h>
 
 #include <gtest/gtest.h>

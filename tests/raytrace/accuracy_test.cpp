@@ -1,7 +1,7 @@
 // Checks raytrace/accuracy.h: depth and Phong errors of an icosphere shrink as h^2, a mesh
 // shifted along the view direction has exactly that depth error, flipped normals give 180 deg.
 #include <raytrace/accuracy.h>
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <polygonizer/models/analytic.h>
 #include <polygonizer/models/expression.h>

@@ -1,7 +1,7 @@
 // Checks raytrace/embree_scene.h: hits agree with the triangle they name, misses, closest points
 // against brute force, and the closest point on a triangle in each of its regions.
 #include <raytrace/embree_scene.h>
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <polygonizer/errors.h>
 

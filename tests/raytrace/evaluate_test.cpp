@@ -1,6 +1,6 @@
 // Checks raytrace/evaluate.h: the documented metric names are all present and consistent.
 #include <raytrace/evaluate.h>
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <polygonizer/errors.h>
 #include <polygonizer/models/analytic.h>

@@ -1,6 +1,6 @@
 // Checks raytrace/mesh_quality.h against values computed by hand.
 #include <raytrace/mesh_quality.h>
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <raytrace/mesh_render.h>
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <polygonizer/errors.h>
 

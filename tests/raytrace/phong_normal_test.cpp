@@ -1,6 +1,6 @@
 // Checks raytrace/phong_normal.h: barycentric blending and area-weighted vertex normals.
 #include <raytrace/phong_normal.h>
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <polygonizer/errors.h>
 

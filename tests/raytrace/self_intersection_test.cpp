@@ -2,7 +2,7 @@
 // against a brute-force count, every adjacency rule of the exact test, degenerate and invalid
 // input, the broad phase against brute force on random boxes and triangle soups (no candidate is
 // lost), and an independent floating-point test on random triangles in general position.
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 #include <raytrace/self_intersection.h>
 
 #include <polygonizer/errors.h>

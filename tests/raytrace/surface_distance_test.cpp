@@ -1,7 +1,7 @@
 // Checks raytrace/surface_distance.h: deterministic area-weighted sampling, vertex and sampled
 // distances of an icosphere against the sphere, surface-to-mesh distance of a shifted plane.
 #include <raytrace/surface_distance.h>
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <polygonizer/models/analytic.h>
 #include <polygonizer/models/expression.h>

@@ -1,4 +1,4 @@
-#include <raytrace/reference_meshes.h>
+#include "common/reference_meshes.h"
 
 #include <polygonizer/errors.h>
 
