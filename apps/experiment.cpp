@@ -334,6 +334,7 @@ int summarize(const Experiment& e, const Paths& p) {
       {"manifold", "/metrics/topology/manifold"},
       {"components", "/metrics/topology/components"},
       {"genus", "/metrics/topology/genus"},
+      {"self_intersections", "/metrics/topology/self_intersections/pairs"},
   };
   nlohmann::json summary{{"experiment", e.name}, {"description", e.description}, {"seed", e.seed}, {"runs", nlohmann::json::array()}};
   std::ostringstream csv;

@@ -49,8 +49,12 @@ def paper_row(paper, method, parameter):
 def topology_text(r):
     if r["closed"] is None:
         return "—"
-    return "{} / {} / {}c g{}".format("closed" if r["closed"] else "OPEN", "manifold" if r["manifold"] else "NON-MANIFOLD",
+    text = "{} / {} / {}c g{}".format("closed" if r["closed"] else "OPEN", "manifold" if r["manifold"] else "NON-MANIFOLD",
                                       r["components"], r["genus"])
+    # A mesh crossing itself is wrong however closed it is: said in the cell, not only in metrics.json.
+    if r.get("self_intersections"):
+        text += " / {} SELF-INTERSECTING PAIRS".format(r["self_intersections"])
+    return text
 
 
 def markdown(rows, paper, env, summary):
