@@ -1,5 +1,7 @@
 #include <raytrace/phong_normal.h>
 
+#include <cmath>
+
 #include <polygonizer/errors.h>
 
 namespace cdp {
@@ -23,6 +25,17 @@ std::vector<Vec3> area_weighted_normals(const Mesh& mesh) {
   for (Vec3& n : normals) {
     const double len = n.norm();
     n = len > 0.0 ? Vec3(n / len) : Vec3::Zero();
+  }
+  return normals;
+}
+
+std::vector<Vec3> field_normals(const Field& field, const Mesh& mesh) {
+  std::vector<Vec3> normals(mesh.positions.size(), Vec3::Zero());
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+    Vec3 g;
+    field.value_gradient(mesh.positions[i], g);
+    const double len = g.norm();
+    if (len > 0.0 && std::isfinite(len)) normals[i] = g / len;
   }
   return normals;
 }

@@ -3,6 +3,8 @@
 #include "common/reference_meshes.h"
 
 #include <polygonizer/errors.h>
+#include <polygonizer/models/analytic.h>
+#include <polygonizer/models/expression.h>
 
 #include <gtest/gtest.h>
 
@@ -38,6 +40,21 @@ TEST(PhongNormal, AreaWeightedNormalsOfAnIcosphereAreNearlyRadial) {
   two.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(-1e-3, 0, 1e-3)};
   two.triangles = {{0, 1, 2}, {0, 2, 3}};
   EXPECT_GT(area_weighted_normals(two)[0].z(), 0.999);
+}
+
+TEST(FieldNormals, AreTheNormalizedGradientAtEachVertex) {
+  // On a sphere's icosphere every vertex lies on the surface: the field's normal is radial.
+  const Sphere sphere(Vec3(0.5, 0, 0), 2.0);
+  const Mesh m = icosphere(2, Vec3(0.5, 0, 0), 2.0);
+  const auto n = field_normals(sphere, m);
+  ASSERT_EQ(n.size(), m.positions.size());
+  for (std::size_t i = 0; i < n.size(); ++i) EXPECT_LT((n[i] - m.normals[i]).norm(), 1e-12);
+  // Where the gradient vanishes (the centre of the sphere x^2+y^2+z^2-1 as an expression with a
+  // zero gradient at the origin), the normal is zero rather than NaN.
+  Mesh centre;
+  centre.positions = {Vec3(0.5, 0, 0)};
+  const Expression f("(x-0.5)^2 + y^2 + z^2 - 4", {}, Box{Vec3(-3, -3, -3), Vec3(3, 3, 3)});
+  EXPECT_EQ(field_normals(f, centre)[0], Vec3::Zero());
 }
 
 }  // namespace
