@@ -30,7 +30,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: evaluate FIELD.json MESH.ply [--rays N] [--views V] [--projection perspective|orthographic] "
-    "[--samples N] [--cache DIR] [--quiet | --progress] -o METRICS.json";
+    "[--samples N] [--cache DIR] [--normals field|file|mesh] [--quiet | --progress] -o METRICS.json";
 
 long long parse_count(const std::string& option, const std::string& text, long long lo, long long hi) {
   std::size_t used = 0;
@@ -68,7 +68,7 @@ bool same_rays(const std::vector<cdp::Ray>& a, const std::vector<cdp::Ray>& b) {
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
   try {
-    std::string field_path, mesh_path, out_path, cache_dir;
+    std::string field_path, mesh_path, out_path, cache_dir, normals_choice;
     bool quiet = false, progress_lines = false;
     cdp::EvaluateOptions options;
     std::set<std::string> seen;
@@ -87,6 +87,11 @@ int main(int argc, char** argv) {
       else if (arg == "--samples") options.sampling.samples = static_cast<std::size_t>(parse_count(arg, value(), 1, 100000000));
       else if (arg == "--projection") options.camera.projection = cdp::parse_projection(value());
       else if (arg == "--cache") cache_dir = value();
+      else if (arg == "--normals") {
+        normals_choice = value();
+        if (normals_choice != "field" && normals_choice != "file" && normals_choice != "mesh")
+          throw cdp::InvalidInputError("--normals must be field, file or mesh, not \"" + normals_choice + "\"");
+      }
       else if (arg == "-o") out_path = value();
       else if (arg == "-h" || arg == "--help") {
         std::cout << kUsage << "\n";
@@ -106,10 +111,21 @@ int main(int argc, char** argv) {
     const std::string field_text = read_text(field_path);
     const auto field = cdp::load_field(field_path);
     cdp::Mesh mesh = cdp::read_mesh(mesh_path);
-    std::string normals_source = "file";
-    if (mesh.normals.size() != mesh.positions.size()) {
+    // Which vertex normals the Phong error uses: the file's, the field's gradient at the vertices
+    // (the exact normal, as the adaptive method writes them) or the mesh's own area-weighted
+    // ones. Default: the file's when it has them, else the field's, so that a mesh from another
+    // tool is not judged on how it estimates normals.
+    if (normals_choice.empty()) normals_choice = mesh.normals.size() == mesh.positions.size() ? "file" : "field";
+    std::string normals_source = normals_choice;
+    if (normals_choice == "file") {
+      if (mesh.normals.size() != mesh.positions.size())
+        throw cdp::InvalidInputError(mesh_path + ": --normals file, but the mesh file has no vertex normals");
+    } else if (normals_choice == "field") {
+      mesh.normals = cdp::field_normals(*field, mesh);
+      normals_source = "field (normalized gradient at the vertices)";
+    } else {
       mesh.normals = cdp::area_weighted_normals(mesh);
-      normals_source = "area_weighted (the mesh file has no vertex normals)";
+      normals_source = "mesh (area-weighted face normals)";
     }
 
     const auto start = std::chrono::steady_clock::now();

@@ -95,5 +95,37 @@ TEST_F(EvaluateApp, FieldsTooLargeForTheRaysAreErrors) {
   }
 }
 
+// A mesh without normals (another tool's OBJ) is judged with the field's normals by default,
+// so that the Phong error measures the mesh rather than a normal estimator; each choice is
+// named in metrics.json.
+TEST_F(EvaluateApp, NormalsComeFromTheFileTheFieldOrTheMesh) {
+  Mesh ico = icosphere(2);
+  const auto with = dir.path / "with.ply";
+  write_mesh(ico, with);
+  ico.normals.clear();
+  const auto without = dir.path / "without.obj";
+  write_mesh(ico, without);
+  const auto normals = [&](const std::filesystem::path& mesh, const std::string& flag) {
+    const auto r = test::run_app("evaluate", args(mesh) + flag);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream in(metrics);
+    const auto j = nlohmann::json::parse(in);
+    std::filesystem::remove(metrics);
+    return std::make_pair(j["normals"].get<std::string>(), j["phong_error_deg"]["mean"].get<double>());
+  };
+  EXPECT_EQ(normals(with, "").first, "file");
+  const auto [field_source, field_phong] = normals(without, "");
+  EXPECT_EQ(field_source.rfind("field", 0), 0u) << field_source;
+  const auto [mesh_source, mesh_phong] = normals(without, " --normals mesh");
+  EXPECT_EQ(mesh_source.rfind("mesh", 0), 0u) << mesh_source;
+  // On the icosphere of the unit sphere the field's normals are the file's (radial).
+  EXPECT_NEAR(field_phong, normals(with, " --normals file").second, 1e-9);
+  EXPECT_NE(field_phong, mesh_phong);
+  const auto r = test::run_app("evaluate", args(without) + " --normals file");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err, "evaluate: " + without.string() + ": --normals file, but the mesh file has no vertex normals\n");
+  EXPECT_FALSE(std::filesystem::exists(metrics));
+}
+
 }  // namespace
 }  // namespace cdp
