@@ -132,8 +132,13 @@ Mesh read_mesh(const std::filesystem::path& path) {
   if (ext == ".stl") {
     silence_openmesh();
     TriMesh om;
-    if (!OpenMesh::IO::read_mesh(om, name)) throw InvalidInputError(name + ": cannot read mesh (malformed STL file)");
+    OpenMesh::IO::Options read;
+    if (!OpenMesh::IO::read_mesh(om, name, read)) throw InvalidInputError(name + ": cannot read mesh (malformed STL file)");
     Mesh mesh = from_openmesh(om);
+    // STL stores face normals only. The traits give every TriMesh a vertex normal property,
+    // which the reader leaves as allocated: uninitialised values, sometimes NaN, that were
+    // returned as the file's normals (and then refused by check_mesh at random).
+    if (!read.vertex_has_normal()) mesh.normals.clear();
     formats::check_mesh(mesh, name);
     return mesh;
   }
