@@ -80,3 +80,16 @@ def test_evaluate_bad_input():
         cdp.evaluate(sphere, V, [[0, 1, 2]], views=0)
     with pytest.raises(ValueError, match="orthogonal"):
         cdp.evaluate(sphere, V, [[0, 1, 2]], projection="orthogonal")
+
+
+def test_evaluate_a_callable_field():
+    """The ray casting calls the field from TBB's threads, each taking the GIL in turn."""
+    box = ((-1.5, -1.5, -0.5), (1.5, 1.5, 0.5))
+    expression = cdp.expression("(sqrt(x^2 + y^2) - 1)^2 + z^2 - 0.09", bounds=box)
+    field = cdp.callable_field(lambda p: (np.sqrt(p[:, 0] ** 2 + p[:, 1] ** 2) - 1) ** 2 + p[:, 2] ** 2 - 0.09, box)
+    V, F, N, _ = cdp.polygonize(expression, factor=3, return_normals=True)
+    a = cdp.evaluate(expression, V, F, normals=N, views=1, resolution=24, samples=500)
+    b = cdp.evaluate(field, V, F, normals=N, views=1, resolution=24, samples=500)
+    assert field.python_calls > 0
+    assert b["rays"]["surface_hits"] == a["rays"]["surface_hits"]
+    assert b["depth_error"]["mean"] == pytest.approx(a["depth_error"]["mean"], rel=1e-6)
