@@ -50,11 +50,14 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
   // limit) reaches the message, and so that fsync can make the contents durable before the
   // rename makes them visible.
   const int fd = open(tmp_name.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw InvalidInputError(failure + ": " + errno_text(errno));
+  if (fd < 0) {
+    const int err = errno;
+    throw FileError(failure + ": " + errno_text(err), err);
+  }
   const auto fail = [&](int err) {
     close(fd);
     unlink(tmp_name.c_str());
-    throw InvalidInputError(failure + ": " + errno_text(err));
+    throw FileError(failure + ": " + errno_text(err), err);
   };
   const char* data = contents.data();
   std::size_t left = contents.size();
@@ -72,12 +75,12 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
   if (close(fd) != 0) {
     const int err = errno;
     unlink(tmp_name.c_str());
-    throw InvalidInputError(failure + ": " + errno_text(err));
+    throw FileError(failure + ": " + errno_text(err), err);
   }
   if (std::rename(tmp_name.c_str(), path.c_str()) != 0) {
     const int err = errno;
     unlink(tmp_name.c_str());
-    throw InvalidInputError(failure + ": " + errno_text(err));
+    throw FileError(failure + ": " + errno_text(err), err);
   }
 }
 

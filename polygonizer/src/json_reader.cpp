@@ -2,6 +2,7 @@
 #include <polygonizer/json_reader.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -165,7 +166,7 @@ std::filesystem::path JsonReader::file(const std::string& key) {
   std::filesystem::path p = string(key);
   if (p.is_relative() && !base_dir_.empty()) p = base_dir_ / p;
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(p, ec)) fail(key, "file not found: " + p.string());
+  if (!std::filesystem::is_regular_file(p, ec)) throw FileError(where(key) + ": file not found: " + p.string(), ENOENT);
   return p;
 }
 JsonReader JsonReader::object(const std::string& key) {
@@ -213,9 +214,13 @@ void JsonReader::finish(const std::vector<std::string>& known) const {
 
 nlohmann::json read_json_file(const std::filesystem::path& path) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InvalidInputError(path.string() + ": is a folder, not a JSON file");
+  if (std::filesystem::is_directory(path, ec)) throw FileError(path.string() + ": is a folder, not a JSON file", EISDIR);
+  errno = 0;
   std::ifstream in(path);
-  if (!in) throw InvalidInputError(path.string() + ": cannot open file");
+  if (!in) {
+    const int err = errno;
+    throw FileError(path.string() + ": cannot open file", err);
+  }
   // A key given twice in one object is an error: nlohmann keeps the last value silently, and a
   // field whose "radius" is written twice is a mistake to point at, not to guess about. One set
   // of keys per open object.
@@ -239,7 +244,7 @@ nlohmann::json read_json_file(const std::filesystem::path& path) {
     if (auto pos = msg.find("] "); pos != std::string::npos) msg = msg.substr(pos + 2);
     throw InvalidInputError(path.string() + ": malformed JSON: " + msg);
   }
-  if (in.bad()) throw InvalidInputError(path.string() + ": cannot read file");
+  if (in.bad()) throw FileError(path.string() + ": cannot read file", EIO);
   if (!duplicate.empty()) throw InvalidInputError(path.string() + ": the key \"" + duplicate + "\" appears twice in one object");
   return j;
 }

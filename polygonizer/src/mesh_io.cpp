@@ -8,6 +8,7 @@
 #include <polygonizer/mesh_io.h>
 
 #include <cctype>
+#include <cerrno>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -123,22 +124,32 @@ Mesh read_mesh(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
-  if (!std::filesystem::exists(status)) throw InvalidInputError(name + ": file not found");
-  if (std::filesystem::is_directory(status)) throw InvalidInputError(name + ": is a directory, not a mesh file");
+  if (!std::filesystem::exists(status)) throw FileError(name + ": file not found", ec ? ec.value() : ENOENT);
+  if (std::filesystem::is_directory(status)) throw FileError(name + ": is a directory, not a mesh file", EISDIR);
   const std::string ext = extension_of(path);
   if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl")
     throw InvalidInputError(name + ": unsupported mesh format \"" + ext + "\" (.ply, .obj, .off or .stl)");
   if (ext == ".stl") {
     silence_openmesh();
     TriMesh om;
-    if (!OpenMesh::IO::read_mesh(om, name)) throw InvalidInputError(name + ": cannot read mesh (malformed STL file)");
+    OpenMesh::IO::Options read;
+    if (!OpenMesh::IO::read_mesh(om, name, read)) throw InvalidInputError(name + ": cannot read mesh (malformed STL file)");
     Mesh mesh = from_openmesh(om);
+    // STL stores face normals only. The traits give every TriMesh a vertex normal property,
+    // which the reader leaves as allocated: uninitialised values, sometimes NaN, that were
+    // returned as the file's normals (and then refused by check_mesh at random).
+    if (!read.vertex_has_normal()) mesh.normals.clear();
     formats::check_mesh(mesh, name);
     return mesh;
   }
+  errno = 0;
   std::ifstream in(path, std::ios::binary);
+  if (!in.is_open()) {
+    const int err = errno != 0 ? errno : EIO;
+    throw FileError(name + ": cannot read the file", err);
+  }
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad() || !in.is_open()) throw InvalidInputError(name + ": cannot read the file");
+  if (in.bad()) throw FileError(name + ": cannot read the file", EIO);
   if (ext == ".ply") return formats::read_ply(bytes, name);
   if (ext == ".obj") return formats::read_obj(bytes, name);
   return formats::read_off(bytes, name);

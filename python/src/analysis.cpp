@@ -1,0 +1,199 @@
+// curvature, project and evaluate: the curvature program, the Newton projection and the
+// evaluate program on arrays.
+#include "bindings.h"
+
+#include <polygonizer/curvature.h>
+#include <polygonizer/errors.h>
+#include <polygonizer/newton_projection.h>
+#include <raytrace/evaluate.h>
+#include <raytrace/phong_normal.h>
+
+#include <pybind11/stl.h>
+
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <optional>
+
+namespace cdp::python {
+
+namespace {
+
+using namespace pybind11::literals;
+
+std::string shortest(double v) {
+  char buf[32];
+  return std::string(buf, std::to_chars(buf, buf + sizeof(buf), v).ptr);
+}
+
+std::string point_text(const Vec3& p) { return "(" + shortest(p.x()) + ", " + shortest(p.y()) + ", " + shortest(p.z()) + ")"; }
+
+py::dict curvature(const Field& field, py::handle points_in) {
+  const std::vector<Vec3> points = points_from(points_in, "points");
+  std::vector<Curvature> c(points.size());
+  {
+    py::gil_scoped_release release;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      try {
+        c[i] = curvature_at(field, points[i]);
+      } catch (const NoSurfaceError& e) {
+        // Which of the points, as the programs name the file.
+        throw NoSurfaceError("points[" + std::to_string(i) + "] " + point_text(points[i]) + ": " + e.what());
+      }
+    }
+  }
+  const std::size_t n = c.size();
+  std::vector<Vec3> normal(n), dir1(n), dir2(n);
+  std::vector<double> k1(n), k2(n), gaussian(n), mean(n), mac(n), min_radius(n), shape_index(n);
+  py::array_t<double> C({static_cast<py::ssize_t>(n), py::ssize_t{3}, py::ssize_t{3}});
+  double* Cd = C.mutable_data();
+  for (std::size_t i = 0; i < n; ++i) {
+    normal[i] = c[i].normal;
+    dir1[i] = c[i].dir1;
+    dir2[i] = c[i].dir2;
+    k1[i] = c[i].k1;
+    k2[i] = c[i].k2;
+    gaussian[i] = c[i].gaussian;
+    mean[i] = c[i].mean;
+    mac[i] = c[i].mac;
+    min_radius[i] = c[i].min_radius;
+    shape_index[i] = c[i].shape_index;
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) Cd[9 * i + 3 * r + k] = c[i].C(r, k);
+  }
+  py::dict d;
+  d["normal"] = to_array(normal);
+  d["k1"] = to_array(k1);
+  d["k2"] = to_array(k2);
+  d["dir1"] = to_array(dir1);
+  d["dir2"] = to_array(dir2);
+  d["gaussian"] = to_array(gaussian);
+  d["mean"] = to_array(mean);
+  d["mac"] = to_array(mac);
+  d["min_radius"] = to_array(min_radius);
+  d["shape_index"] = to_array(shape_index);
+  d["C"] = C;
+  return d;
+}
+
+const char* status_name(ProjectionStatus s) {
+  switch (s) {
+    case ProjectionStatus::Converged: return "converged";
+    case ProjectionStatus::MaxIterations: return "max_iterations";
+    case ProjectionStatus::VanishingGradient: return "vanishing_gradient";
+    case ProjectionStatus::TooFar: return "too_far";
+    case ProjectionStatus::NotFinite: return "not_finite";
+    case ProjectionStatus::OutOfRange: return "out_of_range";
+    case ProjectionStatus::NoProgress: return "no_progress";
+  }
+  return "unknown";
+}
+
+py::dict project(const Field& field, py::handle points_in, std::optional<long long> max_iterations,
+                 std::optional<double> tolerance, std::optional<double> max_step, std::optional<double> max_travel) {
+  const std::vector<Vec3> points = points_from(points_in, "points");
+  ProjectionOptions o;
+  if (max_iterations) {
+    if (*max_iterations < 1 || *max_iterations > 1000000)
+      throw InvalidInputError("max_iterations must be an integer in [1, 1000000], not " + std::to_string(*max_iterations));
+    o.max_iterations = static_cast<int>(*max_iterations);
+  }
+  const auto positive = [](const std::optional<double>& v, const char* name, double& slot) {
+    if (!v) return;
+    if (!(std::isfinite(*v) && *v > 0))
+      throw InvalidInputError(std::string(name) + " must be a positive number, not " + std::string(py::str(py::float_(*v))));
+    slot = *v;
+  };
+  positive(tolerance, "tolerance", o.tolerance);
+  positive(max_step, "max_step", o.max_step);
+  positive(max_travel, "max_travel", o.max_travel);
+  std::vector<ProjectionResult> r(points.size());
+  {
+    py::gil_scoped_release release;
+    for (std::size_t i = 0; i < points.size(); ++i) r[i] = project_to_surface(field, points[i], o);
+  }
+  const std::size_t n = r.size();
+  std::vector<Vec3> projected(n);
+  std::vector<double> residual(n);
+  py::array_t<bool> converged(static_cast<py::ssize_t>(n));
+  py::array_t<std::int32_t> iterations(static_cast<py::ssize_t>(n));
+  py::list status;
+  for (std::size_t i = 0; i < n; ++i) {
+    projected[i] = r[i].point;
+    residual[i] = r[i].residual;
+    converged.mutable_data()[i] = r[i].ok();
+    iterations.mutable_data()[i] = r[i].iterations;
+    status.append(status_name(r[i].status));
+  }
+  py::dict d;
+  d["points"] = to_array(projected);
+  d["converged"] = converged;
+  d["status"] = py::module_::import("numpy").attr("array")(status, "dtype"_a = "U");
+  d["iterations"] = iterations;
+  d["residual"] = to_array(residual);
+  return d;
+}
+
+py::dict evaluate(const Field& field, py::handle vertices, py::handle faces, py::handle normals, long long views,
+                  long long resolution, const std::string& projection, long long samples) {
+  Mesh mesh = mesh_from(vertices, faces, normals);
+  std::string normals_source = "given";
+  if (mesh.normals.empty()) {
+    mesh.normals = area_weighted_normals(mesh);
+    normals_source = "area_weighted (no normals given)";
+  }
+  // The program's ranges (build/bin/evaluate --views, --rays, --samples).
+  const auto range = [](long long v, const char* name, long long lo, long long hi) {
+    if (v < lo || v > hi)
+      throw InvalidInputError(std::string(name) + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                              "], not " + std::to_string(v));
+  };
+  range(views, "views", 1, 10000);
+  range(resolution, "resolution", 1, 8192);
+  range(samples, "samples", 1, 100000000);
+  EvaluateOptions options;
+  options.camera.views = static_cast<int>(views);
+  options.camera.resolution = static_cast<int>(resolution);
+  options.camera.projection = parse_projection(projection);
+  options.sampling.samples = static_cast<std::size_t>(samples);
+
+  nlohmann::json metrics;
+  double gt_seconds = 0;
+  {
+    py::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<Ray> rays = make_camera_rays(field.bounds(), options.camera);
+    // As build/bin/evaluate computes it when it has no cache; the cache key needs the field's
+    // JSON text, which a field made in Python need not have, so none is recorded.
+    const GroundTruth truth = compute_ground_truth(field, std::move(rays), options.raycast);
+    gt_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    metrics = evaluate_mesh(field, mesh, truth, options, normals_source, "");
+  }
+  metrics["rays"]["ground_truth_cached"] = false;
+  metrics["rays"]["ground_truth_seconds"] = gt_seconds;
+  return from_json(metrics);
+}
+
+}  // namespace
+
+void bind_analysis(py::module_& m) {
+  m.def("curvature", &curvature, py::arg("field"), py::arg("points"),
+        "Curvature of the level set through each row of points (N, 3), evaluated where the points are (no "
+        "projection: call project first for points off the surface). A dict of arrays: normal, dir1, dir2 (N, 3); "
+        "k1 >= k2, gaussian, mean, mac, min_radius, shape_index (N,); C (N, 3, 3), the derivative of the unit normal. "
+        "A point where the gradient vanishes raises NoSurfaceError naming it.");
+  m.def("project", &project, py::arg("field"), py::arg("points"), py::kw_only(), py::arg("max_iterations") = py::none(),
+        py::arg("tolerance") = py::none(), py::arg("max_step") = py::none(), py::arg("max_travel") = py::none(),
+        "The paper's bounded Newton projection of each row of points (N, 3) onto F = 0. A dict: points (N, 3), converged "
+        "(N,) bool, status (N,) str (converged, max_iterations, vanishing_gradient, too_far, not_finite, out_of_range, "
+        "no_progress), iterations (N,) int32, residual (N,) = |F| / |grad F| at the point. Defaults: 40 iterations, "
+        "tolerance 1e-10, max_step 0.1 and max_travel 0.5 of the box diagonal.");
+  m.def("evaluate", &evaluate, py::arg("field"), py::arg("vertices"), py::arg("faces"), py::kw_only(),
+        py::arg("normals") = py::none(), py::arg("views") = 8, py::arg("resolution") = 64,
+        py::arg("projection") = "perspective", py::arg("samples") = 20000,
+        "build/bin/evaluate on arrays: the metrics dict (schema cdp-metrics/1, raytrace/README.md) of a mesh against "
+        "the exact ray-cast surface of its field, without cache and without the \"files\" entry. Without normals the "
+        "mesh gets area-weighted vertex normals, as the program does for files without normals.");
+}
+
+}  // namespace cdp::python

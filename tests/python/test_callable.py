@@ -1,0 +1,65 @@
+"""A field written in numpy meshes like the same formula as an expression field: same topology,
+vertices on the same surface, close to the expression's mesh."""
+import numpy as np
+import pytest
+
+import cdp
+
+from conftest import nearest_distances, topology
+
+BOX = ((-1.5, -1.5, -0.5), (1.5, 1.5, 0.5))
+FORMULA = "(sqrt(x^2 + y^2) - 1)^2 + z^2 - 0.09"
+
+
+def torus(p):
+    return (np.sqrt(p[:, 0] ** 2 + p[:, 1] ** 2) - 1) ** 2 + p[:, 2] ** 2 - 0.09
+
+
+def torus_gradient(p):
+    r = np.sqrt(p[:, 0] ** 2 + p[:, 1] ** 2)
+    s = 2 * (r - 1) / r
+    return np.stack([s * p[:, 0], s * p[:, 1], 2 * p[:, 2]], axis=1)
+
+
+@pytest.fixture(scope="module")
+def expression():
+    return cdp.expression(FORMULA, bounds=BOX)
+
+
+# Marching at cell 0.1: the root searches and the normals call Python point by point (see
+# python/README.md), and finer cells only take longer.
+@pytest.mark.parametrize("method, options", [("adaptive", {"factor": 3}), ("mc", {"cell": 0.1}), ("mt", {"cell": 0.1})])
+@pytest.mark.parametrize("gradient", [None, torus_gradient])
+def test_callable_field_meshes_like_the_expression(expression, method, options, gradient):
+    field = cdp.callable_field(torus, BOX, gradient=gradient)
+    V, F, stats = cdp.polygonize(field, method, **options)
+    V_ref, F_ref, stats_ref = cdp.polygonize(expression, method, **options)
+    assert topology(V, F) == topology(V_ref, F_ref) == (1, 1, True)
+    assert stats["components"] == 1
+    # On the expression's surface: the first-order distance |F| / |grad F| of every vertex.
+    distance = np.abs(expression.values(V)) / np.linalg.norm(expression.gradients(V), axis=1)
+    assert distance.max() < 1e-6
+    # Near the expression's mesh: no vertex farther from the other mesh's vertices than a
+    # fraction of an edge (the meshes need not be identical: the finite differences differ
+    # from the exact derivatives in the last digits, and the tracker's choices follow them).
+    edge = np.linalg.norm(V_ref[F_ref[:, 0]] - V_ref[F_ref[:, 1]], axis=1).mean()
+    assert nearest_distances(V, V_ref).max() < 0.75 * edge
+    assert abs(len(F) - len(F_ref)) <= 0.05 * len(F_ref)
+
+
+def test_python_errors_in_the_field_propagate_and_leave_nothing_broken(expression):
+    calls = [0]
+
+    def flaky(p):
+        calls[0] += 1
+        if calls[0] == 30:
+            raise ArithmeticError("call 30 fails")
+        return torus(p)
+
+    field = cdp.callable_field(flaky, BOX)
+    with pytest.raises(ArithmeticError, match="call 30 fails"):
+        cdp.polygonize(field, factor=3)
+    V, F, _ = cdp.polygonize(field, factor=3)  # the same field, the same module: fine again
+    assert topology(V, F) == (1, 1, True)
+    with pytest.raises(ValueError, match=r"^callable field: f returned shape \((\d+), 2\) for \1 points; expected \(\1,\)$"):
+        cdp.polygonize(cdp.callable_field(lambda p: p[:, :2], BOX), factor=3)

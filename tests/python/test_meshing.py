@@ -1,0 +1,117 @@
+"""polygonize, marching_cubes, marching_tetrahedra: results, options, errors, and the same
+arrays as build/bin/polygonize, bit for bit."""
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import cdp
+
+from conftest import program, topology
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return cdp.sphere(radius=1)
+
+
+def bits(a):
+    """The array's bytes: equality of these is bit-for-bit equality (-0.0 differs from 0.0)."""
+    return np.ascontiguousarray(a).tobytes()
+
+
+@pytest.mark.parametrize("method, options", [("adaptive", {"factor": 2}), ("mc", {"cell": 0.1}), ("mt", {"cell": 0.1})])
+def test_sphere_meshes_are_closed_spheres(sphere, method, options):
+    V, F, stats = cdp.polygonize(sphere, method, **options)
+    assert V.dtype == np.float64 and V.shape[1] == 3
+    assert F.dtype == np.int32 and F.shape[1] == 3
+    assert topology(V, F) == (1, 0, True)
+    assert np.abs(np.linalg.norm(V, axis=1) - 1).max() < 1e-6
+    assert stats["method"] == method
+    assert stats["triangles"] == len(F) and stats["vertices"] == len(V)
+    assert stats["field_evaluations"]["total"] > 0
+    V2, F2, N, stats2 = cdp.polygonize(sphere, method, return_normals=True, **options)
+    assert bits(V2) == bits(V) and bits(F2) == bits(F)
+    assert np.allclose(N, V / np.linalg.norm(V, axis=1)[:, None], atol=1e-6)
+
+
+def test_marching_functions_are_polygonize(sphere):
+    for function, method in [(cdp.marching_cubes, "mc"), (cdp.marching_tetrahedra, "mt")]:
+        V, F, stats = function(sphere, cell=0.2, traversal="grid")
+        V2, F2, stats2 = cdp.polygonize(sphere, method, cell=0.2, traversal="grid")
+        assert bits(V) == bits(V2) and bits(F) == bits(F2)
+        assert stats["traversal"] == "grid"
+
+
+def test_progress_and_phase_callbacks(sphere):
+    fractions, phases = [], []
+    cdp.polygonize(cdp.torus(major_radius=1, minor_radius=0.3), factor=3, progress=fractions.append, phase=phases.append)
+    assert phases == ["sampling the seed grid", "meshing", "checking the mesh"]
+    assert fractions and fractions[-1] == 1.0
+    fractions.clear()
+    cdp.marching_cubes(sphere, cell=0.05, progress=fractions.append)
+    assert fractions and fractions[-1] == 1.0
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda s: cdp.polygonize(s, "adaptive", cell=0.1), 'cell does not apply to method "adaptive"'),
+    (lambda s: cdp.polygonize(s, "mc", factor=2), 'factor does not apply to method "mc"'),
+    (lambda s: cdp.polygonize(s, "mt", face_ambiguity="join_inside"), 'face_ambiguity does not apply to method "mt"'),
+    (lambda s: cdp.polygonize(s, factor=2, tolerance=0.01), "give either factor or tolerance, not both"),
+    (lambda s: cdp.polygonize(s, factor=-1), "factor must be a positive number, not -1.0"),
+    (lambda s: cdp.polygonize(s, min_edge=float("nan")), "min_edge must be a positive number, not nan"),
+    (lambda s: cdp.polygonize(s, "marching"), 'method must be "adaptive", "mc" or "mt", not "marching"'),
+    (lambda s: cdp.polygonize(s, triangle_count="floor"), 'triangle_count must be "hartmann" or "paper", not "floor"'),
+    (lambda s: cdp.polygonize(s, seed_resolution=1), "seed_resolution must be an integer in [2, 2147483647], not 1"),
+    (lambda s: cdp.marching_cubes(s, cell=0), "cell must be a positive number, not 0.0"),
+    (lambda s: cdp.marching_cubes(s, traversal="walk"), 'traversal must be "continuation" or "grid", not "walk"'),
+    (lambda s: cdp.marching_cubes(s, cell=1e-9), None),
+    (lambda s: cdp.marching_tetrahedra(s, precision=2),
+     'marching: --precision needs a variational (data-driven) model with constraint points; the "sphere" field has '
+     'none, give a cell size instead'),
+])
+def test_bad_options_are_value_errors(sphere, call, message):
+    with pytest.raises(ValueError) as e:
+        call(sphere)
+    if message is None:
+        assert "needs more than 2^19 cells" in str(e.value)
+    else:
+        assert str(e.value) == message
+
+
+def test_algorithm_errors_are_runtime_error_subclasses():
+    assert issubclass(cdp.NoSurfaceError, RuntimeError) and issubclass(cdp.LimitExceededError, RuntimeError)
+    outside = cdp.sphere(radius=1, bounds=((2, 2, 2), (3, 3, 3)))
+    with pytest.raises(cdp.NoSurfaceError) as e:
+        cdp.polygonize(outside)
+    assert str(e.value).startswith("adaptive: no zero crossing of the field in its box")
+    with pytest.raises(cdp.NoSurfaceError):
+        cdp.marching_cubes(outside, cell=0.1)
+    with pytest.raises(cdp.LimitExceededError):
+        cdp.polygonize(cdp.torus(major_radius=1, minor_radius=0.3), factor=3, max_triangles=10)
+
+
+@pytest.mark.parametrize("method, flags, options", [
+    ("adaptive", ["--factor", "3"], {"factor": 3}),
+    ("adaptive", ["--tolerance", "0.002", "--min-edge", "0.01"], {"tolerance": 0.002, "min_edge": 0.01}),
+    ("mc", ["--cell", "0.05"], {"cell": 0.05}),
+    ("mt", ["--cell", "0.08", "--traversal", "grid"], {"cell": 0.08, "traversal": "grid"}),
+])
+def test_same_arrays_as_the_polygonize_program(tmp_path, method, flags, options):
+    field_path = tmp_path / "field.json"
+    field_path.write_text(json.dumps({
+        "type": "blobs", "threshold": 0.3,
+        "blobs": [{"center": [0, 0, 0], "radius": 1}, {"center": [0.9, 0.3, 0], "radius": 0.8, "strength": 0.7}]}))
+    out, stats_path = tmp_path / "mesh.ply", tmp_path / "stats.json"
+    subprocess.run([program("polygonize"), field_path, "-o", out, "--method", method, "--stats", stats_path, "--quiet",
+                    *flags], check=True)
+    V_file, F_file, N_file = cdp.read_mesh(out, return_normals=True)
+    V, F, N, stats = cdp.polygonize(cdp.field_from_json(field_path), method, return_normals=True, **options)
+    assert bits(V) == bits(V_file)
+    assert bits(F) == bits(F_file)
+    assert bits(N) == bits(N_file)
+    program_stats = json.loads(stats_path.read_text())
+    timing = {"seconds", "curvature_seconds", "field"}
+    assert {k: v for k, v in stats.items() if k not in timing} == \
+        {k: v for k, v in program_stats.items() if k not in timing}
