@@ -1,12 +1,15 @@
 // apps/support/command_line.h (CLI11 with the programs' conventions), in process: what the
 // validators accept, the values they hand on, their messages, parse()'s one-line errors and
-// --help.
+// --help; then every program's --help and a mistake of each, run as a command.
 #include <gtest/gtest.h>
 
 #include "support/command_line.h"
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+
+#include "common/run_command.h"
 
 namespace cdp::app {
 namespace {
@@ -138,6 +141,65 @@ TEST(CommandLine, HelpGoesToStandardOutputWithStatusZero) {
     EXPECT_NE(o.out.find("Usage: prog [OPTIONS]"), std::string::npos) << o.out;
     EXPECT_NE(o.out.find("--x"), std::string::npos) << o.out;
   }
+}
+
+// ---- The programs ----------------------------------------------------------------------------
+
+const char* const kPrograms[] = {"polygonize", "evaluate", "render", "curvature", "experiment"};
+
+TEST(CommandLineApps, EveryProgramPrintsItsHelpOnStandardOutput) {
+  for (const std::string program : kPrograms)
+    for (const char* flag : {"--help", "-h"}) {
+      const auto r = test::run_app(program, flag);
+      EXPECT_EQ(r.exit_code, 0) << program << " " << flag;
+      EXPECT_EQ(r.err, "") << program << " " << flag;
+      EXPECT_NE(r.out.find("\nUsage: " + program + " [OPTIONS]"), std::string::npos) << r.out;
+      EXPECT_NE(r.out.find("-h,--help"), std::string::npos) << r.out;
+    }
+  // polygonize sorts its options by method.
+  const std::string help = test::run_app("polygonize", "--help").out;
+  for (const char* text : {"adaptive method", "--factor K", "--tolerance EPS", "mc and mt methods", "--cell H",
+                           "--precision P", "--seed-resolution N"})
+    EXPECT_NE(help.find(text), std::string::npos) << text << "\n" << help;
+  EXPECT_LT(help.find("adaptive method"), help.find("--factor K"));
+  EXPECT_LT(help.find("--factor K"), help.find("mc and mt methods"));
+  EXPECT_GT(help.find("--cell H"), help.find("mc and mt methods"));
+}
+
+TEST(CommandLineApps, MistakesFoundByCli11AreOneLineWithStatusOne) {
+  test::TempDir dir("command_line_apps");
+  const std::string f = (dir.path / "f.json").string(), m = (dir.path / "m.ply").string();
+  const std::string out = (dir.path / "out.ply").string(), png = (dir.path / "p.png").string();
+  const std::string json = (dir.path / "m.json").string();
+  const struct {
+    std::string program, args, message;
+  } cases[] = {
+      {"polygonize", f + " -o " + out + " --bogus", "The following argument was not expected: --bogus; see polygonize --help"},
+      {"polygonize", f, "--output is required; see polygonize --help"},
+      {"polygonize", "-o " + out, "FIELD.json is required; see polygonize --help"},
+      {"polygonize", f + " -o " + out + " -o " + out, "--output given twice"},
+      {"polygonize", f + " -o " + out + " --factor inf", "--factor: expects a positive number, found \"inf\", which is not finite"},
+      {"polygonize", f + " -o " + out + " --method mt --precision 1.5",
+       "--precision: expects an integer between 0 and 5, found \"1.5\""},
+      {"polygonize", f + " -o " + out + " --method MC", "--method: MC not in {adaptive,mc,mt}"},
+      {"evaluate", f + " " + m + " -o " + json + " --rays", "--rays needs a value; see evaluate --help"},
+      {"evaluate", f + " " + m + " -o " + json + " --views 1 --views 2", "--views given twice"},
+      {"evaluate", f + " " + m + " " + m + " -o " + json, "The following argument was not expected: " + m + "; see evaluate --help"},
+      {"render", m + " -o " + png + " --zoom nan", "--zoom: expects a positive number, found \"nan\", which is not finite"},
+      {"render", m + " -o " + png + " --elevation 91", "--elevation: expects a number between -90 and 90, found \"91\""},
+      {"render", m + " -o " + png + " --range 1", "--range: expects two numbers LO,HI, found \"1\""},
+      {"curvature", f + " --at 1,2", "--at: expects three numbers x,y,z, found \"1,2\""},
+      {"curvature", f + " --at", "--at needs a value; see curvature --help"},
+      {"experiment", f + " --jobs 0", "--jobs: expects an integer between 1 and 2147483647, found \"0\""},
+      {"experiment", f + " --run", "--run needs a value; see experiment --help"},
+  };
+  for (const auto& c : cases) {
+    const auto r = test::run_app(c.program, c.args);
+    EXPECT_EQ(r.exit_code, 1) << c.program << " " << c.args;
+    EXPECT_EQ(r.err, c.program + ": " + c.message + "\n") << c.program << " " << c.args;
+    EXPECT_EQ(r.out, "") << c.program << " " << c.args;
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path));
 }
 
 }  // namespace
