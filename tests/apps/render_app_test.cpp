@@ -11,6 +11,8 @@
 #include "common/run_command.h"
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 namespace cdp {
 namespace {
@@ -27,6 +29,11 @@ struct RenderApp : public ::testing::Test {
   }
   std::string png(const std::string& name) const { return (dir.path / name).string(); }
 };
+
+std::string bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
 
 double mean(const test::DecodedPng& p) {
   double s = 0;
@@ -58,6 +65,7 @@ TEST_F(RenderApp, WritesAPngOfTheRequestedSizeShowingTheMesh) {
   ASSERT_TRUE(wire && wire2);
   EXPECT_LT(mean(*wire), mean(*image) - 1.0);
   EXPECT_EQ(wire->rgb, wire2->rgb);
+  EXPECT_EQ(bytes(png("w.png")), bytes(png("w2.png")));
 }
 
 TEST_F(RenderApp, ColoursByAVertexPropertyOfThePly) {
