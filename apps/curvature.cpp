@@ -1,30 +1,20 @@
 // build/bin/curvature FIELD.json --at x,y,z
 // Projects the point onto the surface and prints the curvature measures there as one JSON object.
 #include "support/app_support.h"
+#include "support/command_line.h"
 
 #include <polygonizer/curvature.h>
 #include <polygonizer/errors.h>
 #include <polygonizer/field_factory.h>
 #include <polygonizer/newton_projection.h>
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
-
-constexpr const char* kUsage = "usage: curvature FIELD.json --at x,y,z";
-
-cdp::Vec3 parse_point(const std::string& text) {
-  std::stringstream in(text);
-  cdp::Vec3 p;
-  char c1 = 0, c2 = 0;
-  if (!(in >> p.x() >> c1 >> p.y() >> c2 >> p.z()) || c1 != ',' || c2 != ',' || !(in >> std::ws).eof() ||
-      !p.allFinite())
-    throw cdp::InvalidInputError("--at expects three numbers x,y,z, found \"" + text + "\"");
-  return p;
-}
 
 nlohmann::json vec(const cdp::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
@@ -33,21 +23,16 @@ nlohmann::json vec(const cdp::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
   try {
+    CLI::App app{"Projects a point onto the surface of FIELD.json (Newton's method) and prints the curvature\n"
+                 "measures there as one JSON object.\n",
+                 "curvature"};
+    cdp::app::configure(app);
     std::string field_path, at;
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      if (arg == "--at" && i + 1 < argc) {
-        if (!at.empty()) throw cdp::InvalidInputError("--at given twice");
-        at = argv[++i];
-      }
-      else if (arg == "-h" || arg == "--help") {
-        std::cout << kUsage << "\n";
-        return 0;
-      } else if (!arg.empty() && arg[0] != '-' && field_path.empty()) field_path = arg;
-      else throw cdp::InvalidInputError("unexpected argument \"" + arg + "\"; " + kUsage);
-    }
-    if (field_path.empty() || at.empty()) throw cdp::InvalidInputError(kUsage);
-    const cdp::Vec3 start = parse_point(at);
+    app.add_option("FIELD.json", field_path, "the field file")->required()->type_name("")->check(cdp::app::path_name());
+    app.add_option("--at", at, "the point to project")->required()->type_name("x,y,z")->check(cdp::app::numbers(3, "x,y,z"));
+    if (const auto status = cdp::app::parse(app, argc, argv)) return *status;
+    const std::vector<double> xyz = cdp::app::split_numbers(at);
+    const cdp::Vec3 start(xyz[0], xyz[1], xyz[2]);
     const auto field = cdp::load_field(field_path);
     const cdp::ProjectionResult proj = cdp::project_to_surface(*field, start);
     if (!proj.ok())

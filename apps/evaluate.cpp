@@ -5,6 +5,7 @@
 // self-intersections and distances between mesh and surface. Writes METRICS.json (schema in
 // raytrace/README.md) and prints a short summary.
 #include "support/app_support.h"
+#include "support/command_line.h"
 
 #include <raytrace/evaluate.h>
 #include <raytrace/ground_truth_cache.h>
@@ -20,31 +21,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <set>
 #include <sstream>
 #include <string>
 
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr const char* kUsage =
-    "usage: evaluate FIELD.json MESH.ply [--rays N] [--views V] [--projection perspective|orthographic] "
-    "[--samples N] [--cache DIR] [--normals field|file|mesh] [--quiet | --progress] -o METRICS.json";
-
-long long parse_count(const std::string& option, const std::string& text, long long lo, long long hi) {
-  std::size_t used = 0;
-  long long v = 0;
-  try {
-    v = std::stoll(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || text.empty() || v < lo || v > hi)
-    throw cdp::InvalidInputError(option + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                                 "], found \"" + text + "\"");
-  return v;
-}
 
 std::string read_text(const fs::path& path) {
   std::error_code ec;
@@ -68,41 +50,44 @@ bool same_rays(const std::vector<cdp::Ray>& a, const std::vector<cdp::Ray>& b) {
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
   try {
-    std::string field_path, mesh_path, out_path, cache_dir, normals_choice;
+    CLI::App app{"Measures MESH.ply against the implicit surface of FIELD.json (exact ray casting): depth and\n"
+                 "Phong errors, silhouettes, triangle quality, topology, self-intersections, distances.\n"
+                 "Writes METRICS.json (schema in raytrace/README.md) and prints a summary.\n",
+                 "evaluate"};
+    cdp::app::configure(app);
+    std::string field_path, mesh_path, out_path, cache_dir, projection = "perspective", normals_choice;
     bool quiet = false, progress_lines = false;
     cdp::EvaluateOptions options;
-    std::set<std::string> seen;
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw cdp::InvalidInputError(arg + " needs a value; " + kUsage);
-        // Each option once: a second value would silently replace the first.
-        if (!seen.insert(arg).second) throw cdp::InvalidInputError(arg + " given twice");
-        return argv[++i];
-      };
-      if (arg == "--quiet") quiet = true;
-      else if (arg == "--progress") progress_lines = true;
-      else if (arg == "--rays") options.camera.resolution = static_cast<int>(parse_count(arg, value(), 1, 8192));
-      else if (arg == "--views") options.camera.views = static_cast<int>(parse_count(arg, value(), 1, 10000));
-      else if (arg == "--samples") options.sampling.samples = static_cast<std::size_t>(parse_count(arg, value(), 1, 100000000));
-      else if (arg == "--projection") options.camera.projection = cdp::parse_projection(value());
-      else if (arg == "--cache") cache_dir = value();
-      else if (arg == "--normals") {
-        normals_choice = value();
-        if (normals_choice != "field" && normals_choice != "file" && normals_choice != "mesh")
-          throw cdp::InvalidInputError("--normals must be field, file or mesh, not \"" + normals_choice + "\"");
-      }
-      else if (arg == "-o") out_path = value();
-      else if (arg == "-h" || arg == "--help") {
-        std::cout << kUsage << "\n";
-        return 0;
-      } else if (!arg.empty() && arg[0] != '-' && field_path.empty()) field_path = arg;
-      else if (!arg.empty() && arg[0] != '-' && mesh_path.empty()) mesh_path = arg;
-      else if (!arg.empty() && arg[0] != '-') throw cdp::InvalidInputError("a third file \"" + arg + "\"; " + kUsage);
-      else throw cdp::InvalidInputError("unexpected argument \"" + arg + "\"; " + kUsage);
-    }
-    if (field_path.empty() || mesh_path.empty() || out_path.empty()) throw cdp::InvalidInputError(kUsage);
-    if (quiet && progress_lines) throw cdp::InvalidInputError("give either --quiet or --progress, not both");
+    app.add_option("FIELD.json", field_path, "the field file")->required()->type_name("")->check(cdp::app::path_name());
+    app.add_option("MESH.ply", mesh_path, "the mesh: .ply, .obj or .off")->required()->type_name("")->check(cdp::app::path_name());
+    app.add_option("-o", out_path, "the metrics file")->required()->type_name("METRICS.json")->check(cdp::app::path_name());
+    app.add_option("--rays", options.camera.resolution, "N x N rays per view, N in [1, 8192]")
+        ->capture_default_str()
+        ->type_name("N")
+        ->transform(cdp::app::integer_in(1, 8192));
+    app.add_option("--views", options.camera.views, "viewing directions, in [1, 10000]")
+        ->capture_default_str()
+        ->type_name("V")
+        ->transform(cdp::app::integer_in(1, 10000));
+    app.add_option("--projection", projection, "perspective or orthographic")
+        ->capture_default_str()
+        ->type_name("NAME")
+        ->check(CLI::IsMember({"perspective", "orthographic"}));
+    app.add_option("--samples", options.sampling.samples, "points of the mesh measured against the surface, in [1, 1e8]")
+        ->capture_default_str()
+        ->type_name("N")
+        ->transform(cdp::app::integer_in(1, 100000000));
+    app.add_option("--cache", cache_dir, "keep the ground truth in DIR and reuse it")->type_name("DIR")->check(cdp::app::path_name());
+    app.add_option("--normals", normals_choice,
+                   "vertex normals of the Phong error: field (the gradient at the vertices), file or mesh "
+                   "(area-weighted); default: file when the mesh has them, else field")
+        ->type_name("NAME")
+        ->check(CLI::IsMember({"field", "file", "mesh"}));
+    CLI::Option* quiet_flag = app.add_flag("--quiet", quiet, "no progress bar");
+    app.add_flag("--progress", progress_lines, "progress as lines, one per phase and one every 5 s (for logs)")
+        ->excludes(quiet_flag);
+    if (const auto status = cdp::app::parse(app, argc, argv)) return *status;
+    options.camera.projection = cdp::parse_projection(projection);
     cdp::app::check_output_paths({{"-o", out_path}}, {field_path, mesh_path});
     cdp::app::ProgressReporter reporter("evaluate", fs::path(mesh_path).filename().string(),
                                         cdp::app::progress_mode(quiet, progress_lines));

@@ -5,6 +5,7 @@
 // job; then the per-run results are collected into summary.csv and summary.json. The format of
 // the experiment file is documented in experiments/README.md.
 #include "support/app_support.h"
+#include "support/command_line.h"
 
 #include <polygonizer/atomic_write.h>
 #include <polygonizer/errors.h>
@@ -23,7 +24,6 @@
 #include <iomanip>
 #include <iostream>
 #include <mutex>
-#include <set>
 #include <sstream>
 #include <thread>
 
@@ -32,9 +32,6 @@ extern char** environ;
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr const char* kUsage =
-    "usage: experiment EXPERIMENT.json [--out DIR] [--jobs N] [--list | --commands | --run ID | --summarize]";
 
 // Exit status when the experiment ran but some of its runs failed (their rows in the tables say
 // why); 1 stays "the experiment itself could not run" (a bad file, bad options).
@@ -386,42 +383,32 @@ int summarize(const Experiment& e, const Paths& p) {
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
   try {
-    fs::path file, out;
-    int jobs = std::max(1u, std::thread::hardware_concurrency());
-    std::string mode = "all", run_id;
-    std::set<std::string> seen;
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw cdp::InvalidInputError(a + " needs a value; " + kUsage);
-        // Each option once: a second value would silently replace the first.
-        if (!seen.insert(a).second) throw cdp::InvalidInputError(a + " given twice");
-        return argv[++i];
-      };
-      const auto set_mode = [&](const std::string& m) {
-        if (mode != "all") throw cdp::InvalidInputError("give one of --list, --commands, --run and --summarize");
-        mode = m;
-      };
-      if (a == "--out") out = value();
-      else if (a == "--jobs") {
-        const std::string v = value();
-        try {
-          jobs = std::stoi(v);
-        } catch (const std::exception&) {
-          jobs = 0;
-        }
-        if (jobs < 1) throw cdp::InvalidInputError("--jobs expects a positive integer, found \"" + v + "\"");
-      } else if (a == "--list") set_mode("list");
-      else if (a == "--commands") set_mode("commands");
-      else if (a == "--summarize") set_mode("summarize");
-      else if (a == "--run") set_mode("run"), run_id = value();
-      else if (a == "-h" || a == "--help") {
-        std::cout << kUsage << "\n";
-        return 0;
-      } else if (!a.empty() && a[0] != '-' && file.empty()) file = a;
-      else throw cdp::InvalidInputError("unexpected argument \"" + a + "\"; " + kUsage);
-    }
-    if (file.empty()) throw cdp::InvalidInputError(kUsage);
+    CLI::App app{"Runs an experiment's sweep (experiments/README.md): every run polygonized and evaluated as an\n"
+                 "independent job, then summary.csv and summary.json. Exit status 2 when some runs failed.\n",
+                 "experiment"};
+    cdp::app::configure(app);
+    std::string file_name, out_name, run_id;
+    int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    bool list = false, commands = false, summarize_only = false;
+    app.add_option("EXPERIMENT.json", file_name, "the experiment file")->required()->type_name("")->check(cdp::app::path_name());
+    app.add_option("--out", out_name, "the output folder (default results/NAME)")->type_name("DIR")->check(cdp::app::path_name());
+    app.add_option("--jobs", jobs, "runs at a time (default: one per core)")
+        ->type_name("N")
+        ->transform(cdp::app::integer_in(1, 2147483647));
+    // One mode at most; each excludes the others.
+    std::vector<CLI::Option*> modes{
+        app.add_flag("--list", list, "print the run ids, write nothing"),
+        app.add_flag("--commands", commands, "print one command per run, write nothing"),
+        app.add_option("--run", run_id, "execute the run ID only")->type_name("ID")->check(cdp::app::non_empty("a run id")),
+        app.add_flag("--summarize", summarize_only, "only collect the runs' results into the summary"),
+    };
+    for (CLI::Option* a : modes)
+      for (CLI::Option* b : modes)
+        if (a != b) a->excludes(b);
+    if (const auto status = cdp::app::parse(app, argc, argv)) return *status;
+    const fs::path file = file_name;
+    fs::path out = out_name;
+    const std::string mode = list ? "list" : commands ? "commands" : summarize_only ? "summarize" : !run_id.empty() ? "run" : "all";
     if (out.empty()) out = fs::path("results") / file.stem();
     const Experiment e = read_experiment(file, out);
 

@@ -3,6 +3,7 @@
 // same mesh output (PLY, OBJ or OFF by extension, vertex normals from the field gradient) and
 // the same STATS.json, so that experiments compare like with like.
 #include "support/app_support.h"
+#include "support/command_line.h"
 
 #include <baselines/marching_cubes.h>
 #include <baselines/marching_tetrahedra.h>
@@ -13,25 +14,11 @@
 #include <polygonizer/mesh_io.h>
 #include <polygonizer/polygonize_stats_json.h>
 
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <iostream>
-#include <map>
-#include <optional>
 #include <string>
 
 namespace {
-
-constexpr const char* kUsage =
-    "usage: polygonize FIELD.json -o OUT.ply|obj|off [--method adaptive|mc|mt] [--stats STATS.json] [--quiet|--progress]\n"
-    "  adaptive: [--factor K | --tolerance EPS] [--min-edge L] [--max-edge L] [--curvature]\n"
-    "            [--triangle-count hartmann|paper] [--seed-resolution N] [--max-triangles N]\n"
-    "  mc, mt:   [--cell H | --precision P] [--traversal continuation|grid] [--seed-resolution N]\n"
-    "            [--max-triangles N]";
-
-using cdp::app::parse_integer;
-using cdp::app::parse_number;
 
 // Integer options are ints in the libraries; larger values are refused here with their range
 // rather than wrapping around.
@@ -58,63 +45,100 @@ cdp::PolygonizeResult name_field(const std::string& path, F&& run) {
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
   try {
-    std::string field_path, out_path, stats_path, method;
+    CLI::App app{"Meshes the implicit surface of FIELD.json with the adaptive polygonizer (the default) or a\n"
+                 "baseline, Marching Cubes (mc) or Marching Tetrahedra (mt).\n",
+                 "polygonize"};
+    cdp::app::configure(app);
+    std::string field_path, out_path, stats_path, method = "adaptive";
     bool quiet = false, progress_lines = false;
-    // Flags are collected first and checked against the method, so that a flag the chosen
-    // method would ignore is an error rather than a silent no-op.
-    std::map<std::string, std::string> flags;
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      const auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw cdp::InvalidInputError(arg + " needs a value; " + kUsage);
-        return argv[++i];
-      };
-      // Each option once: a second value would silently replace the first.
-      const auto once = [&](std::string& slot) {
-        if (!slot.empty()) throw cdp::InvalidInputError(arg + " given twice");
-        slot = value();
-        if (slot.empty()) throw cdp::InvalidInputError(arg + " needs a non-empty value");
-      };
-      if (arg == "-o" || arg == "--output") once(out_path);
-      else if (arg == "--method") once(method);
-      else if (arg == "--stats") once(stats_path);
-      else if (arg == "--quiet") quiet = true;
-      else if (arg == "--progress") progress_lines = true;
-      else if (arg == "--curvature") flags[arg] = "1";
-      else if (arg == "-h" || arg == "--help") {
-        std::cout << kUsage << "\n";
-        return 0;
-      } else if (arg == "--factor" || arg == "--tolerance" || arg == "--min-edge" || arg == "--max-edge" ||
-                 arg == "--triangle-count" || arg == "--seed-resolution" || arg == "--max-triangles" ||
-                 arg == "--cell" || arg == "--precision" || arg == "--traversal") {
-        if (flags.count(arg)) throw cdp::InvalidInputError(arg + " given twice");
-        flags[arg] = value();
-      } else if (!arg.empty() && arg[0] != '-' && field_path.empty()) field_path = arg;
-      else if (!arg.empty() && arg[0] != '-') throw cdp::InvalidInputError("a second field file \"" + arg + "\"; " + kUsage);
-      else throw cdp::InvalidInputError("unexpected argument \"" + arg + "\"\n" + kUsage);
-    }
-    if (field_path.empty() || out_path.empty()) throw cdp::InvalidInputError(std::string("missing FIELD.json or -o OUT\n") + kUsage);
-    if (method.empty()) method = "adaptive";
-    if (quiet && progress_lines) throw cdp::InvalidInputError("give either --quiet or --progress, not both");
-    if (method != "adaptive" && method != "mc" && method != "mt")
-      throw cdp::InvalidInputError("--method must be adaptive, mc or mt, not \"" + method + "\"");
+    app.add_option("FIELD.json", field_path, "the field file")->required()->type_name("")->check(cdp::app::path_name());
+    app.add_option("-o,--output", out_path, "the mesh file: .ply, .obj or .off")
+        ->required()
+        ->type_name("OUT")
+        ->check(cdp::app::path_name());
+    app.add_option("--method", method, "adaptive, mc or mt")
+        ->capture_default_str()
+        ->type_name("NAME")
+        ->check(CLI::IsMember({"adaptive", "mc", "mt"}));
+    app.add_option("--stats", stats_path, "also write the run's statistics as JSON")
+        ->type_name("STATS.json")
+        ->check(cdp::app::path_name());
+    CLI::Option* quiet_flag = app.add_flag("--quiet", quiet, "no progress bar");
+    app.add_flag("--progress", progress_lines, "progress as lines, one per phase and one every 5 s (for logs)")
+        ->excludes(quiet_flag);
+    int seed_resolution = 32;
+    long long max_triangles = 0;
+    CLI::Option* seed_option = app.add_option("--seed-resolution", seed_resolution,
+                                              "cells along the longest side of the seed grid")
+                                   ->capture_default_str()
+                                   ->type_name("N")
+                                   ->transform(cdp::app::integer_in(2, kIntMax));
+    CLI::Option* max_triangles_option =
+        app.add_option("--max-triangles", max_triangles, "stop with an error beyond N triangles")
+            ->type_name("N")
+            ->transform(cdp::app::integer_in(1, kIntMax));
+
+    // Each method's options in their own group, so that the help sorts them and an option of
+    // the other method is found below: it would be silently ignored.
+    cdp::AdaptiveOptions adaptive_options;
+    std::string triangle_count = "hartmann";
+    CLI::Option_group* adaptive_group = app.add_option_group("adaptive method");
+    CLI::Option* factor = adaptive_group
+                              ->add_option("--factor", adaptive_options.factor,
+                                           "edge = minimum radius of curvature / K (the paper's heuristic)")
+                              ->capture_default_str()
+                              ->type_name("K")
+                              ->transform(cdp::app::positive_number());
+    CLI::Option* tolerance = adaptive_group
+                                 ->add_option("--tolerance", adaptive_options.tolerance,
+                                              "edges for a chord deviation of EPS instead of --factor")
+                                 ->type_name("EPS")
+                                 ->transform(cdp::app::positive_number())
+                                 ->excludes(factor);
+    adaptive_group
+        ->add_option("--min-edge", adaptive_options.min_edge, "shortest edge (default 2e-3 of the box diagonal)")
+        ->type_name("L")
+        ->transform(cdp::app::positive_number());
+    adaptive_group
+        ->add_option("--max-edge", adaptive_options.max_edge, "longest edge (default 0.1 of the box diagonal)")
+        ->type_name("L")
+        ->transform(cdp::app::positive_number());
+    adaptive_group->add_option("--triangle-count", triangle_count, "triangles per expansion: hartmann or paper")
+        ->capture_default_str()
+        ->type_name("RULE")
+        ->check(CLI::IsMember({"hartmann", "paper"}));
+    adaptive_group->add_flag("--curvature", adaptive_options.curvature_properties,
+                             "write mac and shape_index per vertex (PLY)");
+
+    cdp::MarchingOptions marching_options;
+    std::string traversal = "continuation";
+    CLI::Option_group* marching_group = app.add_option_group("mc and mt methods");
+    // 0 means "the default" inside the library; on the command line it is a mistake.
+    CLI::Option* cell = marching_group
+                            ->add_option("--cell", marching_options.cell_size,
+                                         "cell edge (default 1/64 of the box's longest side)")
+                            ->type_name("H")
+                            ->transform(cdp::app::positive_number());
+    marching_group
+        ->add_option("--precision", marching_options.precision,
+                     "the paper's precision for data-driven models, an integer in [0, 5], instead of --cell")
+        ->type_name("P")
+        ->transform(cdp::app::integer_in(0, 5))
+        ->excludes(cell);
+    marching_group->add_option("--traversal", traversal, "continuation or grid")
+        ->capture_default_str()
+        ->type_name("HOW")
+        ->check(CLI::IsMember({"continuation", "grid"}));
+
+    if (const auto status = cdp::app::parse(app, argc, argv)) return *status;
+
+    const bool adaptive = method == "adaptive";
+    const CLI::Option_group* other_method = adaptive ? marching_group : adaptive_group;
+    for (const CLI::Option* o : other_method->get_options())
+      if (o->count() > 0) throw cdp::InvalidInputError(o->get_name() + " does not apply to --method " + method);
     const std::string ext = std::filesystem::path(out_path).extension().string();
     if (ext != ".ply" && ext != ".obj" && ext != ".off")
       throw cdp::InvalidInputError("output " + out_path + ": the extension must be .ply, .obj or .off");
-
-    const bool adaptive = method == "adaptive";
-    for (const auto& [flag, v] : flags) {
-      const bool adaptive_only = flag == "--factor" || flag == "--tolerance" || flag == "--min-edge" ||
-                                 flag == "--max-edge" || flag == "--triangle-count" || flag == "--curvature";
-      const bool marching_only = flag == "--cell" || flag == "--precision" || flag == "--traversal";
-      if ((adaptive_only && !adaptive) || (marching_only && adaptive))
-        throw cdp::InvalidInputError(flag + " does not apply to --method " + method);
-    }
-    const auto get = [&](const char* flag) -> std::optional<std::string> {
-      auto it = flags.find(flag);
-      if (it == flags.end()) return std::nullopt;
-      return it->second;
-    };
 
     // Every output is checked before the work starts: an unwritable --stats is found before
     // minutes of meshing, and no output may replace another output or the field file.
@@ -130,53 +154,19 @@ int main(int argc, char** argv) {
 
     cdp::PolygonizeResult result;
     if (adaptive) {
-      cdp::AdaptiveOptions o;
-      if (get("--factor") && get("--tolerance"))
-        throw cdp::InvalidInputError("give either --factor or --tolerance, not both");
-      if (auto v = get("--factor")) {
-        o.factor = parse_number("--factor", *v);
-        if (!(o.factor > 0)) throw cdp::InvalidInputError("--factor must be positive");
-      }
-      if (auto v = get("--tolerance")) {
-        o.sizing = cdp::SizingMode::Tolerance;
-        o.tolerance = parse_number("--tolerance", *v);
-        if (!(o.tolerance > 0)) throw cdp::InvalidInputError("--tolerance must be positive");
-      }
-      if (auto v = get("--min-edge")) {
-        o.min_edge = parse_number("--min-edge", *v);
-        if (!(o.min_edge > 0)) throw cdp::InvalidInputError("--min-edge must be positive");
-      }
-      if (auto v = get("--max-edge")) {
-        o.max_edge = parse_number("--max-edge", *v);
-        if (!(o.max_edge > 0)) throw cdp::InvalidInputError("--max-edge must be positive");
-      }
-      if (auto v = get("--triangle-count")) {
-        if (*v == "hartmann") o.triangle_count = cdp::TriangleCountRule::Hartmann;
-        else if (*v == "paper") o.triangle_count = cdp::TriangleCountRule::PaperFloor;
-        else throw cdp::InvalidInputError("--triangle-count must be hartmann or paper, not \"" + *v + "\"");
-      }
-      if (auto v = get("--seed-resolution")) o.seed_resolution = static_cast<int>(parse_integer("--seed-resolution", *v, 2, kIntMax));
-      if (auto v = get("--max-triangles")) o.max_triangles = static_cast<std::size_t>(parse_integer("--max-triangles", *v, 1, kIntMax));
-      o.curvature_properties = get("--curvature").has_value();
+      cdp::AdaptiveOptions& o = adaptive_options;
+      if (tolerance->count() > 0) o.sizing = cdp::SizingMode::Tolerance;
+      o.triangle_count = triangle_count == "paper" ? cdp::TriangleCountRule::PaperFloor : cdp::TriangleCountRule::Hartmann;
+      if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
+      if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
       o.progress = progress;
       o.phase = reporter.phase_callback();
       result = name_field(field_path, [&] { return cdp::polygonize_adaptive(*field, o); });
     } else {
-      cdp::MarchingOptions o;
-      if (get("--cell") && get("--precision")) throw cdp::InvalidInputError("give either --cell or --precision, not both");
-      if (auto v = get("--cell")) {
-        o.cell_size = parse_number("--cell", *v);
-        // 0 means "the default" inside the library; on the command line it is a mistake.
-        if (!(o.cell_size > 0)) throw cdp::InvalidInputError("--cell must be positive, not " + *v);
-      }
-      if (auto v = get("--precision")) o.precision = static_cast<int>(parse_integer("--precision", *v, 0, 5));
-      if (auto v = get("--traversal")) {
-        if (*v == "continuation") o.traversal = cdp::Traversal::Continuation;
-        else if (*v == "grid") o.traversal = cdp::Traversal::Grid;
-        else throw cdp::InvalidInputError("--traversal must be continuation or grid, not \"" + *v + "\"");
-      }
-      if (auto v = get("--seed-resolution")) o.seed_resolution = static_cast<int>(parse_integer("--seed-resolution", *v, 2, kIntMax));
-      if (auto v = get("--max-triangles")) o.max_triangles = static_cast<std::size_t>(parse_integer("--max-triangles", *v, 1, kIntMax));
+      cdp::MarchingOptions& o = marching_options;
+      o.traversal = traversal == "grid" ? cdp::Traversal::Grid : cdp::Traversal::Continuation;
+      if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
+      if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
       reporter.phase("meshing");
       o.progress = progress;
       result = name_field(field_path, [&] { return method == "mc" ? cdp::marching_cubes(*field, o) : cdp::marching_tetrahedra(*field, o); });

@@ -3,6 +3,7 @@
 // principal-direction glyphs of a field. Prints one JSON line describing what it drew (the
 // colour map and range, so a script can draw a matching colour bar).
 #include "support/app_support.h"
+#include "support/command_line.h"
 
 #include <raytrace/mesh_render.h>
 #include <raytrace/png_image.h>
@@ -14,99 +15,86 @@
 
 #include <nlohmann/json.hpp>
 
-
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <set>
-#include <sstream>
+#include <memory>
 #include <string>
 #include <vector>
-
-namespace {
-
-constexpr const char* kUsage =
-    "usage: render MESH -o OUT.png [--width W] [--height H] [--azimuth DEG] [--elevation DEG] [--up x|y|z] "
-    "[--zoom Z] [--focus x,y,z] [--samples N] [--wireframe] [--line-width PX] "
-    "[--color none|mac|shape_index|PROPERTY] [--range LO,HI] [--field FIELD.json] [--directions] [--spacing PX]";
-
-std::vector<double> parse_numbers(const std::string& option, const std::string& text, std::size_t count) {
-  std::vector<double> values;
-  std::stringstream in(text);
-  std::string item;
-  bool ok = !text.empty() && text.back() != ',';
-  while (ok && std::getline(in, item, ',')) {
-    std::size_t used = 0;
-    try {
-      values.push_back(std::stod(item, &used));
-    } catch (const std::exception&) {
-      ok = false;
-    }
-    ok = ok && used == item.size() && std::isfinite(values.back());
-  }
-  if (!ok || values.size() != count)
-    throw cdp::InvalidInputError(option + " expects " +
-                                 (count == 1 ? std::string("a number") : std::to_string(count) + " comma-separated numbers") +
-                                 ", found \"" + text + "\"");
-  return values;
-}
-
-int parse_int(const std::string& option, const std::string& text) {
-  const double v = parse_numbers(option, text, 1)[0];
-  if (v != std::floor(v) || std::abs(v) > 1e9) throw cdp::InvalidInputError(option + " expects an integer, found \"" + text + "\"");
-  return static_cast<int>(v);
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
   try {
-    std::string mesh_path, out_path, field_path, color = "none", range;
+    CLI::App app{"A picture of MESH (Embree ray casting): shading, wireframe, colour maps of vertex properties,\n"
+                 "principal directions of a field. Prints one JSON line saying what it drew.\n",
+                 "render"};
+    cdp::app::configure(app);
+    std::string mesh_path, out_path, field_path, color = "none", range, up = "y", focus;
     cdp::RenderOptions options;
-    std::set<std::string> seen;
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      const bool has_value = i + 1 < argc;
-      auto value = [&]() -> std::string {
-        if (!has_value) throw cdp::InvalidInputError(arg + " needs a value; " + kUsage);
-        // Each option once: a second value would silently replace the first.
-        if (!seen.insert(arg).second) throw cdp::InvalidInputError(arg + " given twice");
-        return argv[++i];
-      };
-      if (arg == "-h" || arg == "--help") {
-        std::cout << kUsage << "\n";
-        return 0;
-      } else if (arg == "-o") out_path = value();
-      else if (arg == "--width") options.view.width = parse_int(arg, value());
-      else if (arg == "--height") options.view.height = parse_int(arg, value());
-      else if (arg == "--azimuth") options.view.azimuth_deg = parse_numbers(arg, value(), 1)[0];
-      else if (arg == "--elevation") options.view.elevation_deg = parse_numbers(arg, value(), 1)[0];
-      else if (arg == "--up") options.view.up = cdp::parse_up_axis(value());
-      else if (arg == "--zoom") options.view.zoom = parse_numbers(arg, value(), 1)[0];
-      else if (arg == "--focus") {
-        const auto f = parse_numbers(arg, value(), 3);
-        options.view.focus = cdp::Vec3(f[0], f[1], f[2]);
-      } else if (arg == "--samples") options.samples = parse_int(arg, value());
-      else if (arg == "--wireframe") options.wireframe = true;
-      else if (arg == "--line-width") options.line_width_px = parse_numbers(arg, value(), 1)[0];
-      else if (arg == "--color") color = value();
-      else if (arg == "--range") range = value();
-      else if (arg == "--field") field_path = value();
-      else if (arg == "--directions") options.directions = true;
-      else if (arg == "--spacing") options.glyph_spacing_px = parse_numbers(arg, value(), 1)[0];
-      else if (!arg.empty() && arg[0] != '-' && mesh_path.empty()) mesh_path = arg;
-      else throw cdp::InvalidInputError("unexpected argument \"" + arg + "\"; " + kUsage);
+    app.add_option("MESH", mesh_path, "the mesh: .ply, .obj or .off")->required()->type_name("")->check(cdp::app::path_name());
+    app.add_option("-o", out_path, "the picture (PNG)")->required()->type_name("OUT.png")->check(cdp::app::path_name());
+    app.add_option("--width", options.view.width, "picture width in pixels, in [1, 8192]")
+        ->capture_default_str()
+        ->type_name("W")
+        ->transform(cdp::app::integer_in(1, 8192));
+    app.add_option("--height", options.view.height, "picture height in pixels, in [1, 8192]")
+        ->capture_default_str()
+        ->type_name("H")
+        ->transform(cdp::app::integer_in(1, 8192));
+    app.add_option("--azimuth", options.view.azimuth_deg, "turn of the camera around the up axis, in degrees")
+        ->capture_default_str()
+        ->type_name("DEG")
+        ->transform(cdp::app::number());
+    app.add_option("--elevation", options.view.elevation_deg, "lift of the camera towards the up axis, in [-90, 90] degrees")
+        ->capture_default_str()
+        ->type_name("DEG")
+        ->transform(cdp::app::number_in(-90, 90));
+    app.add_option("--up", up, "the model's up axis: x, y or z")
+        ->capture_default_str()
+        ->type_name("AXIS")
+        ->check(CLI::IsMember({"x", "y", "z"}));
+    app.add_option("--zoom", options.view.zoom, "1 shows the whole mesh, 3 a third of it")
+        ->capture_default_str()
+        ->type_name("Z")
+        ->transform(cdp::app::positive_number());
+    app.add_option("--focus", focus, "the point at the picture's centre (default: the centre of the mesh's box)")
+        ->type_name("x,y,z")
+        ->check(cdp::app::numbers(3, "x,y,z"));
+    app.add_option("--samples", options.samples, "N x N rays per pixel, N in [1, 8]")
+        ->capture_default_str()
+        ->type_name("N")
+        ->transform(cdp::app::integer_in(1, 8));
+    app.add_flag("--wireframe", options.wireframe, "draw the edges");
+    app.add_option("--line-width", options.line_width_px, "width of the edges in pixels")
+        ->capture_default_str()
+        ->type_name("PX")
+        ->transform(cdp::app::positive_number());
+    app.add_option("--color", color, "colour by a vertex property: mac, shape_index or any other, or none")
+        ->capture_default_str()
+        ->type_name("PROPERTY")
+        ->check(cdp::app::non_empty("a property name or none"));
+    app.add_option("--range", range, "the colour map's range (default: 2nd to 98th percentile)")
+        ->type_name("LO,HI")
+        ->check(cdp::app::numbers(2, "LO,HI"));
+    app.add_option("--field", field_path, "the field, for mac and shape_index of meshes without them and for --directions")
+        ->type_name("FIELD.json")
+        ->check(cdp::app::path_name());
+    app.add_flag("--directions", options.directions, "draw the principal directions (needs --field)");
+    app.add_option("--spacing", options.glyph_spacing_px, "pixels between principal-direction glyphs, at least 2")
+        ->capture_default_str()
+        ->type_name("PX")
+        ->transform(cdp::app::number());
+    if (const auto status = cdp::app::parse(app, argc, argv)) return *status;
+    options.view.up = cdp::parse_up_axis(up);
+    if (!focus.empty()) {
+      const std::vector<double> f = cdp::app::split_numbers(focus);
+      options.view.focus = cdp::Vec3(f[0], f[1], f[2]);
     }
-    if (mesh_path.empty() || out_path.empty()) throw cdp::InvalidInputError(kUsage);
     std::vector<std::filesystem::path> inputs{mesh_path};
     if (!field_path.empty()) inputs.push_back(field_path);
     cdp::app::check_output_paths({{"-o", out_path}}, inputs);
     if (std::filesystem::path(out_path).extension() != ".png")
       throw cdp::InvalidInputError(out_path + ": the output must be a .png file");
-    if (color.empty()) throw cdp::InvalidInputError("--color needs a property name or none");
     if (options.directions && field_path.empty())
       throw cdp::InvalidInputError("--directions needs --field FIELD.json (the curvature comes from the field)");
     if (!range.empty() && color == "none") throw cdp::InvalidInputError("--range needs --color");
@@ -124,7 +112,7 @@ int main(int argc, char** argv) {
                                        (color == "mac" || color == "shape_index" ? " (give --field FIELD.json to compute it)" : ""));
       }
       if (!range.empty()) {
-        const auto r = parse_numbers("--range", range, 2);
+        const auto r = cdp::app::split_numbers(range);
         cdp::ColorMapping m = cdp::default_color_mapping(color, mesh.vertex_scalars.at(color));
         m.lo = r[0];
         m.hi = r[1];

@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
-#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -125,32 +124,6 @@ void check_output_paths(const std::vector<std::pair<std::string, std::filesystem
     for (const auto& in : inputs)
       if (same(path, in)) throw InvalidInputError(path.string() + ": " + flag + " would overwrite an input file");
   }
-}
-
-double parse_number(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (text.empty() || used != text.size() || !std::isfinite(v))
-    throw InvalidInputError(flag + " expects a number, found \"" + text + "\"");
-  return v;
-}
-
-long long parse_integer(const std::string& flag, const std::string& text, long long lo, long long hi) {
-  double v = 0;
-  try {
-    v = parse_number(flag, text);
-  } catch (const InvalidInputError&) {
-    throw InvalidInputError(flag + " expects an integer, found \"" + text + "\"");
-  }
-  if (v != std::floor(v)) throw InvalidInputError(flag + " expects an integer, found \"" + text + "\"");
-  if (v < static_cast<double>(lo) || v > static_cast<double>(hi))
-    throw InvalidInputError(flag + " must be between " + std::to_string(lo) + " and " + std::to_string(hi) + ", not " + text);
-  return static_cast<long long>(v);
 }
 
 ProgressReporter::Mode progress_mode(bool quiet, bool lines) {

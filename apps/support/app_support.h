@@ -1,6 +1,6 @@
 // What every program shares and no library should have: signals, checks of the paths a command
-// line names, number options, and progress reports on the terminal or in a log. Programs only;
-// the libraries stay free of terminal output and process control.
+// line names, and progress reports on the terminal or in a log (the command lines themselves:
+// command_line.h). Programs only; the libraries stay free of terminal output and process control.
 #pragma once
 
 #include <polygonizer/progress.h>
@@ -44,11 +44,6 @@ class BlockSignals {
 // ("-o", "--stats") with its path.
 void check_output_paths(const std::vector<std::pair<std::string, std::filesystem::path>>& outputs,
                         const std::vector<std::filesystem::path>& inputs);
-
-// Option values: the whole text must be a finite number (an integer within [lo, hi]); else
-// InvalidInputError "FLAG expects ..., found "TEXT"".
-double parse_number(const std::string& flag, const std::string& text);
-long long parse_integer(const std::string& flag, const std::string& text, long long lo, long long hi);
 
 // Progress of a long run on standard error. Bar: a bar redrawn in place, only on an interactive
 // terminal (the default). Lines: one line per phase and then one every few seconds, for logs and

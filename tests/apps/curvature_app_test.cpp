@@ -70,7 +70,7 @@ TEST(CurvatureAppErrors, BadInputGivesOneLineAndExitCodeOne) {
       {(dir.path / "missing.json").string() + " --at 1,0,0", (dir.path / "missing.json").string() + ": cannot open file"},
       {deep.string() + " --at 1,0,0", deep.string() + ": value: expression: formula nested too deeply (more than 256 "
                                                       "levels of parentheses, calls, signs and exponents) at position 257"},
-      {flat.string() + " --at 1,zero,0", "--at expects three numbers x,y,z, found \"1,zero,0\""},
+      {flat.string() + " --at 1,zero,0", "--at: expects three numbers x,y,z, found \"1,zero,0\""},
       {flat.string() + " --at 0,0,0", flat.string() + ": cannot project 0,0,0 onto the surface: the gradient vanishes"},
       {huge.string() + " --at 1,0,0", huge.string() + ": cannot project 1,0,0 onto the surface: the field's box is too "
                                                       "large (or too small) for double precision"},
@@ -78,7 +78,7 @@ TEST(CurvatureAppErrors, BadInputGivesOneLineAndExitCodeOne) {
       {tiny.string() + " --at 1e-150,0,0", tiny.string() + ": no curvature at the projected point: the Hessian is not "
                                                            "finite (|grad F| = 1)"},
       {flat.string() + " --at 1,0,0 --at 2,0,0", "--at given twice"},
-      {flat.string(), "usage: curvature FIELD.json --at x,y,z"},
+      {flat.string(), "--at is required; see curvature --help"},
   };
   for (const auto& c : cases) {
     const auto r = test::run_app("curvature", c.args);

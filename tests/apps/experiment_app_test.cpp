@@ -140,7 +140,8 @@ TEST(ExperimentApp, OptionsGivenTwiceOrTwoModesAreErrors) {
   const auto file = dir.write("e.json", R"({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "mt", "cell": 0.2}]})");
   for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
            {"--out a --out b --list", "--out given twice"},
-           {"--list --commands", "give one of --list, --commands, --run and --summarize"},
+           {"--list --commands", "--list excludes --commands"},
+           {"--summarize --run x", "--run excludes --summarize"},
            {"--jobs 1 --jobs 2 --list", "--jobs given twice"}}) {
     const auto r = test::run_app("experiment", file.string() + " " + args);
     EXPECT_EQ(r.exit_code, 1) << args;

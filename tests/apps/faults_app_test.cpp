@@ -348,9 +348,9 @@ TEST(Faults, BadFilesAndOptionsGetPreciseOneLineMessages) {
       {"polygonize", inverted.string() + " -o " + out + " --method mc", "looks inverted"},
       {"polygonize", torus.string() + " -o " + out + " --seed-resolution 1000000", "use a resolution of at most"},
       {"polygonize", torus.string() + " -o " + out + " --seed-resolution 2147483648", "between 2 and 2147483647"},
-      {"polygonize", torus.string() + " -o " + out + " --method mc --cell 0", "--cell must be positive"},
-      {"polygonize", torus.string() + " -o " + out + " --method mt --precision 6", "--precision must be between 0 and 5"},
-      {"polygonize", torus.string() + " -o " + out + " -o " + out, "-o given twice"},
+      {"polygonize", torus.string() + " -o " + out + " --method mc --cell 0", "--cell: expects a positive number, found \"0\""},
+      {"polygonize", torus.string() + " -o " + out + " --method mt --precision 6", "--precision: expects an integer between 0 and 5, found \"6\""},
+      {"polygonize", torus.string() + " -o " + out + " -o " + out, "--output given twice"},
       {"polygonize", torus.string() + " -o " + out + " --factor 3 --max-triangles 20", torus.string() + ": adaptive:"},
       {"evaluate", torus.string() + " " + lying.string() + " -o " + metrics, "too short"},
       {"evaluate", torus.string() + " " + garbage_obj.string() + " -o " + metrics, "garbage.obj:1: unknown OBJ statement"},
@@ -398,7 +398,7 @@ TEST(Faults, ProgressLinesNameEveryPhaseForLogs) {
   for (const char* phase : {"reading the field and the mesh", "casting rays", "measuring the mesh", "writing "})
     EXPECT_NE(e.err.find(phase), std::string::npos) << phase << "\n" << e.err;
   const auto both = test::run_app("polygonize", torus.string() + " -o " + out.string() + " --progress --quiet");
-  expect_one_line_error(both, "polygonize", "either --quiet or --progress", "both");
+  expect_one_line_error(both, "polygonize", "--quiet excludes --progress", "both");
 }
 
 }  // namespace

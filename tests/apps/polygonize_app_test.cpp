@@ -95,18 +95,18 @@ TEST(PolygonizeAppErrors, BadArgumentsAndFieldsGiveAOneLineErrorAndNoOutput) {
     std::string args, expected;
   };
   const std::vector<Case> cases = {
-      {torus.string() + " -o " + out + " --method marching", "--method"},
+      {torus.string() + " -o " + out + " --method marching", "--method: marching not in {adaptive,mc,mt}"},
       {torus.string() + " -o " + out + " --cell 0.1", "--cell does not apply"},
       {torus.string() + " -o " + out + " --method mc --factor 2", "--factor does not apply"},
-      {torus.string() + " -o " + out + " --factor two", "--factor expects a number"},
-      {torus.string() + " -o " + out + " --factor 2 --tolerance 0.01", "either --factor or --tolerance"},
+      {torus.string() + " -o " + out + " --factor two", "--factor: expects a positive number, found \"two\""},
+      {torus.string() + " -o " + out + " --factor 2 --tolerance 0.01", "--factor excludes --tolerance"},
       {torus.string() + " -o " + out + " --method mt --precision 3", "precision"},
       {torus.string() + " -o " + (dir.path / "out.stl").string(), ".ply, .obj or .off"},
       {(dir.path / "missing.json").string() + " -o " + out, "missing.json"},
       {typo.string() + " -o " + out, "minor_raduis"},
       {nan.string() + " -o " + out, ""},
       {empty.string() + " -o " + out, ""},
-      {torus.string(), "-o"},
+      {torus.string(), "--output is required"},
   };
   for (const auto& c : cases) {
     const auto r = test::run_app("polygonize", c.args);

@@ -1,13 +1,11 @@
-// An 8-bit RGB image and its PNG file. None of the project's dependencies writes PNG, so the
-// writer here emits the simplest valid PNG: one IDAT chunk holding a zlib stream of *stored*
-// (uncompressed) deflate blocks, with the CRC-32 and Adler-32 checksums the format requires.
-// Files are about 3 bytes per pixel; scripts that keep images recompress them (matplotlib).
-// Writing the bytes to a file is the caller's job (apps/render.cpp), as everywhere in raytrace/.
+// An 8-bit RGB image and its PNG file, encoded by stb_image_write (Debian's libstb-dev; header
+// only, compiled into src/png_image.cpp): deflate-compressed, with per-row filters. The same
+// image always gives the same bytes. Writing the bytes to a file is the caller's job
+// (apps/render.cpp, atomically), as everywhere in raytrace/.
 #pragma once
 
 #include <array>
 #include <cstdint>
-#include <string>
 #include <vector>
 
 namespace cdp {
@@ -24,12 +22,8 @@ struct Image {
   void set(int x, int y, Rgb c);
 };
 
-// The complete PNG file (signature, IHDR, IDAT, IEND) as bytes. Throws InvalidInputError for an
-// empty image or one whose rgb size is not 3 * width * height.
+// The complete PNG file as bytes. Throws InvalidInputError for an empty image or one whose rgb
+// size is not 3 * width * height, and std::bad_alloc when the encoder runs out of memory.
 std::vector<std::uint8_t> encode_png(const Image& image);
-
-// CRC-32 (ISO 3309, as PNG uses it) and Adler-32 (RFC 1950), exposed for the tests.
-std::uint32_t crc32(const std::uint8_t* data, std::size_t n, std::uint32_t crc = 0);
-std::uint32_t adler32(const std::uint8_t* data, std::size_t n, std::uint32_t adler = 1);
 
 }  // namespace cdp
