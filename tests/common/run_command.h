@@ -18,26 +18,11 @@ struct CommandResult {
   std::string err;
 };
 
+inline CommandResult run_shell(const std::string& command);
+
 // `args` is passed to /bin/sh after the program path; quote what needs quoting.
 inline CommandResult run_app(const std::string& program, const std::string& args) {
-  static int counter = 0;
-  const auto err_path = std::filesystem::temp_directory_path() /
-                        ("cdp_app_stderr_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
-  const std::string cmd = std::string(CDP_BIN_DIR) + "/" + program + " " + args + " 2>" + err_path.string();
-  CommandResult r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf{};
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
-  std::filesystem::remove(err_path);
-  return r;
+  return run_shell(std::string(CDP_BIN_DIR) + "/" + program + " " + args);
 }
 
 // A fresh temporary folder, removed when the object goes.
@@ -59,7 +44,8 @@ struct TempDir {
 
 namespace cdp::test {
 
-// Runs a whole shell command line (for what run_app cannot say: a `ulimit` before the program).
+// Runs a whole shell command line (run_app, and what it cannot say: a `ulimit` before the
+// program): exit code, stdout, and stderr through a temporary file.
 inline CommandResult run_shell(const std::string& command) {
   static int counter = 0;
   const auto err_path = std::filesystem::temp_directory_path() /
