@@ -3,10 +3,10 @@
 #include "support/app_support.h"
 #include "support/command_line.h"
 
-#include <polygonizer/curvature.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/field_factory.h>
-#include <polygonizer/newton_projection.h>
+#include <cdp/core/curvature.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/field_factory.h>
+#include <cdp/core/newton_projection.h>
 
 #include <cmath>
 #include <cstdio>

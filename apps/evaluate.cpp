@@ -7,14 +7,14 @@
 #include "support/app_support.h"
 #include "support/command_line.h"
 
-#include <raytrace/evaluate.h>
-#include <raytrace/ground_truth_cache.h>
-#include <raytrace/phong_normal.h>
+#include <cdp/raytrace/evaluate.h>
+#include <cdp/raytrace/ground_truth_cache.h>
+#include <cdp/raytrace/phong_normal.h>
 
-#include <polygonizer/atomic_write.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/field_factory.h>
-#include <polygonizer/mesh_io.h>
+#include <cdp/io/atomic_write.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/field_factory.h>
+#include <cdp/io/mesh_io.h>
 
 #include <chrono>
 #include <cstdio>

@@ -7,10 +7,10 @@
 #include "support/app_support.h"
 #include "support/command_line.h"
 
-#include <polygonizer/atomic_write.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/field_factory.h>
-#include <polygonizer/json_reader.h>
+#include <cdp/io/atomic_write.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/field_factory.h>
+#include <cdp/io/json_reader.h>
 
 #include <spawn.h>
 #include <sys/wait.h>

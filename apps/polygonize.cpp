@@ -5,14 +5,14 @@
 #include "support/app_support.h"
 #include "support/command_line.h"
 
-#include <baselines/marching_cubes.h>
-#include <baselines/marching_tetrahedra.h>
-#include <polygonizer/atomic_write.h>
-#include <polygonizer/adaptive_polygonizer.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/field_factory.h>
-#include <polygonizer/mesh_io.h>
-#include <polygonizer/polygonize_stats_json.h>
+#include <cdp/baselines/marching_cubes.h>
+#include <cdp/baselines/marching_tetrahedra.h>
+#include <cdp/io/atomic_write.h>
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/field_factory.h>
+#include <cdp/io/mesh_io.h>
+#include <cdp/io/polygonize_stats_json.h>
 
 #include <cstdio>
 #include <filesystem>

@@ -5,13 +5,13 @@
 #include "support/app_support.h"
 #include "support/command_line.h"
 
-#include <raytrace/mesh_render.h>
-#include <raytrace/png_image.h>
+#include <cdp/render/mesh_render.h>
+#include <cdp/render/png_image.h>
 
-#include <polygonizer/atomic_write.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/field_factory.h>
-#include <polygonizer/mesh_io.h>
+#include <cdp/io/atomic_write.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/field_factory.h>
+#include <cdp/io/mesh_io.h>
 
 #include <nlohmann/json.hpp>
 

@@ -3,13 +3,13 @@
 // scaling series from 10^4 to 10^6 triangles on the torus, where bookkeeping that grows faster
 // than linearly would show as a rising time per triangle. Times are the polygonizers' own
 // stats.seconds (manual time), as in STATS.json.
-#include <baselines/marching_cubes.h>
-#include <baselines/marching_tetrahedra.h>
-#include <polygonizer/adaptive_polygonizer.h>
-#include <polygonizer/field_factory.h>
-#include <polygonizer/models/analytic.h>
-#include <polygonizer/models/expression.h>
-#include <polygonizer/surface_seeds.h>
+#include <cdp/baselines/marching_cubes.h>
+#include <cdp/baselines/marching_tetrahedra.h>
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/io/field_factory.h>
+#include <cdp/core/models/analytic.h>
+#include <cdp/core/models/expression.h>
+#include <cdp/core/surface_seeds.h>
 
 #include <benchmark/benchmark.h>
 

@@ -11,12 +11,12 @@
 // Points: a cell-centred 16^3 lattice over the field's bounds (deterministic, and it avoids the
 // centres of symmetric boxes where a distance field's gradient is undefined).
 //   build/bin/bench_fields --benchmark_min_time=0.05
-#include <polygonizer/curvature.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/field_factory.h>
-#include <polygonizer/models/analytic.h>
-#include <polygonizer/models/blobs.h>
-#include <polygonizer/models/expression.h>
+#include <cdp/core/curvature.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/field_factory.h>
+#include <cdp/core/models/analytic.h>
+#include <cdp/core/models/blobs.h>
+#include <cdp/core/models/expression.h>
 
 #include <benchmark/benchmark.h>
 

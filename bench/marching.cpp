@@ -3,11 +3,11 @@
 // per triangle; also evaluations at lattice corners and in root searches per triangle. Times
 // are the polygonizer's own stats.seconds (manual time), as in STATS.json: the topology count
 // the statistics also make is not polygonization.
-#include <baselines/marching_cubes.h>
-#include <baselines/marching_tetrahedra.h>
+#include <cdp/baselines/marching_cubes.h>
+#include <cdp/baselines/marching_tetrahedra.h>
 
-#include <polygonizer/models/analytic.h>
-#include <polygonizer/models/expression.h>
+#include <cdp/core/models/analytic.h>
+#include <cdp/core/models/expression.h>
 
 #include <benchmark/benchmark.h>
 

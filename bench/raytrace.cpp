@@ -1,12 +1,12 @@
 // Rays per second of the exact implicit ray caster (torus: model Lipschitz bound; tanglecube:
 // estimated bound) and of the Embree mesh intersection, single-threaded and with TBB.
 //   build/bin/bench_raytrace --benchmark_min_time=0.05
-#include <raytrace/embree_scene.h>
-#include <raytrace/implicit_raycast.h>
+#include <cdp/raytrace/embree_scene.h>
+#include <cdp/raytrace/implicit_raycast.h>
 #include "common/reference_meshes.h"
 
-#include <polygonizer/models/analytic.h>
-#include <polygonizer/models/expression.h>
+#include <cdp/core/models/analytic.h>
+#include <cdp/core/models/expression.h>
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>

@@ -3,7 +3,7 @@
 // command_line.h). Programs only; the libraries stay free of terminal output and process control.
 #pragma once
 
-#include <polygonizer/progress.h>
+#include <cdp/core/progress.h>
 
 #include <sys/types.h>
 

@@ -1,7 +1,7 @@
 // Generates the Marching Cubes table from the rule stated in cube_cases.h.
-#include <baselines/cube_cases.h>
+#include <cdp/baselines/cube_cases.h>
 
-#include <polygonizer/field.h>
+#include <cdp/core/field.h>
 
 #include <algorithm>
 #include <limits>

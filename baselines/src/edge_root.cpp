@@ -1,6 +1,6 @@
 #include "edge_root.h"
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <algorithm>
 #include <cmath>

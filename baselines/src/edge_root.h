@@ -1,7 +1,7 @@
 // The crossing of F = 0 on a lattice edge, by a bracketed root search.
 #pragma once
 
-#include <polygonizer/field.h>
+#include <cdp/core/field.h>
 
 namespace cdp::marching {
 

@@ -4,10 +4,10 @@
 #include "flat_map.h"
 #include "short_edge_collapse.h"
 
-#include <polygonizer/errors.h>
-#include <polygonizer/mesh_topology.h>
-#include <polygonizer/newton_projection.h>
-#include <polygonizer/surface_seeds.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/mesh_topology.h>
+#include <cdp/core/newton_projection.h>
+#include <cdp/core/surface_seeds.h>
 
 #include <algorithm>
 #include <chrono>

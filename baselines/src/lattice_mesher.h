@@ -3,9 +3,9 @@
 // how one cube with given corner values is cut into triangles.
 #pragma once
 
-#include <baselines/marching_options.h>
+#include <cdp/baselines/marching_options.h>
 
-#include <polygonizer/polygonize_result.h>
+#include <cdp/core/polygonize_result.h>
 
 #include <array>
 #include <cstdint>

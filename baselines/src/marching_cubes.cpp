@@ -1,7 +1,7 @@
 #include "lattice_mesher.h"
 
-#include <baselines/cube_cases.h>
-#include <baselines/marching_cubes.h>
+#include <cdp/baselines/cube_cases.h>
+#include <cdp/baselines/marching_cubes.h>
 
 namespace cdp {
 

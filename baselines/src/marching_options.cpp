@@ -1,6 +1,6 @@
-#include <baselines/marching_options.h>
+#include <cdp/baselines/marching_options.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <cmath>
 #include <string>

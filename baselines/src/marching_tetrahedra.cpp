@@ -1,6 +1,6 @@
 #include "lattice_mesher.h"
 
-#include <baselines/marching_tetrahedra.h>
+#include <cdp/baselines/marching_tetrahedra.h>
 
 #include <vector>
 

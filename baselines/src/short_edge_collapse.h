@@ -3,7 +3,7 @@
 // corner, and the triangles joining them have edges a millionth of a cell long.
 #pragma once
 
-#include <polygonizer/mesh.h>
+#include <cdp/core/mesh.h>
 
 #include <cstddef>
 #include <cstdint>

@@ -1,5 +1,5 @@
-#include <polygonizer/curvature.h>
-#include <polygonizer/errors.h>
+#include <cdp/core/curvature.h>
+#include <cdp/core/errors.h>
 
 #include <Eigen/Eigenvalues>
 

@@ -1,4 +1,4 @@
-#include <polygonizer/mesh.h>
+#include <cdp/core/mesh.h>
 
 namespace cdp {
 

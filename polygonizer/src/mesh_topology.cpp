@@ -1,4 +1,4 @@
-#include <polygonizer/mesh_topology.h>
+#include <cdp/core/mesh_topology.h>
 
 #include <algorithm>
 #include <numeric>

@@ -1,4 +1,4 @@
-#include <polygonizer/newton_projection.h>
+#include <cdp/core/newton_projection.h>
 
 #include <cmath>
 

@@ -1,6 +1,5 @@
-#include <polygonizer/errors.h>
-#include <polygonizer/mesh_io.h>
-#include <polygonizer/oriented_points.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/oriented_points.h>
 
 #include <cmath>
 #include <limits>
@@ -34,10 +33,6 @@ OrientedPoints oriented_points_from_mesh(const Mesh& mesh, const std::string& so
   }
   if (out.positions.empty()) throw InvalidInputError(source + ": no vertex with a defined normal (no triangles?)");
   return out;
-}
-
-OrientedPoints read_oriented_points(const std::filesystem::path& path) {
-  return oriented_points_from_mesh(read_mesh(path), path.string());
 }
 
 std::vector<std::size_t> farthest_point_subset(const std::vector<Vec3>& positions, std::size_t n) {

@@ -1,6 +1,6 @@
-#include <polygonizer/errors.h>
-#include <polygonizer/newton_projection.h>
-#include <polygonizer/surface_seeds.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/newton_projection.h>
+#include <cdp/core/surface_seeds.h>
 
 #include <algorithm>
 #include <array>

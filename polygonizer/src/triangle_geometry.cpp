@@ -1,4 +1,4 @@
-#include <polygonizer/triangle_geometry.h>
+#include <cdp/core/triangle_geometry.h>
 
 #include <algorithm>
 #include <cmath>

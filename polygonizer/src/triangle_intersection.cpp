@@ -4,9 +4,9 @@
 // and, when the bound cannot certify the sign, again with exact expansion arithmetic, so its sign
 // is exact as long as no product overflows or underflows (every coordinate 0 or between about
 // 1e-50 and 1e100 in magnitude).
-#include <polygonizer/triangle_intersection.h>
+#include <cdp/core/triangle_intersection.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <algorithm>
 #include <climits>

@@ -2,11 +2,11 @@
 // evaluate program on arrays.
 #include "bindings.h"
 
-#include <polygonizer/curvature.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/newton_projection.h>
-#include <raytrace/evaluate.h>
-#include <raytrace/phong_normal.h>
+#include <cdp/core/curvature.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/newton_projection.h>
+#include <cdp/raytrace/evaluate.h>
+#include <cdp/raytrace/phong_normal.h>
 
 #include <pybind11/stl.h>
 

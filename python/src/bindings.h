@@ -2,9 +2,9 @@
 // that keep long C++ runs interruptible, and one registration function per file.
 #pragma once
 
-#include <polygonizer/field.h>
-#include <polygonizer/mesh.h>
-#include <polygonizer/progress.h>
+#include <cdp/core/field.h>
+#include <cdp/core/mesh.h>
+#include <cdp/core/progress.h>
 
 #include <nlohmann/json.hpp>
 

@@ -1,6 +1,6 @@
 #include "bindings.h"
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <cmath>
 #include <cstring>

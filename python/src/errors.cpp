@@ -9,7 +9,7 @@
 // travel through the C++ code as py::error_already_set and come out as themselves.
 #include "bindings.h"
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <cerrno>
 

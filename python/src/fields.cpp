@@ -4,8 +4,8 @@
 #include "bindings.h"
 #include "python_field.h"
 
-#include <polygonizer/errors.h>
-#include <polygonizer/field_factory.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/field_factory.h>
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>

@@ -3,8 +3,8 @@
 // are refused with the same messages as in the programs.
 #include "bindings.h"
 
-#include <polygonizer/errors.h>
-#include <polygonizer/mesh_io.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/mesh_io.h>
 
 #include <pybind11/stl/filesystem.h>
 

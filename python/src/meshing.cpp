@@ -4,11 +4,11 @@
 // takes it back to look for Ctrl-C.
 #include "bindings.h"
 
-#include <baselines/marching_cubes.h>
-#include <baselines/marching_tetrahedra.h>
-#include <polygonizer/adaptive_polygonizer.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/polygonize_stats_json.h>
+#include <cdp/baselines/marching_cubes.h>
+#include <cdp/baselines/marching_tetrahedra.h>
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/polygonize_stats_json.h>
 
 #include <pybind11/stl.h>
 

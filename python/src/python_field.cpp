@@ -1,6 +1,6 @@
 #include "python_field.h"
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <cstring>
 

@@ -1,7 +1,7 @@
-#include <raytrace/accuracy.h>
-#include <raytrace/phong_normal.h>
+#include <cdp/raytrace/accuracy.h>
+#include <cdp/raytrace/phong_normal.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
 // overlapping_box_pairs (self_intersection.h): Embree's rtcCollide as a broad phase. With
 // embree_scene.cpp, the only file of the project that calls Embree (version 3).
-#include <raytrace/self_intersection.h>
+#include <cdp/raytrace/self_intersection.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>

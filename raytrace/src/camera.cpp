@@ -1,6 +1,6 @@
-#include <raytrace/camera.h>
+#include <cdp/raytrace/camera.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <cmath>
 #include <numbers>

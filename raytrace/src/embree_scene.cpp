@@ -1,7 +1,7 @@
 // With box_overlaps.cpp, the only file of the project that calls Embree (version 3).
-#include <raytrace/embree_scene.h>
+#include <cdp/raytrace/embree_scene.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>

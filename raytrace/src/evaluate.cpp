@@ -1,8 +1,8 @@
-#include <raytrace/embree_scene.h>
-#include <raytrace/evaluate.h>
-#include <raytrace/self_intersection.h>
+#include <cdp/raytrace/embree_scene.h>
+#include <cdp/raytrace/evaluate.h>
+#include <cdp/raytrace/self_intersection.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <cmath>
 

@@ -1,7 +1,7 @@
-#include <raytrace/ground_truth_cache.h>
+#include <cdp/raytrace/ground_truth_cache.h>
 
-#include <polygonizer/atomic_write.h>
-#include <polygonizer/errors.h>
+#include <cdp/io/atomic_write.h>
+#include <cdp/core/errors.h>
 
 #include <cstdint>
 #include <cstdio>

@@ -1,6 +1,6 @@
-#include <raytrace/implicit_raycast.h>
+#include <cdp/raytrace/implicit_raycast.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -1,6 +1,6 @@
-#include <raytrace/mesh_quality.h>
+#include <cdp/raytrace/mesh_quality.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
-#include <raytrace/phong_normal.h>
+#include <cdp/raytrace/phong_normal.h>
 
 #include <cmath>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 namespace cdp {
 

@@ -1,6 +1,6 @@
 // Self-intersections: candidate pairs from overlapping_box_pairs (Embree, in box_overlaps.cpp),
-// each decided by the core's exact triangle-triangle test (polygonizer/triangle_intersection.h).
-#include <raytrace/self_intersection.h>
+// each decided by the core's exact triangle-triangle test (<cdp/core/triangle_intersection.h>).
+#include <cdp/raytrace/self_intersection.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

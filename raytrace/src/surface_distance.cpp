@@ -1,6 +1,6 @@
-#include <raytrace/surface_distance.h>
+#include <cdp/raytrace/surface_distance.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -3,7 +3,7 @@
 // dropped; bad experiment files refused with the key named; two runs give the same meshes.
 #include <gtest/gtest.h>
 
-#include <polygonizer/mesh_io.h>
+#include <cdp/io/mesh_io.h>
 
 #include <nlohmann/json.hpp>
 

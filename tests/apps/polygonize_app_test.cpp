@@ -2,8 +2,8 @@
 // bad arguments and bad fields end with a one-line error and no output file.
 #include <gtest/gtest.h>
 
-#include <polygonizer/mesh_io.h>
-#include <polygonizer/mesh_topology.h>
+#include <cdp/io/mesh_io.h>
+#include <cdp/core/mesh_topology.h>
 
 #include <nlohmann/json.hpp>
 

@@ -3,7 +3,7 @@
 
 #include "common/reference_meshes.h"
 
-#include <polygonizer/mesh_io.h>
+#include <cdp/io/mesh_io.h>
 
 #include <nlohmann/json.hpp>
 

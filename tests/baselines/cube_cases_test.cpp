@@ -1,9 +1,9 @@
-// Checks the generated Marching Cubes table (baselines/cube_cases.h) case by case: every one of
+// Checks the generated Marching Cubes table (<cdp/baselines/cube_cases.h>) case by case: every one of
 // the 256 corner sign patterns, under every decision on its ambiguous faces, closes up, and two
 // cubes sharing a face draw the same segments on it in opposite directions.
-#include <baselines/cube_cases.h>
+#include <cdp/baselines/cube_cases.h>
 
-#include <polygonizer/field.h>
+#include <cdp/core/field.h>
 
 #include <gtest/gtest.h>
 

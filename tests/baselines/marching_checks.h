@@ -2,9 +2,9 @@
 // exercises every cube case, and comparisons of meshes by geometry rather than by index.
 #pragma once
 
-#include <polygonizer/field.h>
-#include <polygonizer/mesh.h>
-#include <polygonizer/mesh_topology.h>
+#include <cdp/core/field.h>
+#include <cdp/core/mesh.h>
+#include <cdp/core/mesh_topology.h>
 
 #include <gtest/gtest.h>
 
@@ -109,8 +109,8 @@ inline void expect_closed_manifold(const MeshTopology& t) {
 }  // namespace cdp::test
 
 // The checks both methods must pass, written once.
-#include <baselines/marching_options.h>
-#include <polygonizer/polygonize_result.h>
+#include <cdp/baselines/marching_options.h>
+#include <cdp/core/polygonize_result.h>
 
 namespace cdp::test {
 

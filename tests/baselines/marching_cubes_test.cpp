@@ -1,12 +1,12 @@
-// Checks baselines/marching_cubes.h: topology on closed surfaces of genus 0, 1 and 5 and on
+// Checks <cdp/baselines/marching_cubes.h>: topology on closed surfaces of genus 0, 1 and 5 and on
 // several components, for both traversals; area convergence; vertices on the surface; every
 // cube case met by random fields closes up; errors.
 #include "marching_checks.h"
 
-#include <baselines/marching_cubes.h>
+#include <cdp/baselines/marching_cubes.h>
 
-#include <polygonizer/errors.h>
-#include <polygonizer/models/analytic.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/analytic.h>
 
 #include <common/test_fields.h>
 

@@ -1,9 +1,9 @@
-// Checks baselines/marching_options.h: the paper's precision convention, the cell size
+// Checks <cdp/baselines/marching_options.h>: the paper's precision convention, the cell size
 // resolution and its errors, and the lattice both traversals share.
-#include <baselines/marching_options.h>
+#include <cdp/baselines/marching_options.h>
 
-#include <polygonizer/errors.h>
-#include <polygonizer/models/analytic.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/analytic.h>
 
 #include <gtest/gtest.h>
 

@@ -1,11 +1,11 @@
-// Checks baselines/marching_tetrahedra.h: the same closedness, topology, convergence and
+// Checks <cdp/baselines/marching_tetrahedra.h>: the same closedness, topology, convergence and
 // accuracy requirements as Marching Cubes.
 #include "marching_checks.h"
 
-#include <baselines/marching_tetrahedra.h>
+#include <cdp/baselines/marching_tetrahedra.h>
 
-#include <polygonizer/errors.h>
-#include <polygonizer/models/analytic.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/analytic.h>
 
 #include <common/test_fields.h>
 

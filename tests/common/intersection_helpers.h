@@ -2,8 +2,8 @@
 // (Embree broad phase): the reference count without any broad phase, and joining meshes.
 #pragma once
 
-#include <polygonizer/mesh.h>
-#include <polygonizer/triangle_intersection.h>
+#include <cdp/core/mesh.h>
+#include <cdp/core/triangle_intersection.h>
 
 #include <utility>
 #include <vector>

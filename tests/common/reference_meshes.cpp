@@ -1,6 +1,6 @@
 #include "common/reference_meshes.h"
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <cmath>
 #include <map>

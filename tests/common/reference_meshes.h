@@ -2,7 +2,7 @@
 // metrics: an icosphere with exact normals and a regular tetrahedron.
 #pragma once
 
-#include <polygonizer/mesh.h>
+#include <cdp/core/mesh.h>
 
 namespace cdp {
 

@@ -1,8 +1,8 @@
 // Meshes a sphere through the installed library and checks the mesh: what a user's first
 // program does. Exit 0 and one line on success.
-#include <polygonizer/adaptive_polygonizer.h>
-#include <polygonizer/mesh_topology.h>
-#include <polygonizer/models/analytic.h>
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/mesh_topology.h>
+#include <cdp/core/models/analytic.h>
 
 #include <cstdio>
 

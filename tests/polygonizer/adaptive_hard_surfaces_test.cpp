@@ -11,9 +11,9 @@
 // whose topology is the same at two grid sizes.
 #include <gtest/gtest.h>
 
-#include <polygonizer/adaptive_polygonizer.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/mesh_topology.h>
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/mesh_topology.h>
 
 #include <iostream>
 #include <map>

@@ -3,9 +3,9 @@
 // surface before coverage replaced proximity and the small-component search existed.
 #include <gtest/gtest.h>
 
-#include <polygonizer/adaptive_polygonizer.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/mesh_topology.h>
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/mesh_topology.h>
 
 #include <memory>
 #include <random>

@@ -1,9 +1,9 @@
 // Principal curvatures against closed forms; the matrix C of the paper against the shape operator.
 #include <gtest/gtest.h>
 
-#include <polygonizer/curvature.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/newton_projection.h>
+#include <cdp/core/curvature.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/newton_projection.h>
 
 #include <Eigen/Eigenvalues>
 

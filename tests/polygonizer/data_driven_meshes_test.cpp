@@ -6,11 +6,11 @@
 // polygonizer/README.md.
 #include <gtest/gtest.h>
 
-#include <baselines/marching_cubes.h>
-#include <baselines/marching_tetrahedra.h>
-#include <polygonizer/adaptive_polygonizer.h>
-#include <polygonizer/field_factory.h>
-#include <polygonizer/mesh_topology.h>
+#include <cdp/baselines/marching_cubes.h>
+#include <cdp/baselines/marching_tetrahedra.h>
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/io/field_factory.h>
+#include <cdp/core/mesh_topology.h>
 
 #include <map>
 #include <memory>

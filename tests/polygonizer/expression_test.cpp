@@ -1,8 +1,8 @@
 // The formula language: precedence, parameters, functions, and errors that name the position.
 #include <gtest/gtest.h>
 
-#include <polygonizer/errors.h>
-#include <polygonizer/models/expression.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/expression.h>
 
 #include <numbers>
 

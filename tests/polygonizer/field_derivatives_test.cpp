@@ -1,7 +1,7 @@
 // Gradient and Hessian of every model against central finite differences at random points.
 #include <gtest/gtest.h>
 
-#include <polygonizer/field_factory.h>
+#include <cdp/io/field_factory.h>
 
 #include <random>
 

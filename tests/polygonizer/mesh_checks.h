@@ -1,12 +1,12 @@
 // Independent checks of polygonizer output used by the polygonizer tests: a reference topology
 // from a simple marching-tetrahedra polygonization, the self-intersection count of
-// raytrace/self_intersection.h, distances to the surface and triangle shape statistics.
+// <cdp/raytrace/self_intersection.h>, distances to the surface and triangle shape statistics.
 #pragma once
 
-#include <polygonizer/field.h>
-#include <polygonizer/mesh.h>
-#include <polygonizer/mesh_topology.h>
-#include <raytrace/self_intersection.h>
+#include <cdp/core/field.h>
+#include <cdp/core/mesh.h>
+#include <cdp/core/mesh_topology.h>
+#include <cdp/raytrace/self_intersection.h>
 
 #include <algorithm>
 #include <cmath>
@@ -80,7 +80,7 @@ inline Mesh marching_tetrahedra_reference(const Field& field, int n) {
 }
 
 // Pairs of triangles that meet anywhere other than at the vertices or the edge they share
-// (exact test, Embree broad phase: raytrace/self_intersection.h, whose rules apply).
+// (exact test, Embree broad phase: <cdp/raytrace/self_intersection.h>, whose rules apply).
 inline std::size_t count_self_intersections(const Mesh& mesh) { return find_self_intersections(mesh).pairs; }
 
 // Largest first-order distance |F| / |grad F| of a mesh vertex to the surface.

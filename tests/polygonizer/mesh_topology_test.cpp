@@ -1,7 +1,7 @@
 // Topology of hand-built meshes: what the checks of every polygonizer test rely on.
 #include <gtest/gtest.h>
 
-#include <polygonizer/mesh_topology.h>
+#include <cdp/core/mesh_topology.h>
 
 #include <cmath>
 #include <numbers>

@@ -2,9 +2,9 @@
 // cover the box, and bad input.
 #include <gtest/gtest.h>
 
-#include <polygonizer/errors.h>
-#include <polygonizer/field_factory.h>
-#include <polygonizer/models/mpu.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/field_factory.h>
+#include <cdp/core/models/mpu.h>
 
 #include <random>
 

@@ -1,7 +1,7 @@
 // The Newton step converges onto the surface and reports, rather than loops, when it cannot.
 #include <gtest/gtest.h>
 
-#include <polygonizer/newton_projection.h>
+#include <cdp/core/newton_projection.h>
 
 #include "common/test_fields.h"
 

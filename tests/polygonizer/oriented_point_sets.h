@@ -1,7 +1,7 @@
 // Oriented points sampled from closed-form surfaces, for the data-driven model tests.
 #pragma once
 
-#include <polygonizer/oriented_points.h>
+#include <cdp/core/oriented_points.h>
 
 #include <cmath>
 

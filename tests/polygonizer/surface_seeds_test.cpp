@@ -1,8 +1,8 @@
 // Seeds land on every component; fields without a usable surface are reported as such.
 #include <gtest/gtest.h>
 
-#include <polygonizer/errors.h>
-#include <polygonizer/surface_seeds.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/surface_seeds.h>
 
 #include <set>
 

@@ -1,14 +1,14 @@
-// Checks polygonizer/triangle_intersection.h: the hash-grid broad phase with the exact test gives
+// Checks <cdp/core/triangle_intersection.h>: the hash-grid broad phase with the exact test gives
 // the same pairs as raytrace's find_self_intersections (Embree broad phase) and as brute force on
 // random soups of triangles of very different sizes, on overlapping spheres and on meshes with
 // huge triangles; degenerate and duplicate triangles follow the documented rules; the first
 // max_pairs pairs and the count agree; invalid meshes throw. (The exact test's own rules are
 // checked case by case in tests/raytrace/self_intersection_test.cpp.)
-#include <polygonizer/triangle_intersection.h>
+#include <cdp/core/triangle_intersection.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 #include "common/reference_meshes.h"
-#include <raytrace/self_intersection.h>
+#include <cdp/raytrace/self_intersection.h>
 
 #include <gtest/gtest.h>
 

@@ -2,9 +2,9 @@
 // derivatives, the vectorized kernels against the scalar reference, and bad input.
 #include <gtest/gtest.h>
 
-#include <polygonizer/errors.h>
-#include <polygonizer/field_factory.h>
-#include <polygonizer/models/vis.h>
+#include <cdp/core/errors.h>
+#include <cdp/io/field_factory.h>
+#include <cdp/core/models/vis.h>
 
 #include <random>
 

@@ -1,10 +1,10 @@
-// Checks raytrace/accuracy.h: depth and Phong errors of an icosphere shrink as h^2, a mesh
+// Checks <cdp/raytrace/accuracy.h>: depth and Phong errors of an icosphere shrink as h^2, a mesh
 // shifted along the view direction has exactly that depth error, flipped normals give 180 deg.
-#include <raytrace/accuracy.h>
+#include <cdp/raytrace/accuracy.h>
 #include "common/reference_meshes.h"
 
-#include <polygonizer/models/analytic.h>
-#include <polygonizer/models/expression.h>
+#include <cdp/core/models/analytic.h>
+#include <cdp/core/models/expression.h>
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
-// Checks raytrace/camera.h: ray counts, unit directions, eyes outside the box, determinism.
-#include <raytrace/camera.h>
+// Checks <cdp/raytrace/camera.h>: ray counts, unit directions, eyes outside the box, determinism.
+#include <cdp/raytrace/camera.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <gtest/gtest.h>
 

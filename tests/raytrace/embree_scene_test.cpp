@@ -1,9 +1,9 @@
-// Checks raytrace/embree_scene.h: hits agree with the triangle they name, misses, closest points
+// Checks <cdp/raytrace/embree_scene.h>: hits agree with the triangle they name, misses, closest points
 // against brute force, and the closest point on a triangle in each of its regions.
-#include <raytrace/embree_scene.h>
+#include <cdp/raytrace/embree_scene.h>
 #include "common/reference_meshes.h"
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
-// Checks raytrace/evaluate.h: the documented metric names are all present and consistent.
-#include <raytrace/evaluate.h>
+// Checks <cdp/raytrace/evaluate.h>: the documented metric names are all present and consistent.
+#include <cdp/raytrace/evaluate.h>
 #include "common/reference_meshes.h"
 
-#include <polygonizer/errors.h>
-#include <polygonizer/models/analytic.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/analytic.h>
 
 #include <gtest/gtest.h>
 

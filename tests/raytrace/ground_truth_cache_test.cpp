@@ -1,9 +1,9 @@
-// Checks raytrace/ground_truth_cache.h: keys, a bit-exact round trip, missing and damaged files.
-#include <raytrace/ground_truth_cache.h>
+// Checks <cdp/raytrace/ground_truth_cache.h>: keys, a bit-exact round trip, missing and damaged files.
+#include <cdp/raytrace/ground_truth_cache.h>
 
 #include <common/run_command.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/models/analytic.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/analytic.h>
 
 #include <gtest/gtest.h>
 

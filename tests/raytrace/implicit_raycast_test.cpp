@@ -1,12 +1,12 @@
-// Checks raytrace/implicit_raycast.h against closed-form intersections: sphere and ellipsoid
+// Checks <cdp/raytrace/implicit_raycast.h> against closed-form intersections: sphere and ellipsoid
 // (quadratics), torus and tanglecube (polynomials solved by dense sampling and bisection here),
 // rays that just miss, just hit and touch, and the counted failure statuses.
-#include <raytrace/implicit_raycast.h>
+#include <cdp/raytrace/implicit_raycast.h>
 
 #include <common/test_fields.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/models/analytic.h>
-#include <polygonizer/models/expression.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/analytic.h>
+#include <cdp/core/models/expression.h>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

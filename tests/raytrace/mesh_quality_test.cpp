@@ -1,5 +1,5 @@
-// Checks raytrace/mesh_quality.h against values computed by hand.
-#include <raytrace/mesh_quality.h>
+// Checks <cdp/raytrace/mesh_quality.h> against values computed by hand.
+#include <cdp/raytrace/mesh_quality.h>
 #include "common/reference_meshes.h"
 
 #include <gtest/gtest.h>

@@ -1,10 +1,10 @@
-// Checks raytrace/phong_normal.h: barycentric blending and area-weighted vertex normals.
-#include <raytrace/phong_normal.h>
+// Checks <cdp/raytrace/phong_normal.h>: barycentric blending and area-weighted vertex normals.
+#include <cdp/raytrace/phong_normal.h>
 #include "common/reference_meshes.h"
 
-#include <polygonizer/errors.h>
-#include <polygonizer/models/analytic.h>
-#include <polygonizer/models/expression.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/analytic.h>
+#include <cdp/core/models/expression.h>
 
 #include <gtest/gtest.h>
 

@@ -1,11 +1,11 @@
-// Checks raytrace/self_intersection.h: closed meshes without crossings, overlapping spheres
+// Checks <cdp/raytrace/self_intersection.h>: closed meshes without crossings, overlapping spheres
 // against a brute-force count, every adjacency rule of the exact test, degenerate and invalid
 // input, the broad phase against brute force on random boxes and triangle soups (no candidate is
 // lost), and an independent floating-point test on random triangles in general position.
 #include "common/reference_meshes.h"
-#include <raytrace/self_intersection.h>
+#include <cdp/raytrace/self_intersection.h>
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

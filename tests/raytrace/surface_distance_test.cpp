@@ -1,10 +1,10 @@
-// Checks raytrace/surface_distance.h: deterministic area-weighted sampling, vertex and sampled
+// Checks <cdp/raytrace/surface_distance.h>: deterministic area-weighted sampling, vertex and sampled
 // distances of an icosphere against the sphere, surface-to-mesh distance of a shifted plane.
-#include <raytrace/surface_distance.h>
+#include <cdp/raytrace/surface_distance.h>
 #include "common/reference_meshes.h"
 
-#include <polygonizer/models/analytic.h>
-#include <polygonizer/models/expression.h>
+#include <cdp/core/models/analytic.h>
+#include <cdp/core/models/expression.h>
 
 #include <gtest/gtest.h>
 

@@ -3,12 +3,12 @@
 #include "seeding.h"
 #include "tracker.h"
 
-#include <polygonizer/adaptive_polygonizer.h>
-#include <polygonizer/curvature.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/mesh_topology.h>
-#include <polygonizer/surface_seeds.h>
-#include <polygonizer/triangle_intersection.h>
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/curvature.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/mesh_topology.h>
+#include <cdp/core/surface_seeds.h>
+#include <cdp/core/triangle_intersection.h>
 
 #include <algorithm>
 #include <chrono>

@@ -2,7 +2,7 @@
 // paper's factor mode or as a chord-deviation tolerance, clamped to [min_edge, max_edge].
 #pragma once
 
-#include <polygonizer/adaptive_polygonizer.h>
+#include <cdp/core/adaptive_polygonizer.h>
 
 namespace cdp::adaptive {
 

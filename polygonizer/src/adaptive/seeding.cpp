@@ -1,10 +1,10 @@
 #include "seeding.h"
 #include "spatial_hash.h"
 
-#include <polygonizer/curvature.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/newton_projection.h>
-#include <polygonizer/triangle_geometry.h>
+#include <cdp/core/curvature.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/newton_projection.h>
+#include <cdp/core/triangle_geometry.h>
 
 #include <algorithm>
 #include <array>

@@ -28,7 +28,7 @@
 
 #include "tracker.h"
 
-#include <polygonizer/surface_seeds.h>
+#include <cdp/core/surface_seeds.h>
 
 #include <cstddef>
 #include <vector>

@@ -4,7 +4,7 @@
 // deterministic; callers that pick "the nearest" still break ties by id.
 #pragma once
 
-#include <polygonizer/field.h>
+#include <cdp/core/field.h>
 
 #include <cmath>
 #include <cstdint>

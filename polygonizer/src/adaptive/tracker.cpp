@@ -1,6 +1,6 @@
 #include "tracker.h"
 
-#include <polygonizer/errors.h>
+#include <cdp/core/errors.h>
 
 #include <chrono>
 #include <cmath>

@@ -13,9 +13,9 @@
 #include "front.h"
 #include "spatial_hash.h"
 
-#include <polygonizer/adaptive_polygonizer.h>
-#include <polygonizer/curvature.h>
-#include <polygonizer/newton_projection.h>
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/curvature.h>
+#include <cdp/core/newton_projection.h>
 
 #include <optional>
 #include <queue>

@@ -1,7 +1,7 @@
 // How many triangles the expansion of a front point produces (paper section 5).
 #pragma once
 
-#include <polygonizer/adaptive_polygonizer.h>
+#include <cdp/core/adaptive_polygonizer.h>
 
 namespace cdp::adaptive {
 

@@ -1,5 +1,5 @@
-#include <polygonizer/errors.h>
-#include <polygonizer/models/analytic.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/analytic.h>
 
 namespace cdp {
 

@@ -1,5 +1,5 @@
-#include <polygonizer/errors.h>
-#include <polygonizer/models/blobs.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/blobs.h>
 
 #include <cmath>
 

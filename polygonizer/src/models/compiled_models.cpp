@@ -1,10 +1,10 @@
 // Compiled models: a C++ model is one templated function of the point; gradient and Hessian
 // come from automatic differentiation. To add one, write the functor and add one line to the
-// list at the bottom. Its JSON is {"type": "<name>"} with an optional "bounds".
-#include <polygonizer/errors.h>
-#include <polygonizer/models/autodiff_field.h>
+// list at the bottom. Its JSON (cdp::io's field factory) is {"type": "<name>"} with an optional "bounds".
+#include <cdp/core/errors.h>
+#include <cdp/core/models/autodiff_field.h>
 
-#include "builtin_models.h"
+#include <cdp/core/models/compiled.h>
 
 namespace cdp {
 
@@ -30,15 +30,15 @@ struct Tanglecube {
 };
 
 template <class Fn>
-FieldBuilder compiled(const std::string& name, const Box& bounds) {
-  return [name, bounds](JsonReader&) -> std::unique_ptr<Field> {
+CompiledModelMaker compiled(const std::string& name, const Box& bounds) {
+  return [name, bounds]() -> std::unique_ptr<Field> {
     return std::make_unique<FunctionField<Fn>>(name, Fn{}, bounds);
   };
 }
 
 }  // namespace
 
-std::map<std::string, FieldBuilder> compiled_model_builders() {
+std::map<std::string, CompiledModelMaker> compiled_models() {
   return {
       {"double_torus", compiled<DoubleTorus>("double_torus", Box{{-0.3, -0.7, -0.3}, {2.3, 0.7, 0.3}})},
       {"tanglecube", compiled<Tanglecube>("tanglecube", Box{{-3, -3, -3}, {3, 3, 3}})},

@@ -1,6 +1,6 @@
-#include <polygonizer/autodiff.h>
-#include <polygonizer/errors.h>
-#include <polygonizer/models/expression.h>
+#include <cdp/core/autodiff.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/expression.h>
 
 #include <algorithm>
 #include <cctype>

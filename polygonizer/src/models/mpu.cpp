@@ -1,5 +1,5 @@
-#include <polygonizer/errors.h>
-#include <polygonizer/models/mpu.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/mpu.h>
 
 #include <Eigen/QR>
 

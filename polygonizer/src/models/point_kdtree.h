@@ -3,7 +3,7 @@
 // order.
 #pragma once
 
-#include <polygonizer/field.h>
+#include <cdp/core/field.h>
 
 #include <algorithm>
 #include <cstddef>

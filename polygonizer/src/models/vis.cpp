@@ -1,5 +1,5 @@
-#include <polygonizer/errors.h>
-#include <polygonizer/models/vis.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/vis.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Householder>

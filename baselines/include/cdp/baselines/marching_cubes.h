@@ -1,0 +1,26 @@
+// Marching Cubes (Lorensen & Cline 1987) on a cubic lattice over the field's box, with the case
+// table generated from a stated rule (cube_cases.h), face ambiguities decided consistently
+// between neighbouring cubes, crossings found by a root search on the field, and either
+// Bloomenthal's continuation or a full grid traversal (marching_options.h).
+#pragma once
+
+#include <cdp/baselines/marching_options.h>
+
+#include <cdp/core/polygonize_result.h>
+
+namespace cdp {
+
+// A welded, indexed mesh (one vertex per crossed lattice edge, less those merged away where
+// edges under a hundredth of a cell are collapsed, so that no triangle degenerates) with normals
+// from the field gradient; closed, oriented and edge-manifold when the surface lies inside the
+// box. stats.method = "mc"; stats.extra holds "traversal", "cell_size", "precision" (if given),
+// "lattice_cells", "root_tolerance", "cubes_visited", "cubes_crossed", "root_evaluations",
+// "face_ambiguity", "collapsed_edges", "dropped_components", "short_edges_left", and for the
+// continuation "seeds", "unresolved_seeds", "starts", "sign_changes", "completion_starts",
+// "unreached_sign_changes" (0 unless the lattice is too coarse for some of the surface the seed
+// grid sees), "completion_evaluations".
+// Throws InvalidInputError for invalid options, NoSurfaceError when no cube is crossed or the
+// surface leaves the box (with require_closed_in_box), LimitExceededError at a bound.
+PolygonizeResult marching_cubes(const Field& field, const MarchingOptions& options = {});
+
+}  // namespace cdp

@@ -1,0 +1,87 @@
+// The paper's curvature-dependent adaptive surface tracker (de Araujo & Jorge 2004, Figure 6).
+//
+// From a seed on the surface it grows a mesh by expanding, one at a time, the front point of
+// smallest front angle into triangles whose edge length follows the local minimum radius of
+// curvature. Fronts that run into themselves are split, fronts that run into other fronts are
+// merged, so cracks are resolved on the fly and no re-meshing step follows. Beyond the paper:
+// every component is meshed (seeds from a coarse sign-change grid), edge lengths can follow a
+// chord-deviation tolerance instead of the heuristic factor, and every loop is bounded.
+// See polygonizer/README.md, section "Adaptive polygonizer".
+#pragma once
+
+#include <cdp/core/field.h>
+#include <cdp/core/polygonize_result.h>
+#include <cdp/core/progress.h>
+
+#include <cstddef>
+
+namespace cdp {
+
+// How the target edge length follows the minimum radius of curvature r at a point.
+enum class SizingMode {
+  Factor,     // the paper: l = r / factor
+  Tolerance,  // chord deviation: l = 2 sqrt(2 r eps - eps^2), so the chord sags at most eps
+};
+
+// How many triangles the expansion of a front point with front angle theta produces.
+enum class TriangleCountRule {
+  // The paper's formula as printed, n = floor(3 theta / pi); n <= 1 closes the angle.
+  PaperFloor,
+  // Hartmann (1998): n = trunc(3 theta / pi) + 1; n - 1 when theta / n < 0.8 and n > 1; n = 2
+  // when n = 1, theta > 0.8 and the two neighbours are farther apart than 1.2 delta.
+  Hartmann,
+};
+
+struct AdaptiveOptions {
+  SizingMode sizing = SizingMode::Factor;
+  // The paper's heuristic factor k: edge length = r_min / k. Used in SizingMode::Factor.
+  double factor = 2.0;
+  // Target chord deviation eps, used in SizingMode::Tolerance. Non-positive: 1e-3 of the
+  // bounding-box diagonal.
+  double tolerance = 0;
+  // Edge-length clamps. Non-positive: min_edge = 2e-3 and max_edge = 0.1 of the field's
+  // bounding-box diagonal.
+  double min_edge = 0;
+  double max_edge = 0;
+  // Hartmann's rule reproduces the paper's edge ratios (see README); the printed formula gives
+  // flatter, longer-edged triangles.
+  TriangleCountRule triangle_count = TriangleCountRule::Hartmann;
+  // A front point q closer to the expanded point than collision_factor * edge length, visible
+  // from it and on the same side of the surface, triggers a split or a merge instead of the
+  // expansion. The paper uses 1; a little more also catches front edges passing close by.
+  double collision_factor = 1.3;
+  // Cells along the longest side of the box of the sign-change grid that finds the seeds and
+  // checks that every component was meshed. Components smaller than about one cell can be
+  // missed; raise this to catch them.
+  int seed_resolution = 32;
+  // Checks the finished mesh for intersecting triangles (self_intersecting_pairs: about 1 us per
+  // triangle) and throws NoSurfaceError naming the place when two intersect. On by default: a
+  // mesh that is wrong without saying so is worse than a slower run.
+  bool check_self_intersections = true;
+  // Adds vertex_scalars "mac" (maximum absolute curvature) and "shape_index" to the mesh.
+  bool curvature_properties = false;
+  // Bounds; hitting one throws LimitExceededError. 0: derived from the box and min_edge
+  // (max_triangles = 20 box-surface areas in equilateral triangles of side min_edge, capped at
+  // 5e7; max_steps = 4 max_triangles + 10^4).
+  std::size_t max_triangles = 0;
+  std::size_t max_steps = 0;
+  // Called now and then with an estimate of the fraction of the meshing done.
+  ProgressCallback progress;
+  // Called on entering each phase: "sampling the seed grid", "meshing", "checking the mesh".
+  PhaseCallback phase;
+};
+
+// The result is closed, oriented, manifold and outward, one component per component of the
+// surface the seeding found, and (with check_self_intersections) free of intersections; a run
+// that cannot deliver that throws instead.
+// Throws NoSurfaceError when the field has no surface in its box (or it leaves the box), or when
+// the finished mesh fails the checks above (naming the place),
+// LimitExceededError when a bound is hit, InvalidInputError for invalid options.
+// stats.extra holds "seeds" (seeds meshed from), "steps", "min_angle_degrees", "edge_length"
+// ({"min", "max"} after clamping), "triangle_count_rule" and "sizing".
+PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& options = {});
+
+const char* to_string(SizingMode mode);
+const char* to_string(TriangleCountRule rule);
+
+}  // namespace cdp

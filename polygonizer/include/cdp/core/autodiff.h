@@ -1,0 +1,185 @@
+// Forward-mode automatic differentiation in three variables, to second order.
+// Values are computed exactly as with plain doubles, so value(), value_gradient() and
+// gradient_hessian() of a model agree to the last bit.
+//
+// Jet<1> carries a value and its gradient, Jet<2> also the Hessian. A model written once as a
+// template over its scalar type T (double, Jet<1>, Jet<2>) gets exact derivatives: every
+// operation applies the chain rule f(u) -> {f, f' du, f' d2u + f'' du du^T}.
+#pragma once
+
+#include <cdp/core/field.h>
+
+#include <cmath>
+#include <type_traits>
+
+namespace cdp {
+
+namespace detail {
+struct NoHessian {};
+}  // namespace detail
+
+template <int Order>
+struct Jet {
+  static_assert(Order == 1 || Order == 2);
+  double v = 0;
+  Vec3 g = Vec3::Zero();
+  std::conditional_t<Order == 2, Mat3, detail::NoHessian> h{};
+
+  Jet() {
+    if constexpr (Order == 2) h.setZero();
+  }
+  Jet(double value) : v(value) {  // NOLINT: constants mix freely with jets
+    if constexpr (Order == 2) h.setZero();
+  }
+  // The coordinate variable number `axis` (0, 1, 2) at value `value`.
+  static Jet variable(double value, int axis) {
+    Jet j(value);
+    j.g[axis] = 1.0;
+    return j;
+  }
+};
+
+using Jet1 = Jet<1>;
+using Jet2 = Jet<2>;
+
+// f(u) given f(v), f'(v), f''(v).
+template <int O>
+inline Jet<O> chain(const Jet<O>& u, double f, double df, double d2f) {
+  Jet<O> r(f);
+  r.g = df * u.g;
+  if constexpr (O == 2) r.h = df * u.h + d2f * (u.g * u.g.transpose());
+  return r;
+}
+
+template <int O>
+inline Jet<O> operator+(const Jet<O>& a, const Jet<O>& b) {
+  Jet<O> r(a.v + b.v);
+  r.g = a.g + b.g;
+  if constexpr (O == 2) r.h = a.h + b.h;
+  return r;
+}
+template <int O>
+inline Jet<O> operator-(const Jet<O>& a, const Jet<O>& b) {
+  Jet<O> r(a.v - b.v);
+  r.g = a.g - b.g;
+  if constexpr (O == 2) r.h = a.h - b.h;
+  return r;
+}
+template <int O>
+inline Jet<O> operator-(const Jet<O>& a) {
+  Jet<O> r(-a.v);
+  r.g = -a.g;
+  if constexpr (O == 2) r.h = -a.h;
+  return r;
+}
+template <int O>
+inline Jet<O> operator*(const Jet<O>& a, const Jet<O>& b) {
+  Jet<O> r(a.v * b.v);
+  r.g = a.v * b.g + b.v * a.g;
+  if constexpr (O == 2) r.h = a.v * b.h + b.v * a.h + a.g * b.g.transpose() + b.g * a.g.transpose();
+  return r;
+}
+template <int O>
+inline Jet<O> operator/(const Jet<O>& a, const Jet<O>& b) {
+  const double inv = 1.0 / b.v;
+  Jet<O> r = a * chain(b, inv, -inv * inv, 2.0 * inv * inv * inv);
+  r.v = a.v / b.v;  // the value exactly as plain doubles compute it
+  return r;
+}
+
+// Mixed with plain numbers (ints convert: these are not templates in the scalar argument).
+#define CDP_JET_SCALAR_OPS(O)                                                                     \
+  inline Jet<O> operator+(const Jet<O>& a, double b) { Jet<O> r = a; r.v += b; return r; }       \
+  inline Jet<O> operator+(double a, const Jet<O>& b) { return b + a; }                            \
+  inline Jet<O> operator-(const Jet<O>& a, double b) { return a + (-b); }                         \
+  inline Jet<O> operator-(double a, const Jet<O>& b) { return (-b) + a; }                         \
+  inline Jet<O> operator*(const Jet<O>& a, double b) { return chain(a, a.v * b, b, 0.0); }        \
+  inline Jet<O> operator*(double a, const Jet<O>& b) { return b * a; }                            \
+  inline Jet<O> operator/(const Jet<O>& a, double b) { return chain(a, a.v / b, 1.0 / b, 0.0); }                    \
+  inline Jet<O> operator/(double a, const Jet<O>& b) { return Jet<O>(a) / b; }                    \
+  inline bool operator<(const Jet<O>& a, const Jet<O>& b) { return a.v < b.v; }                   \
+  inline bool operator>(const Jet<O>& a, const Jet<O>& b) { return a.v > b.v; }                   \
+  inline bool operator<(const Jet<O>& a, double b) { return a.v < b; }                            \
+  inline bool operator>(const Jet<O>& a, double b) { return a.v > b; }                            \
+  inline Jet<O>& operator+=(Jet<O>& a, const Jet<O>& b) { return a = a + b; }                     \
+  inline Jet<O>& operator-=(Jet<O>& a, const Jet<O>& b) { return a = a - b; }                     \
+  inline Jet<O>& operator*=(Jet<O>& a, const Jet<O>& b) { return a = a * b; }                     \
+  inline Jet<O>& operator/=(Jet<O>& a, const Jet<O>& b) { return a = a / b; }
+CDP_JET_SCALAR_OPS(1)
+CDP_JET_SCALAR_OPS(2)
+#undef CDP_JET_SCALAR_OPS
+
+template <int O>
+inline Jet<O> sqrt(const Jet<O>& u) {
+  const double s = std::sqrt(u.v);
+  return chain(u, s, 0.5 / s, -0.25 / (s * u.v));
+}
+template <int O>
+inline Jet<O> exp(const Jet<O>& u) {
+  const double e = std::exp(u.v);
+  return chain(u, e, e, e);
+}
+template <int O>
+inline Jet<O> log(const Jet<O>& u) {
+  return chain(u, std::log(u.v), 1.0 / u.v, -1.0 / (u.v * u.v));
+}
+template <int O>
+inline Jet<O> sin(const Jet<O>& u) {
+  const double s = std::sin(u.v);
+  return chain(u, s, std::cos(u.v), -s);
+}
+template <int O>
+inline Jet<O> cos(const Jet<O>& u) {
+  const double c = std::cos(u.v);
+  return chain(u, c, -std::sin(u.v), -c);
+}
+template <int O>
+inline Jet<O> tan(const Jet<O>& u) {
+  const double t = std::tan(u.v);
+  const double d = 1.0 + t * t;
+  return chain(u, t, d, 2.0 * t * d);
+}
+template <int O>
+inline Jet<O> abs(const Jet<O>& u) {
+  return u.v < 0 ? -u : u;
+}
+template <int O>
+inline Jet<O> min(const Jet<O>& a, const Jet<O>& b) {
+  return b.v < a.v ? b : a;
+}
+template <int O>
+inline Jet<O> max(const Jet<O>& a, const Jet<O>& b) {
+  return a.v < b.v ? b : a;
+}
+// u^p for a constant exponent: exact for negative u when p is an integer.
+template <int O>
+inline Jet<O> pow(const Jet<O>& u, double p) {
+  if (p == 0.0) return Jet<O>(1.0);
+  if (p == 1.0) return u;
+  if (p == 2.0) return u * u;
+  const double f = std::pow(u.v, p);
+  const double df = p * std::pow(u.v, p - 1.0);
+  const double d2f = (p == 1.0) ? 0.0 : p * (p - 1.0) * std::pow(u.v, p - 2.0);
+  return chain(u, f, df, d2f);
+}
+template <int O>
+inline Jet<O> pow(const Jet<O>& u, const Jet<O>& w) {
+  Jet<O> r = exp(w * log(u));
+  r.v = std::pow(u.v, w.v);
+  return r;
+}
+template <int O>
+inline Jet<O> pow(double a, const Jet<O>& w) {
+  Jet<O> r = exp(w * std::log(a));
+  r.v = std::pow(a, w.v);
+  return r;
+}
+
+// Value of a plain number or a jet, for code templated on the scalar type.
+inline double value_of(double x) { return x; }
+template <int O>
+inline double value_of(const Jet<O>& j) {
+  return j.v;
+}
+
+}  // namespace cdp

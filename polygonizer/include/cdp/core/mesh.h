@@ -1,0 +1,28 @@
+// The project's triangle mesh: plain indexed arrays, what every polygonizer produces and every
+// metric reads. Connectivity (triangles) is kept apart from geometry (positions, normals).
+// Conversion to OpenMesh and file I/O are cdp::io's (<cdp/io/mesh_io.h>).
+#pragma once
+
+#include <cdp/core/field.h>
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace cdp {
+
+struct Mesh {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> normals;                    // per vertex, unit length; empty if not computed
+  std::vector<std::array<int, 3>> triangles;    // counter-clockwise seen from outside
+  std::map<std::string, std::vector<double>> vertex_scalars;  // e.g. "mac", "shape_index"
+
+  std::size_t num_vertices() const { return positions.size(); }
+  std::size_t num_triangles() const { return triangles.size(); }
+};
+
+// Sets mesh.normals to the normalized field gradient at every vertex (one value_gradient each).
+void compute_field_normals(const Field& field, Mesh& mesh);
+
+}  // namespace cdp

@@ -1,0 +1,39 @@
+// What a user relies on in a mesh: closed, oriented, manifold, components, genus.
+// Works on the raw index arrays, so it also detects what OpenMesh would refuse to load.
+#pragma once
+
+#include <cdp/core/mesh.h>
+
+namespace cdp {
+
+struct MeshTopology {
+  std::size_t vertices = 0;            // referenced by at least one triangle
+  std::size_t unreferenced_vertices = 0;
+  std::size_t triangles = 0;
+  std::size_t edges = 0;
+  std::size_t boundary_edges = 0;      // used by one triangle
+  std::size_t nonmanifold_edges = 0;   // used by three or more triangles
+  std::size_t misoriented_edges = 0;   // two triangles traverse the edge in the same direction
+  std::size_t nonmanifold_vertices = 0;  // one-ring is not a single fan
+  std::size_t degenerate_triangles = 0;  // repeated index or zero area
+  std::size_t duplicate_triangles = 0;   // same vertex set as another triangle
+  std::size_t components = 0;            // connected through shared edges
+  int euler_characteristic = 0;          // V - E + F
+  int genus = -1;                        // total genus when closed, oriented and manifold; -1 otherwise
+  double signed_volume = 0;              // positive when oriented outward
+  double area = 0;
+
+  bool closed() const { return boundary_edges == 0; }
+  bool edge_manifold() const { return nonmanifold_edges == 0; }
+  bool vertex_manifold() const { return nonmanifold_vertices == 0; }
+  bool oriented() const { return misoriented_edges == 0; }
+  // Closed, oriented, edge- and vertex-manifold, no degenerate or duplicate triangles, outward.
+  bool watertight() const {
+    return closed() && edge_manifold() && vertex_manifold() && oriented() && degenerate_triangles == 0 &&
+           duplicate_triangles == 0 && signed_volume > 0;
+  }
+};
+
+MeshTopology analyze_topology(const Mesh& mesh);
+
+}  // namespace cdp

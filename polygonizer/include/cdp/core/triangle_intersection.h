@@ -1,0 +1,58 @@
+// Self-intersections of a triangle mesh without Embree: an exact triangle-triangle test (double
+// predicates with Shewchuk's error bounds and an exact fallback) and a hash-grid broad phase, so
+// the core can check its own output. <cdp/raytrace/self_intersection.h> runs the same exact test
+// behind Embree's rtcCollide; the rules and limits are in raytrace/README.md.
+#pragma once
+
+#include <cdp/core/mesh.h>
+
+#include <array>
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+namespace cdp {
+
+// Whether the three points are collinear (zero area), decided exactly.
+bool triangle_is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c);
+
+// The exact test, for triangles given by their corners. Vertices are shared when their positions
+// are equal (same index or bit-identical coordinates). Closed triangles intersect when they have
+// a point in common that is not in the convex hull of their shared vertices:
+//  - no shared vertex: any contact (a touching vertex or edge, a crossing, a coplanar overlap);
+//  - one shared vertex: any common point other than that vertex;
+//  - a shared edge: only when both lie in one plane on the same side of the edge (folded flat
+//    onto each other); triangles in different planes meet only along the line of the edge;
+//  - three shared vertices (a duplicated triangle, either orientation): always.
+// Degenerate triangles (see triangle_is_degenerate) never intersect anything here. Throws
+// InvalidInputError on non-finite corners.
+bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);
+// The same for triangles f and g of a mesh (f != g). Throws InvalidInputError on bad indices.
+bool triangles_intersect(const Mesh& mesh, int f, int g);
+
+// Every intersecting pair (f, g), f < g, of distinct triangles (see triangles_intersect), found
+// by a hash grid over the triangles' bounding boxes (cells about the median longest edge; the
+// few triangles much larger than a cell are tested against all): the first max_pairs of them in
+// lexicographic order. Every pair whose boxes overlap is tested exactly once. Deterministic,
+// single-threaded, no output; memory linear in the number of triangles (plus max_pairs), time
+// linear for triangles of similar sizes. Throws InvalidInputError on out-of-range indices or
+// non-finite positions (of vertices that triangles use); LimitExceededError when the grid would
+// hold 2^32 entries (beyond 67 million triangles).
+std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs = 16);
+// The number of such pairs (the same search).
+std::size_t count_self_intersecting_pairs(const Mesh& mesh);
+
+// ---- For broad phases (self_intersecting_pairs here, Embree's in <cdp/raytrace/self_intersection.h>).
+
+// Each triangle's bounding box, empty (min > max) for degenerate triangles, which take part in no
+// pair; `degenerate`, when given, receives their number. Throws InvalidInputError (naming `what`)
+// on out-of-range indices or non-finite positions. Triangles with a common point have
+// overlapping boxes (closed, touching included), so a broad phase on these boxes loses no pair.
+std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate = nullptr,
+                                                 const char* what = "self-intersections");
+
+// triangles_intersect without its checks, for candidates whose corners are known to be finite
+// and whose triangles are not degenerate (non-empty boxes above).
+bool nondegenerate_triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);
+
+}  // namespace cdp

@@ -1,0 +1,54 @@
+// Ray-mesh intersection and closest-point queries through Embree. Every Embree call of the
+// project is in embree_scene.cpp and box_overlaps.cpp (rtcCollide, for self_intersection.h), so
+// moving to another Embree version touches those two files.
+#pragma once
+
+#include <cdp/raytrace/camera.h>
+
+#include <cdp/core/mesh.h>
+#include <cdp/core/triangle_geometry.h>  // closest_point_on_triangle, used with the queries below
+
+#include <limits>
+#include <memory>
+#include <vector>
+
+namespace cdp {
+
+// Embree's conventions: the hit point is (1-u-v) p0 + u p1 + v p2 of triangle `triangle`.
+struct MeshHit {
+  int triangle = -1;
+  double u = 0.0, v = 0.0;
+  double t = std::numeric_limits<double>::infinity();
+  bool hit() const { return triangle >= 0; }
+};
+
+struct ClosestPoint {
+  Vec3 point = Vec3::Zero();
+  double distance = std::numeric_limits<double>::infinity();
+  int triangle = -1;
+};
+
+// An Embree scene of one mesh (robust build flag, float vertices relative to the mesh's centre).
+// Embree finds the triangle; t, u and v are then recomputed in double on that triangle, so that
+// depth errors are not floored by float rounding (about 1e-7 of the distance).
+class EmbreeScene {
+ public:
+  // Throws InvalidInputError on out-of-range indices, non-finite positions or a mesh extending
+  // beyond Embree's float range (1e18 from its centre), whose triangles Embree would drop.
+  explicit EmbreeScene(const Mesh& mesh);
+  ~EmbreeScene();
+  EmbreeScene(const EmbreeScene&) = delete;
+  EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+  // The first hit of every ray (t >= 0), in parallel over blocks of rays. Throws InvalidInputError
+  // (where Embree would abort) on a non-finite ray or one starting beyond its float range.
+  std::vector<MeshHit> intersect(const std::vector<Ray>& rays) const;
+  // The nearest point of the mesh to every point (rtcPointQuery), in parallel.
+  std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cdp

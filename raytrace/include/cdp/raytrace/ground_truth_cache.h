@@ -1,0 +1,32 @@
+// Ground truth on disk: computed once per model and camera set, reused by every mesh of it.
+// This file (and its .cpp) is the only place of the module that touches the file system.
+#pragma once
+
+#include <cdp/raytrace/camera.h>
+#include <cdp/raytrace/implicit_raycast.h>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace cdp {
+
+// 16 hex digits: FNV-1a 64 of the field's JSON (parsed and re-serialized, so formatting and key
+// order do not matter), the camera options, the ray-casting options and a format version.
+// Files the JSON refers to (point clouds) are identified by name only: change their name when
+// their content changes. Throws InvalidInputError when field_json_text is not JSON.
+std::string ground_truth_key(const std::string& field_json_text, const CameraOptions& camera,
+                             const RaycastOptions& raycast);
+
+// <dir>/gt_<key>.bin
+std::filesystem::path ground_truth_path(const std::filesystem::path& dir, const std::string& key);
+
+// Writes a temporary file and renames it, creating `dir` if needed. Throws InvalidInputError on
+// an I/O failure.
+void save_ground_truth(const GroundTruth& truth, const std::filesystem::path& dir, const std::string& key);
+
+// Empty when there is no file for the key; throws InvalidInputError naming the file when it
+// exists but is not a complete ground truth of this format and key.
+std::optional<GroundTruth> load_ground_truth(const std::filesystem::path& dir, const std::string& key);
+
+}  // namespace cdp

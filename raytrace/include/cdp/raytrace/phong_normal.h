@@ -1,0 +1,25 @@
+// The normal a Phong shader sees: vertex normals blended with the hit's barycentric coordinates.
+#pragma once
+
+#include <cdp/core/field.h>
+#include <cdp/core/mesh.h>
+
+#include <vector>
+
+namespace cdp {
+
+// normalize((1-u-v) n0 + u n1 + v n2) of triangle `triangle`; zero when the blend vanishes
+// (opposite vertex normals). Requires mesh.normals.
+Vec3 phong_normal(const Mesh& mesh, int triangle, double u, double v);
+
+// Vertex normals as the normalized sum of the incident triangles' area vectors, for meshes
+// read without normals; zero for vertices without (non-degenerate) triangles.
+std::vector<Vec3> area_weighted_normals(const Mesh& mesh);
+
+// Vertex normals from the field: the normalized gradient at each vertex, the exact normal of
+// the surface there when the vertex lies on it. What the adaptive method writes; giving every
+// mesh these (evaluate --normals field) compares meshes, not normal estimators. Zero where the
+// gradient vanishes or is not finite.
+std::vector<Vec3> field_normals(const Field& field, const Mesh& mesh);
+
+}  // namespace cdp
