@@ -5,8 +5,8 @@
 
 #include <cdp/core/curvature.h>
 #include <cdp/core/errors.h>
-#include <cdp/io/field_factory.h>
 #include <cdp/core/newton_projection.h>
+#include <cdp/io/field_factory.h>
 
 #include <cmath>
 #include <cstdio>

@@ -11,8 +11,8 @@
 #include <cdp/raytrace/ground_truth_cache.h>
 #include <cdp/raytrace/phong_normal.h>
 
-#include <cdp/io/atomic_write.h>
 #include <cdp/core/errors.h>
+#include <cdp/io/atomic_write.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/io/mesh_io.h>
 

@@ -7,8 +7,8 @@
 #include "support/app_support.h"
 #include "support/command_line.h"
 
-#include <cdp/io/atomic_write.h>
 #include <cdp/core/errors.h>
+#include <cdp/io/atomic_write.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/io/json_reader.h>
 

@@ -7,9 +7,9 @@
 
 #include <cdp/baselines/marching_cubes.h>
 #include <cdp/baselines/marching_tetrahedra.h>
-#include <cdp/io/atomic_write.h>
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/errors.h>
+#include <cdp/io/atomic_write.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/io/mesh_io.h>
 #include <cdp/io/polygonize_stats_json.h>

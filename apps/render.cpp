@@ -8,8 +8,8 @@
 #include <cdp/render/mesh_render.h>
 #include <cdp/render/png_image.h>
 
-#include <cdp/io/atomic_write.h>
 #include <cdp/core/errors.h>
+#include <cdp/io/atomic_write.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/io/mesh_io.h>
 
@@ -121,6 +121,11 @@ int main(int argc, char** argv) {
     }
     options.field = field.get();
     const cdp::RenderResult result = cdp::render_mesh(mesh, options);
+    // A picture of the background alone is a camera pointed away from the mesh, not a picture
+    // of it: written with exit 0 it would pass for one.
+    if (result.coverage == 0)
+      throw cdp::InvalidInputError(mesh_path + ": no pixel of the picture shows the mesh: the camera looks away from it "
+                                   "(see --focus, --zoom, --azimuth, --elevation)");
     {
       const std::vector<std::uint8_t> png = cdp::encode_png(result.image);
       cdp::write_file_atomically(out_path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()),

@@ -6,10 +6,10 @@
 #include <cdp/baselines/marching_cubes.h>
 #include <cdp/baselines/marching_tetrahedra.h>
 #include <cdp/core/adaptive_polygonizer.h>
-#include <cdp/io/field_factory.h>
 #include <cdp/core/models/analytic.h>
 #include <cdp/core/models/expression.h>
 #include <cdp/core/surface_seeds.h>
+#include <cdp/io/field_factory.h>
 
 #include <benchmark/benchmark.h>
 

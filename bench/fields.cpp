@@ -13,10 +13,10 @@
 //   build/bin/bench_fields --benchmark_min_time=0.05
 #include <cdp/core/curvature.h>
 #include <cdp/core/errors.h>
-#include <cdp/io/field_factory.h>
 #include <cdp/core/models/analytic.h>
 #include <cdp/core/models/blobs.h>
 #include <cdp/core/models/expression.h>
+#include <cdp/io/field_factory.h>
 
 #include <benchmark/benchmark.h>
 

@@ -15,10 +15,10 @@
 // (scan vertices moved along their normals by -0.5, 0 or +0.5 % of the box diagonal), the region
 // the polygonizers evaluate; deterministic.
 //   build/bin/bench_fields_data --benchmark_min_time=0.05
-#include <cdp/io/field_factory.h>
 #include <cdp/core/models/mpu.h>
 #include <cdp/core/models/vis.h>
 #include <cdp/core/oriented_points.h>
+#include <cdp/io/field_factory.h>
 #include <cdp/io/mesh_io.h>
 
 #include <benchmark/benchmark.h>

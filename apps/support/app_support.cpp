@@ -1,7 +1,7 @@
 #include "support/app_support.h"
 
-#include <cdp/io/atomic_write.h>
 #include <cdp/core/errors.h>
+#include <cdp/io/atomic_write.h>
 
 #include <algorithm>
 #include <atomic>

@@ -1,5 +1,5 @@
-#include <cdp/io/atomic_write.h>
 #include <cdp/core/errors.h>
+#include <cdp/io/atomic_write.h>
 
 #include <cerrno>
 #include <csignal>

@@ -1,11 +1,11 @@
 #include <cdp/core/errors.h>
-#include <cdp/io/field_factory.h>
 #include <cdp/core/models/analytic.h>
 #include <cdp/core/models/blobs.h>
 #include <cdp/core/models/expression.h>
 #include <cdp/core/models/mpu.h>
 #include <cdp/core/models/vis.h>
 #include <cdp/core/oriented_points.h>
+#include <cdp/io/field_factory.h>
 #include <cdp/io/mesh_io.h>
 
 #include <map>

@@ -3,8 +3,8 @@
 
 #include "mesh_formats/mesh_formats.h"
 
-#include <cdp/io/atomic_write.h>
 #include <cdp/core/errors.h>
+#include <cdp/io/atomic_write.h>
 #include <cdp/io/mesh_io.h>
 
 #include <cctype>

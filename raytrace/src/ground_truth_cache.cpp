@@ -1,7 +1,7 @@
 #include <cdp/raytrace/ground_truth_cache.h>
 
-#include <cdp/io/atomic_write.h>
 #include <cdp/core/errors.h>
+#include <cdp/io/atomic_write.h>
 
 #include <cstdint>
 #include <cstdio>

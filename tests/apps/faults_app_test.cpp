@@ -4,8 +4,8 @@
 // temporary file left behind, and nothing overwritten.
 #include <gtest/gtest.h>
 
-#include <cdp/io/mesh_io.h>
 #include <cdp/core/mesh_topology.h>
+#include <cdp/io/mesh_io.h>
 
 #include <nlohmann/json.hpp>
 

@@ -2,8 +2,8 @@
 // bad arguments and bad fields end with a one-line error and no output file.
 #include <gtest/gtest.h>
 
-#include <cdp/io/mesh_io.h>
 #include <cdp/core/mesh_topology.h>
+#include <cdp/io/mesh_io.h>
 
 #include <nlohmann/json.hpp>
 

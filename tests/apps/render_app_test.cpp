@@ -132,6 +132,9 @@ TEST_F(RenderApp, BadInputGivesOneLineAndNoPicture) {
       {m + " -o " + out + " --focus 1e20,0,0", "focus is too far from the mesh (1e+20 from its centre"},
       {m + " -o " + out + " --zoom 1e-300", "zoom 1e-300 is too small for a 800 x 800 picture"},
       {m + " -o " + out + " --zoom 1e300", "zoom 1e+300 is too large for a 800 x 800 picture"},
+      // The focus off the mesh (the unit sphere): a picture of the background only, once written
+      // with exit 0.
+      {m + " -o " + out + " --focus 5,0,0 --zoom 4", m + ": no pixel of the picture shows the mesh"},
   };
   for (const auto& c : cases) {
     const auto r = test::run_app("render", c.args);

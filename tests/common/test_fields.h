@@ -1,10 +1,10 @@
 // Small fields shared by the tests of every module.
 #pragma once
 
-#include <cdp/io/field_factory.h>
 #include <cdp/core/models/analytic.h>
 #include <cdp/core/models/blobs.h>
 #include <cdp/core/models/expression.h>
+#include <cdp/io/field_factory.h>
 
 #include <memory>
 #include <string>

@@ -9,8 +9,8 @@
 #include <cdp/baselines/marching_cubes.h>
 #include <cdp/baselines/marching_tetrahedra.h>
 #include <cdp/core/adaptive_polygonizer.h>
-#include <cdp/io/field_factory.h>
 #include <cdp/core/mesh_topology.h>
+#include <cdp/io/field_factory.h>
 
 #include <map>
 #include <memory>

@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cdp/core/errors.h>
-#include <cdp/io/field_factory.h>
 #include <cdp/core/models/vis.h>
+#include <cdp/io/field_factory.h>
 
 #include <random>
 
