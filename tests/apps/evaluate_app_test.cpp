@@ -84,8 +84,8 @@ TEST_F(EvaluateApp, FieldsTooLargeForTheRaysAreErrors) {
     std::string message;
   } cases[] = {
       {huge, huge.string() + ": camera: the field's box is too large for double precision (its diagonal overflows)"},
-      {large, mesh.string() + ": EmbreeScene: ray 0 is not finite or starts more than 1e18 from the mesh's centre, "
-                              "out of Embree's float range"},
+      {large, mesh.string() + ": EmbreeScene: ray 0 is not finite or starts more than 1e18 half-diagonals of the "
+                              "mesh from its centre, out of Embree's float range"},
   };
   for (const auto& c : cases) {
     const auto r = test::run_app("evaluate", c.field.string() + " " + mesh.string() + " -o " + metrics.string() + kFewRays);

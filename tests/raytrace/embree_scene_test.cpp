@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 #include <random>
 
@@ -102,13 +103,41 @@ TEST(EmbreeScene, RaysAndMeshesBeyondEmbreesFloatRangeAreErrors) {
       ADD_FAILURE() << ray.origin.transpose();
     } catch (const InvalidInputError& e) {
       EXPECT_EQ(std::string(e.what()),
-                "EmbreeScene: ray 1 is not finite or starts more than 1e18 from the mesh's centre, out of Embree's "
-                "float range");
+                "EmbreeScene: ray 1 is not finite or starts more than 1e18 half-diagonals of the mesh from its "
+                "centre, out of Embree's float range");
     }
   }
   EXPECT_NO_THROW((void)scene.intersect({Ray{Vec3(0, 0, -9e17), Vec3::UnitZ()}})) << "within the range";
-  EXPECT_THROW(EmbreeScene{icosphere(1, Vec3::Zero(), 1e19)}, InvalidInputError);
   EXPECT_NO_THROW(EmbreeScene{icosphere(1, Vec3(1e30, 0, 0), 1.0)}) << "far from the origin is fine: it is shifted";
+  EXPECT_THROW(EmbreeScene{icosphere(1, Vec3::Zero(), 1e300)}, InvalidInputError) << "the diagonal overflows double";
+}
+
+// Embree's float products of coordinates overflowed for a mesh 1e13 across (a sphere of radius
+// 1e14 got a Phong error of 73 degrees) and underflow for a tiny one: the scene is scaled, so
+// the same rays, scaled with the mesh, hit the same triangles at the same scaled distances.
+TEST(EmbreeScene, MeshesOfAnySizeGiveTheSameHits) {
+  const Mesh unit = icosphere(3);
+  const EmbreeScene reference(unit);
+  std::vector<Ray> rays;
+  for (int i = 0; i < 200; ++i) {
+    const double a = 0.1 * i, b = 0.037 * i;
+    const Vec3 target(0.6 * std::cos(a) * std::cos(b), 0.6 * std::sin(a) * std::cos(b), 0.6 * std::sin(b));
+    const Vec3 origin(3 * std::cos(1.7 * i), 3 * std::sin(1.7 * i), 0.5);
+    rays.push_back({origin, (target - origin).normalized()});
+  }
+  const std::vector<MeshHit> expected = reference.intersect(rays);
+  for (const double size : {1e-20, 1e14, 1e30}) {
+    Mesh scaled = unit;
+    for (Vec3& p : scaled.positions) p *= size;
+    std::vector<Ray> scaled_rays = rays;
+    for (Ray& r : scaled_rays) r.origin *= size;
+    const std::vector<MeshHit> hits = EmbreeScene(scaled).intersect(scaled_rays);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      ASSERT_GE(expected[i].triangle, 0) << i;
+      EXPECT_EQ(hits[i].triangle, expected[i].triangle) << "size " << size << ", ray " << i;
+      EXPECT_NEAR(hits[i].t / size, expected[i].t, 1e-12) << "size " << size << ", ray " << i;
+    }
+  }
 }
 
 }  // namespace

@@ -28,20 +28,22 @@ struct ClosestPoint {
   int triangle = -1;
 };
 
-// An Embree scene of one mesh (robust build flag, float vertices relative to the mesh's centre).
+// An Embree scene of one mesh (robust build flag, float vertices relative to the mesh's centre,
+// in units of a power of two near its half-diagonal, so that meshes of any size work).
 // Embree finds the triangle; t, u and v are then recomputed in double on that triangle, so that
 // depth errors are not floored by float rounding (about 1e-7 of the distance).
 class EmbreeScene {
  public:
-  // Throws InvalidInputError on out-of-range indices, non-finite positions or a mesh extending
-  // beyond Embree's float range (1e18 from its centre), whose triangles Embree would drop.
+  // Throws InvalidInputError on out-of-range indices, non-finite positions or a mesh whose box's
+  // diagonal overflows double.
   explicit EmbreeScene(const Mesh& mesh);
   ~EmbreeScene();
   EmbreeScene(const EmbreeScene&) = delete;
   EmbreeScene& operator=(const EmbreeScene&) = delete;
 
   // The first hit of every ray (t >= 0), in parallel over blocks of rays. Throws InvalidInputError
-  // (where Embree would abort) on a non-finite ray or one starting beyond its float range.
+  // (where Embree would abort) on a non-finite ray or one starting beyond its float range (1e18
+  // half-diagonals of the mesh from its centre).
   std::vector<MeshHit> intersect(const std::vector<Ray>& rays) const;
   // The nearest point of the mesh to every point (rtcPointQuery), in parallel.
   std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points) const;
