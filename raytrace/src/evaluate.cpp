@@ -1,5 +1,6 @@
 #include <cdp/raytrace/embree_scene.h>
 #include <cdp/raytrace/evaluate.h>
+#include <cdp/raytrace/field_cost.h>
 #include <cdp/raytrace/self_intersection.h>
 
 #include <cdp/core/errors.h>
@@ -127,6 +128,12 @@ nlohmann::json evaluate_mesh(const Field& field, const Mesh& mesh, const GroundT
                           {"method", "distance from every ground-truth ray hit to the nearest mesh point"}};
   // fmax: a side without samples (--samples 0) leaves the other side's maximum.
   j["hausdorff_estimate"] = number(std::fmax(ms.max, sm.max));
+  const FieldCost cost = measure_field_cost(field, mesh);
+  j["field_cost"] = {{"value_us", 1e6 * cost.value_seconds},
+                     {"value_gradient_us", 1e6 * cost.value_gradient_seconds},
+                     {"gradient_hessian_us", 1e6 * cost.gradient_hessian_seconds},
+                     {"points", cost.points},
+                     {"method", "fastest of 3 passes of single-point evaluations at up to 1000 vertices"}};
   return j;
 }
 
