@@ -44,6 +44,25 @@ def silhouette_fraction(metrics):
     return number(s)
 
 
+def per(count, n):
+    count = number(count)
+    return count / n if count is not None and n else None
+
+
+def outside_field_us(stats, metrics, seconds, vertices):
+    """Microseconds per vertex the run spent outside field evaluations (None without a price list)."""
+    cost = get(metrics, "field_cost")
+    ev = get(stats, "field_evaluations")
+    if not isinstance(cost, dict) or not isinstance(ev, dict) or not seconds or not vertices:
+        return None
+    try:
+        field = 1e-6 * (ev.get("value", 0) * cost["value_us"] + ev.get("value_gradient", 0) * cost["value_gradient_us"] +
+                        ev.get("gradient_hessian", 0) * cost["gradient_hessian_us"])
+    except (KeyError, TypeError):
+        return None
+    return 1e6 * (seconds - field) / vertices
+
+
 def run_row(run):
     """The numbers of one run that the tables, claims and plots use (None where missing)."""
     st, m = run.get("stats", {}), run.get("metrics", {})
@@ -62,6 +81,13 @@ def run_row(run):
         "curvature_seconds": number(get(st, "curvature_seconds")),
         "hessian_seconds": number(get(st, "hessian_seconds")),
         "hessian_evaluations": number(get(st, "field_evaluations", "gradient_hessian")),
+        # Evaluations per vertex by kind, and the time outside the field per vertex: the run's time
+        # less its evaluation counts priced by evaluate's field_cost (an estimate, see
+        # raytrace/include/cdp/raytrace/field_cost.h).
+        "values_per_vertex": per(get(st, "field_evaluations", "value"), verts),
+        "value_gradients_per_vertex": per(get(st, "field_evaluations", "value_gradient"), verts),
+        "hessians_per_vertex": per(get(st, "field_evaluations", "gradient_hessian"), verts),
+        "outside_field_us_per_vertex": outside_field_us(st, m, sec, verts),
         "shares_at_most": get(m, "edge_ratio", "share_at_most"),
         "self_intersections": get(m, "topology", "self_intersections", "pairs"),
         "seconds": sec,

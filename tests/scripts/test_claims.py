@@ -8,6 +8,7 @@ import unittest
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "scripts"))
 import results_lib as rl  # noqa: E402
 import table1  # noqa: E402
+import claims_by_model  # noqa: E402
 
 _, PAPER = rl.load_paper_table()
 
@@ -75,6 +76,45 @@ class Claims(unittest.TestCase):
                                    if c[0].startswith("Good meshes")][0]
         self.assertIn("topology", test)
         self.assertIn("MT: [1.992, 1.992]", numbers)
+
+    def test_a_failed_run_counts_against_no_cracks(self):
+        ours = [row("adaptive", k) for k in range(1, 6)]
+        ours[0] = row("adaptive", 1, status="failed", reason="a front cannot advance")
+        self.assertIs(find(verdicts({"adaptive": ours}), "No cracks"), False)
+
+    def test_other_models_judge_phong_at_our_factor_5_and_equilateral_at_the_papers_thresholds(self):
+        ours = [row("adaptive", k) for k in range(1, 5)] + [row("adaptive", 5, triangles=90000, phong_error=0.4)]
+        cl = {t: ok for t, _, ok, _ in table1.claims({"adaptive": ours}, None, threshold_rows=PAPER["adaptive"])}
+        self.assertIs(find(cl, "We achieve an average Phong"), True)
+        # 50% at 1.1 alone still does not count on another model.
+        ours = [row("adaptive", k, shares_at_most={"1.1": 0.5, "1.2": 0.7, "1.25": 0.8, "1.3": 0.9}) for k in range(1, 6)]
+        cl = {t: ok for t, _, ok, _ in table1.claims({"adaptive": ours}, None, threshold_rows=PAPER["adaptive"])}
+        self.assertIs(find(cl, "Approximately 50 percent"), False)
+
+    def test_time_to_accuracy_interpolates_mt_at_our_factor_3_errors(self):
+        # Ours at factor 3: Phong 1.0 deg and relative depth 1e-3 in 250 ms. MT reaches them
+        # between its runs at 300 ms: ours is faster to that accuracy, whatever the triangle rates.
+        ours = [row("adaptive", k, time_ms=250.0 * k / 3, depth_error_relative=1e-3 * 3 / k, phong_error=3.0 / k)
+                for k in range(1, 6)]
+        mt = [row("mt", p, time_ms=t, phong_error=e, depth_error_relative=d)
+              for p, t, e, d in ((1, 200.0, 2.0, 2e-3), (3, 450.0, 0.5, 5e-4))]
+        v = verdicts({"adaptive": ours, "mt": mt})
+        self.assertIs(find(v, "For the same accuracy"), True)
+        mt = [row("mt", p, time_ms=t, phong_error=e, depth_error_relative=d)
+              for p, t, e, d in ((1, 100.0, 2.0, 2e-3), (3, 200.0, 0.5, 5e-4))]
+        self.assertIs(find(verdicts({"adaptive": ours, "mt": mt}), "For the same accuracy"), False)
+        # Out of MT's range: not measurable rather than a verdict.
+        mt = [row("mt", p, time_ms=t, phong_error=e, depth_error_relative=d)
+              for p, t, e, d in ((1, 100.0, 0.5, 5e-4), (3, 200.0, 0.3, 3e-4))]
+        self.assertIsNone(find(verdicts({"adaptive": ours, "mt": mt}), "For the same accuracy"))
+
+    def test_overall_verdict_over_models(self):
+        self.assertEqual(claims_by_model.overall([True, True, True]), "holds everywhere")
+        self.assertEqual(claims_by_model.overall([True, None, True]), "holds everywhere it was measured")
+        self.assertEqual(claims_by_model.overall([True, False]), "holds on some")
+        self.assertEqual(claims_by_model.overall(["partly", "partly"]), "holds on some")
+        self.assertEqual(claims_by_model.overall([False, False]), "fails everywhere")
+        self.assertEqual(claims_by_model.overall([None, None]), "not measurable")
 
 
 if __name__ == "__main__":
