@@ -19,7 +19,7 @@ def main():
              "the committed files are those of the last run." +
              (" That run took {:.1f} minutes including the experiments.".format(a.seconds / 60) if a.seconds else ""),
              ""]
-    for name in ("table1.md", "claims.md"):
+    for name in ("table1.md", "claims.md", "claims_by_model.md"):
         p = os.path.join(r, name)
         if os.path.exists(p):
             with open(p) as f:
