@@ -3,6 +3,9 @@
 
 #include <polygonizer/field.h>
 
+#include <span>
+#include <vector>
+
 namespace cdp {
 
 struct ProjectionOptions {
@@ -32,5 +35,12 @@ struct ProjectionResult {
 const char* to_string(ProjectionStatus status);
 
 ProjectionResult project_to_surface(const Field& field, const Vec3& start, const ProjectionOptions& options = {});
+
+// Projects every start point, starts[i] with options[i], in lockstep: each Newton round evaluates
+// the points still iterating in one values_gradients call, so that a field whose calls cost more
+// than its arithmetic (a Python function) is called once a round rather than once a point. Each
+// result is the one project_to_surface gives, bit for bit, with the same evaluation count.
+std::vector<ProjectionResult> project_to_surface(const Field& field, std::span<const Vec3> starts,
+                                                 std::span<const ProjectionOptions> options);
 
 }  // namespace cdp
