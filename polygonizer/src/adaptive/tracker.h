@@ -19,6 +19,7 @@
 
 #include <optional>
 #include <queue>
+#include <span>
 #include <tuple>
 #include <vector>
 
@@ -110,15 +111,17 @@ class Tracker {
   bool same_side(const Vec3& n, int w) const { return same_side(n, mesh_.normals[w]); }
 
   // --- tracker.cpp
-  // Curvature at p; nothing where the gradient vanishes.
-  std::optional<Placed> measure(const Vec3& p) const;
+  // Curvature at each point; nothing where the gradient vanishes. One gradients_hessians batch.
+  std::vector<std::optional<Placed>> measure(std::span<const Vec3> points) const;
   int add_vertex(const Placed& placed);
-  // A new surface point about distance d from vertex v in tangent direction dir, or nothing
-  // when Newton fails or lands somewhere implausible (another sheet, far away).
-  std::optional<Placed> place_point(int v, const Vec3& dir, double d) const;
-  // The mean of the normals on both sides when x lies on a crease (the gradient at x is n),
-  // nothing elsewhere. Two value_gradient evaluations.
-  std::optional<Vec3> crease_normal(const Vec3& x, const Vec3& n) const;
+  // New surface points about distance d from vertex v, one in each tangent direction, as far
+  // as they can be placed in order: the first direction where Newton fails or lands somewhere
+  // implausible (another sheet, far away, finished mesh) ends the list. The directions' field
+  // evaluations are batched (see place_points in tracker.cpp).
+  std::vector<Placed> place_points(int v, std::span<const Vec3> dirs, double d) const;
+  // For each point xs[i] whose gradient is ns[i]: the mean of the normals on both sides when it
+  // lies on a crease, nothing elsewhere. Two value_gradient evaluations a point, in one batch.
+  std::vector<std::optional<Vec3>> crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns) const;
   // Whether x (with its normal, placed at step d) lies on finished mesh (counted).
   bool over_finished_mesh(const Vec3& x, const Vec3& normal, double d) const;
   void emit_triangle(int a, int b, int c);
