@@ -22,14 +22,13 @@ const char* to_string(ProjectionStatus status) {
 
 namespace {
 
-// One projection's tolerance and limits, with every default resolved.
-struct Limits {
-  double diag = 0, tol = 0, max_step = 0, max_travel = 0;
-  int max_iterations = 0;
-  // An infinite tolerance (a box whose diagonal overflows, as for a sphere of radius 1e160)
-  // would accept the start point, however far from the surface, as converged.
-  bool usable() const { return tol > 0 && std::isfinite(tol) && std::isfinite(max_step) && std::isfinite(max_travel); }
-};
+using Limits = detail::ProjectionLimits;
+
+// An infinite tolerance (a box whose diagonal overflows, as for a sphere of radius 1e160) would
+// accept the start point, however far from the surface, as converged.
+bool usable(const Limits& l) {
+  return l.tol > 0 && std::isfinite(l.tol) && std::isfinite(l.max_step) && std::isfinite(l.max_travel);
+}
 
 Limits resolve(const Field& field, const ProjectionOptions& options) {
   Limits l;
@@ -87,7 +86,7 @@ ProjectionResult project_to_surface(const Field& field, const Vec3& start, const
   const Limits l = resolve(field, options);
   ProjectionResult r;
   r.point = start;
-  if (!l.usable()) {
+  if (!usable(l)) {
     r.status = ProjectionStatus::OutOfRange;
     return r;
   }
@@ -103,35 +102,42 @@ ProjectionResult project_to_surface(const Field& field, const Vec3& start, const
 
 std::vector<ProjectionResult> project_to_surface(const Field& field, std::span<const Vec3> starts,
                                                  std::span<const ProjectionOptions> options) {
+  BatchProjector projector;
+  const std::span<const ProjectionResult> r = projector.project(field, starts, options);
+  return {r.begin(), r.end()};
+}
+
+std::span<const ProjectionResult> BatchProjector::project(const Field& field, std::span<const Vec3> starts,
+                                                          std::span<const ProjectionOptions> options) {
   if (options.size() != starts.size())
     throw std::invalid_argument("project_to_surface: " + std::to_string(starts.size()) + " start points but " +
                                 std::to_string(options.size()) + " options");
   const std::size_t n = starts.size();
-  std::vector<ProjectionResult> results(n);
-  std::vector<Limits> limits(n);
-  std::vector<std::size_t> active;  // the points still iterating, in order
-  active.reserve(n);
+  results_.assign(n, ProjectionResult{});
+  limits_.resize(n);
+  active_.clear();
   int rounds = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    results[i].point = starts[i];
-    limits[i] = resolve(field, options[i]);
-    if (!limits[i].usable()) results[i].status = ProjectionStatus::OutOfRange;
-    else if (limits[i].max_iterations >= 0) active.push_back(i), rounds = std::max(rounds, limits[i].max_iterations + 1);
+    results_[i].point = starts[i];
+    limits_[i] = resolve(field, options[i]);
+    if (!usable(limits_[i])) results_[i].status = ProjectionStatus::OutOfRange;
+    else if (limits_[i].max_iterations >= 0) active_.push_back(i), rounds = std::max(rounds, limits_[i].max_iterations + 1);
   }
-  std::vector<Vec3> points(active.size()), gradients(active.size());
-  std::vector<double> values(active.size());
-  for (int round = 0; round < rounds && !active.empty(); ++round) {
-    const std::size_t m = active.size();
-    for (std::size_t k = 0; k < m; ++k) points[k] = results[active[k]].point;
-    field.values_gradients(points.data(), values.data(), gradients.data(), m);
+  points_.resize(active_.size());
+  gradients_.resize(active_.size());
+  values_.resize(active_.size());
+  for (int round = 0; round < rounds && !active_.empty(); ++round) {
+    const std::size_t m = active_.size();
+    for (std::size_t k = 0; k < m; ++k) points_[k] = results_[active_[k]].point;
+    field.values_gradients(points_.data(), values_.data(), gradients_.data(), m);
     std::size_t kept = 0;
     for (std::size_t k = 0; k < m; ++k) {
-      const std::size_t i = active[k];
-      if (!newton_round(results[i], starts[i], values[k], gradients[k], limits[i])) active[kept++] = i;
+      const std::size_t i = active_[k];
+      if (!newton_round(results_[i], starts[i], values_[k], gradients_[k], limits_[i])) active_[kept++] = i;
     }
-    active.resize(kept);
+    active_.resize(kept);
   }
-  return results;
+  return results_;
 }
 
 }  // namespace cdp

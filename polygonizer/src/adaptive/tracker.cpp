@@ -27,18 +27,21 @@ Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
     : field_(field), s_(settings), mesh_(mesh),
       front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell) {}
 
-std::vector<std::optional<Tracker::Placed>> Tracker::measure(std::span<const Vec3> points) const {
+void Tracker::measure(std::span<const Vec3> points, std::vector<std::optional<Placed>>& out) const {
   // Timed in two parts, so that the stats can show what the paper claims (curvature costs
   // little) for each of its costs: the field's Hessian, and the eigen-decomposition of C.
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   const std::size_t n = points.size();
-  std::vector<double> values(n);
-  std::vector<Vec3> gradients(n);
-  std::vector<Mat3> hessians(n);
-  field_.gradients_hessians(points.data(), values.data(), gradients.data(), hessians.data(), n);
+  DerivativeBuffers& d = derivatives_;
+  d.values.resize(n);
+  d.gradients.resize(n);
+  d.hessians.resize(n);
+  const std::vector<Vec3>& gradients = d.gradients;
+  const std::vector<Mat3>& hessians = d.hessians;
+  field_.gradients_hessians(points.data(), d.values.data(), d.gradients.data(), d.hessians.data(), n);
   const auto evaluated = Clock::now();
-  std::vector<std::optional<Placed>> out(n);
+  out.assign(n, std::nullopt);
   for (std::size_t i = 0; i < n; ++i) {
     try {
       out[i] = Placed{points[i], curvature_from_derivatives(gradients[i], hessians[i])};
@@ -49,7 +52,6 @@ std::vector<std::optional<Tracker::Placed>> Tracker::measure(std::span<const Vec
   const auto done = Clock::now();
   hessian_seconds_ += std::chrono::duration<double>(evaluated - start).count();
   curvature_seconds_ += std::chrono::duration<double>(done - start).count();
-  return out;
 }
 
 int Tracker::add_vertex(const Placed& placed) {
@@ -72,18 +74,11 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
   // most kWalkLegs legs, so that fronts fold over creases instead of piling points onto them.
   // The walks advance together, each leg's field evaluations batched across them; a walk's
   // course depends on nothing but its own direction, so it ends as it would alone.
-  struct Walk {
-    Vec3 at, normal, heading;
-    double left = 0;
-    std::optional<Placed> placed;
-    bool walking = true, failed = false;
-    std::size_t creases = 0;  // crease points it landed on, counted once it is known to be wanted
-  };
+  PlacementBuffers& b = placement_;
   const Vec3& origin = mesh_.positions[v];
-  std::vector<Walk> walks;
-  walks.reserve(dirs.size());
+  b.walks.clear();
   for (const Vec3& dir : dirs) {
-    Walk& w = walks.emplace_back();
+    Walk& w = b.walks.emplace_back();
     w.at = origin;
     w.normal = mesh_.normals[v];
     w.heading = dir;
@@ -92,51 +87,48 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
   ProjectionOptions po;
   po.tolerance = 1e-10 * s_.diagonal;
 
-  std::vector<std::size_t> legging;  // the walks taking this leg
-  std::vector<Vec3> starts, landed, crease_at, crease_n;
-  std::vector<ProjectionOptions> options;
   for (int leg = 0; leg < kWalkLegs; ++leg) {
-    legging.clear();
-    starts.clear();
-    options.clear();
-    for (std::size_t i = 0; i < walks.size(); ++i) {
-      Walk& w = walks[i];
+    b.legging.clear();
+    b.starts.clear();
+    b.options.clear();
+    for (std::size_t i = 0; i < b.walks.size(); ++i) {
+      const Walk& w = b.walks[i];
       if (!w.walking) continue;
-      legging.push_back(i);
-      starts.push_back(w.at + w.left * w.heading);
+      b.legging.push_back(i);
+      b.starts.push_back(w.at + w.left * w.heading);
       po.max_step = w.left;
       po.max_travel = w.left;
-      options.push_back(po);
+      b.options.push_back(po);
     }
-    if (legging.empty()) break;
-    const std::vector<ProjectionResult> r = project_to_surface(field_, starts, options);
-    landed.clear();
-    for (std::size_t k = 0; k < legging.size(); ++k) {
-      if (r[k].ok()) landed.push_back(r[k].point);
-      else walks[legging[k]].failed = true, walks[legging[k]].walking = false;
+    if (b.legging.empty()) break;
+    const std::span<const ProjectionResult> r = b.newton.project(field_, b.starts, b.options);
+    b.landed.clear();
+    for (std::size_t k = 0; k < b.legging.size(); ++k) {
+      if (r[k].ok()) b.landed.push_back(r[k].point);
+      else b.walks[b.legging[k]].failed = true, b.walks[b.legging[k]].walking = false;
     }
-    std::vector<std::optional<Placed>> measured = measure(landed);
+    measure(b.landed, b.measured);
     // Across a crease of a CSG shape the gradient turns at once; a point on the crease gets the
     // mean of the normals on both sides, so that both sides see it as theirs.
-    crease_at.clear();
-    crease_n.clear();
+    b.crease_at.clear();
+    b.crease_n.clear();
     std::size_t m = 0;
-    for (const std::size_t i : legging) {
-      Walk& w = walks[i];
+    for (const std::size_t i : b.legging) {
+      Walk& w = b.walks[i];
       if (w.failed) continue;
-      w.placed = std::move(measured[m++]);
+      w.placed = std::move(b.measured[m++]);
       if (!w.placed) w.failed = true, w.walking = false;
       else if (!same_side(w.normal, w.placed->curvature.normal))
-        crease_at.push_back(w.placed->point), crease_n.push_back(w.placed->curvature.normal);
+        b.crease_at.push_back(w.placed->point), b.crease_n.push_back(w.placed->curvature.normal);
     }
-    const std::vector<std::optional<Vec3>> creases = crease_normals(crease_at, crease_n);
+    crease_normals(b.crease_at, b.crease_n, b.creases);
     std::size_t c = 0;
-    for (const std::size_t i : legging) {
-      Walk& w = walks[i];
+    for (const std::size_t i : b.legging) {
+      Walk& w = b.walks[i];
       if (w.failed) continue;
       bool on_crease = false;
       if (!same_side(w.normal, w.placed->curvature.normal)) {
-        const std::optional<Vec3>& crease = creases[c++];
+        const std::optional<Vec3>& crease = b.creases[c++];
         if (!crease || !same_side(w.normal, *crease)) {
           w.failed = true, w.walking = false;
           continue;
@@ -162,8 +154,8 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
   // The points as placing them one after another gives them: up to the first that fails, whose
   // creases still count; the final checks look at the mesh and run only for the points wanted.
   std::vector<Placed> out;
-  out.reserve(walks.size());
-  for (const Walk& w : walks) {
+  out.reserve(b.walks.size());
+  for (const Walk& w : b.walks) {
     crease_points_ += w.creases;
     if (w.failed) break;
     // Newton may jump to a nearby sheet of the surface; such a point is not a neighbour of v.
@@ -188,13 +180,14 @@ bool Tracker::over_finished_mesh(const Vec3& x, const Vec3& normal, double d) co
   return hit;
 }
 
-std::vector<std::optional<Vec3>> Tracker::crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns) const {
+void Tracker::crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns,
+                             std::vector<std::optional<Vec3>>& out) const {
   // On a crease of max(f, g) (or min) the gradient at x is one side's; a step just inside or
   // just outside along it makes the other side's piece the active one. Both probes of every
   // point go to the field in one batch: 2i just inside, 2i + 1 just outside.
   const std::size_t n = xs.size();
-  std::vector<std::optional<Vec3>> out(n);
-  if (n == 0) return out;
+  out.assign(n, std::nullopt);
+  if (n == 0) return;
   const double eps = kCreaseProbe * s_.diagonal;
   constexpr double kSides[2] = {-1.0, 1.0};
   std::vector<Vec3> probes(2 * n), gradients(2 * n);
@@ -216,7 +209,6 @@ std::vector<std::optional<Vec3>> Tracker::crease_normals(std::span<const Vec3> x
     if (!(mean.squaredNorm() > 1e-6)) continue;
     out[i] = mean.normalized();
   }
-  return out;
 }
 
 void Tracker::emit_triangle(int a, int b, int c) {
@@ -286,7 +278,9 @@ double Tracker::local_edge_length(int node) const {
 }
 
 bool Tracker::mesh_from_seed(const Vec3& seed) {
-  const auto seed_placed = measure(std::span(&seed, 1)).front();
+  std::vector<std::optional<Placed>> measured;
+  measure(std::span(&seed, 1), measured);
+  const std::optional<Placed>& seed_placed = measured.front();
   if (!seed_placed) return false;
   const int c = add_vertex(*seed_placed);
   const Vec3 n = mesh_.normals[c];
