@@ -37,14 +37,12 @@ void Tracker::measure(std::span<const Vec3> points, std::vector<std::optional<Pl
   d.values.resize(n);
   d.gradients.resize(n);
   d.hessians.resize(n);
-  const std::vector<Vec3>& gradients = d.gradients;
-  const std::vector<Mat3>& hessians = d.hessians;
   field_.gradients_hessians(points.data(), d.values.data(), d.gradients.data(), d.hessians.data(), n);
   const auto evaluated = Clock::now();
   out.assign(n, std::nullopt);
   for (std::size_t i = 0; i < n; ++i) {
     try {
-      out[i] = Placed{points[i], curvature_from_derivatives(gradients[i], hessians[i])};
+      out[i] = Placed{points[i], curvature_from_derivatives(d.gradients[i], d.hessians[i])};
     } catch (const NoSurfaceError&) {
     }
     if (out[i] && !out[i]->curvature.normal.allFinite()) out[i].reset();
