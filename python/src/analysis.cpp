@@ -10,6 +10,7 @@
 
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -33,12 +34,21 @@ py::dict curvature(const Field& field, py::handle points_in) {
   std::vector<Curvature> c(points.size());
   {
     py::gil_scoped_release release;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      try {
-        c[i] = curvature_at(field, points[i]);
-      } catch (const NoSurfaceError& e) {
-        // Which of the points, as the programs name the file.
-        throw NoSurfaceError("points[" + std::to_string(i) + "] " + point_text(points[i]) + ": " + e.what());
+    const std::size_t batch = std::min(kBindingBatch, points.size());
+    std::vector<double> values(batch);
+    std::vector<Vec3> gradients(batch);
+    std::vector<Mat3> hessians(batch);
+    for (std::size_t s = 0; s < points.size(); s += kBindingBatch) {
+      const std::size_t m = std::min(kBindingBatch, points.size() - s);
+      field.gradients_hessians(&points[s], values.data(), gradients.data(), hessians.data(), m);
+      for (std::size_t k = 0; k < m; ++k) {
+        const std::size_t i = s + k;
+        try {
+          c[i] = curvature_from_derivatives(gradients[k], hessians[k]);
+        } catch (const NoSurfaceError& e) {
+          // Which of the points, as the programs name the file.
+          throw NoSurfaceError("points[" + std::to_string(i) + "] " + point_text(points[i]) + ": " + e.what());
+        }
       }
     }
   }
@@ -110,7 +120,13 @@ py::dict project(const Field& field, py::handle points_in, std::optional<long lo
   std::vector<ProjectionResult> r(points.size());
   {
     py::gil_scoped_release release;
-    for (std::size_t i = 0; i < points.size(); ++i) r[i] = project_to_surface(field, points[i], o);
+    const std::vector<ProjectionOptions> options(std::min(kBindingBatch, points.size()), o);
+    BatchProjector projector;
+    for (std::size_t s = 0; s < points.size(); s += kBindingBatch) {
+      const std::size_t m = std::min(kBindingBatch, points.size() - s);
+      const auto batch = projector.project(field, std::span(points).subspan(s, m), std::span(options).first(m));
+      std::copy(batch.begin(), batch.end(), r.begin() + static_cast<std::ptrdiff_t>(s));
+    }
   }
   const std::size_t n = r.size();
   std::vector<Vec3> projected(n);

@@ -27,6 +27,11 @@ void bind_meshing(py::module_& m);
 void bind_analysis(py::module_& m);
 void bind_mesh_files(py::module_& m);
 
+// Points per batched field evaluation the bindings ask for (Field.gradients and .hessians,
+// curvature, project): a callable field's central differences put 25 points per point into one
+// numpy array for Hessians, 10 MB for this many points; larger inputs take several calls.
+inline constexpr std::size_t kBindingBatch = std::size_t{1} << 14;
+
 // --- conversions (conversions.cpp); every error is InvalidInputError, raised as ValueError ---
 
 // An (N, 3) array of numbers (anything numpy can turn into float64). `what` names the argument.

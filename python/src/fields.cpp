@@ -10,6 +10,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -150,11 +151,13 @@ void bind_fields(py::module_& m) {
             std::vector<Vec3> out(p.size());
             {
               py::gil_scoped_release release;
-              for (std::size_t i = 0; i < p.size(); ++i) f.value_gradient(p[i], out[i]);
+              std::vector<double> values(p.size());
+              for (std::size_t s = 0; s < p.size(); s += kBindingBatch)
+                f.values_gradients(&p[s], &values[s], &out[s], std::min(kBindingBatch, p.size() - s));
             }
             return to_array(out);
           },
-          py::arg("points"), "grad F at each row of an (N, 3) array: (N, 3) (one value_gradient per point).")
+          py::arg("points"), "grad F at each row of an (N, 3) array: (N, 3) (one value_gradient per point, batched).")
       .def(
           "hessians",
           [](const Field& f, py::handle points) {
@@ -162,8 +165,10 @@ void bind_fields(py::module_& m) {
             std::vector<Mat3> h(p.size());
             {
               py::gil_scoped_release release;
-              Vec3 g;
-              for (std::size_t i = 0; i < p.size(); ++i) f.gradient_hessian(p[i], g, h[i]);
+              std::vector<double> values(p.size());
+              std::vector<Vec3> g(p.size());
+              for (std::size_t s = 0; s < p.size(); s += kBindingBatch)
+                f.gradients_hessians(&p[s], &values[s], &g[s], &h[s], std::min(kBindingBatch, p.size() - s));
             }
             py::array_t<double> out({static_cast<py::ssize_t>(p.size()), py::ssize_t{3}, py::ssize_t{3}});
             double* d = out.mutable_data();
@@ -172,7 +177,7 @@ void bind_fields(py::module_& m) {
                 for (int c = 0; c < 3; ++c) d[9 * i + 3 * r + c] = h[i](r, c);
             return out;
           },
-          py::arg("points"), "The Hessian of F at each row of an (N, 3) array: (N, 3, 3) (one gradient_hessian per point).")
+          py::arg("points"), "The Hessian of F at each row of an (N, 3) array: (N, 3, 3) (one gradient_hessian per point, batched).")
       .def(
           "counts", [](const Field& f) { return counts_dict(f.counts()); },
           "Evaluations so far by kind: value (single or batched points), value_gradient, gradient_hessian, total.")

@@ -2,6 +2,7 @@
 
 #include <cdp/core/errors.h>
 
+#include <algorithm>
 #include <cstring>
 
 namespace cdp::python {
@@ -14,25 +15,43 @@ std::string shape_text(const py::array& a) {
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
-// The points p, p + h e_k, p - h e_k (k = 0, 1, 2), and the steps as they came out in floating
-// point: far from the origin p + h - p is not h, and central differences divide by what the
-// function was actually given.
-struct Stencil {
-  std::vector<Vec3> points;
-  Vec3 plus = Vec3::Zero(), minus = Vec3::Zero();  // (p + h e_k)_k - p_k and p_k - (p - h e_k)_k
-};
+// Central differences evaluate F (or the user's gradient) on a stencil around each point, laid
+// out point after point: a batch of one is the call a single point makes.
+//   0: p; 1-6: p +- hg e_k (first derivatives, k = 0, 1, 2);
+//   7-12: p +- hh e_k (diagonal second differences of F);
+//   13-24: p + (+-hh) e_i + (+-hh) e_j for i < j (mixed second differences of F).
+constexpr std::size_t kGradientStencil = 7;
+constexpr std::size_t kAxisStencil = 13;  // when the user's Hessian replaces the mixed differences
+constexpr std::size_t kFullStencil = 25;
+constexpr int kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
 
-void add_axis_points(const Vec3& p, double h, Stencil& s) {
+void add_axis_points(const Vec3& p, double h, std::vector<Vec3>& out) {
   for (int k = 0; k < 3; ++k) {
     Vec3 a = p, b = p;
     a[k] += h;
     b[k] -= h;
-    s.points.push_back(a);
-    s.points.push_back(b);
-    s.plus[k] = a[k] - p[k];
-    s.minus[k] = p[k] - b[k];
+    out.push_back(a);
+    out.push_back(b);
   }
 }
+
+void add_mixed_points(const Vec3& p, double h, std::vector<Vec3>& out) {
+  for (const auto& [i, j] : kPairs)
+    for (const double si : {1.0, -1.0})
+      for (const double sj : {1.0, -1.0}) {
+        Vec3 q = p;
+        q[i] += si * h;
+        q[j] += sj * h;
+        out.push_back(q);
+      }
+}
+
+// The steps as they came out in floating point, (p + h e_k)_k - p_k and p_k - (p - h e_k)_k: far
+// from the origin p + h - p is not h, and central differences divide by what the function was
+// actually given.
+double step_up(const Vec3& p, int k, double h) { return (p[k] + h) - p[k]; }
+double step_down(const Vec3& p, int k, double h) { return p[k] - (p[k] - h); }
+double spacing(const Vec3& p, int k, double h) { return step_up(p, k, h) + step_down(p, k, h); }
 
 }  // namespace
 
@@ -120,75 +139,109 @@ double PythonField::eval_value(const Vec3& p) const {
 }
 
 double PythonField::eval_value_gradient(const Vec3& p, Vec3& gradient) const {
-  py::gil_scoped_acquire gil;
-  if (has_gradient()) {
-    const double v = call_value(&p, 1)[0];
-    gradient = call_gradient(&p, 1)[0];
-    return v;
-  }
-  Stencil s;
-  s.points.push_back(p);
-  add_axis_points(p, gradient_step_, s);
-  const std::vector<double> f = call_value(s.points.data(), s.points.size());
-  for (int k = 0; k < 3; ++k) gradient[k] = (f[1 + 2 * k] - f[2 + 2 * k]) / (s.plus[k] + s.minus[k]);
-  return f[0];
+  double v;
+  eval_values_gradients(&p, &v, &gradient, 1);
+  return v;
 }
 
 double PythonField::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const {
+  double v;
+  eval_gradients_hessians(&p, &v, &gradient, &hessian, 1);
+  return v;
+}
+
+void PythonField::eval_values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const {
+  if (n == 0) return;
   py::gil_scoped_acquire gil;
   if (has_gradient()) {
-    const double v = call_value(&p, 1)[0];
+    const std::vector<double> v = call_value(points, n);
+    const std::vector<Vec3> g = call_gradient(points, n);
+    std::copy(v.begin(), v.end(), values);
+    std::copy(g.begin(), g.end(), gradients);
+    return;
+  }
+  std::vector<Vec3> stencil;
+  stencil.reserve(kGradientStencil * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    stencil.push_back(points[i]);
+    add_axis_points(points[i], gradient_step_, stencil);
+  }
+  const std::vector<double> f = call_value(stencil.data(), stencil.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* fi = &f[kGradientStencil * i];
+    values[i] = fi[0];
+    for (int k = 0; k < 3; ++k) gradients[i][k] = (fi[1 + 2 * k] - fi[2 + 2 * k]) / spacing(points[i], k, gradient_step_);
+  }
+}
+
+void PythonField::eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
+                                          std::size_t n) const {
+  if (n == 0) return;
+  py::gil_scoped_acquire gil;
+  std::vector<Vec3> stencil;
+  if (has_gradient()) {
+    const std::vector<double> v = call_value(points, n);
+    std::copy(v.begin(), v.end(), values);
     if (has_hessian()) {
-      gradient = call_gradient(&p, 1)[0];
-      hessian = call_hessian(&p, 1)[0];
-      return v;
+      const std::vector<Vec3> g = call_gradient(points, n);
+      const std::vector<Mat3> h = call_hessian(points, n);
+      std::copy(g.begin(), g.end(), gradients);
+      std::copy(h.begin(), h.end(), hessians);
+      return;
     }
-    // Central differences of the user's gradient, one call for all seven points.
-    Stencil s;
-    s.points.push_back(p);
-    add_axis_points(p, gradient_step_, s);
-    const std::vector<Vec3> g = call_gradient(s.points.data(), s.points.size());
-    gradient = g[0];
-    for (int k = 0; k < 3; ++k) hessian.col(k) = (g[1 + 2 * k] - g[2 + 2 * k]) / (s.plus[k] + s.minus[k]);
-    hessian = (0.5 * (hessian + hessian.transpose())).eval();
-    return v;
+    // Central differences of the user's gradient, one call for the stencils of all points.
+    stencil.reserve(kGradientStencil * n);
+    for (std::size_t i = 0; i < n; ++i) {
+      stencil.push_back(points[i]);
+      add_axis_points(points[i], gradient_step_, stencil);
+    }
+    const std::vector<Vec3> g = call_gradient(stencil.data(), stencil.size());
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3* gi = &g[kGradientStencil * i];
+      gradients[i] = gi[0];
+      Mat3& hessian = hessians[i];
+      for (int k = 0; k < 3; ++k) hessian.col(k) = (gi[1 + 2 * k] - gi[2 + 2 * k]) / spacing(points[i], k, gradient_step_);
+      hessian = (0.5 * (hessian + hessian.transpose())).eval();
+    }
+    return;
   }
   // Values only (or a Hessian without a gradient): one call for every point of the stencils.
-  // 0: p; 1-6: p +- hg e_k (gradient); 7-12: p +- hh e_k (diagonal of the Hessian);
-  // 13-24: p + (+-hh) e_i + (+-hh) e_j for i < j (mixed second differences).
-  Stencil g, h;
-  g.points.push_back(p);
-  add_axis_points(p, gradient_step_, g);
-  add_axis_points(p, hessian_step_, h);
-  std::vector<Vec3> points = g.points;
-  points.insert(points.end(), h.points.begin(), h.points.end());
   const bool mixed = !has_hessian();
-  constexpr int kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
-  if (mixed)
-    for (const auto& [i, j] : kPairs)
-      for (const double si : {1.0, -1.0})
-        for (const double sj : {1.0, -1.0}) {
-          Vec3 q = p;
-          q[i] += si * hessian_step_;
-          q[j] += sj * hessian_step_;
-          points.push_back(q);
-        }
-  const std::vector<double> f = call_value(points.data(), points.size());
-  for (int k = 0; k < 3; ++k) gradient[k] = (f[1 + 2 * k] - f[2 + 2 * k]) / (g.plus[k] + g.minus[k]);
+  const std::size_t size = mixed ? kFullStencil : kAxisStencil;
+  stencil.reserve(size * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    stencil.push_back(points[i]);
+    add_axis_points(points[i], gradient_step_, stencil);
+    add_axis_points(points[i], hessian_step_, stencil);
+    if (mixed) add_mixed_points(points[i], hessian_step_, stencil);
+  }
+  const std::vector<double> f = call_value(stencil.data(), stencil.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& p = points[i];
+    const double* fi = &f[size * i];
+    values[i] = fi[0];
+    for (int k = 0; k < 3; ++k) gradients[i][k] = (fi[1 + 2 * k] - fi[2 + 2 * k]) / spacing(p, k, gradient_step_);
+  }
   if (!mixed) {
-    hessian = call_hessian(&p, 1)[0];
-    return f[0];
+    const std::vector<Mat3> h = call_hessian(points, n);
+    std::copy(h.begin(), h.end(), hessians);
+    return;
   }
-  for (int k = 0; k < 3; ++k) {
-    const double hp = h.plus[k], hm = h.minus[k];
-    hessian(k, k) = 2 * ((f[7 + 2 * k] - f[0]) / hp - (f[0] - f[8 + 2 * k]) / hm) / (hp + hm);
+  const double hh = hessian_step_;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& p = points[i];
+    const double* fi = &f[size * i];
+    Mat3& hessian = hessians[i];
+    for (int k = 0; k < 3; ++k) {
+      const double hp = step_up(p, k, hh), hm = step_down(p, k, hh);
+      hessian(k, k) = 2 * ((fi[7 + 2 * k] - fi[0]) / hp - (fi[0] - fi[8 + 2 * k]) / hm) / (hp + hm);
+    }
+    for (int m = 0; m < 3; ++m) {
+      const auto [a, b] = kPairs[m];
+      const double* q = &fi[13 + 4 * m];  // ++, +-, -+, --
+      hessian(a, b) = hessian(b, a) = (q[0] - q[1] - q[2] + q[3]) / (spacing(p, a, hh) * spacing(p, b, hh));
+    }
   }
-  for (int n = 0; n < 3; ++n) {
-    const auto [i, j] = kPairs[n];
-    const double* q = &f[13 + 4 * n];  // ++, +-, -+, --
-    hessian(i, j) = hessian(j, i) = (q[0] - q[1] - q[2] + q[3]) / ((h.plus[i] + h.minus[i]) * (h.plus[j] + h.minus[j]));
-  }
-  return f[0];
 }
 
 }  // namespace cdp::python

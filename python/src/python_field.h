@@ -3,11 +3,12 @@
 // from central differences (python/README.md gives the steps and the accuracy measured).
 //
 // Every evaluation takes the GIL, so the algorithms may call it from any thread (the ray casting
-// of cdp.evaluate runs on TBB's) once the binding has released it. Batched values() is one call;
-// value, value_gradient and gradient_hessian are asked point by point by the Newton projection,
-// the curvature and the adaptive tracker, so each is one call (two or three when the user's
-// gradient and Hessian are separate functions); the finite differences put all their points in
-// that one call.
+// of cdp.evaluate runs on TBB's) once the binding has released it. Each batched evaluation
+// (values, values_gradients, gradients_hessians) is one Python call of each function it needs,
+// the finite differences putting all the stencil points of all the batch's points into that one
+// call: the seed grid and the marching lattices ask for values in slabs, the adaptive tracker for
+// the points of each expansion's Newton round and curvature together, the batched Newton
+// projection for its points still iterating. A single-point evaluation is a batch of one.
 #pragma once
 
 #include "bindings.h"
@@ -54,6 +55,9 @@ class PythonField final : public Field {
   double eval_value_gradient(const Vec3& p, Vec3& gradient) const override;
   double eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const override;
   void eval_values(const Vec3* points, double* out, std::size_t n) const override;
+  void eval_values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const override;
+  void eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
+                               std::size_t n) const override;
 
  private:
   // The GIL must be held. Check the shapes the functions return and throw InvalidInputError

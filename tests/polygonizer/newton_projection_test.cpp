@@ -3,6 +3,15 @@
 
 #include <cdp/core/newton_projection.h>
 
+#include <bit>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <random>
+#include <span>
+#include <stdexcept>
+#include <vector>
+
 #include "common/test_fields.h"
 
 namespace cdp {
@@ -78,6 +87,126 @@ TEST(NewtonProjection, ReportsAStepThatCannotMoveThePoint) {
   const ProjectionResult r = project_to_surface(far, Vec3(1e20 + 1e10 + 3e5, 0, 0));
   EXPECT_EQ(r.status, ProjectionStatus::NoProgress);
   EXPECT_LT(r.iterations, 5);
+}
+
+bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
+
+// Wraps a field and records the size of every values_gradients batch asked of it.
+class BatchRecorder : public Field {
+ public:
+  explicit BatchRecorder(const Field& inner) : inner_(inner) { bounds_ = inner.bounds(); }
+  std::string type_name() const override { return "recorder"; }
+  mutable std::vector<std::size_t> batches;
+
+ protected:
+  double eval_value(const Vec3& p) const override { return inner_.value(p); }
+  double eval_value_gradient(const Vec3& p, Vec3& g) const override { return inner_.value_gradient(p, g); }
+  double eval_gradient_hessian(const Vec3& p, Vec3& g, Mat3& h) const override { return inner_.gradient_hessian(p, g, h); }
+  void eval_values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const override {
+    batches.push_back(n);
+    inner_.values_gradients(points, values, gradients, n);
+  }
+
+ private:
+  const Field& inner_;
+};
+
+// Start points all over the box and beyond, with options that differ from point to point
+// (every limit, including none and no iterations at all), so that every status comes up.
+struct Starts {
+  std::vector<Vec3> points;
+  std::vector<ProjectionOptions> options;
+};
+
+Starts random_starts(const Field& field, std::size_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-0.1, 1.1);
+  const Box box = field.bounds();
+  const double d = box.diagonal();
+  constexpr int kIterations[] = {-1, 0, 1, 2, 3, 5, 40, 40, 40, 40};
+  constexpr double kTolerance[] = {0, 0, 1e-6, 1e-12};
+  constexpr double kStep[] = {0, 0, 0.001, 0.01, 0.05, 0.3};
+  constexpr double kTravel[] = {0, 0, 0.002, 0.02, 0.1, 1};
+  const auto pick = [&](const auto& a) { return a[std::uniform_int_distribution<std::size_t>(0, std::size(a) - 1)(rng)]; };
+  Starts s;
+  for (std::size_t i = 0; i < n; ++i) {
+    s.points.push_back(box.min + box.size().cwiseProduct(Vec3(u(rng), u(rng), u(rng))));
+    ProjectionOptions o;
+    o.max_iterations = pick(kIterations);
+    o.tolerance = pick(kTolerance) * d;
+    o.max_step = pick(kStep) * d;
+    o.max_travel = pick(kTravel) * d;
+    s.options.push_back(o);
+  }
+  return s;
+}
+
+TEST(NewtonProjection, BatchedGivesEveryPointTheSingleResultBitForBit) {
+  std::vector<std::unique_ptr<Field>> fields;
+  fields.push_back(test::tanglecube());
+  fields.push_back(test::three_separate_blobs());
+  fields.push_back(std::make_unique<Torus>(Vec3::Zero(), 1.0, 0.3));
+  fields.push_back(test::field_from_json(
+      R"({"type": "expression", "value": "max(abs(x),max(abs(y),abs(z)))-1", "bounds": [[-1.5,-1.5,-1.5],[1.5,1.5,1.5]]})"));
+  fields.push_back(test::field_from_json(
+      R"({"type": "expression", "value": "log(x - 0.5) + y^2 + z", "bounds": [[-1,-1,-1],[1,1,1]]})"));
+  std::map<ProjectionStatus, int> seen;
+  for (const auto& field : fields) {
+    SCOPED_TRACE(field->type_name());
+    const Starts s = random_starts(*field, 2000, 7);
+    field->reset_counts();
+    std::vector<ProjectionResult> single;
+    for (std::size_t i = 0; i < s.points.size(); ++i) single.push_back(project_to_surface(*field, s.points[i], s.options[i]));
+    const EvaluationCounts single_counts = field->counts();
+    field->reset_counts();
+    const std::vector<ProjectionResult> batched = project_to_surface(*field, s.points, s.options);
+    EXPECT_EQ(field->counts().value_gradient, single_counts.value_gradient);
+    EXPECT_EQ(field->counts().total(), single_counts.total());
+    ASSERT_EQ(batched.size(), single.size());
+    for (std::size_t i = 0; i < single.size(); ++i) {
+      const ProjectionResult &a = single[i], &b = batched[i];
+      ASSERT_EQ(a.status, b.status) << "point " << i;
+      ASSERT_EQ(a.iterations, b.iterations) << "point " << i;
+      ASSERT_TRUE(same_bits(a.residual, b.residual)) << "point " << i;
+      for (int k = 0; k < 3; ++k) ASSERT_TRUE(same_bits(a.point[k], b.point[k])) << "point " << i;
+      ++seen[a.status];
+    }
+  }
+  // The starts reach every way a projection ends but OutOfRange (next test).
+  for (const ProjectionStatus st : {ProjectionStatus::Converged, ProjectionStatus::MaxIterations,
+                                    ProjectionStatus::VanishingGradient, ProjectionStatus::TooFar,
+                                    ProjectionStatus::NotFinite})
+    EXPECT_GT(seen[st], 0) << to_string(st);
+}
+
+TEST(NewtonProjection, BatchedEvaluatesThePointsStillIteratingOnceARound) {
+  const auto blobs = test::three_separate_blobs();
+  const BatchRecorder field(*blobs);
+  const Starts s = random_starts(field, 300, 11);
+  const std::vector<ProjectionResult> r = project_to_surface(field, s.points, s.options);
+  // Round k evaluates the points that have not ended before it: those ending at iteration j
+  // were evaluated in rounds 0..j (a point with max_iterations -1 in none).
+  std::size_t rounds = 0;
+  for (std::size_t i = 0; i < r.size(); ++i)
+    if (s.options[i].max_iterations >= 0) rounds = std::max(rounds, static_cast<std::size_t>(r[i].iterations) + 1);
+  ASSERT_EQ(field.batches.size(), rounds);
+  for (std::size_t k = 0; k < rounds; ++k) {
+    std::size_t iterating = 0;
+    for (std::size_t i = 0; i < r.size(); ++i)
+      if (s.options[i].max_iterations >= 0 && static_cast<std::size_t>(r[i].iterations) >= k) ++iterating;
+    EXPECT_EQ(field.batches[k], iterating) << "round " << k;
+  }
+}
+
+TEST(NewtonProjection, BatchedHandlesOutOfRangeAndEmptyInput) {
+  const Sphere huge(Vec3::Zero(), 1e160);
+  const std::vector<Vec3> starts = {Vec3(1, 0, 0), Vec3(0, 2, 0)};
+  const std::vector<ProjectionOptions> options(2);
+  const std::vector<ProjectionResult> r = project_to_surface(huge, starts, options);
+  for (const ProjectionResult& x : r) EXPECT_EQ(x.status, ProjectionStatus::OutOfRange);
+  EXPECT_EQ(huge.counts().total(), 0u);
+  EXPECT_TRUE(project_to_surface(huge, std::span<const Vec3>{}, std::span<const ProjectionOptions>{}).empty());
+  EXPECT_THROW(project_to_surface(huge, starts, std::span(options).first(1)), std::invalid_argument);
 }
 
 }  // namespace

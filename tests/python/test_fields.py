@@ -158,11 +158,18 @@ def test_central_differences_against_exact_expression_derivatives():
     assert np.median(g_err) < 3e-9 and g_err.max() < 3e-8
     assert np.median(h_err) < 3e-7 and h_err.max() < 1e-5
     assert np.allclose(h, np.transpose(h, (0, 2, 1)))
-    # One call per point for each derivative kind: 7 points for the gradient, 25 for the Hessian.
-    approx.reset_python_calls()
-    approx.gradients(p[:3])
-    approx.hessians(p[:3])
-    assert approx.python_calls == 6
+    # One call per batch for each derivative kind, with 7 points a point for the gradient and 25
+    # for the Hessian.
+    sizes = []
+
+    def recorded(q):
+        sizes.append(len(q))
+        return exact.values(q)
+
+    counted = cdp.callable_field(recorded, BOX)
+    assert np.array_equal(counted.gradients(p[:3]), approx.gradients(p[:3]))
+    assert np.array_equal(counted.hessians(p[:3]), approx.hessians(p[:3]))
+    assert counted.python_calls == 2 and sizes == [3 * 7, 3 * 25]
 
 
 def test_user_derivatives_are_used_when_given():

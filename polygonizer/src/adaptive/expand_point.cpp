@@ -52,17 +52,14 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
 
   // Where Newton cannot place a point at full length (a nearby sheet, a vanishing gradient),
   // try shorter edges before giving up on this point for now.
-  std::vector<Placed> placed;
-  for (double d = delta; d >= 0.24 * s_.sizing.min_edge && placed.size() < static_cast<std::size_t>(count - 1);
-       d *= 0.5) {
-    placed.clear();
-    for (int k = 1; k < count; ++k) {
-      const double t = k * theta / count;
-      const auto x = place_point(n.vertex, std::cos(t) * e0 + std::sin(t) * e1, d);
-      if (!x) break;
-      placed.push_back(*x);
-    }
+  std::vector<Vec3> dirs(count - 1);
+  for (int k = 1; k < count; ++k) {
+    const double t = k * theta / count;
+    dirs[k - 1] = std::cos(t) * e0 + std::sin(t) * e1;
   }
+  std::vector<Placed> placed;
+  for (double d = delta; d >= 0.24 * s_.sizing.min_edge && placed.size() < dirs.size(); d *= 0.5)
+    placed = place_points(n.vertex, dirs, d);
   if (placed.size() < static_cast<std::size_t>(count - 1)) return {false, -1};
 
   // A new point landing close to a front point the collision test did not see (beyond

@@ -427,22 +427,33 @@ class Seeder {
     ProjectionOptions po;
     po.max_travel = 2 * grid_.h;
     po.max_step = 0.5 * grid_.h;
+    std::vector<Vec3> starts;
     for (int k = 0; k <= n[2]; ++k)
       for (int j = 0; j <= n[1]; ++j)
         for (int i = 0; i <= n[0]; ++i) {
           const double v = grid_.value(i, j, k);
-          if (v == 0 || !strict_local_minimum(i, j, k)) continue;
-          ++report_.probes;
-          const ProjectionResult r = project_to_surface(field_, grid_.point(i, j, k), po);
-          if (!r.ok()) continue;
-          const Vec3 g = field_.gradient(r.point);
-          if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
-          const SurfacePoint x{r.point, g.normalized()};
-          cover_.update();
-          if (cover_.near_same_sheet(x.point, x.normal) || walks_to_mesh(x)) continue;
-          unsure_.push_back({{}, false, x});
-          consider_seed(x);
+          if (v != 0 && strict_local_minimum(i, j, k)) starts.push_back(grid_.point(i, j, k));
         }
+    // The probes' projections and normals depend on the field alone, not on the mesh the
+    // earlier probes' seeds grow: they are evaluated in batches up front, then taken in order.
+    report_.probes += starts.size();
+    const std::vector<ProjectionOptions> options(starts.size(), po);
+    const std::vector<ProjectionResult> r = project_to_surface(field_, starts, options);
+    std::vector<Vec3> landed;
+    for (const ProjectionResult& x : r)
+      if (x.ok()) landed.push_back(x.point);
+    std::vector<double> values(landed.size());
+    std::vector<Vec3> gradients(landed.size());
+    field_.values_gradients(landed.data(), values.data(), gradients.data(), landed.size());
+    for (std::size_t i = 0; i < landed.size(); ++i) {
+      const Vec3& g = gradients[i];
+      if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
+      const SurfacePoint x{landed[i], g.normalized()};
+      cover_.update();
+      if (cover_.near_same_sheet(x.point, x.normal) || walks_to_mesh(x)) continue;
+      unsure_.push_back({{}, false, x});
+      consider_seed(x);
+    }
   }
 
   // |F| at node (i, j, k) below that of its 26 neighbours, all of the same sign (ties go to the

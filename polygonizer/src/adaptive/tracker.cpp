@@ -27,27 +27,29 @@ Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
     : field_(field), s_(settings), mesh_(mesh),
       front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell) {}
 
-std::optional<Tracker::Placed> Tracker::measure(const Vec3& p) const {
+void Tracker::measure(std::span<const Vec3> points, std::vector<std::optional<Placed>>& out) const {
   // Timed in two parts, so that the stats can show what the paper claims (curvature costs
   // little) for each of its costs: the field's Hessian, and the eigen-decomposition of C.
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
-  auto evaluated = start;
-  std::optional<Placed> out;
-  try {
-    Vec3 g;
-    Mat3 h;
-    field_.gradient_hessian(p, g, h);
-    evaluated = Clock::now();
-    out = Placed{p, curvature_from_derivatives(g, h)};
-  } catch (const NoSurfaceError&) {
+  const std::size_t n = points.size();
+  DerivativeBuffers& d = derivatives_;
+  d.values.resize(n);
+  d.gradients.resize(n);
+  d.hessians.resize(n);
+  field_.gradients_hessians(points.data(), d.values.data(), d.gradients.data(), d.hessians.data(), n);
+  const auto evaluated = Clock::now();
+  out.assign(n, std::nullopt);
+  for (std::size_t i = 0; i < n; ++i) {
+    try {
+      out[i] = Placed{points[i], curvature_from_derivatives(d.gradients[i], d.hessians[i])};
+    } catch (const NoSurfaceError&) {
+    }
+    if (out[i] && !out[i]->curvature.normal.allFinite()) out[i].reset();
   }
   const auto done = Clock::now();
-  if (evaluated == start) evaluated = done;
   hessian_seconds_ += std::chrono::duration<double>(evaluated - start).count();
   curvature_seconds_ += std::chrono::duration<double>(done - start).count();
-  if (out && !out->curvature.normal.allFinite()) out.reset();
-  return out;
 }
 
 int Tracker::add_vertex(const Placed& placed) {
@@ -63,48 +65,104 @@ int Tracker::add_vertex(const Placed& placed) {
   return v;
 }
 
-std::optional<Tracker::Placed> Tracker::place_point(int v, const Vec3& dir, double d) const {
-  // Walk d along the surface in direction dir: a straight step in the tangent plane, then Newton.
+std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> dirs, double d) const {
+  // Walk d along the surface in each direction: a straight step in the tangent plane, then Newton.
   // Where Newton lands on a crease well short of d (the projection does not cross creases), the
   // walk goes on from there in the tangent plane of the crease point with what is left of d, at
   // most kWalkLegs legs, so that fronts fold over creases instead of piling points onto them.
+  // The walks advance together, each leg's field evaluations batched across them; a walk's
+  // course depends on nothing but its own direction, so it ends as it would alone.
+  PlacementBuffers& b = placement_;
   const Vec3& origin = mesh_.positions[v];
+  b.walks.clear();
+  for (const Vec3& dir : dirs) {
+    Walk& w = b.walks.emplace_back();
+    w.at = origin;
+    w.normal = mesh_.normals[v];
+    w.heading = dir;
+    w.left = d;
+  }
   ProjectionOptions po;
   po.tolerance = 1e-10 * s_.diagonal;
-  Vec3 at = origin, normal = mesh_.normals[v], heading = dir;
-  double left = d;
-  std::optional<Placed> placed;
+
   for (int leg = 0; leg < kWalkLegs; ++leg) {
-    po.max_step = left;
-    po.max_travel = left;
-    const ProjectionResult r = project_to_surface(field_, at + left * heading, po);
-    if (!r.ok()) return std::nullopt;
-    placed = measure(r.point);
-    if (!placed) return std::nullopt;
-    bool on_crease = false;
-    if (!same_side(normal, placed->curvature.normal)) {
-      // Across a crease of a CSG shape the gradient turns at once; a point on the crease gets
-      // the mean of the normals on both sides, so that both sides see it as theirs.
-      const auto crease = crease_normal(r.point, placed->curvature.normal);
-      if (!crease || !same_side(normal, *crease)) return std::nullopt;
-      placed->curvature.normal = *crease;
-      ++crease_points_;
-      on_crease = true;
+    b.legging.clear();
+    b.starts.clear();
+    b.options.clear();
+    for (std::size_t i = 0; i < b.walks.size(); ++i) {
+      const Walk& w = b.walks[i];
+      if (!w.walking) continue;
+      b.legging.push_back(i);
+      b.starts.push_back(w.at + w.left * w.heading);
+      po.max_step = w.left;
+      po.max_travel = w.left;
+      b.options.push_back(po);
     }
-    const double moved = (r.point - at).norm();
-    left -= moved;
-    at = r.point;
-    if (!on_crease || left <= (1 - kShortLanding) * d || leg + 1 == kWalkLegs) break;
-    normal = placed->curvature.normal;
-    heading -= normal * normal.dot(heading);
-    if (!(heading.squaredNorm() > 1e-12)) break;
-    heading.normalize();
+    if (b.legging.empty()) break;
+    const std::span<const ProjectionResult> r = b.newton.project(field_, b.starts, b.options);
+    b.landed.clear();
+    for (std::size_t k = 0; k < b.legging.size(); ++k) {
+      if (r[k].ok()) b.landed.push_back(r[k].point);
+      else b.walks[b.legging[k]].failed = true, b.walks[b.legging[k]].walking = false;
+    }
+    measure(b.landed, b.measured);
+    // Across a crease of a CSG shape the gradient turns at once; a point on the crease gets the
+    // mean of the normals on both sides, so that both sides see it as theirs.
+    b.crease_at.clear();
+    b.crease_n.clear();
+    std::size_t m = 0;
+    for (const std::size_t i : b.legging) {
+      Walk& w = b.walks[i];
+      if (w.failed) continue;
+      w.placed = std::move(b.measured[m++]);
+      if (!w.placed) w.failed = true, w.walking = false;
+      else if (!same_side(w.normal, w.placed->curvature.normal))
+        b.crease_at.push_back(w.placed->point), b.crease_n.push_back(w.placed->curvature.normal);
+    }
+    crease_normals(b.crease_at, b.crease_n, b.creases);
+    std::size_t c = 0;
+    for (const std::size_t i : b.legging) {
+      Walk& w = b.walks[i];
+      if (w.failed) continue;
+      bool on_crease = false;
+      if (!same_side(w.normal, w.placed->curvature.normal)) {
+        const std::optional<Vec3>& crease = b.creases[c++];
+        if (!crease || !same_side(w.normal, *crease)) {
+          w.failed = true, w.walking = false;
+          continue;
+        }
+        w.placed->curvature.normal = *crease;
+        ++w.creases;
+        on_crease = true;
+      }
+      const double moved = (w.placed->point - w.at).norm();
+      w.left -= moved;
+      w.at = w.placed->point;
+      if (!on_crease || w.left <= (1 - kShortLanding) * d || leg + 1 == kWalkLegs) {
+        w.walking = false;
+        continue;
+      }
+      w.normal = w.placed->curvature.normal;
+      w.heading -= w.normal * w.normal.dot(w.heading);
+      if (!(w.heading.squaredNorm() > 1e-12)) w.walking = false;
+      else w.heading.normalize();
+    }
   }
-  // Newton may jump to a nearby sheet of the surface; such a point is not a neighbour of v.
-  const double dist = (at - origin).norm();
-  if (dist < 0.25 * d || dist > 1.75 * d) return std::nullopt;
-  if (over_finished_mesh(placed->point, placed->curvature.normal, d)) return std::nullopt;
-  return placed;
+
+  // The points as placing them one after another gives them: up to the first that fails, whose
+  // creases still count; the final checks look at the mesh and run only for the points wanted.
+  std::vector<Placed> out;
+  out.reserve(b.walks.size());
+  for (const Walk& w : b.walks) {
+    crease_points_ += w.creases;
+    if (w.failed) break;
+    // Newton may jump to a nearby sheet of the surface; such a point is not a neighbour of v.
+    const double dist = (w.at - origin).norm();
+    if (dist < 0.25 * d || dist > 1.75 * d) break;
+    if (over_finished_mesh(w.placed->point, w.placed->curvature.normal, d)) break;
+    out.push_back(*w.placed);
+  }
+  return out;
 }
 
 bool Tracker::over_finished_mesh(const Vec3& x, const Vec3& normal, double d) const {
@@ -120,21 +178,35 @@ bool Tracker::over_finished_mesh(const Vec3& x, const Vec3& normal, double d) co
   return hit;
 }
 
-std::optional<Vec3> Tracker::crease_normal(const Vec3& x, const Vec3& n) const {
+void Tracker::crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns,
+                             std::vector<std::optional<Vec3>>& out) const {
   // On a crease of max(f, g) (or min) the gradient at x is one side's; a step just inside or
-  // just outside along it makes the other side's piece the active one.
+  // just outside along it makes the other side's piece the active one. Both probes of every
+  // point go to the field in one batch: 2i just inside, 2i + 1 just outside.
+  const std::size_t n = xs.size();
+  out.assign(n, std::nullopt);
+  if (n == 0) return;
   const double eps = kCreaseProbe * s_.diagonal;
-  Vec3 best = n;
-  for (const double side : {-1.0, 1.0}) {
-    const Vec3 g = field_.gradient(x + side * eps * n);
-    if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
-    const Vec3 u = g.normalized();
-    if (u.dot(n) < best.dot(n)) best = u;
+  constexpr double kSides[2] = {-1.0, 1.0};
+  std::vector<Vec3> probes(2 * n), gradients(2 * n);
+  std::vector<double> values(2 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int s = 0; s < 2; ++s) probes[2 * i + s] = xs[i] + kSides[s] * eps * ns[i];
+  field_.values_gradients(probes.data(), values.data(), gradients.data(), 2 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& x_normal = ns[i];
+    Vec3 best = x_normal;
+    for (int s = 0; s < 2; ++s) {
+      const Vec3& g = gradients[2 * i + s];
+      if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
+      const Vec3 u = g.normalized();
+      if (u.dot(x_normal) < best.dot(x_normal)) best = u;
+    }
+    if (!(best.dot(x_normal) < kCreaseCosine)) continue;
+    const Vec3 mean = x_normal + best;
+    if (!(mean.squaredNorm() > 1e-6)) continue;
+    out[i] = mean.normalized();
   }
-  if (!(best.dot(n) < kCreaseCosine)) return std::nullopt;
-  const Vec3 mean = n + best;
-  if (!(mean.squaredNorm() > 1e-6)) return std::nullopt;
-  return mean.normalized();
 }
 
 void Tracker::emit_triangle(int a, int b, int c) {
@@ -204,7 +276,9 @@ double Tracker::local_edge_length(int node) const {
 }
 
 bool Tracker::mesh_from_seed(const Vec3& seed) {
-  const auto seed_placed = measure(seed);
+  std::vector<std::optional<Placed>> measured;
+  measure(std::span(&seed, 1), measured);
+  const std::optional<Placed>& seed_placed = measured.front();
   if (!seed_placed) return false;
   const int c = add_vertex(*seed_placed);
   const Vec3 n = mesh_.normals[c];
@@ -215,16 +289,14 @@ bool Tracker::mesh_from_seed(const Vec3& seed) {
   const Vec3 e1 = n.cross(e0);
 
   // The hexagon of Figure 5a; shrink it where Newton cannot place its corners.
-  std::vector<Placed> corners;
-  for (double d = target_[c]; d >= 0.24 * s_.sizing.min_edge && corners.size() < 6; d *= 0.5) {
-    corners.clear();
-    for (int k = 0; k < 6; ++k) {
-      const double t = k * std::numbers::pi / 3;
-      const auto p = place_point(c, std::cos(t) * e0 + std::sin(t) * e1, d);
-      if (!p) break;
-      corners.push_back(*p);
-    }
+  std::vector<Vec3> dirs(6);
+  for (int k = 0; k < 6; ++k) {
+    const double t = k * std::numbers::pi / 3;
+    dirs[k] = std::cos(t) * e0 + std::sin(t) * e1;
   }
+  std::vector<Placed> corners;
+  for (double d = target_[c]; d >= 0.24 * s_.sizing.min_edge && corners.size() < 6; d *= 0.5)
+    corners = place_points(c, dirs, d);
   if (corners.size() < 6) {
     // Keep the mesh free of an isolated vertex: the seed vertex is the last one added.
     vertex_hash_.remove(c, mesh_.positions[c]);

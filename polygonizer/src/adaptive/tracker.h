@@ -19,6 +19,7 @@
 
 #include <optional>
 #include <queue>
+#include <span>
 #include <tuple>
 #include <vector>
 
@@ -99,6 +100,31 @@ class Tracker {
     Vec3 point;
     Curvature curvature;
   };
+  // One new point's walk along the surface (see place_points).
+  struct Walk {
+    Vec3 at, normal, heading;
+    double left = 0;
+    std::optional<Placed> placed;
+    bool walking = true, failed = false;
+    std::size_t creases = 0;  // crease points it landed on, counted once it is known to be wanted
+  };
+  // The buffers of place_points, kept from expansion to expansion: allocating them for the one
+  // or two points of each would cost a few percent of the run on a cheap field.
+  struct PlacementBuffers {
+    std::vector<Walk> walks;
+    std::vector<std::size_t> legging;  // the walks taking the current leg
+    std::vector<Vec3> starts, landed, crease_at, crease_n;
+    std::vector<ProjectionOptions> options;
+    std::vector<std::optional<Placed>> measured;
+    std::vector<std::optional<Vec3>> creases;
+    BatchProjector newton;
+  };
+  // measure's buffers of field derivatives.
+  struct DerivativeBuffers {
+    std::vector<double> values;
+    std::vector<Vec3> gradients;
+    std::vector<Mat3> hessians;
+  };
   struct ExpandOutcome {
     bool expanded = false;
     int obstacle = -1;  // when not expanded: a front node to bridge to, or -1
@@ -110,15 +136,18 @@ class Tracker {
   bool same_side(const Vec3& n, int w) const { return same_side(n, mesh_.normals[w]); }
 
   // --- tracker.cpp
-  // Curvature at p; nothing where the gradient vanishes.
-  std::optional<Placed> measure(const Vec3& p) const;
+  // Curvature at each point into out; nothing where the gradient vanishes. One gradients_hessians
+  // batch.
+  void measure(std::span<const Vec3> points, std::vector<std::optional<Placed>>& out) const;
   int add_vertex(const Placed& placed);
-  // A new surface point about distance d from vertex v in tangent direction dir, or nothing
-  // when Newton fails or lands somewhere implausible (another sheet, far away).
-  std::optional<Placed> place_point(int v, const Vec3& dir, double d) const;
-  // The mean of the normals on both sides when x lies on a crease (the gradient at x is n),
-  // nothing elsewhere. Two value_gradient evaluations.
-  std::optional<Vec3> crease_normal(const Vec3& x, const Vec3& n) const;
+  // New surface points about distance d from vertex v, one in each tangent direction, as far
+  // as they can be placed in order: the first direction where Newton fails or lands somewhere
+  // implausible (another sheet, far away, finished mesh) ends the list. The directions' field
+  // evaluations are batched (see place_points in tracker.cpp).
+  std::vector<Placed> place_points(int v, std::span<const Vec3> dirs, double d) const;
+  // For each point xs[i] whose gradient is ns[i]: the mean of the normals on both sides when it
+  // lies on a crease, nothing elsewhere. Two value_gradient evaluations a point, in one batch.
+  void crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns, std::vector<std::optional<Vec3>>& out) const;
   // Whether x (with its normal, placed at step d) lies on finished mesh (counted).
   bool over_finished_mesh(const Vec3& x, const Vec3& normal, double d) const;
   void emit_triangle(int a, int b, int c);
@@ -188,6 +217,8 @@ class Tracker {
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;
   mutable double curvature_seconds_ = 0, hessian_seconds_ = 0;
   mutable std::size_t crease_points_ = 0, over_mesh_ = 0;
+  mutable PlacementBuffers placement_;
+  mutable DerivativeBuffers derivatives_;
   ProgressCallback progress_;
 };
 

@@ -79,6 +79,17 @@ class Field {
     n_value_.fetch_add(n, std::memory_order_relaxed);
     eval_values(points, out, n);
   }
+  // Batched value_gradient: values[i] and gradients[i] at points[i]. Counted as n value_gradient
+  // evaluations, as n single calls would be, so that statistics measure the work, not the calls.
+  void values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const {
+    n_value_gradient_.fetch_add(n, std::memory_order_relaxed);
+    eval_values_gradients(points, values, gradients, n);
+  }
+  // Batched gradient_hessian, counted as n gradient_hessian evaluations.
+  void gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians, std::size_t n) const {
+    n_gradient_hessian_.fetch_add(n, std::memory_order_relaxed);
+    eval_gradients_hessians(points, values, gradients, hessians, n);
+  }
 
   // A box that contains the surface (the model's own, or the "bounds" given in its JSON).
   const Box& bounds() const { return bounds_; }
@@ -124,8 +135,18 @@ class Field {
   virtual double eval_value(const Vec3& p) const = 0;
   virtual double eval_value_gradient(const Vec3& p, Vec3& gradient) const = 0;
   virtual double eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const = 0;
+  // The batched hooks loop over the single-point ones by default, so a model that does not
+  // override them gives the same numbers either way. Fields whose calls cost more than their
+  // arithmetic (a Python function) override them to evaluate a batch in one call.
   virtual void eval_values(const Vec3* points, double* out, std::size_t n) const {
     for (std::size_t i = 0; i < n; ++i) out[i] = eval_value(points[i]);
+  }
+  virtual void eval_values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const {
+    for (std::size_t i = 0; i < n; ++i) values[i] = eval_value_gradient(points[i], gradients[i]);
+  }
+  virtual void eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
+                                       std::size_t n) const {
+    for (std::size_t i = 0; i < n; ++i) values[i] = eval_gradient_hessian(points[i], gradients[i], hessians[i]);
   }
 
   Box bounds_;

@@ -3,6 +3,9 @@
 
 #include <cdp/core/field.h>
 
+#include <span>
+#include <vector>
+
 namespace cdp {
 
 struct ProjectionOptions {
@@ -32,5 +35,37 @@ struct ProjectionResult {
 const char* to_string(ProjectionStatus status);
 
 ProjectionResult project_to_surface(const Field& field, const Vec3& start, const ProjectionOptions& options = {});
+
+// Projects every start point, starts[i] with options[i], in lockstep: each Newton round evaluates
+// the points still iterating in one values_gradients call, so that a field whose calls cost more
+// than its arithmetic (a Python function) is called once a round rather than once a point. Each
+// result is the one project_to_surface gives, bit for bit, with the same evaluation count.
+std::vector<ProjectionResult> project_to_surface(const Field& field, std::span<const Vec3> starts,
+                                                 std::span<const ProjectionOptions> options);
+
+namespace detail {
+// One projection's tolerance and limits, with every default resolved.
+struct ProjectionLimits {
+  double diag = 0, tol = 0, max_step = 0, max_travel = 0;
+  int max_iterations = 0;
+};
+}  // namespace detail
+
+// The batched projection above, keeping its buffers from call to call: for callers that project
+// a few points at a time and often (the adaptive tracker, every expansion), where allocating them
+// each time would cost more than the Newton steps on a cheap field.
+class BatchProjector {
+ public:
+  // The results stay valid until the next call.
+  std::span<const ProjectionResult> project(const Field& field, std::span<const Vec3> starts,
+                                            std::span<const ProjectionOptions> options);
+
+ private:
+  std::vector<ProjectionResult> results_;
+  std::vector<detail::ProjectionLimits> limits_;
+  std::vector<std::size_t> active_;  // the points still iterating, in order
+  std::vector<Vec3> points_, gradients_;
+  std::vector<double> values_;
+};
 
 }  // namespace cdp

@@ -1,0 +1,98 @@
+// The batched field calls (values_gradients, gradients_hessians) give every model the numbers its
+// single-point calls give and count evaluations as those would.
+#include <gtest/gtest.h>
+
+#include <polygonizer/field.h>
+#include <polygonizer/models/mpu.h>
+#include <polygonizer/models/vis.h>
+
+#include <bit>
+#include <cstdint>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "common/test_fields.h"
+#include "polygonizer/oriented_point_sets.h"
+
+namespace cdp {
+namespace {
+
+bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
+
+bool same_bits(const Vec3& a, const Vec3& b) {
+  for (int k = 0; k < 3; ++k)
+    if (!same_bits(a[k], b[k])) return false;
+  return true;
+}
+
+bool same_bits(const Mat3& a, const Mat3& b) {
+  for (int k = 0; k < 9; ++k)
+    if (!same_bits(a.data()[k], b.data()[k])) return false;
+  return true;
+}
+
+std::vector<std::unique_ptr<Field>> models() {
+  std::vector<std::unique_ptr<Field>> v;
+  v.push_back(test::tanglecube());
+  v.push_back(test::three_separate_blobs());
+  v.push_back(std::make_unique<Torus>(Vec3(0.1, 0, 0), 1.0, 0.3));
+  v.push_back(test::field_from_json(
+      R"({"type": "expression", "value": "max(abs(x),max(abs(y),abs(z)))-1", "bounds": [[-1.5,-1.5,-1.5],[1.5,1.5,1.5]]})"));
+  v.push_back(std::make_unique<Vis>(test::torus_points(16, 8), 0.03));
+  MpuOptions o;
+  o.max_error = 0.002;
+  v.push_back(std::make_unique<Mpu>(test::sphere_points(400), o));
+  return v;
+}
+
+TEST(FieldBatches, GiveTheSinglePointNumbersAndCountsForEveryModel) {
+  std::mt19937 rng(2024);
+  constexpr std::size_t kPoints = 200;
+  for (const auto& field : models()) {
+    SCOPED_TRACE(field->type_name());
+    const Box box = field->bounds();
+    std::uniform_real_distribution<double> u(0, 1);
+    std::vector<Vec3> p(kPoints);
+    for (Vec3& x : p) x = box.min + box.size().cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
+
+    std::vector<double> v1(kPoints), h1v(kPoints);
+    std::vector<Vec3> g1(kPoints), h1g(kPoints);
+    std::vector<Mat3> h1(kPoints);
+    field->reset_counts();
+    for (std::size_t i = 0; i < kPoints; ++i) {
+      v1[i] = field->value_gradient(p[i], g1[i]);
+      h1v[i] = field->gradient_hessian(p[i], h1g[i], h1[i]);
+    }
+    const EvaluationCounts single = field->counts();
+
+    std::vector<double> v2(kPoints), h2v(kPoints);
+    std::vector<Vec3> g2(kPoints), h2g(kPoints);
+    std::vector<Mat3> h2(kPoints);
+    field->reset_counts();
+    field->values_gradients(p.data(), v2.data(), g2.data(), kPoints);
+    field->gradients_hessians(p.data(), h2v.data(), h2g.data(), h2.data(), kPoints);
+    const EvaluationCounts batched = field->counts();
+
+    EXPECT_EQ(batched.value, single.value);
+    EXPECT_EQ(batched.value_gradient, single.value_gradient);
+    EXPECT_EQ(batched.gradient_hessian, single.gradient_hessian);
+    EXPECT_EQ(batched.value_gradient, kPoints);
+    EXPECT_EQ(batched.gradient_hessian, kPoints);
+    for (std::size_t i = 0; i < kPoints; ++i) {
+      ASSERT_TRUE(same_bits(v1[i], v2[i]) && same_bits(g1[i], g2[i])) << "value_gradient at point " << i;
+      ASSERT_TRUE(same_bits(h1v[i], h2v[i]) && same_bits(h1g[i], h2g[i]) && same_bits(h1[i], h2[i]))
+          << "gradient_hessian at point " << i;
+    }
+  }
+}
+
+TEST(FieldBatches, AnEmptyBatchEvaluatesAndCountsNothing) {
+  const auto field = test::tanglecube();
+  field->values_gradients(nullptr, nullptr, nullptr, 0);
+  field->gradients_hessians(nullptr, nullptr, nullptr, nullptr, 0);
+  EXPECT_EQ(field->counts().total(), 0u);
+}
+
+}  // namespace
+}  // namespace cdp
