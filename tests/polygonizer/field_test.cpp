@@ -2,9 +2,9 @@
 // single-point calls give and count evaluations as those would.
 #include <gtest/gtest.h>
 
-#include <polygonizer/field.h>
-#include <polygonizer/models/mpu.h>
-#include <polygonizer/models/vis.h>
+#include <cdp/core/field.h>
+#include <cdp/core/models/mpu.h>
+#include <cdp/core/models/vis.h>
 
 #include <bit>
 #include <cstdint>
