@@ -34,6 +34,7 @@ ProjectionResult project_to_surface(const Field& field, const Vec3& start, const
   Vec3 g;
   for (r.iterations = 0; r.iterations <= options.max_iterations; ++r.iterations) {
     const double f = field.value_gradient(r.point, g);
+    if (r.iterations == 0) r.start_gradient = g;
     const double g2 = g.squaredNorm();
     if (!std::isfinite(f) || !std::isfinite(g2)) {
       r.status = ProjectionStatus::NotFinite;

@@ -70,7 +70,13 @@ std::string expression(const std::string& value, double half) {
 
 std::vector<HardSurface> hard_surfaces() {
   std::vector<HardSurface> v = {
-      {"cube", expression("max(abs(x),max(abs(y),abs(z)))-1", 1.5), 1, 0, {}},
+      {"cube", expression("max(abs(x),max(abs(y),abs(z)))-1", 1.5), 1, 0, {1, 2, 3, 5}},
+      // Not aligned with the axes (no ties of max at the edges; faces meet at exactly 90 degrees,
+      // where the same-side test of the normals alone is a rounding decision) and a capped cylinder.
+      {"rotated_cube",
+       expression("max(abs(0.8*x+0.6*y),max(abs(-0.48*x+0.64*y+0.6*z),abs(0.36*x-0.48*y+0.8*z)))-1", 2), 1, 0,
+       {1, 2, 3, 5}},
+      {"capped_cylinder", expression("max(sqrt(x^2+y^2)-1, abs(z)-1)", 1.5), 1, 0, {1, 2, 3, 5}},
       {"gyroid_ball",
        expression("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)", 2.2), -1, -1, {}},
       {"barth_ball",

@@ -82,14 +82,26 @@ std::optional<Tracker::Placed> Tracker::place_point(int v, const Vec3& dir, doub
     placed = measure(r.point);
     if (!placed) return std::nullopt;
     bool on_crease = false;
-    if (!same_side(normal, placed->curvature.normal)) {
+    const Vec3& landed = placed->curvature.normal;
+    // Newton runs along the gradient, which turns little on the way over a smooth surface; a
+    // gradient at the start that points elsewhere than the one where it lands means the path
+    // crossed a crease, and the landing point may lie on it even though its own gradient is
+    // one side's (at a tie of max or min, the cube's edges, the gradient is one piece's, the
+    // same as the origin's face).
+    const Vec3& g0 = r.start_gradient;
+    const bool turned = !(g0.squaredNorm() > 0) || g0.normalized().dot(landed) < kCreaseCosine;
+    if (turned || !same_side(normal, landed)) {
       // Across a crease of a CSG shape the gradient turns at once; a point on the crease gets
       // the mean of the normals on both sides, so that both sides see it as theirs.
-      const auto crease = crease_normal(r.point, placed->curvature.normal);
-      if (!crease || !same_side(normal, *crease)) return std::nullopt;
-      placed->curvature.normal = *crease;
-      ++crease_points_;
-      on_crease = true;
+      const auto crease = crease_normal(r.point, landed);
+      if (crease) {
+        if (!same_side(normal, *crease)) return std::nullopt;
+        placed->curvature.normal = *crease;
+        ++crease_points_;
+        on_crease = true;
+      } else if (!same_side(normal, landed)) {
+        return std::nullopt;
+      }
     }
     const double moved = (r.point - at).norm();
     left -= moved;
