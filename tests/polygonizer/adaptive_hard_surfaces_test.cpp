@@ -85,24 +85,24 @@ std::vector<HardSurface> hard_surfaces() {
                   2.1),
        -1, -1, {}},
       {"chmutov6",
-       expression("(32*x^6-48*x^4+18*x^2-1)+(32*y^6-48*y^4+18*y^2-1)+(32*z^6-48*z^4+18*z^2-1)", 1.15), -1, -1, {5}},
+       expression("(32*x^6-48*x^4+18*x^2-1)+(32*y^6-48*y^4+18*y^2-1)+(32*z^6-48*z^4+18*z^2-1)", 1.15), -1, -1, {2, 5}},
       {"chmutov4", expression("(8*x^4-8*x^2+1)+(8*y^4-8*y^2+1)+(8*z^4-8*z^2+1)", 1.3), -1, -1, {1, 2, 3, 5}},
-      {"tanglecube", expression(test::kTanglecube, 3), 1, 5, {2, 3, 5}},
+      {"tanglecube", expression(test::kTanglecube, 3), 1, 5, {1, 2, 3, 5}},
       {"hollow_sphere", expression("max(sqrt(x^2+y^2+z^2)-1.25, 0.75-sqrt(x^2+y^2+z^2))", 2), 2, 0, {1, 2, 3, 5}},
       {"off_centre_cavity", expression("max(sqrt(x^2+y^2+z^2)-1.25, 0.5-sqrt((x-0.4)^2+y^2+z^2))", 2), 2, 0,
        {1, 2, 3, 5}},
       {"shell", expression("abs(sqrt(x^2+y^2+z^2)-1)-0.1", 1.5), 2, 0, {1, 2, 3, 5}},
       {"spheres_1e-3_apart",
-       expression("min(sqrt((x-1.0005)^2+y^2+z^2)-1, sqrt((x+1.0005)^2+y^2+z^2)-1)", 2.5), 2, 0, {2, 3, 5}},
+       expression("min(sqrt((x-1.0005)^2+y^2+z^2)-1, sqrt((x+1.0005)^2+y^2+z^2)-1)", 2.5), 2, 0, {1, 2, 3, 5}},
       {"needle", R"({"type": "ellipsoid", "radii": [5, 0.05, 0.05]})", 1, 0, {1, 2, 3, 5}},
-      {"thin_torus", R"({"type": "torus", "major_radius": 1, "minor_radius": 0.01})", 1, 1, {2, 3, 5}},
+      {"thin_torus", R"({"type": "torus", "major_radius": 1, "minor_radius": 0.01})", 1, 1, {1, 2, 3, 5}},
       {"tiny_blobs", blobs_json(7, 50, -4.5, 4.5, 0.1, 0.1, 0.5, R"("bounds": [[-5,-5,-5],[5,5,5]], )"), 50, 0,
        {1, 2, 3, 5}},
       {"fifty_blobs", blobs_json(3, 50, -2, 2, 0.5, 1.0), -1, -1, {3, 5}},
   };
   for (unsigned seed = 1; seed <= 20; ++seed)
     v.push_back({"random_blobs_" + std::to_string(seed), blobs_json(100 + seed, 2 + seed % 5, -1.6, 1.6, 0.7, 1.3),
-                 -1, -1, {2, 5}});
+                 -1, -1, {1, 2, 5}});
   return v;
 }
 
@@ -203,13 +203,14 @@ namespace cdp {
 namespace {
 
 TEST(AdaptiveResultCheck, AMeshThatIntersectsItselfIsAnErrorNotAResult) {
-  // Two spheres 1e-3 apart at factor 1: the fronts cross the gap and the triangles of the two
-  // spheres intersect. The check turns that into an error naming the place; without it the
-  // wrong mesh would come back (the option exists to save the check's time, at this risk).
-  const auto f = test::field_from_json(expression(
-      "min(sqrt((x-1.0005)^2+y^2+z^2)-1, sqrt((x+1.0005)^2+y^2+z^2)-1)", 2.5));
+  // Fifty overlapping blobs at factor 2: fronts cross each other between the blobs (an open
+  // defect of the tracker; two spheres 1e-3 apart at factor 1 served here until placements
+  // that jump across the gap were refused). The check turns that into an error naming the
+  // place; without it the wrong mesh would come back (the option exists to save the check's
+  // time, at this risk).
+  const auto f = test::field_from_json(blobs_json(3, 50, -2, 2, 0.5, 1.0));
   AdaptiveOptions o;
-  o.factor = 1;
+  o.factor = 2;
   try {
     polygonize_adaptive(*f, o);
     FAIL() << "expected an error";
