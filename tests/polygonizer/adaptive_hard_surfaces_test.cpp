@@ -85,7 +85,7 @@ std::vector<HardSurface> hard_surfaces() {
                   2.1),
        -1, -1, {}},
       {"chmutov6",
-       expression("(32*x^6-48*x^4+18*x^2-1)+(32*y^6-48*y^4+18*y^2-1)+(32*z^6-48*z^4+18*z^2-1)", 1.15), -1, -1, {2, 5}},
+       expression("(32*x^6-48*x^4+18*x^2-1)+(32*y^6-48*y^4+18*y^2-1)+(32*z^6-48*z^4+18*z^2-1)", 1.15), -1, -1, {1, 2, 3, 5}},
       {"chmutov4", expression("(8*x^4-8*x^2+1)+(8*y^4-8*y^2+1)+(8*z^4-8*z^2+1)", 1.3), -1, -1, {1, 2, 3, 5}},
       {"tanglecube", expression(test::kTanglecube, 3), 1, 5, {1, 2, 3, 5}},
       {"hollow_sphere", expression("max(sqrt(x^2+y^2+z^2)-1.25, 0.75-sqrt(x^2+y^2+z^2))", 2), 2, 0, {1, 2, 3, 5}},

@@ -21,16 +21,6 @@ constexpr double kShortLanding = 0.75;
 constexpr int kWalkLegs = 4;
 // A new point this close to a finished vertex (in units of the step) lies on finished mesh.
 constexpr double kOverMesh = 0.3;
-// A placement whose normal turned more than 75 degrees from the one it walked from (a crease
-// point's mean normal on the legs after a crease) is refused above min_edge, so that the
-// expansion retries at half the length. Such a turn is beyond what the sizing plans (one radian
-// of turn per edge at factor 1, less at higher factors) and means one of two things: Newton
-// jumped across a gap narrower than the step onto another sheet, whose normal near the gap is
-// at about 90 degrees (two spheres 1e-3 apart at factor 1 came out as triangles with corners
-// on both spheres), or the curvature grows between the two points (a neck between blobs) and
-// the tangent-plane tests, which see the new point foreshortened to cos 75 = 0.26, fold the
-// mesh over. At factor 2 and above the torus and the bunny never turn that much.
-constexpr double kMaxTurnCosine = 0.2588;
 }  // namespace
 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
@@ -113,7 +103,8 @@ std::optional<Tracker::Placed> Tracker::place_point(int v, const Vec3& dir, doub
         return std::nullopt;
       }
     }
-    if (!on_crease && d > s_.sizing.min_edge && normal.dot(placed->curvature.normal) < kMaxTurnCosine) return std::nullopt;
+    if (leg == 0 && !on_crease && d > s_.sizing.min_edge && normal.dot(placed->curvature.normal) < kMaxTurnCosine)
+      return std::nullopt;
     const double moved = (r.point - at).norm();
     left -= moved;
     at = r.point;
