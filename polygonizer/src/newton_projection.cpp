@@ -44,6 +44,7 @@ Limits resolve(const Field& field, const ProjectionOptions& options) {
 // projection (sets r.status and returns true) or takes the step and counts the round. The single
 // and the batched projection both go through here, so their points follow the same arithmetic.
 bool newton_round(ProjectionResult& r, const Vec3& start, double f, const Vec3& g, const Limits& l) {
+  if (r.iterations == 0) r.start_gradient = g;
   const double g2 = g.squaredNorm();
   if (!std::isfinite(f) || !std::isfinite(g2)) {
     r.status = ProjectionStatus::NotFinite;

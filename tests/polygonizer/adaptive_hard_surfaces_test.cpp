@@ -70,7 +70,13 @@ std::string expression(const std::string& value, double half) {
 
 std::vector<HardSurface> hard_surfaces() {
   std::vector<HardSurface> v = {
-      {"cube", expression("max(abs(x),max(abs(y),abs(z)))-1", 1.5), 1, 0, {}},
+      {"cube", expression("max(abs(x),max(abs(y),abs(z)))-1", 1.5), 1, 0, {1, 2, 3, 5}},
+      // Not aligned with the axes (no ties of max at the edges; faces meet at exactly 90 degrees,
+      // where the same-side test of the normals alone is a rounding decision) and a capped cylinder.
+      {"rotated_cube",
+       expression("max(abs(0.8*x+0.6*y),max(abs(-0.48*x+0.64*y+0.6*z),abs(0.36*x-0.48*y+0.8*z)))-1", 2), 1, 0,
+       {1, 2, 3, 5}},
+      {"capped_cylinder", expression("max(sqrt(x^2+y^2)-1, abs(z)-1)", 1.5), 1, 0, {1, 2, 3, 5}},
       {"gyroid_ball",
        expression("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)", 2.2), -1, -1, {}},
       {"barth_ball",
@@ -79,24 +85,24 @@ std::vector<HardSurface> hard_surfaces() {
                   2.1),
        -1, -1, {}},
       {"chmutov6",
-       expression("(32*x^6-48*x^4+18*x^2-1)+(32*y^6-48*y^4+18*y^2-1)+(32*z^6-48*z^4+18*z^2-1)", 1.15), -1, -1, {5}},
+       expression("(32*x^6-48*x^4+18*x^2-1)+(32*y^6-48*y^4+18*y^2-1)+(32*z^6-48*z^4+18*z^2-1)", 1.15), -1, -1, {1, 2, 3, 5}},
       {"chmutov4", expression("(8*x^4-8*x^2+1)+(8*y^4-8*y^2+1)+(8*z^4-8*z^2+1)", 1.3), -1, -1, {1, 2, 3, 5}},
-      {"tanglecube", expression(test::kTanglecube, 3), 1, 5, {2, 3, 5}},
+      {"tanglecube", expression(test::kTanglecube, 3), 1, 5, {1, 2, 3, 5}},
       {"hollow_sphere", expression("max(sqrt(x^2+y^2+z^2)-1.25, 0.75-sqrt(x^2+y^2+z^2))", 2), 2, 0, {1, 2, 3, 5}},
       {"off_centre_cavity", expression("max(sqrt(x^2+y^2+z^2)-1.25, 0.5-sqrt((x-0.4)^2+y^2+z^2))", 2), 2, 0,
        {1, 2, 3, 5}},
       {"shell", expression("abs(sqrt(x^2+y^2+z^2)-1)-0.1", 1.5), 2, 0, {1, 2, 3, 5}},
       {"spheres_1e-3_apart",
-       expression("min(sqrt((x-1.0005)^2+y^2+z^2)-1, sqrt((x+1.0005)^2+y^2+z^2)-1)", 2.5), 2, 0, {2, 3, 5}},
+       expression("min(sqrt((x-1.0005)^2+y^2+z^2)-1, sqrt((x+1.0005)^2+y^2+z^2)-1)", 2.5), 2, 0, {1, 2, 3, 5}},
       {"needle", R"({"type": "ellipsoid", "radii": [5, 0.05, 0.05]})", 1, 0, {1, 2, 3, 5}},
-      {"thin_torus", R"({"type": "torus", "major_radius": 1, "minor_radius": 0.01})", 1, 1, {2, 3, 5}},
+      {"thin_torus", R"({"type": "torus", "major_radius": 1, "minor_radius": 0.01})", 1, 1, {1, 2, 3, 5}},
       {"tiny_blobs", blobs_json(7, 50, -4.5, 4.5, 0.1, 0.1, 0.5, R"("bounds": [[-5,-5,-5],[5,5,5]], )"), 50, 0,
        {1, 2, 3, 5}},
       {"fifty_blobs", blobs_json(3, 50, -2, 2, 0.5, 1.0), -1, -1, {3, 5}},
   };
   for (unsigned seed = 1; seed <= 20; ++seed)
     v.push_back({"random_blobs_" + std::to_string(seed), blobs_json(100 + seed, 2 + seed % 5, -1.6, 1.6, 0.7, 1.3),
-                 -1, -1, {2, 5}});
+                 -1, -1, {1, 2, 5}});
   return v;
 }
 
@@ -197,11 +203,13 @@ namespace cdp {
 namespace {
 
 TEST(AdaptiveResultCheck, AMeshThatIntersectsItselfIsAnErrorNotAResult) {
-  // Two spheres 1e-3 apart at factor 1: the fronts cross the gap and the triangles of the two
-  // spheres intersect. The check turns that into an error naming the place; without it the
-  // wrong mesh would come back (the option exists to save the check's time, at this risk).
-  const auto f = test::field_from_json(expression(
-      "min(sqrt((x-1.0005)^2+y^2+z^2)-1, sqrt((x+1.0005)^2+y^2+z^2)-1)", 2.5));
+  // A shell 0.004 thick, thinner than min_edge (2e-3 of the box diagonal, 0.0104): outside
+  // what the tracker promises, and at factor 1 its fronts cross from one side of the shell to
+  // the other. The check turns that into an error naming the place; without it the wrong mesh
+  // would come back (the option exists to save the check's time, at this risk). A field outside
+  // the promise keeps this test independent of the tracker's open defects (two spheres 1e-3
+  // apart served here until the tracker meshed them).
+  const auto f = test::field_from_json(expression("abs(sqrt(x^2+y^2+z^2)-1)-0.002", 1.5));
   AdaptiveOptions o;
   o.factor = 1;
   try {

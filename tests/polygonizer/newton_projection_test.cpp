@@ -35,6 +35,18 @@ TEST(NewtonProjection, ConvergesQuadraticallyOnAPolynomialField) {
   EXPECT_LE(r.iterations, 12);
 }
 
+TEST(NewtonProjection, ReportsTheGradientWhereItStartedSoACreaseCrossingShows) {
+  // From outside the cube's edge x = y = 1 on the y side, Newton runs along +y's gradient and
+  // lands on the edge, where max(|x|, ...) picks the x piece at the tie: the two gradients
+  // differ though the landing point alone looks like a point of the face x = 1.
+  const auto f = test::field_from_json(
+      R"({"type": "expression", "value": "max(abs(x),max(abs(y),abs(z)))-1", "bounds": [[-2,-2,-2],[2,2,2]]})");
+  const ProjectionResult r = project_to_surface(*f, Vec3(1, 1.2, 0.3));
+  ASSERT_TRUE(r.ok()) << to_string(r.status);
+  EXPECT_NEAR(r.point.y(), 1, 1e-9);
+  EXPECT_EQ(r.start_gradient, Vec3(0, 1, 0));
+}
+
 TEST(NewtonProjection, ReportsAVanishingGradient) {
   const auto f = test::field_from_json(
       R"({"type": "expression", "value": "x^2 + y^2 + z^2 - 1", "bounds": [[-2,-2,-2],[2,2,2]]})");

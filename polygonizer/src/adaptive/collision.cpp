@@ -90,7 +90,12 @@ bool Tracker::can_bridge(int node, int q) const {
   if (vm == n.vertex || vm == a.vertex || vm == b.vertex || vm == fs_.nodes[a.prev].vertex ||
       vm == fs_.nodes[b.next].vertex)
     return false;
-  if (!same_side(mesh_.normals[n.vertex], vm)) return false;
+  // A bridge is an edge like any placed one: it may not join points whose normals turned more
+  // than a placement may (kMaxTurnCosine), which also keeps it off a sheet facing the other way.
+  // Chmutov's sextic at factors 1 and 3 stalled behind bridges of 0.5 across its saddles, where
+  // the normal turned 74-82 degrees and the edges around were 0.01-0.05 long; a front edge that
+  // long is never split again.
+  if (mesh_.normals[n.vertex].dot(mesh_.normals[vm]) < kMaxTurnCosine) return false;
   const Vec3& p = mesh_.positions[n.vertex];
   const Vec3& x = mesh_.positions[vm];
   // Each point must see the other inside its unmeshed sector, else the bridge would cross

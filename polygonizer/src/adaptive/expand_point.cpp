@@ -11,6 +11,13 @@ namespace cdp::adaptive {
 
 namespace {
 constexpr double kGrowth = 1.5;
+// Closing an angle joins prev and next by an edge; when their normals are more than 100 degrees
+// apart the two lie around a bend tighter than the edges (a thin neck of the tanglecube at
+// factor 1 got a triangle whose corners' normals were 155 degrees apart, folded over its
+// neighbours). Such an angle is expanded with a new point between them instead. Beyond 90
+// degrees with a margin: a cube's faces meet at exactly 90, and an edge across that crease
+// is right.
+constexpr double kFoldCosine = -0.1736;
 }  // namespace
 
 void Tracker::close_angle(int node) {
@@ -27,8 +34,8 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   const int va = fs_.nodes[n.prev].vertex, vb = fs_.nodes[n.next].vertex;
   const Vec3& p = mesh_.positions[n.vertex];
   const double theta = n.angle;
-  const int count =
-      triangle_count(s_.rule, theta, (mesh_.positions[va] - mesh_.positions[vb]).norm(), delta);
+  int count = triangle_count(s_.rule, theta, (mesh_.positions[va] - mesh_.positions[vb]).norm(), delta);
+  if (count <= 1 && mesh_.normals[va].dot(mesh_.normals[vb]) < kFoldCosine) count = 2;
 
   if (count <= 1) {
     const int q = find_closing_obstacle(node);
@@ -79,6 +86,13 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     if (const int r = crossed_front_edge(n.vertex, -1, x.point, n.vertex); r >= 0)
       return {false, bridge_around(node, r)};
   }
+  // The new front edges next -> x1 and x_last -> prev must leave next and prev into their own
+  // unmeshed sectors. The points were rotated in the tangent plane of the expanded point; where
+  // the surface bends between it and its neighbours, a point can land behind a neighbour, on
+  // triangles already made around it, and no front edge is crossed there (the ones bounding
+  // those triangles all end at the neighbour). A random blob field at factor 1 folded over so.
+  // The point waits instead; the neighbour's own expansion usually closes the gap first.
+  if (!in_sector(n.next, placed.front().point, 0) || !in_sector(n.prev, placed.back().point, 0)) return {false, -1};
   // The new front edges must not cross the front either.
   for (const auto& [from, to] : {std::pair{vb, placed.front().point}, std::pair{va, placed.back().point}})
     if (const int r = crossed_front_edge(from, -1, to, n.vertex); r >= 0) return {false, bridge_around(node, r)};

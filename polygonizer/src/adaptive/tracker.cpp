@@ -102,12 +102,22 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
     const std::span<const ProjectionResult> r = b.newton.project(field_, b.starts, b.options);
     b.landed.clear();
     for (std::size_t k = 0; k < b.legging.size(); ++k) {
-      if (r[k].ok()) b.landed.push_back(r[k].point);
+      if (r[k].ok()) b.landed.push_back(r[k].point), b.walks[b.legging[k]].start_gradient = r[k].start_gradient;
       else b.walks[b.legging[k]].failed = true, b.walks[b.legging[k]].walking = false;
     }
     measure(b.landed, b.measured);
     // Across a crease of a CSG shape the gradient turns at once; a point on the crease gets the
-    // mean of the normals on both sides, so that both sides see it as theirs.
+    // mean of the normals on both sides, so that both sides see it as theirs. Newton runs along
+    // the gradient, which turns little on the way over a smooth surface; a gradient at the start
+    // that points elsewhere than the one where it lands means the path crossed a crease, and the
+    // landing point may lie on it even though its own gradient is one side's (at a tie of max or
+    // min, the cube's edges, the gradient is one piece's, the same as the origin's face).
+    const auto probe = [&](const Walk& w) {
+      const Vec3& g0 = w.start_gradient;
+      const Vec3& landed = w.placed->curvature.normal;
+      const bool turned = !(g0.squaredNorm() > 0) || g0.normalized().dot(landed) < kCreaseCosine;
+      return turned || !same_side(w.normal, landed);
+    };
     b.crease_at.clear();
     b.crease_n.clear();
     std::size_t m = 0;
@@ -116,7 +126,7 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
       if (w.failed) continue;
       w.placed = std::move(b.measured[m++]);
       if (!w.placed) w.failed = true, w.walking = false;
-      else if (!same_side(w.normal, w.placed->curvature.normal))
+      else if (probe(w))
         b.crease_at.push_back(w.placed->point), b.crease_n.push_back(w.placed->curvature.normal);
     }
     crease_normals(b.crease_at, b.crease_n, b.creases);
@@ -125,15 +135,25 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
       Walk& w = b.walks[i];
       if (w.failed) continue;
       bool on_crease = false;
-      if (!same_side(w.normal, w.placed->curvature.normal)) {
+      if (probe(w)) {
         const std::optional<Vec3>& crease = b.creases[c++];
-        if (!crease || !same_side(w.normal, *crease)) {
+        if (crease) {
+          if (!same_side(w.normal, *crease)) {
+            w.failed = true, w.walking = false;
+            continue;
+          }
+          w.placed->curvature.normal = *crease;
+          ++w.creases;
+          on_crease = true;
+        } else if (!same_side(w.normal, w.placed->curvature.normal)) {
           w.failed = true, w.walking = false;
           continue;
         }
-        w.placed->curvature.normal = *crease;
-        ++w.creases;
-        on_crease = true;
+      }
+      if (leg == 0 && !on_crease && d > s_.sizing.min_edge &&
+          w.normal.dot(w.placed->curvature.normal) < kMaxTurnCosine) {
+        w.failed = true, w.walking = false;
+        continue;
       }
       const double moved = (w.placed->point - w.at).norm();
       w.left -= moved;

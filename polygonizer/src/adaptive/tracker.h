@@ -57,6 +57,18 @@ inline constexpr std::uint64_t kSearchWindow = 4096;
 // Normals whose angle is below arccos of this belong to one side of the surface (see same_side).
 inline constexpr double kSameSideCosine = 0;
 
+// A placement whose normal turned more than 75 degrees from its origin's is refused above
+// min_edge, so that the expansion retries at half the length (a walk over a crease is exempt:
+// from the crease point on, the turn is half the crease's angle, which is right). Such a turn is beyond what the sizing plans (one radian
+// of turn per edge at factor 1, less at higher factors) and means one of two things: Newton
+// jumped across a gap narrower than the step onto another sheet, whose normal near the gap is
+// at about 90 degrees (two spheres 1e-3 apart at factor 1 came out as triangles with corners
+// on both spheres), or the curvature grows between the two points (a neck between blobs) and
+// the tangent-plane tests, which see the new point foreshortened to cos 75 = 0.26, fold the
+// mesh over. At factor 2 and above the torus and the bunny never turn that much. Bridges obey
+// the same bound (can_bridge).
+inline constexpr double kMaxTurnCosine = 0.2588;
+
 class Tracker {
  public:
   Tracker(const Field& field, const Settings& settings, Mesh& mesh);
@@ -103,6 +115,7 @@ class Tracker {
   // One new point's walk along the surface (see place_points).
   struct Walk {
     Vec3 at, normal, heading;
+    Vec3 start_gradient;  // where this leg's Newton started (ProjectionResult::start_gradient)
     double left = 0;
     std::optional<Placed> placed;
     bool walking = true, failed = false;

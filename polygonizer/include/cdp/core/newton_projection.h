@@ -29,6 +29,9 @@ struct ProjectionResult {
   ProjectionStatus status = ProjectionStatus::MaxIterations;
   int iterations = 0;
   double residual = 0;  // |F| / |grad F| at `point`
+  // The gradient at `start` (the first Newton evaluation; zero if there was none). Where it and
+  // the gradient at `point` point different ways, the projection crossed a crease of the field.
+  Vec3 start_gradient = Vec3::Zero();
   bool ok() const { return status == ProjectionStatus::Converged; }
 };
 
