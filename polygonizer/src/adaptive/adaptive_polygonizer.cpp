@@ -219,7 +219,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   }
 
   if (s.curvature_properties) {
-    if (quality.moves + quality.collapses + quality.splits == 0) {
+    if (quality.moves + quality.collapses + quality.splits + quality.inserts == 0) {
       mesh.vertex_scalars["mac"] = tracker.vertex_mac();
       mesh.vertex_scalars["shape_index"] = tracker.vertex_shape_index();
     } else {
@@ -279,6 +279,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["quality.moves"] = quality.moves;
   st.extra["quality.collapses"] = quality.collapses;
   st.extra["quality.splits"] = quality.splits;
+  st.extra["quality.inserts"] = quality.inserts;
   st.extra["quality.crease_vertices"] = quality.crease_vertices;
   st.extra["quality.over_tolerance"] = quality.over_tolerance;
   st.extra["triangle_count_rule"] = to_string(s.rule);

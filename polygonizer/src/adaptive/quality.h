@@ -22,7 +22,10 @@ namespace cdp::adaptive {
 struct QualityReport {
   std::size_t bad_before = 0;  // triangles under the angle bound before the pass
   std::size_t bad_after = 0;
-  std::size_t flips = 0, moves = 0, collapses = 0, splits = 0;
+  std::size_t flips = 0, moves = 0, collapses = 0;
+  // Vertices added: splits of edges for the tolerance, inserts in the quad around a cap's
+  // longest edge for the angles.
+  std::size_t splits = 0, inserts = 0;
   // Vertices found on a crease (never moved, their edges never flipped).
   std::size_t crease_vertices = 0;
   // Triangles whose sampled distance to the surface still exceeds the tolerance (0 unless the
