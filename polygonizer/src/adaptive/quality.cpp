@@ -261,14 +261,15 @@ class Improver {
     for (int w : U)
       if (w != a && w != b) d = w;
     if (d < 0 || d == c || has_edge(c, d)) return false;
-    // A flip must not remove a crease edge nor cut across one.
-    const bool creased = on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d);
-    if (creased && !(face_normal(T).dot(face_normal(U)) > kCreaseFlatCos)) return false;
+    // The tests that need no field evaluation first.
     const Tri n1{c, a, d}, n2{d, b, c};
     const double before = std::min(tri_min_angle(T), tri_min_angle(U));
     const double after = std::min(tri_min_angle(n1), tri_min_angle(n2));
     if (!(after > before + kMinGain)) return false;
     if (!faces_surface(n1) || !faces_surface(n2)) return false;
+    // A flip must not remove a crease edge nor cut across one.
+    const bool creased = on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d);
+    if (creased && !(face_normal(T).dot(face_normal(U)) > kCreaseFlatCos)) return false;
     // The new diagonal may lie no farther from the surface than the worst edge of the quad.
     const auto mid = [&](int x, int y) { return std::abs(signed_distance(0.5 * (P(x) + P(y)))); };
     const double allowed = std::max({mid(a, b), mid(a, d), mid(d, b), mid(b, c), mid(c, a)});
@@ -324,6 +325,15 @@ class Improver {
     for (int u : vt_[v]) before = std::min(before, tri_min_angle(m_.triangles[u]));
     for (const double share : kMoveShares)
     for (const Vec3& step : steps) {
+      // Newton moves the point by about the sagitta of its edges, which changes the angles
+      // little: a tangential position that does not raise them is not worth projecting.
+      {
+        m_.positions[v] = x + share * step;
+        double guess = std::numeric_limits<double>::infinity();
+        for (int u : vt_[v]) guess = std::min(guess, tri_min_angle(m_.triangles[u]));
+        m_.positions[v] = x;
+        if (!(guess > before)) continue;
+      }
       ProjectionOptions po;
       po.tolerance = 1e-10 * o_.diagonal;
       po.max_step = shortest;
