@@ -118,13 +118,23 @@ class Improver {
     const double l = n.norm();
     return l > 0 ? Vec3(n / l) : Vec3::Zero();
   }
-  // A triangle that faces like the surface at each corner (a zero-area one does not).
-  bool faces_surface(const Tri& t) const {
+  // The smallest cosine between the triangle's normal and its corners' surface normals (0 for
+  // a zero-area triangle).
+  double facing(const Tri& t) const {
     const Vec3 n = face_normal(t);
-    for (int v : t)
-      if (!(n.dot(m_.normals[v]) > kFaceNormalCos)) return false;
-    return true;
+    double worst = 1;
+    for (int v : t) worst = std::min(worst, n.dot(m_.normals[v]));
+    return worst;
   }
+  // What new triangles must exceed: kFaceNormalCos, or, where the triangles they replace already
+  // faced the surface worse (a fold the fronts left on a sharply curved spot of a coarse mesh),
+  // the worst of those: an operation never makes the facing worse, and may repair it.
+  double facing_floor(const std::vector<int>& replaced) const {
+    double floor = kFaceNormalCos;
+    for (int t : replaced) floor = std::min(floor, facing(m_.triangles[t]));
+    return floor;
+  }
+  bool faces_surface(const Tri& t, double floor) const { return facing(t) > floor; }
   // Signed first-order distance F / |grad F| of p to the surface.
   double signed_distance(const Vec3& p) const {
     Vec3 g;
@@ -266,7 +276,8 @@ class Improver {
     const double before = std::min(tri_min_angle(T), tri_min_angle(U));
     const double after = std::min(tri_min_angle(n1), tri_min_angle(n2));
     if (!(after > before + kMinGain)) return false;
-    if (!faces_surface(n1) || !faces_surface(n2)) return false;
+    const double floor = facing_floor({t, u});
+    if (!faces_surface(n1, floor) || !faces_surface(n2, floor)) return false;
     // A flip must not remove a crease edge nor cut across one.
     const bool creased = on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d);
     if (creased && !(face_normal(T).dot(face_normal(U)) > kCreaseFlatCos)) return false;
@@ -346,18 +357,19 @@ class Improver {
       const Vec3 ng = g.normalized();
       if (!(ng.dot(n) > kMoveNormalCos)) continue;
       // The star with v at its new place.
+      const double floor = facing_floor(vt_[v]);
       const Vec3 saved = m_.positions[v], saved_n = m_.normals[v];
       m_.positions[v] = pr.point;
       m_.normals[v] = ng;
       double after = std::numeric_limits<double>::infinity();
-      bool facing = true;
+      bool faces = true;
       std::vector<Tri> star;
       for (int u : vt_[v]) {
         star.push_back(m_.triangles[u]);
         after = std::min(after, tri_min_angle(m_.triangles[u]));
-        facing = facing && faces_surface(m_.triangles[u]);
+        faces = faces && faces_surface(m_.triangles[u], floor);
       }
-      bool ok = after > before + kMinGain && facing;
+      bool ok = after > before + kMinGain && faces;
       if (ok) {
         // The tolerance test reads the old star at the old place.
         m_.positions[v] = saved;
@@ -451,16 +463,17 @@ class Improver {
       added.push_back(x3);
       kept.push_back(w);
     }
+    const double floor = facing_floor(old);
     const Vec3 saved = m_.positions[a], saved_n = m_.normals[a];
     m_.positions[a] = x;
     m_.normals[a] = nx;
     double after = std::numeric_limits<double>::infinity();
-    bool facing = true;
+    bool faces = true;
     for (const Tri& s : added) {
       after = std::min(after, tri_min_angle(s));
-      facing = facing && faces_surface(s);
+      faces = faces && faces_surface(s, floor);
     }
-    bool ok = after > before + kMinGain && facing;
+    bool ok = after > before + kMinGain && faces;
     double new_dist = 0;
     if (ok && o_.tolerance > 0)
       for (const Tri& s : added) new_dist = std::max(new_dist, estimate_distance(s));
@@ -530,7 +543,8 @@ class Improver {
     crease_.push_back(-1);
     const std::vector<Tri> added{{a, m, c}, {m, b, c}, {b, m, d}, {m, a, d}};
     bool ok = true;
-    for (const Tri& s : added) ok = ok && faces_surface(s);
+    const double floor = facing_floor({t, u});
+    for (const Tri& s : added) ok = ok && faces_surface(s, floor);
     if (ok && repair) {
       double after = std::numeric_limits<double>::infinity();
       for (const Tri& s : added) after = std::min(after, tri_min_angle(s));
