@@ -84,16 +84,24 @@ class Improver {
   }
 
   QualityReport run() {
-    if (o_.tolerance > 0) refine();
-    repair();
-    if (o_.tolerance > 0) {
-      // Collapses and moves keep the bound they were tested against; a last refinement covers
-      // triangles that were beyond it before the repair and stayed so.
-      refine();
+    if (!(o_.tolerance > 0)) {
       repair();
-      for (int t = 0; t < tri_count(); ++t)
-        if (alive_[t] && estimate_distance(m_.triangles[t]) > kToleranceMargin * o_.tolerance) ++r_.over_tolerance;
+      compact();
+      return r_;
     }
+    // Every triangle is checked once; after that only what an operation made or changed (the
+    // operations keep the bound they were tested against, so only triangles that were beyond it
+    // already can be beyond it after them).
+    std::vector<int> all(tri_count());
+    std::iota(all.begin(), all.end(), 0);
+    std::vector<int> over = refine(all);
+    since_check_.clear();
+    repair();
+    over = refine(merged(over, since_check_));
+    since_check_.clear();
+    repair();
+    for (int t : merged(over, since_check_))
+      if (alive_[t] && estimate_distance(m_.triangles[t]) > kToleranceMargin * o_.tolerance) ++r_.over_tolerance;
     compact();
     return r_;
   }
@@ -295,8 +303,8 @@ class Improver {
     vt_[d].push_back(t);
     hash_box(t);
     hash_box(u);
-    touched_.push_back(t);
-    touched_.push_back(u);
+    touch(t);
+    touch(u);
     ++r_.flips;
     return true;
   }
@@ -395,7 +403,7 @@ class Improver {
           crease_[v] = -1;
           for (int u : vt_[v]) {
             hash_box(u);
-            touched_.push_back(u);
+            touch(u);
           }
           ++r_.moves;
           return true;
@@ -501,7 +509,7 @@ class Improver {
     dead_vertex_.push_back(b);
     for (int w : star) {
       hash_box(w);
-      touched_.push_back(w);
+      touch(w);
     }
     ++r_.collapses;
     return true;
@@ -581,7 +589,7 @@ class Improver {
     vt_[m] = {t, t2, u, u2};
     for (int s : {t, t2, u, u2}) {
       hash_box(s);
-      touched_.push_back(s);
+      touch(s);
     }
     ++(repair ? r_.inserts : r_.splits);
     return true;
@@ -658,10 +666,23 @@ class Improver {
     r_.bad_after = bad;
   }
 
-  void refine() {
-    std::vector<int> work(tri_count());
-    std::iota(work.begin(), work.end(), 0);
+  static std::vector<int> merged(std::vector<int> a, const std::vector<int>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+    return a;
+  }
+  void touch(int t) {
+    touched_.push_back(t);
+    since_check_.push_back(t);
+  }
+
+  // Splits the triangles of `work` beyond the bound, and then those the splits made, for at
+  // most kRefineRounds rounds. Returns the triangles that may still be beyond it (a split that
+  // failed its checks, or rounds run out).
+  std::vector<int> refine(std::vector<int> work) {
     const double bound = kToleranceMargin * o_.tolerance;
+    std::vector<int> left;
     for (int round = 0; round < kRefineRounds && !work.empty(); ++round) {
       touched_.clear();
       for (int t : work) {
@@ -676,14 +697,13 @@ class Improver {
           const double l = (P(T[(e + 1) % 3]) - P(T[e])).norm();
           if (l > longest) longest = l, k = e;
         }
-        try_split(t, T[k], T[(k + 1) % 3]);
+        if (!try_split(t, T[k], T[(k + 1) % 3])) left.push_back(t);
       }
       std::sort(touched_.begin(), touched_.end());
       touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
       work = touched_;
-      // Splits leave needles at the new vertex's neighbours; a local repair of what they
-      // touched keeps the angles while the refinement goes on.
     }
+    return merged(left, work);
   }
 
   // Drops removed triangles and vertices, renumbering what is left in its order.
@@ -718,7 +738,8 @@ class Improver {
   std::vector<std::uint32_t> stamp_;
   std::uint32_t stamp_id_ = 0;
   SpatialHash hash_;
-  std::vector<int> touched_, dead_vertex_;
+  // Triangles changed in the current round, and since the last tolerance check.
+  std::vector<int> touched_, since_check_, dead_vertex_;
   QualityReport r_;
 };
 
