@@ -5,7 +5,9 @@
 // curvature. Fronts that run into themselves are split, fronts that run into other fronts are
 // merged, so cracks are resolved on the fly and no re-meshing step follows. Beyond the paper:
 // every component is meshed (seeds from a coarse sign-change grid), edge lengths can follow a
-// chord-deviation tolerance instead of the heuristic factor, and every loop is bounded.
+// tolerance instead of the heuristic factor, and every loop is bounded; by default
+// (Variant::Improved) the few slivers the fronts leave are repaired locally and the tolerance is
+// a bound on the distance between mesh and surface (Variant::Paper: the algorithm as printed).
 // See polygonizer/README.md, section "Adaptive polygonizer".
 #pragma once
 
