@@ -164,6 +164,9 @@ int main(int argc, char** argv) {
                 num(metrics["near_equilateral_fraction"]), num(metrics["min_angle_deg"]["min"]),
                 metrics["topology"]["genus"].get<int>(),
                 metrics["topology"]["self_intersections"]["pairs"].get<std::size_t>());
+    const auto& under = metrics["min_angle_deg"]["share_under"];
+    std::printf("smallest angles under 10/20/30 deg: %.4f %.4f %.4f  mesh-surface distance max %.4g\n",
+                num(under["10"]), num(under["20"]), num(under["30"]), num(metrics["hausdorff_estimate"]));
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "evaluate: %s\n", e.what());

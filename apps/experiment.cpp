@@ -42,6 +42,7 @@ struct Run {
   std::string method;           // adaptive, mc, mt
   std::string parameter_name;   // factor, tolerance, cell, precision
   double parameter = 0;
+  std::string variant;          // adaptive: improved or paper (AdaptiveOptions::variant)
   std::vector<std::string> polygonize_args;  // after FIELD -o MESH
 };
 
@@ -126,7 +127,8 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
 
   for (auto& run : r.objects("runs")) {
     const std::string method = run.choice("method", {"adaptive", "mc", "mt"});
-    if (method == "adaptive") run.check_keys({"method", "label", "factor", "tolerance", "min_edge", "max_edge"});
+    if (method == "adaptive")
+      run.check_keys({"method", "label", "factor", "tolerance", "min_edge", "max_edge", "variant"});
     else run.check_keys({"method", "label", "cell", "precision", "traversal"});
     std::vector<std::string> sweep_keys =
         method == "adaptive" ? std::vector<std::string>{"factor", "tolerance"} : std::vector<std::string>{"cell", "precision"};
@@ -140,7 +142,11 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
     const std::vector<double> values = numbers_or_number(run, key);
     std::vector<std::string> fixed{"--method", method};
     std::vector<std::string> known{"method", sweep_keys[0], sweep_keys[1]};
+    std::string variant;
     if (method == "adaptive") {
+      known.push_back("variant");
+      variant = run.choice("variant", {"improved", "paper"}, "improved");
+      fixed.insert(fixed.end(), {"--variant", variant});
       for (const char* k : {"min_edge", "max_edge"}) {
         known.push_back(k);
         if (run.has(k)) {
@@ -168,6 +174,7 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
       x.method = method;
       x.parameter_name = key;
       x.parameter = v;
+      x.variant = variant;
       x.id = method + (label.empty() ? "" : "_" + label) + "_" + key + format_number(v);
       x.polygonize_args = fixed;
       x.polygonize_args.insert(x.polygonize_args.end(), {"--" + key, format_number(v)});
@@ -340,6 +347,7 @@ int summarize(const Experiment& e, const Paths& p) {
   csv << ",triangles_per_second,evaluations_per_triangle\n";
   for (const Run& r : e.runs) {
     nlohmann::json run{{"id", r.id}, {"method", r.method}, {"parameter_name", r.parameter_name}, {"parameter", r.parameter}};
+    if (!r.variant.empty()) run["variant"] = r.variant;
     run["stats"] = read_optional(p.run_dir(r) / "stats.json");
     run["metrics"] = read_optional(p.run_dir(r) / "metrics.json");
     const nlohmann::json status = read_optional(p.run_dir(r) / "status.json");

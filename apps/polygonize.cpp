@@ -9,6 +9,7 @@
 #include <cdp/baselines/marching_tetrahedra.h>
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/errors.h>
+#include <cdp/core/mesh_angles.h>
 #include <cdp/io/atomic_write.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/io/mesh_io.h>
@@ -107,6 +108,14 @@ int main(int argc, char** argv) {
         ->capture_default_str()
         ->type_name("RULE")
         ->check(CLI::IsMember({"hartmann", "paper"}));
+    std::string variant = "improved";
+    adaptive_group
+        ->add_option("--variant", variant,
+                     "improved (the paper plus grading, local repair of triangles under 30 degrees and a "
+                     "--tolerance that bounds the distance) or paper (the algorithm as printed)")
+        ->capture_default_str()
+        ->type_name("NAME")
+        ->check(CLI::IsMember({"improved", "paper"}));
     adaptive_group->add_flag("--curvature", adaptive_options.curvature_properties,
                              "write mac and shape_index per vertex (PLY)");
 
@@ -156,6 +165,7 @@ int main(int argc, char** argv) {
     if (adaptive) {
       cdp::AdaptiveOptions& o = adaptive_options;
       if (tolerance->count() > 0) o.sizing = cdp::SizingMode::Tolerance;
+      o.variant = variant == "paper" ? cdp::Variant::Paper : cdp::Variant::Improved;
       o.triangle_count = triangle_count == "paper" ? cdp::TriangleCountRule::PaperFloor : cdp::TriangleCountRule::Hartmann;
       if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
       if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
@@ -175,6 +185,17 @@ int main(int argc, char** argv) {
     reporter.phase("writing " + out_path);
     cdp::write_mesh(result.mesh, out_path);
     if (!stats_path.empty()) {
+      // Every method's triangles by their smallest angle (see <cdp/core/mesh_angles.h>).
+      const cdp::AngleStatistics a = cdp::angle_statistics(result.mesh);
+      auto& x = result.stats.extra;
+      x["angles.min_degrees"] = a.min_degrees;
+      x["angles.mean_min_degrees"] = a.mean_min_degrees;
+      x["angles.mean_edge_ratio"] = a.mean_edge_ratio;
+      x["angles.share_under_10"] = a.share_under_10;
+      x["angles.share_under_20"] = a.share_under_20;
+      x["angles.share_under_30"] = a.share_under_30;
+      x["angles.cumulative_below_degrees"] = a.below;
+      x["angles.degenerate"] = a.degenerate;
       nlohmann::json j = cdp::to_json(result.stats);
       j["field"] = field_path;
       cdp::write_file_atomically(stats_path, j.dump(2) + "\n", "statistics");

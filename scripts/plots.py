@@ -10,7 +10,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 import results_lib as rl  # noqa: E402
 
-STYLE = {"adaptive": ("Ours (factor)", "C0", "o"), "adaptive_tolerance": ("Ours (tolerance)", "C2", "s"),
+STYLE = {"adaptive": ("Ours (factor)", "C0", "o"), "adaptive_paper": ("Ours, paper mode (factor)", "C4", "D"),
+         "adaptive_tolerance": ("Ours (tolerance)", "C2", "s"),
          "mt": ("Marching Tetrahedra", "C3", "^"), "mc": ("Marching Cubes", "C1", "v")}
 PAPER = {"adaptive": ("Paper: ours", "C0"), "mt": ("Paper: MT", "C3")}
 
@@ -65,6 +66,29 @@ def histogram_plot(rows, path):
     plt.close(fig)
 
 
+def angle_plot(rows, path, factor=3, precision=3):
+    """Cumulative histogram of the triangles' smallest angles: the adaptive default and paper mode at
+    `factor`, MT and MC at `precision` (rows of similar triangle counts on the bunny VIS-800)."""
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    for m, want in (("adaptive", factor), ("adaptive_paper", factor), ("mt", precision), ("mc", precision)):
+        for r in rows.get(m, []):
+            c = r.get("angle_cumulative")
+            if r["parameter"] != want or r["status"] != "ok" or not isinstance(c, list) or not c or not c[-1]:
+                continue
+            label, color, _ = STYLE[m]
+            ax.step(range(1, len(c) + 1), [v / c[-1] for v in c], where="post", color=color,
+                    label="{} {} {:g}".format(label, r["parameter_name"], r["parameter"]))
+    ax.set_xlabel("smallest angle of a triangle (degrees)")
+    ax.set_ylabel("share of triangles with a smaller one")
+    ax.set_yscale("symlog", linthresh=1e-3)
+    ax.set_title("Smallest angles, bunny VIS-800 (cumulative)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--results", default=os.path.join(rl.ROOT, "results"))
@@ -81,6 +105,7 @@ def main():
     error_plot(rows, paper, "time_ms", "time_ms", "time (ms)", os.path.join(out, "time.png"),
                "Polygonization time (paper: P4 1.8 GHz)")
     histogram_plot(rows, os.path.join(out, "edge_ratio_histograms.png"))
+    angle_plot(rows, os.path.join(out, "min_angle_cumulative.png"))
     print("plots: wrote", ", ".join(sorted(os.listdir(out))))
 
 

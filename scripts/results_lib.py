@@ -72,6 +72,7 @@ def run_row(run):
     verts = number(get(st, "vertices"))
     return {
         "id": run["id"], "method": run["method"], "parameter_name": run["parameter_name"],
+        "variant": run.get("variant", ""),
         "parameter": run["parameter"], "status": run.get("status"), "reason": run.get("reason", ""),
         "time_ms": sec * 1000 if sec is not None else None,
         "triangles": tri, "vertices": verts,
@@ -101,6 +102,7 @@ def run_row(run):
         "silhouette": silhouette_fraction(m),
         "near_equilateral": number(get(m, "near_equilateral_fraction")),
         "min_angle_min": number(get(m, "min_angle_deg", "min")),
+        "angle_cumulative": get(m, "min_angle_deg", "cumulative_below_degrees"),
         "min_angle_mean": number(get(m, "min_angle_deg", "mean")),
         "closed": get(m, "topology", "closed"),
         "manifold": get(m, "topology", "manifold"),
@@ -113,7 +115,8 @@ def rows_by_method(summary):
     out = {}
     for run in summary["runs"]:
         r = run_row(run)
-        key = r["method"] + ("_tolerance" if r["parameter_name"] == "tolerance" else "")
+        key = (r["method"] + ("_paper" if r["variant"] == "paper" else "") +
+               ("_tolerance" if r["parameter_name"] == "tolerance" else ""))
         out.setdefault(key, []).append(r)
     for rows in out.values():
         rows.sort(key=lambda r: r["parameter"])

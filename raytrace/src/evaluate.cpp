@@ -33,6 +33,9 @@ nlohmann::json to_json(const MeshQuality& q) {
   j["near_equilateral_fraction"] = q.near_equilateral_fraction;
   j["near_equilateral_definition"] = "longest / shortest edge <= " + nlohmann::json(q.near_equilateral_ratio).dump();
   j["min_angle_deg"] = to_json(q.min_angle_deg);
+  j["min_angle_deg"]["share_under"] = {{"10", q.angles.share_under_10}, {"20", q.angles.share_under_20},
+                                       {"30", q.angles.share_under_30}};
+  j["min_angle_deg"]["cumulative_below_degrees"] = q.angles.below;
   j["radius_ratio"] = to_json(q.radius_ratio);
   j["edge_length"] = to_json(q.edge_length);
   const MeshTopology& t = q.topology;

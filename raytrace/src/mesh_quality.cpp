@@ -57,6 +57,7 @@ MeshQuality compute_mesh_quality(const Mesh& mesh, const MeshQualityOptions& opt
   q.edge_ratio = sample_stats(ratios);
   q.near_equilateral_fraction = ratios.empty() ? 0.0 : static_cast<double>(near_equilateral) / static_cast<double>(ratios.size());
   q.min_angle_deg = sample_stats(min_angles);
+  q.angles = angle_statistics(mesh);
   q.radius_ratio = sample_stats(radius_ratios);
   q.edge_length = sample_stats(lengths);
   q.topology = analyze_topology(mesh);

@@ -106,7 +106,7 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     // Grading: a new point may ask for at most kGrowth times the length it was placed at, so
     // that a curvature estimate that drops abruptly (MPU's Hessian is only piecewise smooth)
     // cannot put long edges right beside short ones.
-    target_[v] = std::min(target_[v], kGrowth * delta);
+    if (s_.grading) target_[v] = std::min(target_[v], kGrowth * delta);
     vs.push_back(v);
   }
   emit_triangle(n.vertex, vb, vs.front());

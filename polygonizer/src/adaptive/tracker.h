@@ -33,6 +33,8 @@ struct Settings {
   std::size_t max_triangles = 0;
   std::size_t max_steps = 0;
   bool curvature_properties = false;
+  // Variant::Improved's additions inside the tracker (Variant::Paper turns them off).
+  bool grading = true;
   double diagonal = 1;
   // Cell size of the spatial hashes: about a typical edge, so that a query visits a few cells
   // holding a few points each whatever the density.

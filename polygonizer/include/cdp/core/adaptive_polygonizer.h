@@ -5,7 +5,9 @@
 // curvature. Fronts that run into themselves are split, fronts that run into other fronts are
 // merged, so cracks are resolved on the fly and no re-meshing step follows. Beyond the paper:
 // every component is meshed (seeds from a coarse sign-change grid), edge lengths can follow a
-// chord-deviation tolerance instead of the heuristic factor, and every loop is bounded.
+// tolerance instead of the heuristic factor, and every loop is bounded; by default
+// (Variant::Improved) the few slivers the fronts leave are repaired locally and the tolerance is
+// a bound on the distance between mesh and surface (Variant::Paper: the algorithm as printed).
 // See polygonizer/README.md, section "Adaptive polygonizer".
 #pragma once
 
@@ -32,12 +34,29 @@ enum class TriangleCountRule {
   Hartmann,
 };
 
+// Which algorithm runs.
+enum class Variant {
+  // The paper's tracker with this project's additions for the triangles' shape and the
+  // tolerance: the grading of new points' edge lengths, the local repair of triangles whose
+  // smallest angle is under 30 degrees (edge flips, tangential vertex moves back onto the surface,
+  // collapses of needles' short edges; src/adaptive/quality.h), and with SizingMode::Tolerance a
+  // sizing margin plus splits of triangles sampled beyond the tolerance, so that it bounds the
+  // distance between mesh and surface.
+  Improved,
+  // The algorithm as printed (Figure 6 with Hartmann's triangle count, see triangle_count),
+  // none of the additions above: what the paper's method alone gives.
+  Paper,
+};
+
 struct AdaptiveOptions {
+  Variant variant = Variant::Improved;
   SizingMode sizing = SizingMode::Factor;
   // The paper's heuristic factor k: edge length = r_min / k. Used in SizingMode::Factor.
   double factor = 2.0;
-  // Target chord deviation eps, used in SizingMode::Tolerance. Non-positive: 1e-3 of the
-  // bounding-box diagonal.
+  // Target distance eps, used in SizingMode::Tolerance. Non-positive: 1e-3 of the bounding-box
+  // diagonal. Variant::Improved: the largest distance between mesh and surface (sampled over
+  // every triangle, see src/adaptive/quality.h) is at most eps. Variant::Paper: eps is the
+  // sagitta of a chord at each point's smallest radius, which the mesh can exceed 2-4 times.
   double tolerance = 0;
   // Edge-length clamps. Non-positive: min_edge = 2e-3 and max_edge = 0.1 of the field's
   // bounding-box diagonal.
@@ -78,10 +97,13 @@ struct AdaptiveOptions {
 // the finished mesh fails the checks above (naming the place),
 // LimitExceededError when a bound is hit, InvalidInputError for invalid options.
 // stats.extra holds "seeds" (seeds meshed from), "steps", "min_angle_degrees", "edge_length"
-// ({"min", "max"} after clamping), "triangle_count_rule" and "sizing".
+// ({"min", "max"} after clamping), "triangle_count_rule", "sizing", "variant", the additions in
+// force ("grading", "quality_repair", "tolerance_refinement": 0 or 1) and the repair's counts
+// ("quality.flips", "quality.moves", "quality.collapses", "quality.splits", ...).
 PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& options = {});
 
 const char* to_string(SizingMode mode);
 const char* to_string(TriangleCountRule rule);
+const char* to_string(Variant variant);
 
 }  // namespace cdp

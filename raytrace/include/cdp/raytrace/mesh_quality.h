@@ -5,6 +5,7 @@
 #include <cdp/raytrace/accuracy.h>
 
 #include <cdp/core/mesh.h>
+#include <cdp/core/mesh_angles.h>
 #include <cdp/core/mesh_topology.h>
 
 #include <vector>
@@ -35,6 +36,7 @@ struct MeshQuality {
   std::vector<double> share_thresholds;   // as in the options
   std::vector<double> shares_at_most;     // of the non-degenerate triangles, one per threshold
   SampleStats min_angle_deg;    // smallest angle of each triangle
+  AngleStatistics angles;       // the same angles: shares under 10, 20, 30 degrees, cumulative histogram
   SampleStats radius_ratio;     // 2 r_in / r_circ: 1 equilateral, 0 degenerate
   SampleStats edge_length;      // over triangle sides (each shared edge counted per triangle)
   MeshTopology topology;

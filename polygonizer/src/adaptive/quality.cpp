@@ -1,0 +1,756 @@
+#include "quality.h"
+
+#include "spatial_hash.h"
+
+#include <cdp/core/errors.h>
+#include <cdp/core/newton_projection.h>
+#include <cdp/core/triangle_intersection.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <numeric>
+#include <vector>
+
+namespace cdp::adaptive {
+
+namespace {
+
+// Rounds over the work list. Each round visits every triangle still under the bound once and
+// every accepted operation raises the smallest angle it touches by kMinGain, so the pass ends
+// on its own; the bound caps the cost (measured: the bunny VIS-800 and tanglecube settle in
+// under 10 rounds).
+constexpr int kQualityRounds = 24;
+// An operation must raise the smallest angle it touches by at least a quarter of a degree:
+// operations cannot undo each other on floating-point ties, and a vertex cannot creep by tiny
+// moves round after round while the stronger operations further down the list wait.
+constexpr double kMinGain = 0.25 * 3.14159265358979323846 / 180;
+// Same crease test as the tracker's (tracker.cpp): gradients more than 10 degrees apart across a
+// probe 1e-7 of the diagonal long mean a crease, not curvature.
+constexpr double kCreaseProbe = 1e-7;
+constexpr double kCreaseCosine = 0.985;
+// A vertex whose stored normal (the tracker's mean of both sides on a crease) is this far from
+// its own gradient lies on a crease too.
+constexpr double kCreaseNormalCosine = 0.985;
+// A new triangle must face like the surface at its corners: its normal within about 78 degrees
+// of each corner's surface normal. Far looser than the surface's own turn over one edge (under
+// 60 degrees at factor 1, where an edge is one radius long), so it only refuses folds.
+constexpr double kFaceNormalCos = 0.2;
+// Where a crease vertex is among a flip's four corners, the two triangles must be this close to
+// one plane (about 10 degrees), so that no flip cuts across a crease.
+constexpr double kCreaseFlatCos = 0.985;
+// A moved vertex keeps its surface normal within about 30 degrees: Newton must land it on the
+// same sheet and the same side of any crease nearby.
+constexpr double kMoveNormalCos = 0.866;
+// Tangential moves tried, as shares of the way to each target (see try_move).
+constexpr double kMoveShares[] = {1.0, 0.5, 0.25};
+// A needle's shortest edge is collapsed when it is shorter than this share of the triangle's
+// second-shortest edge (the other ops cannot open an angle opposite an edge that short).
+constexpr double kNeedleShare = 0.5;
+// Distance sampling with a tolerance: the largest distance must come out at most this share of
+// the tolerance. The estimate interpolates the distances at the edge midpoints quadratically
+// and scales it by how far the centroid's measured distance exceeds the interpolation's, which
+// captures the sagitta of a curved patch to second order; the 10% margin covers the
+// third-order remainder (measured under 4% on the torus and tanglecube at eps = 1e-2).
+constexpr double kToleranceMargin = 0.9;
+// Rounds of splitting triangles beyond the tolerance; each round halves the longest edge of
+// every offending triangle, and 24 halvings take any edge below min_edge.
+constexpr int kRefineRounds = 24;
+
+double angle_at(const Vec3& p, const Vec3& q, const Vec3& r) {
+  const Vec3 u = q - p, v = r - p;
+  return std::atan2(u.cross(v).norm(), u.dot(v));
+}
+
+double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
+}
+
+using Tri = std::array<int, 3>;
+
+class Improver {
+ public:
+  Improver(const Field& field, Mesh& mesh, const QualityOptions& o)
+      : field_(field), m_(mesh), o_(o), vt_(mesh.positions.size()), crease_(mesh.positions.size(), -1),
+        alive_(mesh.triangles.size(), 1), hash_(cell_size(mesh)) {
+    for (int t = 0; t < static_cast<int>(m_.triangles.size()); ++t) {
+      for (int v : m_.triangles[t]) vt_[v].push_back(t);
+      hash_box(t);
+    }
+    stamp_.assign(m_.triangles.size(), 0);
+  }
+
+  QualityReport run() {
+    if (!(o_.tolerance > 0)) {
+      repair();
+      compact();
+      return r_;
+    }
+    // Every triangle is checked once; after that only what an operation made or changed (the
+    // operations keep the bound they were tested against, so only triangles that were beyond it
+    // already can be beyond it after them).
+    std::vector<int> all(tri_count());
+    std::iota(all.begin(), all.end(), 0);
+    std::vector<int> over = refine(all);
+    since_check_.clear();
+    repair();
+    over = refine(merged(over, since_check_));
+    since_check_.clear();
+    repair();
+    for (int t : merged(over, since_check_))
+      if (alive_[t] && estimate_distance(m_.triangles[t]) > kToleranceMargin * o_.tolerance) ++r_.over_tolerance;
+    compact();
+    return r_;
+  }
+
+ private:
+  // ---- geometry
+  static double cell_size(const Mesh& m) {
+    // About two typical edges, so that a query box around a new triangle touches a few cells.
+    std::vector<double> lengths;
+    const std::size_t stride = std::max<std::size_t>(1, m.triangles.size() / 256);
+    for (std::size_t t = 0; t < m.triangles.size(); t += stride)
+      lengths.push_back((m.positions[m.triangles[t][0]] - m.positions[m.triangles[t][1]]).norm());
+    if (lengths.empty()) return 1;
+    std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+    return std::max(2 * lengths[lengths.size() / 2], 1e-12);
+  }
+  int tri_count() const { return static_cast<int>(m_.triangles.size()); }
+  const Vec3& P(int v) const { return m_.positions[v]; }
+  double tri_min_angle(const Tri& t) const { return min_angle(P(t[0]), P(t[1]), P(t[2])); }
+  Vec3 face_normal(const Tri& t) const {
+    const Vec3 n = (P(t[1]) - P(t[0])).cross(P(t[2]) - P(t[0]));
+    const double l = n.norm();
+    return l > 0 ? Vec3(n / l) : Vec3::Zero();
+  }
+  // The smallest cosine between the triangle's normal and its corners' surface normals (0 for
+  // a zero-area triangle).
+  double facing(const Tri& t) const {
+    const Vec3 n = face_normal(t);
+    double worst = 1;
+    for (int v : t) worst = std::min(worst, n.dot(m_.normals[v]));
+    return worst;
+  }
+  // What new triangles must exceed: kFaceNormalCos, or, where the triangles they replace already
+  // faced the surface worse (a fold the fronts left on a sharply curved spot of a coarse mesh),
+  // the worst of those: an operation never makes the facing worse, and may repair it.
+  double facing_floor(const std::vector<int>& replaced) const {
+    double floor = kFaceNormalCos;
+    for (int t : replaced) floor = std::min(floor, facing(m_.triangles[t]));
+    return floor;
+  }
+  bool faces_surface(const Tri& t, double floor) const { return facing(t) > floor; }
+  // Signed first-order distance F / |grad F| of p to the surface.
+  double signed_distance(const Vec3& p) const {
+    Vec3 g;
+    const double f = field_.value_gradient(p, g);
+    const double l = g.norm();
+    return l > 0 ? f / l : std::numeric_limits<double>::infinity();
+  }
+  // The largest distance between triangle t and the surface, estimated from the edge midpoints
+  // and the centroid (see kToleranceMargin).
+  double estimate_distance(const Tri& t) const {
+    const Vec3 &a = P(t[0]), &b = P(t[1]), &c = P(t[2]);
+    const double mab = signed_distance(0.5 * (a + b)), mbc = signed_distance(0.5 * (b + c)),
+                 mca = signed_distance(0.5 * (c + a));
+    const double centroid = signed_distance((a + b + c) / 3);
+    if (!std::isfinite(mab + mbc + mca + centroid)) return std::numeric_limits<double>::infinity();
+    // The quadratic through 0 at the corners and these at the midpoints, sampled on a grid of
+    // step 1/12 (its maximum lies within 1% of a grid point's).
+    constexpr int kGrid = 12;
+    double q_max = 0;
+    for (int i = 0; i <= kGrid; ++i)
+      for (int j = 0; i + j <= kGrid; ++j) {
+        const double la = double(i) / kGrid, lb = double(j) / kGrid, lc = 1 - la - lb;
+        q_max = std::max(q_max, std::abs(4 * (mab * la * lb + mbc * lb * lc + mca * lc * la)));
+      }
+    const double predicted = std::abs(4.0 / 9.0 * (mab + mbc + mca));
+    const double scale = predicted > 0 ? std::max(1.0, std::abs(centroid) / predicted) : 1.0;
+    return std::max({q_max * scale, std::abs(centroid), std::abs(mab), std::abs(mbc), std::abs(mca)});
+  }
+  // With a tolerance: new triangles may be no farther from the surface than the tolerance or
+  // (before the refinement has run) than the worst of the triangles they replace.
+  bool keeps_tolerance(const std::vector<Tri>& added, const std::vector<int>& removed) const {
+    if (!(o_.tolerance > 0)) return true;
+    double allowed = kToleranceMargin * o_.tolerance;
+    double worst_new = 0;
+    for (const Tri& t : added) worst_new = std::max(worst_new, estimate_distance(t));
+    if (worst_new <= allowed) return true;
+    for (int t : removed) allowed = std::max(allowed, estimate_distance(m_.triangles[t]));
+    return worst_new <= allowed;
+  }
+
+  // ---- crease vertices
+  bool on_crease(int v) {
+    if (crease_[v] >= 0) return crease_[v];
+    const Vec3& x = P(v);
+    Vec3 g0;
+    field_.value_gradient(x, g0);
+    bool crease = !(g0.squaredNorm() > 0) || !(g0.normalized().dot(m_.normals[v]) > kCreaseNormalCosine);
+    if (!crease) {
+      const double eps = kCreaseProbe * o_.diagonal;
+      const Vec3 n = g0.normalized();
+      const Vec3 g1 = field_.gradient(x + eps * n), g2 = field_.gradient(x - eps * n);
+      crease = !(g1.squaredNorm() > 0 && g2.squaredNorm() > 0) ||
+               !(g1.normalized().dot(g2.normalized()) > kCreaseCosine);
+    }
+    crease_[v] = crease;
+    if (crease) ++r_.crease_vertices;
+    return crease;
+  }
+
+  // ---- adjacency
+  // The triangle other than t on edge (a, b), or -1.
+  int across(int t, int a, int b) const {
+    int found = -1;
+    for (int u : vt_[a]) {
+      if (u == t || !alive_[u]) continue;
+      const Tri& x = m_.triangles[u];
+      if (x[0] == b || x[1] == b || x[2] == b) {
+        if (found >= 0) return -1;  // not manifold here: leave it alone
+        found = u;
+      }
+    }
+    return found;
+  }
+  bool has_edge(int a, int b) const {
+    for (int u : vt_[a]) {
+      const Tri& x = m_.triangles[u];
+      if (alive_[u] && (x[0] == b || x[1] == b || x[2] == b)) return true;
+    }
+    return false;
+  }
+  std::vector<int> neighbours(int v) const {
+    std::vector<int> out;
+    for (int u : vt_[v])
+      for (int w : m_.triangles[u])
+        if (w != v) out.push_back(w);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
+  static void erase_value(std::vector<int>& v, int x) {
+    const auto it = std::find(v.begin(), v.end(), x);
+    if (it != v.end()) v.erase(it);
+  }
+
+  // ---- intersections with the triangles nearby
+  void hash_box(int t) {
+    const Tri& x = m_.triangles[t];
+    const Vec3 lo = P(x[0]).cwiseMin(P(x[1])).cwiseMin(P(x[2])), hi = P(x[0]).cwiseMax(P(x[1])).cwiseMax(P(x[2]));
+    hash_.insert_box(t, lo, hi);  // stale entries of earlier shapes stay and are filtered
+  }
+  // Whether a triangle of `added` intersects a live triangle other than those in `ignored`
+  // (which the operation replaces), with the operation's positions `moved` for vertex `mv`.
+  bool intersects(const std::vector<Tri>& added, const std::vector<int>& ignored, int mv = -1,
+                  const Vec3& moved = Vec3::Zero()) {
+    const auto pos = [&](int v) -> const Vec3& { return v == mv ? moved : P(v); };
+    for (const Tri& a : added) {
+      const std::array<Vec3, 3> pa{pos(a[0]), pos(a[1]), pos(a[2])};
+      if (triangle_is_degenerate(pa[0], pa[1], pa[2])) return true;
+      const Vec3 lo = pa[0].cwiseMin(pa[1]).cwiseMin(pa[2]), hi = pa[0].cwiseMax(pa[1]).cwiseMax(pa[2]);
+      ++stamp_id_;
+      for (int t : ignored) stamp_[t] = stamp_id_;
+      const bool hit = hash_.any_in(lo, hi, [&](int u) {
+        if (stamp_[u] == stamp_id_ || !alive_[u]) return false;
+        stamp_[u] = stamp_id_;
+        const Tri& x = m_.triangles[u];
+        const std::array<Vec3, 3> pb{pos(x[0]), pos(x[1]), pos(x[2])};
+        const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
+        if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
+        return triangles_intersect(pa, pb);
+      });
+      if (hit) return true;
+    }
+    return false;
+  }
+
+  // ---- operations. Each returns whether it was applied and pushes the triangles it changed.
+  bool try_flip(int t, int k) {
+    const Tri T = m_.triangles[t];
+    const int a = T[k], b = T[(k + 1) % 3], c = T[(k + 2) % 3];
+    const int u = across(t, a, b);
+    if (u < 0) return false;
+    const Tri& U = m_.triangles[u];
+    int d = -1;
+    for (int w : U)
+      if (w != a && w != b) d = w;
+    if (d < 0 || d == c || has_edge(c, d)) return false;
+    // The tests that need no field evaluation first.
+    const Tri n1{c, a, d}, n2{d, b, c};
+    const double before = std::min(tri_min_angle(T), tri_min_angle(U));
+    const double after = std::min(tri_min_angle(n1), tri_min_angle(n2));
+    if (!(after > before + kMinGain)) return false;
+    const double floor = facing_floor({t, u});
+    if (!faces_surface(n1, floor) || !faces_surface(n2, floor)) return false;
+    // A flip must not remove a crease edge nor cut across one.
+    const bool creased = on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d);
+    if (creased && !(face_normal(T).dot(face_normal(U)) > kCreaseFlatCos)) return false;
+    // The new diagonal may lie no farther from the surface than the worst edge of the quad.
+    const auto mid = [&](int x, int y) { return std::abs(signed_distance(0.5 * (P(x) + P(y)))); };
+    const double allowed = std::max({mid(a, b), mid(a, d), mid(d, b), mid(b, c), mid(c, a)});
+    if (!(mid(c, d) <= allowed)) return false;
+    if (!keeps_tolerance({n1, n2}, {t, u})) return false;
+    if (intersects({n1, n2}, {t, u})) return false;
+    m_.triangles[t] = n1;
+    m_.triangles[u] = n2;
+    erase_value(vt_[a], u);
+    erase_value(vt_[b], t);
+    vt_[c].push_back(u);
+    vt_[d].push_back(t);
+    hash_box(t);
+    hash_box(u);
+    touch(t);
+    touch(u);
+    ++r_.flips;
+    return true;
+  }
+
+  bool try_move(int v) {
+    if (on_crease(v)) return false;
+    const std::vector<int> ring = neighbours(v);
+    if (ring.size() < 3) return false;
+    Vec3 centroid = Vec3::Zero();
+    for (int w : ring) centroid += P(w);
+    centroid /= static_cast<double>(ring.size());
+    const Vec3 x = P(v), n = m_.normals[v];
+    // Two targets: the centroid of the neighbours (Laplacian smoothing), and the mean of the
+    // apexes of equilateral triangles over the star's outer edges, which pulls v towards where
+    // each of its triangles would be equilateral and opens small angles the centroid leaves.
+    Vec3 apex_mean = Vec3::Zero();
+    int apexes = 0;
+    for (int u : vt_[v]) {
+      const Tri& t = m_.triangles[u];
+      int k = 0;
+      while (t[k] != v) ++k;
+      const Vec3 &a = P(t[(k + 1) % 3]), &b = P(t[(k + 2) % 3]);
+      const Vec3 side = n.cross(b - a);  // towards v's side of edge a -> b, seen from outside
+      if (!(side.squaredNorm() > 0)) continue;
+      apex_mean += 0.5 * (a + b) + std::sqrt(3.0) / 2 * (b - a).norm() * side.normalized();
+      ++apexes;
+    }
+    std::vector<Vec3> steps;
+    for (const Vec3& target : {centroid, apexes > 0 ? Vec3(apex_mean / apexes) : centroid}) {
+      Vec3 step = target - x;
+      step -= n * n.dot(step);
+      steps.push_back(step);
+    }
+    double shortest = std::numeric_limits<double>::infinity();
+    for (int w : ring) shortest = std::min(shortest, (P(w) - x).norm());
+    double before = std::numeric_limits<double>::infinity();
+    for (int u : vt_[v]) before = std::min(before, tri_min_angle(m_.triangles[u]));
+    for (const double share : kMoveShares)
+    for (const Vec3& step : steps) {
+      // Newton moves the point by about the sagitta of its edges, which changes the angles
+      // little: a tangential position that does not raise them is not worth projecting.
+      {
+        m_.positions[v] = x + share * step;
+        double guess = std::numeric_limits<double>::infinity();
+        for (int u : vt_[v]) guess = std::min(guess, tri_min_angle(m_.triangles[u]));
+        m_.positions[v] = x;
+        if (!(guess > before)) continue;
+      }
+      ProjectionOptions po;
+      po.tolerance = 1e-10 * o_.diagonal;
+      po.max_step = shortest;
+      po.max_travel = shortest;
+      const ProjectionResult pr = project_to_surface(field_, x + share * step, po);
+      if (!pr.ok()) continue;
+      Vec3 g;
+      field_.value_gradient(pr.point, g);
+      if (!(g.squaredNorm() > 0)) continue;
+      const Vec3 ng = g.normalized();
+      if (!(ng.dot(n) > kMoveNormalCos)) continue;
+      // The star with v at its new place.
+      const double floor = facing_floor(vt_[v]);
+      const Vec3 saved = m_.positions[v], saved_n = m_.normals[v];
+      m_.positions[v] = pr.point;
+      m_.normals[v] = ng;
+      double after = std::numeric_limits<double>::infinity();
+      bool faces = true;
+      std::vector<Tri> star;
+      for (int u : vt_[v]) {
+        star.push_back(m_.triangles[u]);
+        after = std::min(after, tri_min_angle(m_.triangles[u]));
+        faces = faces && faces_surface(m_.triangles[u], floor);
+      }
+      bool ok = after > before + kMinGain && faces;
+      if (ok) {
+        // The tolerance test reads the old star at the old place.
+        m_.positions[v] = saved;
+        m_.normals[v] = saved_n;
+        std::vector<Tri> moved_star = star;
+        const Vec3 target = pr.point;
+        m_.positions[v] = target;
+        m_.normals[v] = ng;
+        double new_dist = 0;
+        if (o_.tolerance > 0)
+          for (const Tri& s : moved_star) new_dist = std::max(new_dist, estimate_distance(s));
+        m_.positions[v] = saved;
+        m_.normals[v] = saved_n;
+        if (o_.tolerance > 0 && new_dist > kToleranceMargin * o_.tolerance) {
+          double old_dist = 0;
+          for (int u : vt_[v]) old_dist = std::max(old_dist, estimate_distance(m_.triangles[u]));
+          ok = new_dist <= old_dist;
+        }
+        if (ok) ok = !intersects(star, vt_[v], v, target);
+        if (ok) {
+          m_.positions[v] = target;
+          m_.normals[v] = ng;
+          crease_[v] = -1;
+          for (int u : vt_[v]) {
+            hash_box(u);
+            touch(u);
+          }
+          ++r_.moves;
+          return true;
+        }
+        continue;
+      }
+      m_.positions[v] = saved;
+      m_.normals[v] = saved_n;
+    }
+    return false;
+  }
+
+  // Collapses edge (a, b) of triangle t into one vertex (a keeps its index).
+  bool try_collapse(int t, int a, int b) {
+    const int u = across(t, a, b);
+    if (u < 0) return false;
+    const bool ca = on_crease(a), cb = on_crease(b);
+    if (ca && cb) return false;
+    int c = -1, d = -1;
+    for (int w : m_.triangles[t])
+      if (w != a && w != b) c = w;
+    for (int w : m_.triangles[u])
+      if (w != a && w != b) d = w;
+    // The link condition: a and b share exactly the neighbours c and d, so the collapse keeps
+    // the surface manifold and its topology; c and d keep at least three neighbours.
+    const std::vector<int> na = neighbours(a), nb = neighbours(b);
+    std::vector<int> common;
+    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
+    if (common.size() != 2 || !((common[0] == c && common[1] == d) || (common[0] == d && common[1] == c))) return false;
+    if (neighbours(c).size() < 4 || neighbours(d).size() < 4) return false;
+    // The merged vertex: a crease end stays where it is; otherwise the midpoint, on the surface.
+    Vec3 x, nx;
+    if (ca || cb) {
+      x = ca ? P(a) : P(b);
+      nx = ca ? m_.normals[a] : m_.normals[b];
+    } else {
+      ProjectionOptions po;
+      po.tolerance = 1e-10 * o_.diagonal;
+      const double l = (P(a) - P(b)).norm();
+      po.max_step = l;
+      po.max_travel = l;
+      const ProjectionResult pr = project_to_surface(field_, 0.5 * (P(a) + P(b)), po);
+      if (!pr.ok()) return false;
+      Vec3 g;
+      field_.value_gradient(pr.point, g);
+      if (!(g.squaredNorm() > 0)) return false;
+      x = pr.point;
+      nx = g.normalized();
+      if (!(nx.dot(m_.normals[a]) > kMoveNormalCos && nx.dot(m_.normals[b]) > kMoveNormalCos)) return false;
+    }
+    std::vector<int> old;  // every triangle around a or b
+    for (int w : vt_[a]) old.push_back(w);
+    for (int w : vt_[b])
+      if (std::find(old.begin(), old.end(), w) == old.end()) old.push_back(w);
+    std::sort(old.begin(), old.end());
+    double before = std::numeric_limits<double>::infinity();
+    for (int w : old) before = std::min(before, tri_min_angle(m_.triangles[w]));
+    std::vector<Tri> added;
+    std::vector<int> kept;
+    for (int w : old) {
+      if (w == t || w == u) continue;
+      Tri x3 = m_.triangles[w];
+      for (int& y : x3)
+        if (y == b) y = a;
+      added.push_back(x3);
+      kept.push_back(w);
+    }
+    const double floor = facing_floor(old);
+    const Vec3 saved = m_.positions[a], saved_n = m_.normals[a];
+    m_.positions[a] = x;
+    m_.normals[a] = nx;
+    double after = std::numeric_limits<double>::infinity();
+    bool faces = true;
+    for (const Tri& s : added) {
+      after = std::min(after, tri_min_angle(s));
+      faces = faces && faces_surface(s, floor);
+    }
+    bool ok = after > before + kMinGain && faces;
+    double new_dist = 0;
+    if (ok && o_.tolerance > 0)
+      for (const Tri& s : added) new_dist = std::max(new_dist, estimate_distance(s));
+    m_.positions[a] = saved;
+    m_.normals[a] = saved_n;
+    if (ok && o_.tolerance > 0 && new_dist > kToleranceMargin * o_.tolerance) {
+      double old_dist = 0;
+      for (int w : old) old_dist = std::max(old_dist, estimate_distance(m_.triangles[w]));
+      ok = new_dist <= old_dist;
+    }
+    if (ok) ok = !intersects(added, old, a, x);
+    if (!ok) return false;
+    m_.positions[a] = x;
+    m_.normals[a] = nx;
+    crease_[a] = ca || cb ? 1 : -1;
+    alive_[t] = alive_[u] = 0;
+    for (std::size_t i = 0; i < kept.size(); ++i) m_.triangles[kept[i]] = added[i];
+    std::vector<int> star;
+    for (int w : old)
+      if (w != t && w != u) star.push_back(w);
+    vt_[a] = star;
+    vt_[b].clear();
+    erase_value(vt_[c], t);
+    erase_value(vt_[d], u);
+    dead_vertex_.push_back(b);
+    for (int w : star) {
+      hash_box(w);
+      touch(w);
+    }
+    ++r_.collapses;
+    return true;
+  }
+
+  // Splits edge (a, b) at its midpoint moved onto the surface (the tolerance's refinement), or
+  // with `repair`, inserts a vertex at the centre of the quad of the two triangles on the edge,
+  // moved onto the surface: a cap whose flip would make a worse pair (the far apex sits near
+  // one end of the edge) opens into four triangles around it. A repair insertion must raise
+  // the smallest angle and keep the new edges no farther from the surface than the quad's.
+  bool try_split(int t, int a, int b, bool repair = false) {
+    const int u = across(t, a, b);
+    if (u < 0) return false;
+    if ((P(a) - P(b)).norm() < 2 * o_.min_edge) return false;
+    int c = -1, d = -1;
+    for (int w : m_.triangles[t])
+      if (w != a && w != b) c = w;
+    for (int w : m_.triangles[u])
+      if (w != a && w != b) d = w;
+    if (repair && (on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d))) return false;
+    ProjectionOptions po;
+    po.tolerance = 1e-10 * o_.diagonal;
+    const double l = (P(a) - P(b)).norm();
+    po.max_step = 0.5 * l;
+    po.max_travel = 0.5 * l;
+    const Vec3 start = repair ? Vec3(0.25 * (P(a) + P(b) + P(c) + P(d))) : Vec3(0.5 * (P(a) + P(b)));
+    const ProjectionResult pr = project_to_surface(field_, start, po);
+    if (!pr.ok()) return false;
+    Vec3 g;
+    field_.value_gradient(pr.point, g);
+    if (!(g.squaredNorm() > 0)) return false;
+    const Vec3 ng = g.normalized();
+    if (!(ng.dot(m_.normals[a]) > 0 && ng.dot(m_.normals[b]) > 0)) return false;
+    // t = (a, b, c) in its own rotation, u = (b, a, d).
+    const int m = static_cast<int>(m_.positions.size());
+    m_.positions.push_back(pr.point);
+    m_.normals.push_back(ng);
+    vt_.emplace_back();
+    crease_.push_back(-1);
+    const std::vector<Tri> added{{a, m, c}, {m, b, c}, {b, m, d}, {m, a, d}};
+    bool ok = true;
+    const double floor = facing_floor({t, u});
+    for (const Tri& s : added) ok = ok && faces_surface(s, floor);
+    if (ok && repair) {
+      double after = std::numeric_limits<double>::infinity();
+      for (const Tri& s : added) after = std::min(after, tri_min_angle(s));
+      ok = after > std::min(tri_min_angle(m_.triangles[t]), tri_min_angle(m_.triangles[u])) + kMinGain;
+      const auto mid = [&](int x, int y) { return std::abs(signed_distance(0.5 * (P(x) + P(y)))); };
+      const double allowed = std::max({mid(a, b), mid(a, d), mid(d, b), mid(b, c), mid(c, a)});
+      ok = ok && std::max({mid(m, a), mid(m, b), mid(m, c), mid(m, d)}) <= allowed;
+      ok = ok && keeps_tolerance(added, {t, u});
+    }
+    if (ok) ok = !intersects(added, {t, u});
+    if (!ok) {
+      m_.positions.pop_back();
+      m_.normals.pop_back();
+      vt_.pop_back();
+      crease_.pop_back();
+      return false;
+    }
+    const int t2 = tri_count(), u2 = t2 + 1;
+    m_.triangles[t] = added[0];
+    m_.triangles.push_back(added[1]);
+    m_.triangles[u] = added[2];
+    m_.triangles.push_back(added[3]);
+    alive_.push_back(1);
+    alive_.push_back(1);
+    stamp_.push_back(0);
+    stamp_.push_back(0);
+    // a: t, u2 (was t, u); b: t2, u (was t, u); c: t, t2; d: u, u2; m: all four.
+    erase_value(vt_[a], u);
+    vt_[a].push_back(u2);
+    erase_value(vt_[b], t);
+    vt_[b].push_back(t2);
+    vt_[c].push_back(t2);
+    vt_[d].push_back(u2);
+    vt_[m] = {t, t2, u, u2};
+    for (int s : {t, t2, u, u2}) {
+      hash_box(s);
+      touch(s);
+    }
+    ++(repair ? r_.inserts : r_.splits);
+    return true;
+  }
+
+  // Rotates a triangle so that the edge (k, k+1) is given as (T[k], T[k+1]).
+  bool repair_triangle(int t) {
+    const Tri T = m_.triangles[t];
+    const Vec3 &p0 = P(T[0]), &p1 = P(T[1]), &p2 = P(T[2]);
+    const std::array<double, 3> len{(p1 - p0).norm(), (p2 - p1).norm(), (p0 - p2).norm()};  // edge k: T[k]-T[k+1]
+    std::array<int, 3> order{0, 1, 2};
+    std::sort(order.begin(), order.end(), [&](int x, int y) { return len[x] != len[y] ? len[x] > len[y] : x < y; });
+    // A cap (an angle near 180 degrees) opens by flipping its longest edge; other edges may flip
+    // too. Flips change nothing but connectivity, so they go first.
+    for (int k : order)
+      if (try_flip(t, k)) return true;
+    // A needle: its shortest edge goes.
+    const int shortest = order[2];
+    if (len[shortest] < kNeedleShare * len[order[1]] &&
+        try_collapse(t, T[shortest], T[(shortest + 1) % 3]))
+      return true;
+    // Otherwise move a corner: the one at the smallest angle first.
+    std::array<std::pair<double, int>, 3> corners{};
+    for (int k = 0; k < 3; ++k) corners[k] = {angle_at(P(T[k]), P(T[(k + 1) % 3]), P(T[(k + 2) % 3])), k};
+    std::sort(corners.begin(), corners.end());
+    for (const auto& [angle, k] : corners)
+      if (try_move(T[k])) return true;
+    // Then the neighbours of the corners (the second ring), which reshape it from outside.
+    for (int v : T)
+      for (int w : neighbours(v))
+        if (w != T[0] && w != T[1] && w != T[2] && try_move(w)) return true;
+    // A cap: a vertex inside the quad on its longest edge.
+    if (try_split(t, T[order[0]], T[(order[0] + 1) % 3], true)) return true;
+    // Last, removing a vertex: any edge of the triangle, shortest first, where that raises the
+    // smallest angle around (a vertex squeezed between neighbours that cannot move).
+    for (int i = 2; i >= 0; --i) {
+      const int k = order[i];
+      if (k == shortest && len[shortest] < kNeedleShare * len[order[1]]) continue;  // tried above
+      if (try_collapse(t, T[k], T[(k + 1) % 3])) return true;
+    }
+    return false;
+  }
+
+  void repair() {
+    std::vector<int> work;
+    for (int t = 0; t < tri_count(); ++t)
+      if (alive_[t] && tri_min_angle(m_.triangles[t]) < o_.improve_below) work.push_back(t);
+    r_.bad_before = std::max(r_.bad_before, work.size());
+    for (int round = 0; round < kQualityRounds && !work.empty(); ++round) {
+      std::vector<std::pair<double, int>> order;
+      for (int t : work)
+        if (alive_[t]) order.push_back({tri_min_angle(m_.triangles[t]), t});
+      std::sort(order.begin(), order.end());
+      touched_.clear();
+      bool changed = false;
+      for (const auto& [angle, t] : order) {
+        if (!alive_[t] || !(tri_min_angle(m_.triangles[t]) < o_.improve_below)) continue;
+        changed = repair_triangle(t) || changed;
+      }
+      if (!changed) break;
+      // Next round: what is still bad among the triangles visited or changed.
+      std::vector<int> next;
+      for (const auto& [angle, t] : order) next.push_back(t);
+      next.insert(next.end(), touched_.begin(), touched_.end());
+      std::sort(next.begin(), next.end());
+      next.erase(std::unique(next.begin(), next.end()), next.end());
+      work.clear();
+      for (int t : next)
+        if (alive_[t] && tri_min_angle(m_.triangles[t]) < o_.improve_below) work.push_back(t);
+    }
+    std::size_t bad = 0;
+    for (int t = 0; t < tri_count(); ++t)
+      if (alive_[t] && tri_min_angle(m_.triangles[t]) < o_.improve_below) ++bad;
+    r_.bad_after = bad;
+  }
+
+  static std::vector<int> merged(std::vector<int> a, const std::vector<int>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+    return a;
+  }
+  void touch(int t) {
+    touched_.push_back(t);
+    since_check_.push_back(t);
+  }
+
+  // Splits the triangles of `work` beyond the bound, and then those the splits made, for at
+  // most kRefineRounds rounds. Returns the triangles that may still be beyond it (a split that
+  // failed its checks, or rounds run out).
+  std::vector<int> refine(std::vector<int> work) {
+    const double bound = kToleranceMargin * o_.tolerance;
+    std::vector<int> left;
+    for (int round = 0; round < kRefineRounds && !work.empty(); ++round) {
+      touched_.clear();
+      for (int t : work) {
+        if (!alive_[t]) continue;
+        const Tri T = m_.triangles[t];
+        if (!(estimate_distance(T) > bound)) continue;
+        // Halve the longest edge; after a split the edge is gone, so a neighbour visited later
+        // in this round sees the new triangles.
+        int k = 0;
+        double longest = -1;
+        for (int e = 0; e < 3; ++e) {
+          const double l = (P(T[(e + 1) % 3]) - P(T[e])).norm();
+          if (l > longest) longest = l, k = e;
+        }
+        if (!try_split(t, T[k], T[(k + 1) % 3])) left.push_back(t);
+      }
+      std::sort(touched_.begin(), touched_.end());
+      touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
+      work = touched_;
+    }
+    return merged(left, work);
+  }
+
+  // Drops removed triangles and vertices, renumbering what is left in its order.
+  void compact() {
+    if (dead_vertex_.empty()) return;
+    std::vector<int> remap(m_.positions.size(), 0);
+    for (int v : dead_vertex_) remap[v] = -1;
+    Mesh out;
+    int next = 0;
+    for (std::size_t v = 0; v < m_.positions.size(); ++v) {
+      if (remap[v] < 0) continue;
+      remap[v] = next++;
+      out.positions.push_back(m_.positions[v]);
+      out.normals.push_back(m_.normals[v]);
+    }
+    for (int t = 0; t < tri_count(); ++t) {
+      if (!alive_[t]) continue;
+      const Tri& x = m_.triangles[t];
+      out.triangles.push_back({remap[x[0]], remap[x[1]], remap[x[2]]});
+    }
+    m_.positions = std::move(out.positions);
+    m_.normals = std::move(out.normals);
+    m_.triangles = std::move(out.triangles);
+  }
+
+  const Field& field_;
+  Mesh& m_;
+  QualityOptions o_;
+  std::vector<std::vector<int>> vt_;
+  std::vector<signed char> crease_;
+  std::vector<char> alive_;
+  std::vector<std::uint32_t> stamp_;
+  std::uint32_t stamp_id_ = 0;
+  SpatialHash hash_;
+  // Triangles changed in the current round, and since the last tolerance check.
+  std::vector<int> touched_, since_check_, dead_vertex_;
+  QualityReport r_;
+};
+
+}  // namespace
+
+QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions& options) {
+  if (mesh.normals.size() != mesh.positions.size())
+    throw std::logic_error("improve_mesh: the mesh needs one normal per vertex");
+  if (mesh.triangles.empty()) return {};
+  Improver improver(field, mesh, options);
+  return improver.run();
+}
+
+}  // namespace cdp::adaptive

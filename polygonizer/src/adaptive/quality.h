@@ -1,0 +1,53 @@
+// Local repair of the few badly shaped triangles the fronts leave behind, and the check that
+// makes --tolerance a distance bound. Neither is a re-meshing: both start from the triangles
+// that fail their test (smallest angle under a bound; a sample farther from the surface than
+// the tolerance) and change only those triangles and their immediate neighbours (the stars of
+// the vertices involved), with operations that keep the surface, the topology and the
+// orientation: edge flips, tangential vertex moves projected back onto the surface by Newton,
+// edge collapses and edge splits at surface points. Every operation is tested before it is
+// applied (it must raise the smallest angle it touches, keep its triangles turned like the
+// surface, keep the chord deviation and, with a tolerance, the distance bound, and intersect no
+// triangle nearby), so the result is never worse than the input on any of these counts.
+// Deterministic: triangles are visited in a fixed order (smallest angle, then index), and every
+// loop is bounded by kQualityRounds rounds over a shrinking work list.
+#pragma once
+
+#include <cdp/core/field.h>
+#include <cdp/core/mesh.h>
+
+#include <cstddef>
+
+namespace cdp::adaptive {
+
+struct QualityReport {
+  std::size_t bad_before = 0;  // triangles under the angle bound before the pass
+  std::size_t bad_after = 0;
+  std::size_t flips = 0, moves = 0, collapses = 0;
+  // Vertices added: splits of edges for the tolerance, inserts in the quad around a cap's
+  // longest edge for the angles.
+  std::size_t splits = 0, inserts = 0;
+  // Vertices found on a crease (never moved, their edges never flipped).
+  std::size_t crease_vertices = 0;
+  // Triangles whose sampled distance to the surface still exceeds the tolerance (0 unless the
+  // refinement ran out of rounds or could not split without breaking a check).
+  std::size_t over_tolerance = 0;
+};
+
+struct QualityOptions {
+  // Triangles whose smallest angle is under this are repaired (radians).
+  double improve_below = 0;
+  // Positive: the largest distance from the mesh to the surface, sampled over every triangle,
+  // must end at most this (triangles beyond it are split), and no operation may break it.
+  double tolerance = 0;
+  // The field's bounding-box diagonal (Newton's tolerance, crease probes).
+  double diagonal = 1;
+  // Shortest edge the splits may create.
+  double min_edge = 0;
+};
+
+// Repairs `mesh` in place (positions, normals, triangles; vertices and triangles that
+// collapses remove are dropped, so indices change where anything was collapsed). The mesh must be
+// closed, oriented and manifold, with one unit normal per vertex.
+QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions& options);
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,49 @@
+#include <cdp/core/mesh_angles.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace cdp {
+
+AngleStatistics angle_statistics(const Mesh& mesh) {
+  constexpr int kBins = 60;
+  AngleStatistics s;
+  std::vector<long long> per_degree(kBins, 0);
+  double min_deg = 180, sum_min = 0, sum_ratio = 0;
+  std::size_t under[3] = {0, 0, 0};
+  for (const auto& t : mesh.triangles) {
+    const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+    const double la = (b - c).norm(), lb = (c - a).norm(), lc = (a - b).norm();
+    const double shortest = std::min({la, lb, lc});
+    const double area2 = (b - a).cross(c - a).norm();
+    if (!(shortest > 0) || !(area2 > 0)) {
+      ++s.degenerate;
+      continue;
+    }
+    const auto angle = [](const Vec3& u, const Vec3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
+    const double m = std::min({angle(b - a, c - a), angle(c - b, a - b), angle(a - c, b - c)}) * 180 / std::numbers::pi;
+    ++s.triangles;
+    min_deg = std::min(min_deg, m);
+    sum_min += m;
+    sum_ratio += std::max({la, lb, lc}) / shortest;
+    if (m < 10) ++under[0];
+    if (m < 20) ++under[1];
+    if (m < 30) ++under[2];
+    ++per_degree[std::clamp(static_cast<int>(std::floor(m)), 0, kBins - 1)];
+  }
+  s.below.assign(kBins, 0);
+  long long running = 0;
+  for (int k = 0; k < kBins; ++k) s.below[k] = running += per_degree[k];
+  if (s.triangles == 0) return s;
+  const double n = static_cast<double>(s.triangles);
+  s.min_degrees = min_deg;
+  s.mean_min_degrees = sum_min / n;
+  s.mean_edge_ratio = sum_ratio / n;
+  s.share_under_10 = under[0] / n;
+  s.share_under_20 = under[1] / n;
+  s.share_under_30 = under[2] / n;
+  return s;
+}
+
+}  // namespace cdp

@@ -1,0 +1,305 @@
+// Issue 18: no slivers and a tolerance that holds, with the paper's algorithm kept as a mode.
+//  - smooth surfaces: every triangle's smallest angle at least 20 degrees, at several factors;
+//  - creased surfaces (CSG, shells): none under 5 degrees;
+//  - the bunny VIS-800 at factor 3: the worst triangle (it was 2.2 degrees before the repair);
+//  - with a tolerance: the largest distance from the mesh to the surface, sampled densely over
+//    every triangle, at most the tolerance;
+//  - Variant::Paper: the printed algorithm, every addition off.
+// Every mesh is also checked closed, manifold, oriented and free of self-intersections.
+#include <gtest/gtest.h>
+
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/mesh_angles.h>
+#include <cdp/core/mesh_topology.h>
+#include <cdp/core/newton_projection.h>
+#include <cdp/io/field_factory.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/test_fields.h"
+#include "polygonizer/mesh_checks.h"
+
+namespace cdp {
+namespace {
+
+std::string expression(const std::string& value, double half) {
+  std::ostringstream s;
+  s << R"({"type": "expression", "value": ")" << value << R"(", "bounds": [[)" << -half << ", " << -half << ", "
+    << -half << "], [" << half << ", " << half << ", " << half << "]]}";
+  return s.str();
+}
+
+std::string blobs_json(unsigned seed, int count) {
+  // As the hard-surface suite's random_blobs_N (adaptive_hard_surfaces_test.cpp).
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> c(-1.6, 1.6), r(0.7, 1.3);
+  std::ostringstream s;
+  s << R"({"type": "blobs", "kernel": "wyvill", "threshold": 0.3, "blobs": [)";
+  for (int i = 0; i < count; ++i) {
+    const double x = c(rng), y = c(rng), z = c(rng);
+    if (i) s << ", ";
+    s << R"({"center": [)" << x << ", " << y << ", " << z << R"(], "radius": )" << r(rng) << "}";
+  }
+  s << "]}";
+  return s.str();
+}
+
+struct Surface {
+  std::string name, json;
+  // Factors at which the tracker meshes the surface (the torus at factor 1 exceeds its search
+  // bound and the tanglecube at factor 1 intersects itself, before any repair: the hard-surface
+  // suite's open cases).
+  std::vector<double> factors;
+};
+
+const std::vector<Surface>& smooth_surfaces() {
+  static const std::vector<Surface> v = {
+      {"sphere", R"({"type": "sphere", "radius": 1})", {1, 2, 3, 5, 10}},
+      {"torus", R"({"type": "torus", "major_radius": 1, "minor_radius": 0.35})", {2, 3, 5, 10}},
+      {"tanglecube", expression(test::kTanglecube, 3), {2, 3, 5}},
+      {"chmutov4", expression("(8*x^4-8*x^2+1)+(8*y^4-8*y^2+1)+(8*z^4-8*z^2+1)", 1.3), {1, 2, 3, 5}},
+      {"blobs_103", blobs_json(103, 5), {1, 2, 3, 5}},
+      {"blobs_111", blobs_json(111, 3), {1, 2, 3, 5}},
+  };
+  return v;
+}
+
+void expect_sound(const Mesh& mesh, const std::string& what) {
+  const MeshTopology t = analyze_topology(mesh);
+  EXPECT_TRUE(t.closed()) << what;
+  EXPECT_TRUE(t.edge_manifold()) << what;
+  EXPECT_TRUE(t.vertex_manifold()) << what;
+  EXPECT_TRUE(t.oriented()) << what;
+  EXPECT_GT(t.signed_volume, 0.0) << what;
+  EXPECT_EQ(test::count_self_intersections(mesh), 0u) << what;
+}
+
+struct SmoothCase {
+  std::size_t surface;
+  double factor;
+};
+
+class SmoothAngles : public testing::TestWithParam<SmoothCase> {};
+
+TEST_P(SmoothAngles, EveryTriangleAtLeast20Degrees) {
+  const Surface& s = smooth_surfaces()[GetParam().surface];
+  const auto field = test::field_from_json(s.json);
+  AdaptiveOptions o;
+  o.factor = GetParam().factor;
+  const PolygonizeResult r = polygonize_adaptive(*field, o);
+  const std::string what = s.name + " factor " + std::to_string(GetParam().factor);
+  expect_sound(r.mesh, what);
+  const AngleStatistics a = angle_statistics(r.mesh);
+  std::cout << "angles " << what << ": " << r.mesh.num_triangles() << " triangles, min " << a.min_degrees
+            << ", under 10/20/30: " << a.share_under_10 << " " << a.share_under_20 << " " << a.share_under_30
+            << ", mean edge ratio " << a.mean_edge_ratio << "\n";
+  EXPECT_GE(a.min_degrees, 20.0) << what;
+  EXPECT_LE(a.share_under_30, 0.01) << what;
+  EXPECT_EQ(a.degenerate, 0u) << what;
+}
+
+std::vector<SmoothCase> smooth_cases() {
+  std::vector<SmoothCase> v;
+  for (std::size_t s = 0; s < smooth_surfaces().size(); ++s)
+    for (double k : smooth_surfaces()[s].factors) v.push_back({s, k});
+  return v;
+}
+
+std::string smooth_name(const testing::TestParamInfo<SmoothCase>& info) {
+  return smooth_surfaces()[info.param.surface].name + "_factor" + std::to_string(static_cast<int>(info.param.factor));
+}
+
+INSTANTIATE_TEST_SUITE_P(Adaptive, SmoothAngles, testing::ValuesIn(smooth_cases()), smooth_name);
+
+TEST(AdaptiveAngles, CreasedSurfacesNoAngleUnder5Degrees) {
+  // CSG creases: the repair leaves crease vertices where they are (the issue asks 5 degrees
+  // there); the cases are those of the hard-surface suite that mesh.
+  const std::vector<std::pair<std::string, std::string>> creased = {
+      {"hollow_sphere", expression("max(sqrt(x^2+y^2+z^2)-1.25, 0.75-sqrt(x^2+y^2+z^2))", 2)},
+      {"shell", expression("abs(sqrt(x^2+y^2+z^2)-1)-0.1", 1.5)},
+      {"off_centre_cavity", expression("max(sqrt(x^2+y^2+z^2)-1.25, 0.5-sqrt((x-0.4)^2+y^2+z^2))", 2)},
+  };
+  for (const auto& [name, json] : creased)
+    for (double k : {1.0, 3.0}) {
+      const auto field = test::field_from_json(json);
+      AdaptiveOptions o;
+      o.factor = k;
+      const PolygonizeResult r = polygonize_adaptive(*field, o);
+      const std::string what = name + " factor " + std::to_string(k);
+      expect_sound(r.mesh, what);
+      const AngleStatistics a = angle_statistics(r.mesh);
+      std::cout << "angles " << what << ": min " << a.min_degrees << ", under 20: " << a.share_under_20 << "\n";
+      EXPECT_GE(a.min_degrees, 5.0) << what;
+    }
+}
+
+TEST(AdaptiveAngles, BunnyVis800WorstTriangle) {
+  // The issue's case is factor 3: 2.2 degrees before, from fronts of 4-5 mm edges meeting
+  // fronts of 0.5-0.9 mm edges. Factor 1 has triangles folded against the surface normals on
+  // the sharply curved spots (8.1 degrees until the repair accepted replacing them by
+  // triangles that face the surface no worse).
+  const auto field = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/bunny_vis800.json");
+  AdaptiveOptions o;
+  for (double k : {1.0, 3.0, 5.0}) {
+    o.factor = k;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    const std::string what = "bunny vis800 factor " + std::to_string(k);
+    expect_sound(r.mesh, what);
+    const AngleStatistics a = angle_statistics(r.mesh);
+    std::cout << "angles " << what << ": " << r.mesh.num_triangles() << " triangles, min " << a.min_degrees
+              << ", under 10/20/30: " << a.share_under_10 << " " << a.share_under_20 << " " << a.share_under_30
+              << ", mean edge ratio " << a.mean_edge_ratio << "\n";
+    EXPECT_GE(a.min_degrees, 20.0) << what;
+    EXPECT_LE(a.share_under_30, 0.01) << what;
+  }
+  // The paper's method alone, for contrast: the slivers the repair removes are there.
+  o.factor = 3;
+  o.variant = Variant::Paper;
+  const PolygonizeResult p = polygonize_adaptive(*field, o);
+  EXPECT_LT(angle_statistics(p.mesh).min_degrees, 10.0);
+}
+
+// The largest distance from the mesh to the surface over a barycentric grid of 28 points per
+// triangle (corners, 7 per side, interior), each point's distance measured as the length of
+// Newton's path onto the surface (at least the true distance).
+double densely_sampled_distance(const Field& field, const Mesh& mesh) {
+  constexpr int kGrid = 6;
+  ProjectionOptions po;
+  po.tolerance = 1e-10 * field.bounds().diagonal();
+  double worst = 0;
+  for (const auto& t : mesh.triangles)
+    for (int i = 0; i <= kGrid; ++i)
+      for (int j = 0; i + j <= kGrid; ++j) {
+        const double a = double(i) / kGrid, b = double(j) / kGrid;
+        const Vec3 p = a * mesh.positions[t[0]] + b * mesh.positions[t[1]] + (1 - a - b) * mesh.positions[t[2]];
+        const ProjectionResult r = project_to_surface(field, p, po);
+        EXPECT_TRUE(r.ok());
+        worst = std::max(worst, (r.point - p).norm());
+      }
+  return worst;
+}
+
+struct ToleranceCase {
+  std::string name, json;
+  double eps;
+};
+
+class ToleranceBound : public testing::TestWithParam<ToleranceCase> {};
+
+TEST_P(ToleranceBound, LargestDistanceAtMostEps) {
+  const auto field = test::field_from_json(GetParam().json);
+  AdaptiveOptions o;
+  o.sizing = SizingMode::Tolerance;
+  o.tolerance = GetParam().eps;
+  // The default min_edge (2e-3 of the diagonal) would cap how short edges may get; a bound
+  // asked for must not be given up for it.
+  o.min_edge = 1e-6 * field->bounds().diagonal();
+  const PolygonizeResult r = polygonize_adaptive(*field, o);
+  const std::string what = GetParam().name + " eps " + std::to_string(GetParam().eps);
+  expect_sound(r.mesh, what);
+  const double d = densely_sampled_distance(*field, r.mesh);
+  const AngleStatistics a = angle_statistics(r.mesh);
+  std::cout << "tolerance " << what << ": " << r.mesh.num_triangles() << " triangles, largest distance " << d
+            << " (" << d / GetParam().eps << " eps), min angle " << a.min_degrees << "\n";
+  EXPECT_LE(d, GetParam().eps) << what;
+  EXPECT_GE(a.min_degrees, 20.0) << what;
+  EXPECT_EQ(r.stats.extra.at("quality.over_tolerance").get<std::size_t>(), 0u);
+}
+
+std::vector<ToleranceCase> tolerance_cases() {
+  const std::string sphere = R"({"type": "sphere", "radius": 1})";
+  const std::string torus = R"({"type": "torus", "major_radius": 1, "minor_radius": 0.35})";
+  const std::string tangle = expression(test::kTanglecube, 3);
+  const std::string chmutov = expression("(8*x^4-8*x^2+1)+(8*y^4-8*y^2+1)+(8*z^4-8*z^2+1)", 1.3);
+  return {{"sphere", sphere, 1e-2},    {"sphere", sphere, 1e-3},      {"sphere", sphere, 1e-4},
+          {"torus", torus, 1e-2},      {"torus", torus, 1e-3},        {"torus", torus, 1e-4},
+          {"tanglecube", tangle, 1e-2}, {"tanglecube", tangle, 3e-3}, {"tanglecube", tangle, 1e-3},
+          {"chmutov4", chmutov, 1e-2}, {"chmutov4", chmutov, 3e-3},   {"chmutov4", chmutov, 1e-3}};
+}
+
+std::string tolerance_name(const testing::TestParamInfo<ToleranceCase>& info) {
+  std::ostringstream s;
+  s << info.param.name << "_eps" << static_cast<int>(std::round(-std::log10(info.param.eps) * 10));
+  return s.str();
+}
+
+INSTANTIATE_TEST_SUITE_P(Adaptive, ToleranceBound, testing::ValuesIn(tolerance_cases()), tolerance_name);
+
+TEST(AdaptivePaperVariant, SwitchesOffEveryAddition) {
+  const auto field = test::tanglecube();
+  AdaptiveOptions o;
+  o.factor = 3;
+  o.variant = Variant::Paper;
+  const PolygonizeResult p = polygonize_adaptive(*field, o);
+  const auto& x = p.stats.extra;
+  EXPECT_EQ(x.at("variant"), "paper");
+  EXPECT_EQ(x.at("triangle_count_rule"), "hartmann");
+  EXPECT_FALSE(x.at("grading").get<bool>());
+  EXPECT_FALSE(x.at("quality_repair").get<bool>());
+  EXPECT_FALSE(x.at("tolerance_refinement").get<bool>());
+  for (const char* k : {"quality.flips", "quality.moves", "quality.collapses", "quality.splits"})
+    EXPECT_EQ(x.at(k).get<std::size_t>(), 0u) << k;
+  expect_sound(p.mesh, "paper tanglecube");
+
+  // The default variant on the same surface has each addition on, and they act.
+  o.variant = Variant::Improved;
+  const PolygonizeResult d = polygonize_adaptive(*field, o);
+  EXPECT_EQ(d.stats.extra.at("variant"), "improved");
+  EXPECT_TRUE(d.stats.extra.at("grading").get<bool>());
+  EXPECT_TRUE(d.stats.extra.at("quality_repair").get<bool>());
+  EXPECT_GT(d.stats.extra.at("quality.flips").get<std::size_t>(), 0u);
+  EXPECT_GT(angle_statistics(d.mesh).min_degrees, angle_statistics(p.mesh).min_degrees);
+
+  // Tolerance: the paper sizes edges for a sagitta of eps at the point (edge_length reports the
+  // target at a point of radius r: the paper's is 2 sqrt(2 r eps - eps^2)); the refinement is off.
+  o.sizing = SizingMode::Tolerance;
+  o.tolerance = 1e-2;
+  o.variant = Variant::Paper;
+  const PolygonizeResult pt = polygonize_adaptive(*field, o);
+  EXPECT_FALSE(pt.stats.extra.at("tolerance_refinement").get<bool>());
+  EXPECT_EQ(pt.stats.extra.at("quality.splits").get<std::size_t>(), 0u);
+  o.variant = Variant::Improved;
+  const PolygonizeResult dt = polygonize_adaptive(*field, o);
+  EXPECT_TRUE(dt.stats.extra.at("tolerance_refinement").get<bool>());
+  // The improved sizing asks for shorter edges (a share of eps), so more triangles.
+  EXPECT_GT(dt.mesh.num_triangles(), pt.mesh.num_triangles());
+}
+
+TEST(AdaptiveAngles, RepairIsDeterministic) {
+  const auto field = test::tanglecube();
+  AdaptiveOptions o;
+  o.factor = 3;
+  const PolygonizeResult a = polygonize_adaptive(*field, o);
+  const PolygonizeResult b = polygonize_adaptive(*field, o);
+  ASSERT_EQ(a.mesh.positions.size(), b.mesh.positions.size());
+  ASSERT_EQ(a.mesh.triangles, b.mesh.triangles);
+  for (std::size_t i = 0; i < a.mesh.positions.size(); ++i) ASSERT_EQ(a.mesh.positions[i], b.mesh.positions[i]);
+}
+
+TEST(AngleStatistics, CountsAndCumulativeHistogram) {
+  Mesh m;
+  // An equilateral triangle and a right isosceles one (45, 45, 90) and a 12-78-90 one.
+  const double t = std::tan(12 * std::acos(-1.0) / 180);
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, std::sqrt(3.0) / 2, 0}, {0, 1, 0}, {1, t, 0}};
+  m.triangles = {{0, 1, 2}, {0, 1, 3}, {0, 1, 4}};
+  const AngleStatistics a = angle_statistics(m);
+  EXPECT_EQ(a.triangles, 3u);
+  EXPECT_NEAR(a.min_degrees, 12.0, 1e-9);
+  EXPECT_EQ(a.share_under_10, 0.0);
+  EXPECT_NEAR(a.share_under_20, 1.0 / 3, 1e-15);
+  EXPECT_NEAR(a.share_under_30, 1.0 / 3, 1e-15);
+  ASSERT_EQ(a.below.size(), 60u);
+  EXPECT_EQ(a.below[10], 0);  // under 11 degrees
+  EXPECT_EQ(a.below[12], 1);  // under 13
+  EXPECT_EQ(a.below[44], 1);  // under 45
+  EXPECT_EQ(a.below[45], 2);  // under 46
+  EXPECT_EQ(a.below[59], 3);
+}
+
+}  // namespace
+}  // namespace cdp
