@@ -108,6 +108,15 @@ class Claims(unittest.TestCase):
               for p, t, e, d in ((1, 100.0, 0.5, 5e-4), (3, 200.0, 0.3, 3e-4))]
         self.assertIsNone(find(verdicts({"adaptive": ours, "mt": mt}), "For the same accuracy"))
 
+    def test_paper_mode_rows_are_judged_by_the_same_tests(self):
+        ours = [row("adaptive", k) for k in range(1, 6)]
+        paper_mode = [row("adaptive", k, variant="paper", self_intersections=2) for k in range(1, 6)]
+        rows = {"adaptive": ours, "adaptive_paper": paper_mode}
+        self.assertIs(paper_mode[0], table1.paper_mode_rows(rows)["adaptive"][0])
+        md = table1.claims_markdown(table1.claims(rows, PAPER), table1.claims(table1.paper_mode_rows(rows), PAPER))
+        line = next(l for l in md.split("\n") if "No cracks" in l and l.startswith("| 1") is False and "|" in l)
+        self.assertIn("| **holds** | does not hold |", line)
+
     def test_overall_verdict_over_models(self):
         self.assertEqual(claims_by_model.overall([True, True, True]), "holds everywhere")
         self.assertEqual(claims_by_model.overall([True, None, True]), "holds everywhere it was measured")
