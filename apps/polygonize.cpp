@@ -186,16 +186,7 @@ int main(int argc, char** argv) {
     cdp::write_mesh(result.mesh, out_path);
     if (!stats_path.empty()) {
       // Every method's triangles by their smallest angle (see <cdp/core/mesh_angles.h>).
-      const cdp::AngleStatistics a = cdp::angle_statistics(result.mesh);
-      auto& x = result.stats.extra;
-      x["angles.min_degrees"] = a.min_degrees;
-      x["angles.mean_min_degrees"] = a.mean_min_degrees;
-      x["angles.mean_edge_ratio"] = a.mean_edge_ratio;
-      x["angles.share_under_10"] = a.share_under_10;
-      x["angles.share_under_20"] = a.share_under_20;
-      x["angles.share_under_30"] = a.share_under_30;
-      x["angles.cumulative_below_degrees"] = a.below;
-      x["angles.degenerate"] = a.degenerate;
+      cdp::add_angle_statistics(result.mesh, result.stats);
       nlohmann::json j = cdp::to_json(result.stats);
       j["field"] = field_path;
       cdp::write_file_atomically(stats_path, j.dump(2) + "\n", "statistics");

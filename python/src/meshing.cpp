@@ -130,19 +130,8 @@ py::tuple run(const Field& field, const Options& o, bool return_normals, py::obj
     py::gil_scoped_release release;
     result = o.method == "mc" ? marching_cubes(field, m) : marching_tetrahedra(field, m);
   }
-  {
-    // The program's STATS.json entries (apps/polygonize.cpp), so that the dicts stay equal.
-    const AngleStatistics a = angle_statistics(result.mesh);
-    auto& x = result.stats.extra;
-    x["angles.min_degrees"] = a.min_degrees;
-    x["angles.mean_min_degrees"] = a.mean_min_degrees;
-    x["angles.mean_edge_ratio"] = a.mean_edge_ratio;
-    x["angles.share_under_10"] = a.share_under_10;
-    x["angles.share_under_20"] = a.share_under_20;
-    x["angles.share_under_30"] = a.share_under_30;
-    x["angles.cumulative_below_degrees"] = a.below;
-    x["angles.degenerate"] = a.degenerate;
-  }
+  // The program's STATS.json entries (apps/polygonize.cpp), so that the dicts stay equal.
+  add_angle_statistics(result.mesh, result.stats);
   py::object stats = from_json(to_json(result.stats));
   py::array_t<double> vertices = to_array(result.mesh.positions);
   py::array_t<std::int32_t> faces = to_array(result.mesh.triangles);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cdp/core/mesh.h>
+#include <cdp/core/polygonize_stats.h>
 
 #include <array>
 #include <cstddef>
@@ -24,5 +25,9 @@ struct AngleStatistics {
 };
 
 AngleStatistics angle_statistics(const Mesh& mesh);
+
+// Puts angle_statistics(mesh) into stats.extra under "angles.*" (STATS.json's "angles" object),
+// as the polygonize program and the Python module report it for every method.
+void add_angle_statistics(const Mesh& mesh, PolygonizeStats& stats);
 
 }  // namespace cdp
