@@ -118,6 +118,7 @@ class LatticeMesher {
   }
 
   std::array<double, 8> cached_corners(const Cell& c);
+  void prefetch_corners(const std::deque<Cell>& cubes);
   void check_boundary(const Cell& c, int mask);
   void mesh_cube(const Cell& c, const std::array<double, 8>& f);
   int vertex(const Cell& c, LocalEdge e, const std::array<double, 8>& f);
@@ -158,6 +159,9 @@ class LatticeMesher {
   std::vector<int> pending_centre_vertices_;
   std::vector<EdgeRoot> roots_;
   std::vector<int> centre_polygon_;
+  std::vector<Key> prefetch_keys_;
+  std::vector<Vec3> prefetch_points_;
+  std::vector<double> prefetch_values_;
 };
 
 std::array<double, 8> LatticeMesher::cached_corners(const Cell& c) {
@@ -170,6 +174,9 @@ std::array<double, 8> LatticeMesher::cached_corners(const Cell& c) {
     const long i = c[0] + (q & 1), j = c[1] + ((q >> 1) & 1), k = c[2] + ((q >> 2) & 1);
     keys[q] = point_key(i, j, k);
     if (const double* cached = corner_cache_.find(keys[q])) {
+      // Prefetched values are checked here, where the cube that first needs them would have
+      // evaluated them, so that a field that is not finite fails at the same place.
+      if (!std::isfinite(*cached)) check_finite(point(i, j, k), *cached);
       f[q] = *cached;
     } else {
       missing[m] = q;
@@ -187,6 +194,28 @@ std::array<double, 8> LatticeMesher::cached_corners(const Cell& c) {
     }
   }
   return f;
+}
+
+// Evaluates the corners of the queued cubes that are not in the cache, in one batched call:
+// every queued cube is meshed before the walk ends, so these are the very evaluations that
+// cached_corners would make one cube at a time, in another grouping.
+void LatticeMesher::prefetch_corners(const std::deque<Cell>& cubes) {
+  prefetch_keys_.clear();
+  prefetch_points_.clear();
+  for (const Cell& c : cubes)
+    for (int q = 0; q < 8; ++q) {
+      const long i = c[0] + (q & 1), j = c[1] + ((q >> 1) & 1), k = c[2] + ((q >> 2) & 1);
+      const Key key = point_key(i, j, k);
+      // A placeholder, so that a corner shared by queued cubes is asked for once.
+      if (!corner_cache_.emplace(key, 0.0).second) continue;
+      prefetch_keys_.push_back(key);
+      prefetch_points_.push_back(point(i, j, k));
+    }
+  if (prefetch_keys_.empty()) return;
+  prefetch_values_.resize(prefetch_keys_.size());
+  field_.values(prefetch_points_.data(), prefetch_values_.data(), prefetch_points_.size());
+  corner_evaluations += prefetch_points_.size();
+  for (std::size_t r = 0; r < prefetch_keys_.size(); ++r) *corner_cache_.find(prefetch_keys_[r]) = prefetch_values_[r];
 }
 
 void LatticeMesher::check_boundary(const Cell& c, int mask) {
@@ -349,26 +378,32 @@ bool LatticeMesher::follow(const Cell& start, std::size_t cluster, std::size_t c
   ++starts;
   std::deque<Cell> queue{start};
   std::size_t done = 0;
+  // Each pass takes the cubes queued at its start, in the order of a plain breadth-first walk,
+  // their corners evaluated together first; every cube is queued once, so the passes are
+  // bounded by the cubes of the lattice.
   while (!queue.empty()) {
-    const Cell c = queue.front();
-    queue.pop_front();
-    count_cube();
-    const std::array<double, 8> f = cached_corners(c);
-    const int mask = crossed_faces(f);
-    check_boundary(c, mask);
-    const std::size_t first = mesh.triangles.size();
-    mesh_cube(c, f);
-    *visited_.find(cell_key(c)) = static_cast<std::uint64_t>(first) << kTriangleRangeBits | (mesh.triangles.size() - first);
-    for (int face = 0; face < 6; ++face) {
-      if (!((mask >> face) & 1)) continue;
-      Cell nb = c;
-      nb[face / 2] += face % 2 == 0 ? -1 : 1;
-      if (in_lattice(nb) && visited_.emplace(cell_key(nb), 0).second) queue.push_back(nb);
-    }
-    if (options_.progress && ++done % 4096 == 0) {
-      const double local = static_cast<double>(done) / static_cast<double>(done + queue.size());
-      progress_reported_ = std::max(progress_reported_, (static_cast<double>(cluster) + local) / clusters);
-      options_.progress(progress_reported_);
+    prefetch_corners(queue);
+    for (std::size_t level = queue.size(); level > 0; --level) {
+      const Cell c = queue.front();
+      queue.pop_front();
+      count_cube();
+      const std::array<double, 8> f = cached_corners(c);
+      const int mask = crossed_faces(f);
+      check_boundary(c, mask);
+      const std::size_t first = mesh.triangles.size();
+      mesh_cube(c, f);
+      *visited_.find(cell_key(c)) = static_cast<std::uint64_t>(first) << kTriangleRangeBits | (mesh.triangles.size() - first);
+      for (int face = 0; face < 6; ++face) {
+        if (!((mask >> face) & 1)) continue;
+        Cell nb = c;
+        nb[face / 2] += face % 2 == 0 ? -1 : 1;
+        if (in_lattice(nb) && visited_.emplace(cell_key(nb), 0).second) queue.push_back(nb);
+      }
+      if (options_.progress && ++done % 4096 == 0) {
+        const double local = static_cast<double>(done) / static_cast<double>(done + queue.size());
+        progress_reported_ = std::max(progress_reported_, (static_cast<double>(cluster) + local) / clusters);
+        options_.progress(progress_reported_);
+      }
     }
   }
   return true;
