@@ -38,6 +38,12 @@ constexpr double kSignChangeRootTolerance = 0.125;
 // vertices (0.5 % in Marching Cubes, 1.5 % in Marching Tetrahedra on random blobs).
 constexpr double kShortEdge = 0.01;
 
+// Edge roots (and centre vertices) wait until this many are pending, then are searched together,
+// one batched evaluation per round of regula falsi: thousands of points per call for a field
+// whose calls cost more than their arithmetic (a Python function), while the searches' state
+// (about 150 bytes each) stays within a core's cache for the compiled fields.
+constexpr std::size_t kRootBatch = 4096;
+
 using Key = std::uint64_t;
 using Cell = std::array<long, 3>;
 
@@ -73,6 +79,9 @@ class LatticeMesher {
 
   void run_grid();
   void run_continuation();
+  // Gives every vertex created so far its position: the pending edge roots, then the pending
+  // centre vertices (whose starting points are means of edge roots).
+  void resolve_pending();
 
   Mesh mesh;
   // Per vertex, a name independent of the traversal: the lattice edge it lies on, or for a
@@ -109,6 +118,7 @@ class LatticeMesher {
   }
 
   std::array<double, 8> cached_corners(const Cell& c);
+  void prefetch_corners(const std::deque<Cell>& cubes);
   void check_boundary(const Cell& c, int mask);
   void mesh_cube(const Cell& c, const std::array<double, 8>& f);
   int vertex(const Cell& c, LocalEdge e, const std::array<double, 8>& f);
@@ -136,6 +146,22 @@ class LatticeMesher {
   CubeMesh cube_mesh_;
   std::vector<int> centre_ids_;
   double progress_reported_ = 0;
+  // Vertices whose positions wait for resolve_pending(): nothing reads a vertex position while
+  // the cubes are walked (the mesh's topology follows from the corner signs alone) until the
+  // completion step tests the mesh against the seed grid, so the roots are searched in batches.
+  std::vector<EdgeRootQuery> pending_roots_;
+  std::vector<int> pending_root_ids_;
+  struct PendingCentre {
+    int id;
+    std::size_t first, count;  // its polygon's vertex ids in pending_centre_vertices_
+  };
+  std::vector<PendingCentre> pending_centres_;
+  std::vector<int> pending_centre_vertices_;
+  std::vector<EdgeRoot> roots_;
+  std::vector<int> centre_polygon_;
+  std::vector<Key> prefetch_keys_;
+  std::vector<Vec3> prefetch_points_;
+  std::vector<double> prefetch_values_;
 };
 
 std::array<double, 8> LatticeMesher::cached_corners(const Cell& c) {
@@ -148,6 +174,9 @@ std::array<double, 8> LatticeMesher::cached_corners(const Cell& c) {
     const long i = c[0] + (q & 1), j = c[1] + ((q >> 1) & 1), k = c[2] + ((q >> 2) & 1);
     keys[q] = point_key(i, j, k);
     if (const double* cached = corner_cache_.find(keys[q])) {
+      // Prefetched values are checked here, where the cube that first needs them would have
+      // evaluated them, so that a field that is not finite fails at the same place.
+      if (!std::isfinite(*cached)) check_finite(point(i, j, k), *cached);
       f[q] = *cached;
     } else {
       missing[m] = q;
@@ -165,6 +194,28 @@ std::array<double, 8> LatticeMesher::cached_corners(const Cell& c) {
     }
   }
   return f;
+}
+
+// Evaluates the corners of the queued cubes that are not in the cache, in one batched call:
+// every queued cube is meshed before the walk ends, so these are the very evaluations that
+// cached_corners would make one cube at a time, in another grouping.
+void LatticeMesher::prefetch_corners(const std::deque<Cell>& cubes) {
+  prefetch_keys_.clear();
+  prefetch_points_.clear();
+  for (const Cell& c : cubes)
+    for (int q = 0; q < 8; ++q) {
+      const long i = c[0] + (q & 1), j = c[1] + ((q >> 1) & 1), k = c[2] + ((q >> 2) & 1);
+      const Key key = point_key(i, j, k);
+      // A placeholder, so that a corner shared by queued cubes is asked for once.
+      if (!corner_cache_.emplace(key, 0.0).second) continue;
+      prefetch_keys_.push_back(key);
+      prefetch_points_.push_back(point(i, j, k));
+    }
+  if (prefetch_keys_.empty()) return;
+  prefetch_values_.resize(prefetch_keys_.size());
+  field_.values(prefetch_points_.data(), prefetch_values_.data(), prefetch_points_.size());
+  corner_evaluations += prefetch_points_.size();
+  for (std::size_t r = 0; r < prefetch_keys_.size(); ++r) *corner_cache_.find(prefetch_keys_[r]) = prefetch_values_[r];
 }
 
 void LatticeMesher::check_boundary(const Cell& c, int mask) {
@@ -187,11 +238,12 @@ int LatticeMesher::vertex(const Cell& c, LocalEdge e, const std::array<double, 8
   const auto [id, inserted] = edge_vertex_.emplace(key, static_cast<int>(mesh.positions.size()));
   if (!inserted) return *id;
   const Vec3 pb = point(c[0] + (e.b & 1), c[1] + ((e.b >> 1) & 1), c[2] + ((e.b >> 2) & 1));
-  const EdgeRoot root = find_edge_root(field_, point(ia, ja, ka), f[e.a], pb, f[e.b], tolerance_);
-  root_evaluations += root.evaluations;
-  mesh.positions.push_back(root.point);
+  pending_roots_.push_back({point(ia, ja, ka), pb, f[e.a], f[e.b]});
+  pending_root_ids_.push_back(*id);
+  mesh.positions.push_back(Vec3::Zero());  // until resolve_pending()
   vertex_keys.push_back(key);
-  return static_cast<int>(mesh.positions.size()) - 1;
+  if (pending_roots_.size() >= kRootBatch) resolve_pending();
+  return *id;
 }
 
 // The mean of the polygon's crossings, moved onto the surface by the Newton projection when it
@@ -199,20 +251,53 @@ int LatticeMesher::vertex(const Cell& c, LocalEdge e, const std::array<double, 8
 int LatticeMesher::centre_vertex(const Cell& c, int polygon, const std::array<double, 8>& f) {
   int& id = centre_ids_[polygon];
   if (id >= 0) return id;
-  Vec3 mean = Vec3::Zero();
-  for (LocalEdge e : cube_mesh_.centres[polygon]) mean += mesh.positions[vertex(c, e, f)];
-  mean /= static_cast<double>(cube_mesh_.centres[polygon].size());
+  // Gathered apart: vertex() may resolve what is pending on the way, which empties the lists.
+  centre_polygon_.clear();
+  for (LocalEdge e : cube_mesh_.centres[polygon]) centre_polygon_.push_back(vertex(c, e, f));
+  id = static_cast<int>(mesh.positions.size());
+  pending_centres_.push_back({id, pending_centre_vertices_.size(), centre_polygon_.size()});
+  pending_centre_vertices_.insert(pending_centre_vertices_.end(), centre_polygon_.begin(), centre_polygon_.end());
+  mesh.positions.push_back(Vec3::Zero());  // until resolve_pending()
+  vertex_keys.push_back(Key{1} << 63 | cell_key(c) << 4 | static_cast<Key>(polygon));
+  ++centre_vertices;
+  return id;
+}
+
+void LatticeMesher::resolve_pending() {
+  // Taken off the lists first, so that a search that throws leaves nothing pending to retry.
+  std::vector<EdgeRootQuery> queries;
+  std::vector<int> ids, centre_vertices;
+  std::vector<PendingCentre> centres;
+  queries.swap(pending_roots_);
+  ids.swap(pending_root_ids_);
+  centres.swap(pending_centres_);
+  centre_vertices.swap(pending_centre_vertices_);
+  if (!queries.empty()) {
+    find_edge_roots(field_, queries, tolerance_, roots_);
+    for (std::size_t r = 0; r < roots_.size(); ++r) {
+      root_evaluations += roots_[r].evaluations;
+      mesh.positions[ids[r]] = roots_[r].point;
+    }
+  }
+  if (centres.empty()) return;
+  // A centre's polygon vertices are edge roots created before it, resolved above or earlier.
+  std::vector<Vec3> means;
+  means.reserve(centres.size());
+  for (const PendingCentre& pc : centres) {
+    Vec3 mean = Vec3::Zero();
+    for (std::size_t v = pc.first; v < pc.first + pc.count; ++v) mean += mesh.positions[centre_vertices[v]];
+    mean /= static_cast<double>(pc.count);
+    means.push_back(mean);
+  }
   ProjectionOptions po;
   po.tolerance = tolerance_;
   po.max_iterations = 20;
   po.max_step = 0.5 * h_;
   po.max_travel = 0.5 * h_;
-  const ProjectionResult projected = project_to_surface(field_, mean, po);
-  id = static_cast<int>(mesh.positions.size());
-  mesh.positions.push_back(projected.ok() ? projected.point : mean);
-  vertex_keys.push_back(Key{1} << 63 | cell_key(c) << 4 | static_cast<Key>(polygon));
-  ++centre_vertices;
-  return id;
+  const std::vector<ProjectionOptions> options(means.size(), po);
+  const std::vector<ProjectionResult> projected = project_to_surface(field_, means, options);
+  for (std::size_t q = 0; q < means.size(); ++q)
+    mesh.positions[centres[q].id] = projected[q].ok() ? projected[q].point : means[q];
 }
 
 void LatticeMesher::mesh_cube(const Cell& c, const std::array<double, 8>& f) {
@@ -293,26 +378,32 @@ bool LatticeMesher::follow(const Cell& start, std::size_t cluster, std::size_t c
   ++starts;
   std::deque<Cell> queue{start};
   std::size_t done = 0;
+  // Each pass takes the cubes queued at its start, in the order of a plain breadth-first walk,
+  // their corners evaluated together first; every cube is queued once, so the passes are
+  // bounded by the cubes of the lattice.
   while (!queue.empty()) {
-    const Cell c = queue.front();
-    queue.pop_front();
-    count_cube();
-    const std::array<double, 8> f = cached_corners(c);
-    const int mask = crossed_faces(f);
-    check_boundary(c, mask);
-    const std::size_t first = mesh.triangles.size();
-    mesh_cube(c, f);
-    *visited_.find(cell_key(c)) = static_cast<std::uint64_t>(first) << kTriangleRangeBits | (mesh.triangles.size() - first);
-    for (int face = 0; face < 6; ++face) {
-      if (!((mask >> face) & 1)) continue;
-      Cell nb = c;
-      nb[face / 2] += face % 2 == 0 ? -1 : 1;
-      if (in_lattice(nb) && visited_.emplace(cell_key(nb), 0).second) queue.push_back(nb);
-    }
-    if (options_.progress && ++done % 4096 == 0) {
-      const double local = static_cast<double>(done) / static_cast<double>(done + queue.size());
-      progress_reported_ = std::max(progress_reported_, (static_cast<double>(cluster) + local) / clusters);
-      options_.progress(progress_reported_);
+    prefetch_corners(queue);
+    for (std::size_t level = queue.size(); level > 0; --level) {
+      const Cell c = queue.front();
+      queue.pop_front();
+      count_cube();
+      const std::array<double, 8> f = cached_corners(c);
+      const int mask = crossed_faces(f);
+      check_boundary(c, mask);
+      const std::size_t first = mesh.triangles.size();
+      mesh_cube(c, f);
+      *visited_.find(cell_key(c)) = static_cast<std::uint64_t>(first) << kTriangleRangeBits | (mesh.triangles.size() - first);
+      for (int face = 0; face < 6; ++face) {
+        if (!((mask >> face) & 1)) continue;
+        Cell nb = c;
+        nb[face / 2] += face % 2 == 0 ? -1 : 1;
+        if (in_lattice(nb) && visited_.emplace(cell_key(nb), 0).second) queue.push_back(nb);
+      }
+      if (options_.progress && ++done % 4096 == 0) {
+        const double local = static_cast<double>(done) / static_cast<double>(done + queue.size());
+        progress_reported_ = std::max(progress_reported_, (static_cast<double>(cluster) + local) / clusters);
+        options_.progress(progress_reported_);
+      }
     }
   }
   return true;
@@ -388,6 +479,7 @@ int LatticeMesher::mesh_crossings(const Vec3& a, const Vec3& b, int axis) {
 void LatticeMesher::complete_from_sign_changes(const SeedGrid& grid, std::size_t clusters) {
   grid.for_each_sign_change([&](const std::array<int, 3>& ia, const std::array<int, 3>& ib) {
     ++sign_changes;
+    resolve_pending();  // the walk the last sign change started, before the mesh is tested
     const Vec3 a = grid.point(ia[0], ia[1], ia[2]), b = grid.point(ib[0], ib[1], ib[2]);
     const int axis = ia[0] != ib[0] ? 0 : ia[1] != ib[1] ? 1 : 2;
     const int crossings = mesh_crossings(a, b, axis);
@@ -433,8 +525,22 @@ PolygonizeResult run_marching(const Field& field, const MarchingOptions& options
   const auto t0 = std::chrono::steady_clock::now();
   const EvaluationCounts before = field.counts();
   LatticeMesher lm(field, options, method, mesher);
-  if (options.traversal == Traversal::Grid) lm.run_grid();
-  else lm.run_continuation();
+  // A root search that the cubes walked before an error asked for would have failed first, so
+  // the pending roots are searched before the error leaves.
+  try {
+    if (options.traversal == Traversal::Grid) lm.run_grid();
+    else lm.run_continuation();
+  } catch (const InvalidInputError&) {
+    lm.resolve_pending();
+    throw;
+  } catch (const NoSurfaceError&) {
+    lm.resolve_pending();
+    throw;
+  } catch (const LimitExceededError&) {
+    lm.resolve_pending();
+    throw;
+  }
+  lm.resolve_pending();
   const CollapseReport collapse = collapse_short_edges(lm.mesh, lm.vertex_keys, kShortEdge * lm.h_);
   if (lm.mesh.triangles.empty())
     throw NoSurfaceError(std::string(method) + ": no cube of the lattice (cell " + std::to_string(lm.h_) +

@@ -22,7 +22,8 @@ struct Mesh {
   std::size_t num_triangles() const { return triangles.size(); }
 };
 
-// Sets mesh.normals to the normalized field gradient at every vertex (one value_gradient each).
+// Sets mesh.normals to the normalized field gradient at every vertex (one value_gradient each,
+// evaluated in batches).
 void compute_field_normals(const Field& field, Mesh& mesh);
 
 }  // namespace cdp
