@@ -21,6 +21,7 @@
 #include <queue>
 #include <span>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 namespace cdp::adaptive {
@@ -178,6 +179,9 @@ class Tracker {
   void step(int& front);
   void check_limits();
   bool zip_spike(int node);
+  // For the error of a front that cannot advance: the closest pair (a vertex of node's front,
+  // a mesh vertex) within min_edge whose normals face opposite ways, if any.
+  std::optional<std::pair<int, int>> thin_feature_at(int node) const;
   double local_edge_length(int node) const;
 
   // --- front_angle.cpp
