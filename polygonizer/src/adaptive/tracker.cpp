@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace cdp::adaptive {
@@ -23,6 +24,11 @@ constexpr double kShortLanding = 0.75;
 constexpr int kWalkLegs = 4;
 // A new point this close to a finished vertex (in units of the step) lies on finished mesh.
 constexpr double kOverMesh = 0.3;
+
+// Points in the tracker's error messages: "(x, y, z)", six decimals.
+std::string format_point(const Vec3& p) {
+  return "(" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " + std::to_string(p.z()) + ")";
+}
 }  // namespace
 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
@@ -237,9 +243,8 @@ void Tracker::emit_triangle(int a, int b, int c) {
   area_ += 0.5 * (mesh_.positions[b] - pa).cross(mesh_.positions[c] - pa).norm();
   if (estimated_area_ > 0 && area_ > kAreaBound * estimated_area_)
     throw LimitExceededError("adaptive: the mesh covers more than " + std::to_string(static_cast<int>(kAreaBound)) +
-                             " times the area the seed grid measures; a front is running over finished mesh near (" +
-                             std::to_string(pa.x()) + ", " + std::to_string(pa.y()) + ", " + std::to_string(pa.z()) +
-                             ")");
+                             " times the area the seed grid measures; a front is running over finished mesh near " +
+                             format_point(pa));
   if (mesh_.triangles.size() > s_.max_triangles)
     throw LimitExceededError("adaptive: more than " + std::to_string(s_.max_triangles) +
                              " triangles (AdaptiveOptions::max_triangles); raise the limit, the minimum edge "
@@ -369,9 +374,8 @@ void Tracker::check_search_budget(int node) {
   const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
   throw LimitExceededError("adaptive: the fronts' neighbour searches looked at " + std::to_string(in_window / kSearchWindow) +
                            " points a step over the last " + std::to_string(kSearchWindow) + " steps (bound " +
-                           std::to_string(kSearchVisitsPerStep) + "), near (" + std::to_string(p.x()) + ", " +
-                           std::to_string(p.y()) + ", " + std::to_string(p.z()) +
-                           "): edges far shorter than elsewhere crowd the search cells there, or a front is "
+                           std::to_string(kSearchVisitsPerStep) + "), near " + format_point(p) +
+                           ": edges far shorter than elsewhere crowd the search cells there, or a front is "
                            "running over finished mesh; raise min_edge");
 }
 
@@ -486,16 +490,13 @@ void Tracker::step(int& f) {
     const double shrunk = delta * std::ldexp(1.0, -rounds);
     if (shrunk < 0.25 * s_.sizing.min_edge && rounds > 1) {
       const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
-      const auto format = [](const Vec3& x) {
-        return "(" + std::to_string(x.x()) + ", " + std::to_string(x.y()) + ", " + std::to_string(x.z()) + ")";
-      };
-      std::string message = "adaptive: a front of " + std::to_string(fs_.fronts[f].size) + " points near " + format(p) +
+      std::string message = "adaptive: a front of " + std::to_string(fs_.fronts[f].size) + " points near " + format_point(p) +
                             " cannot advance even at a quarter of min_edge";
       if (const auto thin = thin_feature_at(node)) {
         const auto& [u, w] = *thin;
         message += ": the surface there has two sheets facing opposite ways " +
                    std::to_string((mesh_.positions[u] - mesh_.positions[w]).norm()) + " apart, near " +
-                   format(mesh_.positions[u]) + " and " + format(mesh_.positions[w]) +
+                   format_point(mesh_.positions[u]) + " and " + format_point(mesh_.positions[w]) +
                    ", a feature thinner than min_edge (" + std::to_string(s_.sizing.min_edge) +
                    "); lower min_edge to resolve it";
       } else {
