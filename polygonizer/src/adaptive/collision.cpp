@@ -58,21 +58,27 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
   };
   const Vec3 mid = 0.5 * (u_point + w_point);
   const double radius = 0.5 * (w_point - u_point).norm() + longest_front_edge();
+  // The first front edge, in the hash's order, that passes every test. The tests are cheapest
+  // first (most candidates do not cross the segment in the plane), which changes no answer:
+  // they are a conjunction.
   int hit = -1;
-  front_hash_.for_each_near(mid, radius, [&](int r) {
-    if (hit >= 0) return;
+  front_hash_.any_in(mid.array() - radius, mid.array() + radius, [&](int r) {
     const int vr = fs_.nodes[r].vertex, vs = fs_.nodes[fs_.nodes[r].next].vertex;
-    if (vr == vu || vr == vw || vs == vu || vs == vw) return;
-    if (!same_side(N, vr) || !same_side(N, vs)) return;
+    if (vr == vu || vr == vw || vs == vu || vs == vw) return false;
     const Vec3& ar = mesh_.positions[vr];
     const Vec3& bs = mesh_.positions[vs];
+    const Eigen::Vector2d a = flat(ar), b = flat(bs);
+    const double o1 = orient(u, w, a), o2 = orient(u, w, b);
+    if (!((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0))) return false;
+    const double o3 = orient(a, b, u), o4 = orient(a, b, w);
+    if (!((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) return false;
+    if (!same_side(N, vr) || !same_side(N, vs)) return false;
     // Only edges that pass near the segment in space count: on a thin tube or a narrow gap the
     // far side of the surface also projects across the segment in the tangent plane.
     const double reach = 0.25 * ((w_point - u_point).norm() + (bs - ar).norm());
-    if (segment_distance(u_point, w_point, ar, bs) > reach) return;
-    const Eigen::Vector2d a = flat(ar), b = flat(bs);
-    const double o1 = orient(u, w, a), o2 = orient(u, w, b), o3 = orient(a, b, u), o4 = orient(a, b, w);
-    if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) hit = r;
+    if (segment_distance(u_point, w_point, ar, bs) > reach) return false;
+    hit = r;
+    return true;
   });
   return hit;
 }
