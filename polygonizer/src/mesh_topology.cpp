@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <numeric>
-#include <unordered_map>
-#include <unordered_set>
 
 namespace cdp {
 
@@ -11,7 +9,12 @@ namespace {
 
 struct UnionFind {
   std::vector<int> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  explicit UnionFind(std::size_t n) { reset(n); }
+  // n singletons again, keeping the allocation (one union-find serves every vertex's fan).
+  void reset(std::size_t n) {
+    parent.resize(n);
+    std::iota(parent.begin(), parent.end(), 0);
+  }
   int find(int x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
@@ -27,6 +30,26 @@ struct HalfEdge {
   bool forward;     // traversed lo -> hi
   int face;
 };
+
+// Sorts items by key(item) in [0, keys) with a counting sort (stable, linear), then each run of
+// equal keys by `less`: the order std::sort by (key, less) gives, without its n log n on meshes
+// of millions of triangles (a run holds about six half-edges or two triangles).
+template <class T, class Key, class Less>
+void bucket_sort(std::vector<T>& items, std::size_t keys, Key key, Less less) {
+  std::vector<std::size_t> start(keys + 1, 0);
+  for (const T& x : items) ++start[static_cast<std::size_t>(key(x)) + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<T> sorted(items.size());
+  {
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (const T& x : items) sorted[fill[static_cast<std::size_t>(key(x))]++] = x;
+  }
+  for (std::size_t k = 0; k < keys; ++k)
+    if (start[k + 1] - start[k] > 1)
+      std::sort(sorted.begin() + static_cast<std::ptrdiff_t>(start[k]),
+                sorted.begin() + static_cast<std::ptrdiff_t>(start[k + 1]), less);
+  items = std::move(sorted);
+}
 
 }  // namespace
 
@@ -61,15 +84,16 @@ MeshTopology analyze_topology(const Mesh& mesh) {
       halfedges.push_back({std::min(u, v), std::max(u, v), u < v, static_cast<int>(f)});
     }
   }
-  std::sort(sorted_tris.begin(), sorted_tris.end());
+  bucket_sort(sorted_tris, nv, [](const std::array<int, 3>& x) { return x[0]; },
+              [](const std::array<int, 3>& a, const std::array<int, 3>& b) { return a < b; });
   for (std::size_t i = 1; i < nf; ++i)
     if (sorted_tris[i] == sorted_tris[i - 1]) ++t.duplicate_triangles;
 
   t.vertices = static_cast<std::size_t>(std::count(referenced.begin(), referenced.end(), 1));
   t.unreferenced_vertices = nv - t.vertices;
 
-  std::sort(halfedges.begin(), halfedges.end(), [](const HalfEdge& a, const HalfEdge& b) {
-    return a.lo != b.lo ? a.lo < b.lo : a.hi != b.hi ? a.hi < b.hi : a.face < b.face;
+  bucket_sort(halfedges, nv, [](const HalfEdge& h) { return h.lo; }, [](const HalfEdge& a, const HalfEdge& b) {
+    return a.hi != b.hi ? a.hi < b.hi : a.face < b.face;
   });
   UnionFind faces(nf);
   for (auto group = halfedges.begin(); group != halfedges.end();) {
@@ -84,9 +108,7 @@ MeshTopology analyze_topology(const Mesh& mesh) {
     for (auto other = group + 1; other != stop; ++other) faces.unite(group->face, other->face);
     group = stop;
   }
-  std::unordered_set<int> roots;
-  for (std::size_t f = 0; f < nf; ++f) roots.insert(faces.find(static_cast<int>(f)));
-  t.components = roots.size();
+  for (std::size_t f = 0; f < nf; ++f) t.components += faces.find(static_cast<int>(f)) == static_cast<int>(f);
 
   // Vertex manifoldness: the triangles around a vertex must form one fan, i.e. be connected
   // through edges that contain the vertex.
@@ -100,19 +122,21 @@ MeshTopology analyze_topology(const Mesh& mesh) {
     for (std::size_t f = 0; f < nf; ++f)
       for (int k = 0; k < 3; ++k) incident[fill[mesh.triangles[f][k]]++] = static_cast<int>(f);
   }
-  std::unordered_map<int, int> first_face_with;  // other vertex -> local face index
+  // (other vertex, local face index) for the faces around a vertex, sorted: faces that share an
+  // edge with the vertex are then neighbours in the list.
+  std::vector<std::pair<int, int>> around;
+  UnionFind local(0);
   for (std::size_t v = 0; v < nv; ++v) {
     const int begin = offsets[v], end = offsets[v + 1];
     if (end - begin <= 1) continue;
-    UnionFind local(end - begin);
-    first_face_with.clear();
-    for (int i = begin; i < end; ++i) {
-      for (int w : mesh.triangles[incident[i]]) {
-        if (w == static_cast<int>(v)) continue;
-        auto [it, inserted] = first_face_with.emplace(w, i - begin);
-        if (!inserted) local.unite(it->second, i - begin);
-      }
-    }
+    local.reset(static_cast<std::size_t>(end - begin));
+    around.clear();
+    for (int i = begin; i < end; ++i)
+      for (int w : mesh.triangles[incident[i]])
+        if (w != static_cast<int>(v)) around.emplace_back(w, i - begin);
+    std::sort(around.begin(), around.end());
+    for (std::size_t k = 1; k < around.size(); ++k)
+      if (around[k].first == around[k - 1].first) local.unite(around[k - 1].second, around[k].second);
     int fans = 0;
     for (int i = 0; i < end - begin; ++i) fans += local.find(i) == i;
     if (fans > 1) ++t.nonmanifold_vertices;
