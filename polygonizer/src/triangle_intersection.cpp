@@ -6,6 +6,8 @@
 // 1e-50 and 1e100 in magnitude).
 #include <cdp/core/triangle_intersection.h>
 
+#include "parallel.h"
+
 #include <cdp/core/errors.h>
 
 #include <algorithm>
@@ -314,6 +316,13 @@ class PairCollector {
     }
   }
   std::size_t count() const { return count_; }
+  std::size_t max_pairs() const { return max_pairs_; }
+  // Adds another collector's pairs: the same count and smallest pairs as adding them one by one.
+  void merge(PairCollector&& other) {
+    const std::size_t count = count_ + other.count_;
+    for (const auto& [f, g] : other.smallest_) add(f, g);
+    count_ = count;
+  }
   std::vector<std::pair<int, int>> sorted_pairs() {
     std::sort_heap(smallest_.begin(), smallest_.end());
     return std::move(smallest_);
@@ -440,31 +449,43 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
     if (!is_large[static_cast<std::size_t>(*it)])
       for_each_cell(*it, [&](int, int, int, std::size_t b) { members[--start[b]] = *it; });
 
+  // The triangles are shared among threads in blocks; each thread collects its own pairs and
+  // the collectors are merged, which gives the same count and smallest pairs in any order.
+  // Below kParallelTriangles threads cost more than they save.
+  constexpr std::size_t kParallelTriangles = 8192, kBlock = 1024;
+  const unsigned workers = n >= kParallelTriangles ? detail::worker_count() : 1;
+  std::vector<PairCollector> found(workers, PairCollector(out.max_pairs()));
+  detail::parallel_blocks(n, kBlock, workers, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    PairCollector& mine = found[worker];
+    for (std::size_t k = begin; k < end; ++k) {
+      const int f = live[k];
+      if (is_large[static_cast<std::size_t>(f)]) continue;
+      const Box& p = boxes[static_cast<std::size_t>(f)];
+      const CellRange& rf = ranges[static_cast<std::size_t>(f)];
+      for_each_cell(f, [&](int x, int y, int z, std::size_t b) {
+        // The bucket lists its triangles in increasing order; one with several cells in the
+        // bucket appears several times, consecutively.
+        const auto first = members.begin() + start[b], last = members.begin() + start[b + 1];
+        int previous = f;
+        for (auto it = std::upper_bound(first, last, f); it != last; ++it) {
+          const int g = *it;
+          if (g == previous) continue;
+          previous = g;
+          const Box& q = boxes[static_cast<std::size_t>(g)];
+          if (!boxes_overlap(p, q)) continue;
+          const CellRange& rg = ranges[static_cast<std::size_t>(g)];
+          if (std::max(rf.lo[0], rg.lo[0]) != x || std::max(rf.lo[1], rg.lo[1]) != y ||
+              std::max(rf.lo[2], rg.lo[2]) != z)
+            continue;
+          if (nondegenerate_triangles_intersect(corners(mesh, f), corners(mesh, g))) mine.add(f, g);
+        }
+      });
+    }
+  });
+  for (PairCollector& c : found) out.merge(std::move(c));
   const auto test = [&](int f, int g) {  // f < g
     if (nondegenerate_triangles_intersect(corners(mesh, f), corners(mesh, g))) out.add(f, g);
   };
-  for (const int f : live) {
-    if (is_large[static_cast<std::size_t>(f)]) continue;
-    const Box& p = boxes[static_cast<std::size_t>(f)];
-    const CellRange& rf = ranges[static_cast<std::size_t>(f)];
-    for_each_cell(f, [&](int x, int y, int z, std::size_t b) {
-      // The bucket lists its triangles in increasing order; one with several cells in the bucket
-      // appears several times, consecutively.
-      const auto first = members.begin() + start[b], last = members.begin() + start[b + 1];
-      int previous = f;
-      for (auto it = std::upper_bound(first, last, f); it != last; ++it) {
-        const int g = *it;
-        if (g == previous) continue;
-        previous = g;
-        const Box& q = boxes[static_cast<std::size_t>(g)];
-        if (!boxes_overlap(p, q)) continue;
-        const CellRange& rg = ranges[static_cast<std::size_t>(g)];
-        if (std::max(rf.lo[0], rg.lo[0]) != x || std::max(rf.lo[1], rg.lo[1]) != y || std::max(rf.lo[2], rg.lo[2]) != z)
-          continue;
-        test(f, g);
-      }
-    });
-  }
   for (const int f : large) {
     const Box& p = boxes[static_cast<std::size_t>(f)];
     for (const int g : live) {

@@ -75,6 +75,20 @@ TEST(SelfIntersection, OverlappingSpheresMatchBruteForce) {
   EXPECT_TRUE(find_self_intersections(m, 0).examples.empty());
 }
 
+// Meshes of 8192 triangles or more are checked by the core on all cores (blocks of triangles,
+// merged collectors): the same pairs as Embree's broad phase, an independent one.
+TEST(SelfIntersection, CoreBroadPhaseOnLargeMeshesMatchesEmbrees) {
+  const Mesh m = merged(icosphere(5), icosphere(5, Vec3(0.5, 0.1, 0.0)));
+  ASSERT_GE(m.num_triangles(), 40000u);
+  const SelfIntersectionReport r = find_self_intersections(m, 1000000);
+  EXPECT_GT(r.pairs, 500u);
+  EXPECT_EQ(self_intersecting_pairs(m, 1000000), r.examples);
+  EXPECT_EQ(count_self_intersecting_pairs(m), r.pairs);
+  // With a bound on the pairs kept: the smallest ones, whichever thread found them.
+  EXPECT_EQ(self_intersecting_pairs(m, 7), Pairs(r.examples.begin(), r.examples.begin() + 7));
+  EXPECT_TRUE(self_intersecting_pairs(icosphere(6)).empty());
+}
+
 TEST(SelfIntersection, SpheresFarApartHaveNone) {
   const Mesh m = merged(icosphere(2), icosphere(2, Vec3(3.0, 0.0, 0.0)));
   EXPECT_EQ(pairs_of(m), 0u);

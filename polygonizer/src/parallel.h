@@ -1,0 +1,59 @@
+// Work shared among threads for the core's data-parallel passes (the seed grid's values, the
+// final self-intersection check): blocks of a range handed out in turn from an atomic counter.
+// Which thread takes which block varies from run to run, so callers give every block its own
+// output slot, or merge per-thread results with an operation whose result does not depend on
+// the order (sums, the smallest pairs): the answer is then the same on any number of threads.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace cdp::detail {
+
+// Threads for the core's parallel passes: the machine's hardware threads, at most kMaxThreads
+// (the passes are memory-bound beyond that), at least one.
+inline constexpr unsigned kMaxThreads = 8;
+inline unsigned worker_count() {
+  const unsigned hw = std::thread::hardware_concurrency();
+  return std::clamp(hw == 0 ? 1u : hw, 1u, kMaxThreads);
+}
+
+// Calls fn(begin, end, worker) for consecutive blocks [begin, end) of [0, n), each block once,
+// on up to `workers` threads (worker in [0, workers)). A range of at most one block runs on the
+// calling thread. The first exception thrown by fn is rethrown here once all threads are done.
+template <class Fn>
+void parallel_blocks(std::size_t n, std::size_t block, unsigned workers, Fn&& fn) {
+  block = std::max<std::size_t>(block, 1);
+  const std::size_t blocks = (n + block - 1) / block;
+  workers = static_cast<unsigned>(std::min<std::size_t>(std::max(workers, 1u), blocks));
+  if (workers <= 1) {
+    for (std::size_t b = 0; b < blocks; ++b) fn(b * block, std::min(n, (b + 1) * block), 0u);
+    return;
+  }
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  const auto work = [&](unsigned worker) {
+    try {
+      for (std::size_t b; (b = next.fetch_add(1, std::memory_order_relaxed)) < blocks;)
+        fn(b * block, std::min(n, (b + 1) * block), worker);
+    } catch (...) {
+      const std::lock_guard<std::mutex> lock(error_mutex);
+      if (!error) error = std::current_exception();
+      next.store(blocks, std::memory_order_relaxed);  // the others stop at their next block
+    }
+  };
+  std::vector<std::thread> threads;
+  threads.reserve(workers - 1);
+  for (unsigned w = 1; w < workers; ++w) threads.emplace_back(work, w);
+  work(0);
+  for (auto& t : threads) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace cdp::detail
