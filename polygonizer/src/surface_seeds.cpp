@@ -1,3 +1,5 @@
+#include "parallel.h"
+
 #include <cdp/core/errors.h>
 #include <cdp/core/newton_projection.h>
 #include <cdp/core/surface_seeds.h>
@@ -47,7 +49,15 @@ SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options) {
     for (int j = 0; j <= g.n[1]; ++j)
       for (int i = 0; i <= g.n[0]; ++i) points.push_back(g.point(i, j, k));
   g.values.resize(count);
-  field.values(points.data(), g.values.data(), count);
+  // A thread-safe field's grid is sampled in blocks on all cores (each value lands in its own
+  // slot: the same grid on any number of threads); any other field in one batched call.
+  constexpr std::size_t kBlock = 4096;
+  if (field.thread_safe() && count > kBlock)
+    detail::parallel_blocks(count, kBlock, detail::worker_count(), [&](std::size_t begin, std::size_t end, unsigned) {
+      field.values(points.data() + begin, g.values.data() + begin, end - begin);
+    });
+  else
+    field.values(points.data(), g.values.data(), count);
   for (std::size_t i = 0; i < count; ++i)
     if (!std::isfinite(g.values[i]))
       throw NoSurfaceError("seeding: the field is not finite (" + std::to_string(g.values[i]) + ") at " +

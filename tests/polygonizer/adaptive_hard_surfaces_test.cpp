@@ -175,8 +175,11 @@ TEST_P(HardSurfaces, CorrectMeshOrClearError) {
     for (double k : h.meshes_at) required = required || k == factor;
     EXPECT_FALSE(required) << h.name << " at factor " << factor << " must mesh: " << outcome;
   }
-  for (double k : h.thin_at)
-    if (k == factor) EXPECT_NE(outcome.find("a feature thinner than min_edge"), std::string::npos) << outcome;
+  for (double k : h.thin_at) {
+    if (k == factor) {
+      EXPECT_NE(outcome.find("a feature thinner than min_edge"), std::string::npos) << outcome;
+    }
+  }
 }
 
 std::vector<Case> all_cases() {

@@ -98,6 +98,13 @@ class Field {
   // The model's type name as written in JSON ("sphere", "vis", ...).
   virtual std::string type_name() const = 0;
 
+  // Whether evaluations (the const calls above) may run on several threads at once: true for a
+  // model whose evaluation reads only its own immutable data. The core's data-parallel passes
+  // (the seed grid) use threads only for such fields; results are the same either way. False by
+  // default, so that a model with a cache, or one calling into an interpreter (a Python
+  // function, which must hold its lock), is evaluated on the caller's thread only.
+  virtual bool thread_safe() const { return false; }
+
   // A bound L with |F(a) - F(b)| <= L |a - b| inside bounds(), when the model knows one.
   // Ray casting steps by |F| / L; models without a bound let the caller estimate one.
   virtual std::optional<double> lipschitz_bound() const { return std::nullopt; }

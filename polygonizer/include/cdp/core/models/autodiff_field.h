@@ -14,8 +14,13 @@
 
 namespace cdp {
 
+// Evaluation is taken to be thread-safe (evaluate is const and, in every model here, reads only
+// the model's own data); a derived class with a cache overrides thread_safe() to return false.
 template <class Derived>
 class AutodiffField : public Field {
+ public:
+  bool thread_safe() const override { return true; }
+
  protected:
   double eval_value(const Vec3& p) const override { return self().evaluate(p.x(), p.y(), p.z()); }
   double eval_value_gradient(const Vec3& p, Vec3& gradient) const override {

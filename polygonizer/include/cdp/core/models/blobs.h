@@ -21,6 +21,7 @@ class Blobs : public Field {
   // Throws InvalidInputError for an empty list, non-positive radii or a non-positive threshold.
   Blobs(BlobKernel kernel, double threshold, std::vector<Blob> blobs);
   std::string type_name() const override { return "blobs"; }
+  bool thread_safe() const override { return true; }  // evaluation reads immutable data only
   std::optional<double> lipschitz_bound() const override { return lipschitz_; }
   // Only blobs whose support reaches the region count (Wyvill kernels vanish beyond R).
   std::optional<double> lipschitz_bound(const Box& region) const override;

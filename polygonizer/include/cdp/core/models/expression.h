@@ -22,6 +22,7 @@ class Expression : public Field {
   Expression(const std::string& formula, const std::map<std::string, double>& params, const Box& bounds);
   ~Expression() override;
   std::string type_name() const override { return "expression"; }
+  bool thread_safe() const override { return true; }  // evaluation reads immutable data only
   const std::string& formula() const { return formula_; }
 
  protected:

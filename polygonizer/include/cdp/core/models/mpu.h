@@ -73,6 +73,7 @@ class Mpu : public Field {
   Mpu(const OrientedPoints& points, const MpuOptions& options = {}, std::string source = "mpu");
 
   std::string type_name() const override { return "mpu"; }
+  bool thread_safe() const override { return true; }  // evaluation reads immutable data only
   const MpuStats& stats() const { return stats_; }
   // sum_i w_i(p): positive wherever F is the blend (everywhere in the octree's root cube).
   double weight_sum(const Vec3& p) const;
