@@ -121,6 +121,21 @@ class Improver {
   int tri_count() const { return static_cast<int>(m_.triangles.size()); }
   const Vec3& P(int v) const { return m_.positions[v]; }
   double tri_min_angle(const Tri& t) const { return min_angle(P(t[0]), P(t[1]), P(t[2])); }
+  // tri_min_angle(t) < limit, with one arc tangent for most triangles instead of three: the
+  // smallest angle is the one facing the shortest edge, and the two differ only by rounding
+  // (far below kSurelyAbove) where edges tie, so a triangle whose angle there is clearly above
+  // the limit is above it; the others are decided by tri_min_angle itself (same answers).
+  bool tri_below(const Tri& t, double limit) const {
+    constexpr double kSurelyAbove = 1e-9;  // radians
+    int k = 0;
+    double shortest = (P(t[2]) - P(t[1])).squaredNorm();  // faces t[0]
+    for (int i = 1; i < 3; ++i) {
+      const double l = (P(t[(i + 2) % 3]) - P(t[(i + 1) % 3])).squaredNorm();
+      if (l < shortest) shortest = l, k = i;
+    }
+    if (angle_at(P(t[k]), P(t[(k + 1) % 3]), P(t[(k + 2) % 3])) > limit + kSurelyAbove) return false;
+    return tri_min_angle(t) < limit;
+  }
   Vec3 face_normal(const Tri& t) const {
     const Vec3 n = (P(t[1]) - P(t[0])).cross(P(t[2]) - P(t[0]));
     const double l = n.norm();
@@ -636,7 +651,7 @@ class Improver {
   void repair() {
     std::vector<int> work;
     for (int t = 0; t < tri_count(); ++t)
-      if (alive_[t] && tri_min_angle(m_.triangles[t]) < o_.improve_below) work.push_back(t);
+      if (alive_[t] && tri_below(m_.triangles[t], o_.improve_below)) work.push_back(t);
     r_.bad_before = std::max(r_.bad_before, work.size());
     for (int round = 0; round < kQualityRounds && !work.empty(); ++round) {
       std::vector<std::pair<double, int>> order;
@@ -658,11 +673,11 @@ class Improver {
       next.erase(std::unique(next.begin(), next.end()), next.end());
       work.clear();
       for (int t : next)
-        if (alive_[t] && tri_min_angle(m_.triangles[t]) < o_.improve_below) work.push_back(t);
+        if (alive_[t] && tri_below(m_.triangles[t], o_.improve_below)) work.push_back(t);
     }
     std::size_t bad = 0;
     for (int t = 0; t < tri_count(); ++t)
-      if (alive_[t] && tri_min_angle(m_.triangles[t]) < o_.improve_below) ++bad;
+      if (alive_[t] && tri_below(m_.triangles[t], o_.improve_below)) ++bad;
     r_.bad_after = bad;
   }
 
