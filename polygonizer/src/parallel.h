@@ -15,12 +15,13 @@
 
 namespace cdp::detail {
 
-// Threads for the core's parallel passes: the machine's hardware threads, at most kMaxThreads
-// (the passes are memory-bound beyond that), at least one.
+// Threads for the core's parallel passes: `requested` when positive, else the machine's
+// hardware threads; at most kMaxThreads (the passes are memory-bound beyond that), at least one.
 inline constexpr unsigned kMaxThreads = 8;
-inline unsigned worker_count() {
+inline unsigned worker_count(int requested = 0) {
   const unsigned hw = std::thread::hardware_concurrency();
-  return std::clamp(hw == 0 ? 1u : hw, 1u, kMaxThreads);
+  const unsigned n = requested > 0 ? static_cast<unsigned>(requested) : hw;
+  return std::clamp(n, 1u, kMaxThreads);
 }
 
 // Calls fn(begin, end, worker) for consecutive blocks [begin, end) of [0, n), each block once,

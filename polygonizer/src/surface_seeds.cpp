@@ -53,7 +53,7 @@ SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options) {
   // slot: the same grid on any number of threads); any other field in one batched call.
   constexpr std::size_t kBlock = 4096;
   if (field.thread_safe() && count > kBlock)
-    detail::parallel_blocks(count, kBlock, detail::worker_count(), [&](std::size_t begin, std::size_t end, unsigned) {
+    detail::parallel_blocks(count, kBlock, detail::worker_count(options.threads), [&](std::size_t begin, std::size_t end, unsigned) {
       field.values(points.data() + begin, g.values.data() + begin, end - begin);
     });
   else

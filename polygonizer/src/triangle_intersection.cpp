@@ -360,7 +360,7 @@ std::uint64_t cell_hash(int x, int y, int z) {
 // that cell holds both triangles, so each overlapping pair is tested exactly once, even when
 // distinct cells share a bucket. Large triangles are tested against all others (two large ones
 // from the lower index): at most about (16 + sqrt n) n box comparisons.
-void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollector& out) {
+void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollector& out, int threads) {
   std::vector<int> live;
   for (std::size_t f = 0; f < boxes.size(); ++f)
     if ((boxes[f].min.array() <= boxes[f].max.array()).all()) live.push_back(static_cast<int>(f));
@@ -453,7 +453,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   // the collectors are merged, which gives the same count and smallest pairs in any order.
   // Below kParallelTriangles threads cost more than they save.
   constexpr std::size_t kParallelTriangles = 8192, kBlock = 1024;
-  const unsigned workers = n >= kParallelTriangles ? detail::worker_count() : 1;
+  const unsigned workers = n >= kParallelTriangles ? detail::worker_count(threads) : 1;
   std::vector<PairCollector> found(workers, PairCollector(out.max_pairs()));
   detail::parallel_blocks(n, kBlock, workers, [&](std::size_t begin, std::size_t end, unsigned worker) {
     PairCollector& mine = found[worker];
@@ -547,17 +547,17 @@ std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* 
   return boxes;
 }
 
-std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs) {
+std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs, int threads) {
   const std::vector<Box> boxes = triangle_boxes_for_intersection(mesh, nullptr, "self_intersecting_pairs");
   PairCollector out(max_pairs);
-  hash_grid_pairs(mesh, boxes, out);
+  hash_grid_pairs(mesh, boxes, out, threads);
   return out.sorted_pairs();
 }
 
-std::size_t count_self_intersecting_pairs(const Mesh& mesh) {
+std::size_t count_self_intersecting_pairs(const Mesh& mesh, int threads) {
   const std::vector<Box> boxes = triangle_boxes_for_intersection(mesh, nullptr, "count_self_intersecting_pairs");
   PairCollector out(0);
-  hash_grid_pairs(mesh, boxes, out);
+  hash_grid_pairs(mesh, boxes, out, threads);
   return out.count();
 }
 

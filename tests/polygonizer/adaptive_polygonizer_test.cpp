@@ -183,6 +183,26 @@ TEST(AdaptivePolygonizer, SameInputGivesTheSameMeshBitForBit) {
   for (std::size_t v = 0; v < a.mesh.positions.size(); ++v) ASSERT_EQ(a.mesh.positions[v], b.mesh.positions[v]);
 }
 
+TEST(AdaptivePolygonizer, SameMeshOnOneThreadOrSeveral) {
+  // Factor 6: about 30k triangles, so that the self-intersection check runs in parallel too
+  // (from 8192 triangles), as does the seed grid of this thread-safe field.
+  const auto field = test::tanglecube();
+  ASSERT_TRUE(field->thread_safe());
+  AdaptiveOptions o = coarse(6);
+  o.threads = 1;
+  const auto a = polygonize_adaptive(*field, o);
+  ASSERT_GT(a.mesh.num_triangles(), 8192u);
+  for (int threads : {2, 3, 0}) {
+    o.threads = threads;
+    const auto b = polygonize_adaptive(*field, o);
+    ASSERT_EQ(a.mesh.triangles, b.mesh.triangles) << threads << " threads";
+    ASSERT_EQ(a.mesh.positions, b.mesh.positions) << threads << " threads";
+    EXPECT_EQ(a.stats.field_evaluations.total(), b.stats.field_evaluations.total());
+  }
+  o.threads = -1;
+  EXPECT_THROW(polygonize_adaptive(*field, o), InvalidInputError);
+}
+
 TEST(AdaptivePolygonizer, CurvaturePropertiesAreAttachedOnRequest) {
   Sphere sphere(Vec3::Zero(), 2.0);
   AdaptiveOptions o = coarse(3);

@@ -75,6 +75,7 @@ adaptive::Settings resolve(const Field& field, const AdaptiveOptions& o) {
   if (!(o.collision_factor >= 0.5 && o.collision_factor <= 3))
     throw InvalidInputError("adaptive: collision_factor must lie in [0.5, 3]");
   if (o.seed_resolution < 2) throw InvalidInputError("adaptive: seed_resolution must be at least 2");
+  if (o.threads < 0) throw InvalidInputError("adaptive: threads must be 0 (all cores) or positive");
   s.rule = o.triangle_count;
   s.collision_factor = o.collision_factor;
   s.curvature_properties = o.curvature_properties;
@@ -105,7 +106,7 @@ std::string format_point(const Vec3& p) {
 // NoSurfaceError naming the place otherwise. (A test of triangles against the vertex normals
 // was tried and dropped: the MPU models' correct meshes have triangles whose face turns more
 // than 120 degrees from a noisy vertex normal.)
-std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersections) {
+std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersections, int threads) {
   const MeshTopology t = analyze_topology(mesh);
   const auto fail = [](const std::string& what, const Vec3& where) {
     throw NoSurfaceError("adaptive: the mesh came out " + what + " near " + format_point(where) +
@@ -120,9 +121,9 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
     fail("with " + std::to_string(t.components) + " components from " + std::to_string(seeds) + " seeds",
          mesh.positions.front());
   if (check_intersections) {
-    const auto pairs = self_intersecting_pairs(mesh, 1);
+    const auto pairs = self_intersecting_pairs(mesh, 1, threads);
     if (!pairs.empty())
-      fail("intersecting itself (" + std::to_string(count_self_intersecting_pairs(mesh)) + " pairs of triangles)",
+      fail("intersecting itself (" + std::to_string(count_self_intersecting_pairs(mesh, threads)) + " pairs of triangles)",
            mesh.positions[mesh.triangles[pairs.front().first][0]]);
   }
   return t.components;
@@ -152,6 +153,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   enter("sampling the seed grid");
   SeedOptions seed_options;
   seed_options.resolution = options.seed_resolution;
+  seed_options.threads = options.threads;
   const SeedGrid grid = sample_seed_grid(field, seed_options);
 
   // The hash cell follows the edge length the sizing asks for at up to 64 grid crossings (their
@@ -242,7 +244,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
 
   enter("checking the mesh");
   PolygonizeStats& st = result.stats;
-  st.components = check_mesh(mesh, seeding.seeds, options.check_self_intersections);
+  st.components = check_mesh(mesh, seeding.seeds, options.check_self_intersections, options.threads);
   st.method = "adaptive";
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   st.field_evaluations = field.counts() - before;

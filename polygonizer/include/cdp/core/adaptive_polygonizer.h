@@ -77,6 +77,10 @@ struct AdaptiveOptions {
   // triangle) and throws NoSurfaceError naming the place when two intersect. On by default: a
   // mesh that is wrong without saying so is worse than a slower run.
   bool check_self_intersections = true;
+  // Threads of the data-parallel passes (the seed grid of a thread-safe field, the
+  // self-intersection check): 0 all cores (at most 8), 1 the caller's only. The tracker itself
+  // runs on the caller's thread. The mesh is the same, bit for bit, on any number.
+  int threads = 0;
   // Adds vertex_scalars "mac" (maximum absolute curvature) and "shape_index" to the mesh.
   bool curvature_properties = false;
   // Bounds; hitting one throws LimitExceededError. 0: derived from the box and min_edge

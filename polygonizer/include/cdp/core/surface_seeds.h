@@ -15,6 +15,9 @@ struct SeedOptions {
   int resolution = 32;  // grid cells along the longest side of the box
   // Reject fields whose surface leaves the box (F < 0 on the box's boundary).
   bool require_closed_in_box = true;
+  // Threads sampling the grid of a thread-safe field (Field::thread_safe): 0 all cores (at most
+  // 8), 1 the caller's only. The grid is the same on any number.
+  int threads = 0;
 };
 
 struct SurfaceSeed {

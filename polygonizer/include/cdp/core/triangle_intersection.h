@@ -33,14 +33,16 @@ bool triangles_intersect(const Mesh& mesh, int f, int g);
 // Every intersecting pair (f, g), f < g, of distinct triangles (see triangles_intersect), found
 // by a hash grid over the triangles' bounding boxes (cells about the median longest edge; the
 // few triangles much larger than a cell are tested against all): the first max_pairs of them in
-// lexicographic order. Every pair whose boxes overlap is tested exactly once. Deterministic,
-// single-threaded, no output; memory linear in the number of triangles (plus max_pairs), time
+// lexicographic order. Every pair whose boxes overlap is tested exactly once. Meshes of 8192
+// triangles or more are searched on `threads` threads (0: all cores, at most 8); the result is
+// the same on any number. Deterministic, no output; memory linear in the number of triangles (plus max_pairs), time
 // linear for triangles of similar sizes. Throws InvalidInputError on out-of-range indices or
 // non-finite positions (of vertices that triangles use); LimitExceededError when the grid would
 // hold 2^32 entries (beyond 67 million triangles).
-std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs = 16);
+std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs = 16,
+                                                         int threads = 0);
 // The number of such pairs (the same search).
-std::size_t count_self_intersecting_pairs(const Mesh& mesh);
+std::size_t count_self_intersecting_pairs(const Mesh& mesh, int threads = 0);
 
 // ---- For broad phases (self_intersecting_pairs here, Embree's in <cdp/raytrace/self_intersection.h>).
 
