@@ -252,7 +252,7 @@ def time_to_accuracy_section(runs):
     names = dict((f, n) for f, n, _ in TTA_FAMILIES)
     order = {f: i for i, (f, _, _) in enumerate(TTA_FAMILIES)}
     for field in sorted(by_field):
-        fr = sorted(by_field[field], key=lambda r: (order.get(r["family"], 9), r["target"]))
+        fr = sorted(by_field[field], key=lambda r: (order.get(r["family"], 9), r["target"] != "phong", r["target"]))
         fig, axes = plt.subplots(1, 2, figsize=(9, 3.0), squeeze=False)
         for ax, (target, xlabel, goal) in zip(axes.flat, TTA_TARGETS):
             for fam, name, marker in TTA_FAMILIES:
