@@ -16,18 +16,21 @@
 //   mt, mc              the paper's precisions 0..5 on the variational fields (cell = constraint
 //                       spacing x 1, 0.7, 0.6, 0.5, 0.4, 0.3), then cells diagonal / N for
 //                       N = 16 x sqrt(2)^k up to 4096, those finer than the last precision's cell
-// and stops one step after both targets are reached. Bounds: a family stops after a run slower
-// than kMaxRunSeconds or larger than kMaxTriangles (the polygonizers' own max_triangles is set a
-// little above, so a runaway run throws instead of going on). A run that throws (the adaptive
-// method does on some surfaces) counts as not reaching and the walk goes on.
+// and stops one step after both targets are reached (none when the step reaching them took over
+// half the time bound). Bounds: a family stops after a run slower than kMaxRunSeconds or larger
+// than kMaxTriangles (the polygonizers' own max_triangles is set a little above, so a runaway run
+// throws instead of going on). A run that throws (the adaptive method does on some surfaces)
+// counts as not reaching and the walk goes on. A run whose silhouette disagrees with the
+// surface's on more than 1% of the rays does not count either: the Phong and depth means are
+// over the rays that hit both, so a mesh missing a part would look accurate (Marching Cubes
+// loses parts of the tanglecube at cell diagonal/16).
 // Each run of the ladder is timed once. Of the runs that reach a target, the first two and any
 // other within 1.5 times the fastest single run are timed again as the median of 3 runs, and
-// the fastest is chosen (single runs are noisy on a shared machine). A run whose silhouette
-// disagrees with the surface's on more than 1% of the rays does not count: the Phong and depth
-// means are over the rays that hit both, so a mesh missing a part would look accurate (Marching
-// Cubes loses parts of the tanglecube at cell diagonal/16). Times are the polygonizer's own
-// stats.seconds (manual time). The adaptive runs keep their defaults (check_self_intersections
-// on, about 1 us per triangle), as `polygonize` and the experiments run them.
+// the fastest is chosen, a later step only when at least 20% faster (single runs are noisy on a
+// shared machine, and the configuration a benchmark times should not change with the noise).
+// Times are the polygonizer's own stats.seconds (manual time, wall clock). The adaptive runs
+// keep their defaults (check_self_intersections on, about 1 us per triangle), as `polygonize`
+// and the experiments run them.
 //
 // Benchmarks: BM_SlowTimeToAccuracy/<field>/<family>/<phong|depth>, registered at start-up. The
 // sweep of a field runs once, on the first of its benchmarks that runs (a static cache); each
@@ -82,6 +85,8 @@ constexpr double kMaxSilhouette = 0.01;
 // Beyond the first two steps reaching a target, candidates slower than this times the fastest
 // single run reaching it are not timed again.
 constexpr double kCandidateSlack = 1.5;
+// A candidate later on the ladder than the current choice replaces it only below this share of its time.
+constexpr double kLaterStepMargin = 0.8;
 
 const char* const kFields[][2] = {{"bunny_vis800", "experiments/fields/bunny_vis800.json"},
                                   {"igea_vis4004", "experiments/fields/igea_vis4004.json"},
@@ -318,7 +323,7 @@ const FieldSweep& sweep(int field_index) {
       phong = phong || reaches(o, "phong");
       depth = depth || reaches(o, "depth");
       if (after > 0) --after;
-      else if (phong && depth) after = 1;
+      else if (phong && depth) after = o.seconds > kMaxRunSeconds / 2 ? 0 : 1;  // the extra step only when cheap
       if (o.seconds > kMaxRunSeconds || o.triangles > kMaxTriangles || o.bound) {
         stop = "bound reached at " + format_step(step);
         break;
@@ -335,7 +340,9 @@ const FieldSweep& sweep(int field_index) {
         if (!reaches(o, t)) continue;
         if (++first > 2 && o.seconds > kCandidateSlack * fastest) continue;
         if (!o.median_seconds) o.median_seconds = timed_median(field, o.step);
-        if (!c.reached || *o.median_seconds < c.seconds) {
+        // Ladders grow in triangles, so a later step wins only when clearly faster: noise alone
+        // should not switch the configuration a benchmark times from one run to the next.
+        if (!c.reached || *o.median_seconds < kLaterStepMargin * c.seconds) {
           c.reached = true;
           c.outcome = o;
           c.seconds = *o.median_seconds;
