@@ -249,6 +249,46 @@ def evaluations_per_item(run):
     return rows
 
 
+# ---- time to accuracy (bench/time_to_accuracy.cpp) ----
+
+TTA_PREFIX = "BM_SlowTimeToAccuracy/"
+# The message of a time-to-accuracy entry whose parameter ladder did not reach the target: a
+# result (the method cannot get there within the bounds), not a broken benchmark.
+UNREACHED = " not reached up to "
+
+
+def unreached(bench):
+    """True for a benchmark skipped because its accuracy target was not reached."""
+    return bool(bench.get("error")) and UNREACHED in bench["error"]
+
+
+def time_to_accuracy(run):
+    """Rows {field, family, target, benchmark, seconds, triangles, parameter, parameter_name, error
+    (the accuracy reached), vs_mt, vs_mc, missing} of the BM_SlowTimeToAccuracy/<field>/<family>/
+    <target>[/...] benchmarks; missing holds the message when the target was not reached."""
+    rows = []
+    for b in run["benchmarks"]:
+        if not b["name"].startswith(TTA_PREFIX):
+            continue
+        parts = b["name"][len(TTA_PREFIX):].split("/")
+        if len(parts) < 3:
+            continue
+        field, family, target = parts[:3]
+        row = {"field": field, "family": family, "target": target, "benchmark": key(b), "missing": b.get("error"),
+               "seconds": None, "triangles": None, "parameter": None, "parameter_name": None, "error": None,
+               "vs_mt": None, "vs_mc": None}
+        if not b.get("error"):
+            row["seconds"] = summary(b)["median"]
+            row["triangles"] = counter_median(b, "triangles")
+            for name in ("factor", "tolerance_per_diag", "precision", "cell_per_diag"):
+                if counter_median(b, name) is not None:
+                    row["parameter"], row["parameter_name"] = counter_median(b, name), name
+            row["error"] = counter_median(b, "phong_deg" if target == "phong" else "depth_relative")
+            row["vs_mt"], row["vs_mc"] = counter_median(b, "vs_mt"), counter_median(b, "vs_mc")
+        rows.append(row)
+    return rows
+
+
 # ---- export for benchmark-tracking CI actions ----
 
 def export(run):

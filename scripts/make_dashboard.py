@@ -118,6 +118,12 @@ def regression_section(runs):
     rows, counts = [], {"regression": 0, "improvement": 0, "same": 0, "unknown": 0}
     for b in new["benchmarks"]:
         k = bl.key(b)
+        if bl.unreached(b) and k not in olds:
+            # A time-to-accuracy target the ladder does not reach: a result, not a failure, unless
+            # the previous run reached it (then it is a regression, below).
+            rows.append(("unknown", [E(k), "", "", "", "missing: " + E(b["error"])]))
+            counts["unknown"] += 1
+            continue
         if b.get("error"):
             rows.append(("regression", [E(k), "", "", "", "error: " + E(b["error"])]))
             counts["regression"] += 1
@@ -221,6 +227,63 @@ def inrun_section(runs):
     else:
         out.append('<p class="note">Not available: no benchmark reports {}.</p>'.format(
             ", ".join(bl.PER_ITEM_COUNTERS)))
+    return "".join(out)
+
+
+TTA_FAMILIES = (("adaptive_factor", "adaptive (factor)", "o"), ("adaptive_tolerance", "adaptive (tolerance)", "s"),
+                ("mt", "MT", "^"), ("mc", "MC", "v"))
+TTA_TARGETS = (("phong", "mean Phong error (°)", 0.5), ("depth", "mean depth error / box diagonal", 1e-4))
+
+
+def time_to_accuracy_section(runs):
+    out = ["<h2>Time to accuracy</h2>"]
+    rows = bl.time_to_accuracy(runs[-1]) if runs else []
+    if not rows:
+        return out[0] + ('<p class="note">Not available: the latest run has no <code>BM_SlowTimeToAccuracy</code> '
+                         'benchmark (bench/time_to_accuracy.cpp; the short mode skips it).</p>')
+    out.append("<p>Per field and method, the fastest run that reaches a mean Phong error ≤ 0.5° and a mean depth "
+               "error ≤ 10<sup>−4</sup> of the box diagonal (Table 1's camera: 6 views, 200² rays, perspective), "
+               "found by a parameter ladder; time = the polygonizer's own, median of the repetitions. A missing "
+               "point is a target the ladder did not reach within its bounds. Adaptive/MT and adaptive/MC are "
+               "time ratios for the same field and target (below 1: the adaptive method is faster).</p>")
+    by_field = {}
+    for r in rows:
+        by_field.setdefault(r["field"], []).append(r)
+    names = dict((f, n) for f, n, _ in TTA_FAMILIES)
+    order = {f: i for i, (f, _, _) in enumerate(TTA_FAMILIES)}
+    for field in sorted(by_field):
+        fr = sorted(by_field[field], key=lambda r: (order.get(r["family"], 9), r["target"] != "phong", r["target"]))
+        fig, axes = plt.subplots(1, 2, figsize=(9, 3.0), squeeze=False)
+        for ax, (target, xlabel, goal) in zip(axes.flat, TTA_TARGETS):
+            for fam, name, marker in TTA_FAMILIES:
+                pts = [(r["error"], 1e3 * r["seconds"]) for r in fr
+                       if r["family"] == fam and r["target"] == target and r["seconds"] and r["error"] is not None]
+                if pts:
+                    ax.plot([p[0] for p in pts], [p[1] for p in pts], marker, ms=7, label=name)
+            ax.axvline(goal, color="gray", lw=0.8, ls=":")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel(xlabel, fontsize=8)
+            ax.set_ylabel("ms", fontsize=8)
+            ax.tick_params(labelsize=7)
+            ax.grid(alpha=0.3)
+            ax.set_title("{}: time to reach {} ≤ {:g}".format(field, target, goal), fontsize=9)
+            if ax.get_legend_handles_labels()[0]:
+                ax.legend(fontsize=6)
+        fig.tight_layout()
+        out.append("<h3>{}</h3>".format(E(field)))
+        out.append(img(png(fig), "{} time to accuracy".format(field)))
+        out.append(table(["Method", "Target", "Parameter", "Triangles", "Time (ms)", "Error reached", "Adaptive/MT",
+                          "Adaptive/MC"],
+                         [("" if not r["missing"] else "unknown",
+                           [E(names.get(r["family"], r["family"])), E(r["target"]),
+                            E("{} {:g}".format(r["parameter_name"], r["parameter"])) if r["parameter"] is not None else "",
+                            fnum(r["triangles"], "{:.0f}"), fnum(r["seconds"] and 1e3 * r["seconds"], "{:.1f}"),
+                            fnum(r["error"], "{:.3g}"), fnum(r["vs_mt"], "{:.2f}"), fnum(r["vs_mc"], "{:.2f}")]
+                           if not r["missing"] else
+                           [E(names.get(r["family"], r["family"])), E(r["target"]), "", "", "", "missing: " +
+                            E(r["missing"]), "", ""])
+                          for r in fr]))
     return "".join(out)
 
 
@@ -357,7 +420,8 @@ def build_page(runs, table_path):
         title += " — " + label(runs[-1])
     parts = ["<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title><style>{}</style>"
              "</head><body><h1>{}</h1>".format(E(title), CSS, E(title)),
-             context_section(runs), regression_section(runs), inrun_section(runs), quality_section(table_path),
+             context_section(runs), regression_section(runs), inrun_section(runs), time_to_accuracy_section(runs),
+             quality_section(table_path),
              series_section(runs), METHOD.format(z=bl.Z, floor=100 * bl.NOISE_FLOOR), "</body></html>\n"]
     return "".join(parts)
 

@@ -126,7 +126,13 @@ def run_binary(path, settings, tmpdir):
     data = {}
     try:
         with open(out_json) as f:
-            data = json.load(f)
+            text = f.read()
+        # Google Benchmark leaves the file empty (and exits with 0) when the filter matches none of
+        # the program's benchmarks, e.g. a program of Slow benchmarks only in the short mode.
+        if text.strip() or proc.returncode != 0:
+            data = json.loads(text)
+        else:
+            info["note"] = "no benchmark matched the filter"
     except (OSError, ValueError) as e:
         info["error"] = "no JSON output ({})".format(e)
     if proc.returncode != 0:

@@ -55,6 +55,25 @@ def write_json(path, data):
         json.dump(data, f)
 
 
+def tta_benchmarks(depth_reached=False):
+    """bench_time_to_accuracy entries of one field: adaptive and MT reach the Phong target (the
+    adaptive method in half MT's time); nobody reaches the depth target unless depth_reached."""
+    name = "BM_SlowTimeToAccuracy/bunny_vis800/{}/{}/iterations:1/manual_time"
+    ok = [bench("bench_time_to_accuracy", name.format("adaptive_factor", "phong"), [10 * x for x in NOISE], kind="real",
+                label="k=3", counters={"triangles": [9000] * 5, "factor": [3] * 5, "phong_deg": [0.45] * 5,
+                                       "depth_relative": [2e-4] * 5, "vs_mt": [0.5] * 5}),
+          bench("bench_time_to_accuracy", name.format("mt", "phong"), [20 * x for x in NOISE], kind="real",
+                label="P4", counters={"triangles": [30000] * 5, "precision": [4] * 5, "phong_deg": [0.4] * 5,
+                                      "depth_relative": [3e-4] * 5})]
+    depth = bench("bench_time_to_accuracy", name.format("mt", "depth"), [], kind="real")
+    if depth_reached:
+        depth = bench("bench_time_to_accuracy", name.format("mt", "depth"), [50 * x for x in NOISE], kind="real",
+                      counters={"triangles": [90000] * 5, "cell_per_diag": [1 / 256] * 5, "depth_relative": [9e-5] * 5})
+    else:
+        depth["error"] = "depth target not reached up to h=d/512 (bound reached at h=d/512)"
+    return ok + [depth]
+
+
 class Statistics(unittest.TestCase):
     def test_twice_as_slow_is_a_regression(self):
         c = bl.compare(NOISE, [2 * x for x in NOISE])
@@ -111,6 +130,20 @@ class InRunRatios(unittest.TestCase):
         r["benchmarks"] = r["benchmarks"][:1]
         self.assertEqual(bl.adaptive_vs_marching(r), [])
         self.assertEqual(bl.batched_vs_scalar(r), [])
+
+    def test_time_to_accuracy(self):
+        r = run("a" * 40, "2026-01-01T00:00:00+00:00")
+        r["benchmarks"] += tta_benchmarks()
+        rows = {(x["family"], x["target"]): x for x in bl.time_to_accuracy(r)}
+        self.assertEqual(len(rows), 3)
+        self.assertAlmostEqual(rows[("adaptive_factor", "phong")]["seconds"], 0.010)
+        self.assertEqual(rows[("adaptive_factor", "phong")]["parameter_name"], "factor")
+        self.assertAlmostEqual(rows[("adaptive_factor", "phong")]["error"], 0.45)
+        self.assertAlmostEqual(rows[("adaptive_factor", "phong")]["vs_mt"], 0.5)
+        self.assertIn("not reached", rows[("mt", "depth")]["missing"])
+        self.assertIsNone(rows[("mt", "depth")]["seconds"])
+        # Not a polygonizer benchmark of the triangles-per-second ratios.
+        self.assertEqual(len(bl.adaptive_vs_marching(r)), 1)
 
 
 class Recording(unittest.TestCase):
@@ -207,6 +240,29 @@ class Dashboard(unittest.TestCase):
         self.assertAlmostEqual(ratios["ratio batched/scalar bench_fields:BM_Field/torus/values_batched"], 1.0)
         # Self-contained: nothing but embedded images.
         self.assertIsNone(re.search(r'(src|href)="(?!data:)', page))
+
+    def test_time_to_accuracy_section_and_unreached_targets(self):
+        old = run("a" * 40, "2026-01-01T00:00:00+00:00")
+        old["benchmarks"] += tta_benchmarks()
+        new = run("b" * 40, "2026-01-02T00:00:00+00:00")
+        new["benchmarks"] += tta_benchmarks()
+        page, smaller, _ = self.make([old, new])
+        self.assertIn("<h2>Time to accuracy</h2>", page)
+        self.assertIn("bunny_vis800 time to accuracy", page)
+        self.assertIn("missing: depth target not reached", page)
+        # A target not reached in both runs is a result, not a regression; the export leaves it out.
+        self.assertIn("0 regression(s)", page)
+        self.assertNotIn("BM_SlowTimeToAccuracy/bunny_vis800/mt/depth/iterations:1/manual_time",
+                         " ".join(e["name"] for e in smaller))
+        # Reached before, not now: a regression.
+        old2 = run("a" * 40, "2026-01-01T00:00:00+00:00")
+        old2["benchmarks"] += tta_benchmarks(depth_reached=True)
+        page, _, _ = self.make([old2, new])
+        self.assertIn("1 regression(s)", page)
+
+    def test_no_time_to_accuracy(self):
+        page, _, _ = self.make([run("a" * 40, "2026-01-01T00:00:00+00:00")])
+        self.assertIn("no <code>BM_SlowTimeToAccuracy</code>", page)
 
 
 if __name__ == "__main__":
