@@ -68,6 +68,7 @@ int main(int argc, char** argv) {
     app.add_flag("--progress", progress_lines, "progress as lines, one per phase and one every 5 s (for logs)")
         ->excludes(quiet_flag);
     int seed_resolution = 32;
+    int threads = 0;
     long long max_triangles = 0;
     CLI::Option* seed_option = app.add_option("--seed-resolution", seed_resolution,
                                               "cells along the longest side of the seed grid")
@@ -118,6 +119,13 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"improved", "paper"}));
     adaptive_group->add_flag("--curvature", adaptive_options.curvature_properties,
                              "write mac and shape_index per vertex (PLY)");
+    adaptive_group
+        ->add_option("--threads", threads,
+                     "threads of the seed grid and the final check (0: all cores, at most 8); the mesh is "
+                     "the same on any number")
+        ->capture_default_str()
+        ->type_name("N")
+        ->transform(cdp::app::integer_in(0, kIntMax));
 
     cdp::MarchingOptions marching_options;
     std::string traversal = "continuation";
@@ -169,6 +177,7 @@ int main(int argc, char** argv) {
       o.triangle_count = triangle_count == "paper" ? cdp::TriangleCountRule::PaperFloor : cdp::TriangleCountRule::Hartmann;
       if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
       if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
+      o.threads = threads;
       o.progress = progress;
       o.phase = reporter.phase_callback();
       result = name_field(field_path, [&] { return cdp::polygonize_adaptive(*field, o); });
