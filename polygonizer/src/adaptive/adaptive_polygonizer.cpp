@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 namespace cdp {
@@ -187,16 +188,42 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
 
   PolygonizeResult result;
   Mesh& mesh = result.mesh;
-  adaptive::Tracker tracker(field, settings, mesh);
-  // Crossed grid edges per unit area average 1.5 / h^2 over all orientations (Crofton); with
-  // fewer than kMeasuredCrossings the surface is too small for the grid to measure.
-  constexpr std::size_t kMeasuredCrossings = 64;
-  if (grid_crossings >= kMeasuredCrossings) tracker.set_estimated_area(grid_crossings * grid.h * grid.h / 1.5);
-  if (options.progress) tracker.set_progress(options.progress);
+  std::optional<adaptive::Tracker> tracker;
+  adaptive::SeedingReport seeding;
+  const auto mesh_surface = [&](bool rollback) {
+    mesh = Mesh{};
+    settings.rollback = rollback;
+    tracker.emplace(field, settings, mesh);
+    // Crossed grid edges per unit area average 1.5 / h^2 over all orientations (Crofton); with
+    // fewer than kMeasuredCrossings the surface is too small for the grid to measure.
+    constexpr std::size_t kMeasuredCrossings = 64;
+    if (grid_crossings >= kMeasuredCrossings) tracker->set_estimated_area(grid_crossings * grid.h * grid.h / 1.5);
+    if (options.progress) tracker->set_progress(options.progress);
+    seeding = adaptive::seed_every_component(field, grid, s.sizing.min_edge, settings.hash_cell, *tracker, mesh);
+    tracker->compact();
+  };
 
   enter("meshing");
-  const adaptive::SeedingReport seeding =
-      adaptive::seed_every_component(field, grid, s.sizing.min_edge, settings.hash_cell, tracker, mesh);
+  bool remeshed = false;
+  try {
+    mesh_surface(false);
+  } catch (const adaptive::StalledFrontError& stalled) {
+    // A stalled front is where a front that ran over finished mesh ends, thousands of steps
+    // later (the MPU models at some factors): the surface is meshed again from the start with
+    // the rollbacks on, which undo such places where they begin. Surfaces that mesh without
+    // them are never meshed with them, so they come out exactly as before. When the second
+    // run fails too, or its mesh fails the checks below (a rollback has been seen to leave a
+    // non-manifold edge: the printed triangle count on the bunny VIS-800 at factor 1), the
+    // first run's error stands.
+    try {
+      remeshed = true;
+      mesh_surface(true);
+      if (seeding.uncovered > 0) throw NoSurfaceError("uncovered sign changes");
+      check_mesh(mesh, seeding.seeds, options.check_self_intersections, options.threads);
+    } catch (const std::exception&) {
+      throw stalled;
+    }
+  }
   if (mesh.triangles.empty() && seeding.sign_changes == 0) {
     std::ostringstream msg;
     msg << "adaptive: no zero crossing of the field in its box " << format_point(field.bounds().min) << " - "
@@ -227,8 +254,8 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
 
   if (s.curvature_properties) {
     if (quality.moves + quality.collapses + quality.splits + quality.inserts == 0) {
-      mesh.vertex_scalars["mac"] = tracker.vertex_mac();
-      mesh.vertex_scalars["shape_index"] = tracker.vertex_shape_index();
+      mesh.vertex_scalars["mac"] = tracker->vertex_mac();
+      mesh.vertex_scalars["shape_index"] = tracker->vertex_shape_index();
     } else {
       // The repair moved, removed or added vertices: measure them all where they are now.
       std::vector<double> mac(mesh.positions.size()), shape(mesh.positions.size());
@@ -250,12 +277,12 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.field_evaluations = field.counts() - before;
   st.triangles = mesh.num_triangles();
   st.vertices = mesh.num_vertices();
-  st.splits = tracker.splits();
-  st.merges = tracker.merges();
+  st.splits = tracker->splits();
+  st.merges = tracker->merges();
   st.extra["seeds"] = seeding.seeds;
   st.extra["seed_grid_seconds"] = seed_grid_seconds;
-  st.extra["curvature_seconds"] = tracker.curvature_seconds();
-  st.extra["hessian_seconds"] = tracker.hessian_seconds();
+  st.extra["curvature_seconds"] = tracker->curvature_seconds();
+  st.extra["hessian_seconds"] = tracker->hessian_seconds();
   st.extra["failed_seeds"] = seeding.failed_seeds;
   st.extra["sign_changes"] = seeding.sign_changes;
   st.extra["covered_nearby"] = seeding.covered_nearby;
@@ -264,12 +291,14 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["refined_cells"] = seeding.refined_cells;
   st.extra["unresolved_cells"] = seeding.unresolved_cells;
   st.extra["probes"] = seeding.probes;
-  st.extra["steps"] = tracker.steps();
-  st.extra["search_visits"] = tracker.search_visits();
-  st.extra["deferrals"] = tracker.deferrals();
-  st.extra["forced_closures"] = tracker.forced_closures();
-  st.extra["crease_points"] = tracker.crease_points();
-  st.extra["over_mesh_rejections"] = tracker.over_mesh();
+  st.extra["steps"] = tracker->steps();
+  st.extra["search_visits"] = tracker->search_visits();
+  st.extra["deferrals"] = tracker->deferrals();
+  st.extra["forced_closures"] = tracker->forced_closures();
+  st.extra["rollbacks"] = tracker->rollbacks();
+  st.extra["remeshed_with_rollbacks"] = remeshed;
+  st.extra["crease_points"] = tracker->crease_points();
+  st.extra["over_mesh_rejections"] = tracker->over_mesh();
   st.extra["min_angle_degrees"] = min_angle_degrees(mesh);
   st.extra["edge_length.min"] = s.sizing.min_edge;
   st.extra["edge_length.max"] = s.sizing.max_edge;

@@ -303,6 +303,8 @@ double Tracker::local_edge_length(int node) const {
 }
 
 bool Tracker::mesh_from_seed(const Vec3& seed) {
+  first_vertex_ = mesh_.positions.size();
+  first_triangle_ = mesh_.triangles.size();
   std::vector<std::optional<Placed>> measured;
   measure(std::span(&seed, 1), measured);
   const std::optional<Placed>& seed_placed = measured.front();
@@ -489,6 +491,7 @@ void Tracker::step(int& f) {
   if (rounds > 0) {
     const double shrunk = delta * std::ldexp(1.0, -rounds);
     if (shrunk < 0.25 * s_.sizing.min_edge && rounds > 1) {
+      if (rollback(f, node, false)) return;  // undo the region and mesh it again (rollback.cpp)
       const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
       std::string message = "adaptive: a front of " + std::to_string(fs_.fronts[f].size) + " points near " + format_point(p) +
                             " cannot advance even at a quarter of min_edge";
@@ -502,13 +505,17 @@ void Tracker::step(int& f) {
       } else {
         message += "; lower min_edge or raise the factor";
       }
-      throw LimitExceededError(message);
+      throw StalledFrontError(message);
     }
     delta = std::max(shrunk, 0.25 * s_.sizing.min_edge);
   }
   int q = find_collision(node, delta);
   if (q < 0) {
-      const ExpandOutcome r = expand(node, delta);
+    const std::size_t over_before = over_mesh_;
+    const ExpandOutcome r = expand(node, delta);
+    // A point that cannot expand because its placements land on finished mesh: the front lies
+    // over finished mesh there; undo the region rather than let it run on (rollback.cpp).
+    if (!r.expanded && over_mesh_ > over_before && rollback(f, node, true)) return;
     if (r.expanded) {
       fs_.fronts[f].stall = 0;
       return;

@@ -7,6 +7,7 @@
 //   expand_point.cpp    expand (minimal-angle point -> n triangles and new front points)
 //   split_front.cpp     split-front (a front that runs into itself becomes two)
 //   merge_fronts.cpp    unify-front (two fronts that meet become one)
+//   rollback.cpp        undo a region gone wrong and mesh it again (Settings::rollback)
 #pragma once
 
 #include "edge_length.h"
@@ -15,6 +16,7 @@
 
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/curvature.h>
+#include <cdp/core/errors.h>
 #include <cdp/core/newton_projection.h>
 
 #include <optional>
@@ -37,9 +39,19 @@ struct Settings {
   // Variant::Improved's additions inside the tracker (Variant::Paper turns them off).
   bool grading = true;
   double diagonal = 1;
+  // Whether regions where the tracker goes wrong are undone and meshed again (rollback.cpp).
+  // polygonize_adaptive turns it on only to mesh a surface again after a StalledFrontError, so
+  // that every surface meshed without it comes out as before.
+  bool rollback = false;
   // Cell size of the spatial hashes: about a typical edge, so that a query visits a few cells
   // holding a few points each whatever the density.
   double hash_cell = 1;
+};
+
+// The error of a front that cannot advance even at a quarter of min_edge.
+class StalledFrontError : public LimitExceededError {
+ public:
+  using LimitExceededError::LimitExceededError;
 };
 
 // How many times the grid's measure of the area the mesh may cover before the run is stopped
@@ -105,6 +117,11 @@ class Tracker {
   // evaluations alone.
   double curvature_seconds() const { return curvature_seconds_; }
   double hessian_seconds() const { return hessian_seconds_; }
+  // Stuck regions undone and re-meshed (see rollback.cpp).
+  std::size_t rollbacks() const { return rollbacks_; }
+  // Drops the vertices rollbacks left without a triangle, renumbering the rest (a no-op when
+  // there was no rollback). Call once, after the last seed.
+  void compact();
   const std::vector<double>& vertex_mac() const { return mac_; }
   const std::vector<double>& vertex_shape_index() const { return shape_index_; }
   const std::vector<double>& vertex_edge_length() const { return target_; }
@@ -184,6 +201,12 @@ class Tracker {
   std::optional<std::pair<int, int>> thin_feature_at(int node) const;
   double local_edge_length(int node) const;
 
+  // --- rollback.cpp
+  // Removes the triangles around node (at_node) or around every point of its front f, with
+  // every front touching them, and re-derives the hole's boundary as new fronts. Returns false
+  // when the bounds are spent or the hole's boundary cannot be traced (nothing changed then).
+  bool rollback(int f, int node, bool at_node);
+
   // --- front_angle.cpp
   double front_angle(int node) const;
   // Angle of x around node's vertex, measured counter-clockwise from the direction of next in
@@ -231,6 +254,11 @@ class Tracker {
   SpatialHash front_hash_, vertex_hash_;
   std::vector<int> front_refs_;  // front nodes of each vertex: 0 once it is finished
   std::vector<int> stack_;
+  // Rollbacks: vertices left without a triangle, the places rolled back (point, times), and
+  // where the current component's vertices and triangles begin.
+  std::vector<char> dead_;
+  std::vector<std::pair<Vec3, int>> rollback_places_;
+  std::size_t rollbacks_ = 0, first_vertex_ = 0, first_triangle_ = 0;
   std::uint64_t window_visits_ = 0;  // search_visits() at the start of the current window
   std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0, forced_closures_ = 0;
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;

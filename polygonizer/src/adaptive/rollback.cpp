@@ -1,0 +1,349 @@
+// rollback: a region where the tracker has gone wrong is undone locally and meshed again.
+//
+// Two triggers (tracker.cpp, step):
+//  - a placement refused because it lands on finished mesh (over_finished_mesh) while the
+//    point cannot expand: the front lies over finished mesh there. Left alone, such a front
+//    runs on over the finished surface (the MPU stalls of bunny 3, horse 1-2 and Igea 2 all
+//    began so, thousands of steps before the error: over-mesh refusals by the thousand, the
+//    mesh's area up to twice the surface's, hundreds of 4-point fronts split off and waiting).
+//    The hole is taken around that point alone;
+//  - a front that cannot advance even at a quarter of min_edge, instead of ending the run with
+//    that error: the hole is taken around all the stuck front's points.
+// The triangles with a vertex within R of those points are removed (R: kRollbackRadius times
+// the largest target edge length there, doubling at each further rollback at the same place);
+// every front touching them joins the hole, whose boundary is traced into new fronts and
+// meshed as usual at its normal edge length. The rollbacks per place and in all are bounded;
+// past the bounds the old behaviour stands (the refusal, or the error).
+//
+// The boundary of the hole: a front edge a -> b stays when the triangle owning it (the one with
+// the edge b -> a) stays (a bridge edge, with no triangle on either side, goes when one of its
+// ends is in the hole's middle); a removed triangle's edge x -> y becomes a front edge when the
+// triangle across it (with y -> x) stays. The edges are chained into loops; where the chain
+// reaches a vertex with more than one way on, it follows the old front's link when there is
+// one, and otherwise that vertex's triangles join the hole and it is traced again. So do the
+// ends of a hole edge far shorter than their target (left by the retries at half length), and
+// remaining triangles cut off from the rest of the component (an island inside the hole, which
+// would otherwise get a front of its own and be capped into a separate closed piece).
+// Vertices left without a triangle leave the vertex hash and are dropped by compact().
+#include "tracker.h"
+
+#include <algorithm>
+#include <array>
+#include <set>
+#include <tuple>
+
+namespace cdp::adaptive {
+
+namespace {
+// R is this many times the stuck front's largest target edge length at the first rollback.
+constexpr double kRollbackRadius = 3;
+// Rollbacks at one place (R doubling), and in one run.
+constexpr int kRollbacksPerPlace = 3;
+constexpr std::size_t kRollbacksInAll = 32;
+// Vertices whose triangles are added to the hole while tracing its boundary, at most.
+constexpr int kGrowSteps = 256;
+// A hole edge shorter than this share of its ends' target edge length is grown over.
+constexpr double kShortEdge = 0.4;
+
+struct BoundaryEdge {
+  int from, to;
+  int from_node, to_node;  // the old front's nodes for an edge kept from a front, else -1
+};
+}  // namespace
+
+bool Tracker::rollback(int f, int node, bool at_node) {
+  if (!s_.rollback || rollbacks_ >= kRollbacksInAll) return false;
+  const std::size_t nv = mesh_.positions.size();
+  dead_.resize(nv, 0);
+
+  // The stuck front's vertices, its place and its largest target.
+  std::vector<int> stuck;
+  double longest_target = 0;
+  Vec3 center = Vec3::Zero();
+  {
+    int x = node;
+    do {
+      const int v = fs_.nodes[x].vertex;
+      stuck.push_back(v);
+      longest_target = std::max(longest_target, target_[v]);
+      center += mesh_.positions[v];
+      x = fs_.nodes[x].next;
+    } while (x != node && !at_node);
+    center /= static_cast<double>(stuck.size());
+  }
+  const double r0 = kRollbackRadius * std::max(longest_target, s_.sizing.min_edge);
+  int place = -1;
+  for (std::size_t i = 0; i < rollback_places_.size(); ++i)
+    if ((rollback_places_[i].first - center).norm() < 4 * r0) {
+      place = static_cast<int>(i);
+      break;
+    }
+  const int times = place >= 0 ? rollback_places_[place].second : 0;
+  if (times >= kRollbacksPerPlace) return false;
+  const double radius = r0 * std::ldexp(1.0, times);
+
+  // The vertices whose triangles go: within radius of a stuck point, on the same side, of the
+  // component being meshed (earlier components are finished and indexed by the seeding).
+  std::vector<char> in_s(nv, 0);
+  for (const int u : stuck) {
+    const Vec3& pu = mesh_.positions[u];
+    in_s[u] = 1;
+    vertex_hash_.for_each_near(pu, radius, [&](int w) {
+      if (static_cast<std::size_t>(w) >= first_vertex_ && (mesh_.positions[w] - pu).norm() < radius &&
+          same_side(mesh_.normals[u], w))
+        in_s[w] = 1;
+    });
+  }
+
+  // The component's triangles and their directed edges (a, b, triangle), sorted.
+  const std::size_t t0 = first_triangle_, nt = mesh_.triangles.size();
+  std::vector<std::tuple<int, int, int>> edges;
+  edges.reserve(3 * (nt - t0));
+  for (std::size_t t = t0; t < nt; ++t) {
+    const auto& tri = mesh_.triangles[t];
+    for (int k = 0; k < 3; ++k) edges.emplace_back(tri[k], tri[(k + 1) % 3], static_cast<int>(t - t0));
+  }
+  std::sort(edges.begin(), edges.end());
+  const auto owners = [&](int a, int b) {
+    const auto lo = std::lower_bound(edges.begin(), edges.end(), std::tuple<int, int, int>(a, b, -1));
+    auto hi = lo;
+    while (hi != edges.end() && std::get<0>(*hi) == a && std::get<1>(*hi) == b) ++hi;
+    return std::pair(lo, hi);
+  };
+
+  std::vector<char> removed;
+  std::vector<int> absorbed;
+  std::vector<std::vector<int>> loops;
+  bool traced = false;
+  for (int grow = 0; grow <= kGrowSteps && !traced; ++grow) {
+    removed.assign(nt - t0, 0);
+    std::vector<char> touched(nv, 0);
+    for (std::size_t t = t0; t < nt; ++t) {
+      const auto& tri = mesh_.triangles[t];
+      if (in_s[tri[0]] || in_s[tri[1]] || in_s[tri[2]]) {
+        removed[t - t0] = 1;
+        for (const int v : tri) touched[v] = 1;
+      }
+    }
+    for (std::size_t v = 0; v < nv; ++v)
+      if (in_s[v]) touched[v] = 1;
+    // Every front with a point on a touched vertex joins the hole (node id order).
+    std::set<int> fronts;
+    for (std::size_t n = 0; n < fs_.nodes.size(); ++n) {
+      const FrontNode& fn = fs_.nodes[n];
+      if (fn.front >= 0 && touched[fn.vertex]) fronts.insert(fn.front);
+    }
+    fronts.insert(f);
+    absorbed.assign(fronts.begin(), fronts.end());
+
+    const auto stays = [&](int a, int b) {  // a triangle with edge a -> b stays, or none exists
+      const auto [lo, hi] = owners(a, b);
+      if (lo == hi) return true;
+      for (auto it = lo; it != hi; ++it)
+        if (!removed[std::get<2>(*it)]) return true;
+      return false;
+    };
+    const auto remains = [&](int a, int b) {  // a triangle with edge a -> b stays
+      const auto [lo, hi] = owners(a, b);
+      for (auto it = lo; it != hi; ++it)
+        if (!removed[std::get<2>(*it)]) return true;
+      return false;
+    };
+    std::vector<BoundaryEdge> boundary;
+    std::vector<int> edge_from_node(fs_.nodes.size(), -1);
+    for (std::size_t n = 0; n < fs_.nodes.size(); ++n) {
+      const FrontNode& fn = fs_.nodes[n];
+      if (fn.front < 0 || !fronts.count(fn.front)) continue;
+      const int a = fn.vertex, b = fs_.nodes[fn.next].vertex;
+      // A front edge with no triangle on either side (a bridge of a split or a merge) goes when
+      // one of its ends is in the hole's middle, and stays otherwise.
+      if (!stays(b, a) || ((in_s[a] || in_s[b]) && owners(b, a).first == owners(b, a).second)) continue;
+      edge_from_node[n] = static_cast<int>(boundary.size());
+      boundary.push_back({a, b, static_cast<int>(n), fn.next});
+    }
+    for (std::size_t t = t0; t < nt; ++t) {
+      if (!removed[t - t0]) continue;
+      const auto& tri = mesh_.triangles[t];
+      for (int k = 0; k < 3; ++k) {
+        const int x = tri[k], y = tri[(k + 1) % 3];
+        if (remains(y, x)) boundary.push_back({x, y, -1, -1});
+      }
+    }
+    // Out-edges by vertex.
+    std::vector<std::pair<int, int>> out;  // (from vertex, edge index)
+    out.reserve(boundary.size());
+    for (std::size_t e = 0; e < boundary.size(); ++e) out.emplace_back(boundary[e].from, static_cast<int>(e));
+    std::sort(out.begin(), out.end());
+    const auto out_range = [&](int v) {
+      const auto lo = std::lower_bound(out.begin(), out.end(), std::pair(v, -1));
+      auto hi = lo;
+      while (hi != out.end() && hi->first == v) ++hi;
+      return std::pair(lo, hi);
+    };
+
+    std::vector<char> used(boundary.size(), 0);
+    loops.clear();
+    int grow_at = -1;
+    for (std::size_t s = 0; s < boundary.size() && grow_at < 0; ++s) {
+      if (used[s]) continue;
+      std::vector<int> loop;
+      int e = static_cast<int>(s);
+      for (;;) {
+        used[e] = 1;
+        loop.push_back(boundary[e].from);
+        const BoundaryEdge& be = boundary[e];
+        int next = -1;
+        if (be.to_node >= 0) {
+          const int k = edge_from_node[be.to_node];
+          if (k >= 0 && (!used[k] || k == static_cast<int>(s))) next = k;
+        }
+        if (next < 0) {
+          const auto [lo, hi] = out_range(be.to);
+          if (hi - lo == 1 && (!used[lo->second] || lo->second == static_cast<int>(s))) next = lo->second;
+        }
+        if (next < 0) {
+          grow_at = be.to;
+          break;
+        }
+        if (next == static_cast<int>(s)) break;
+        e = next;
+        if (loop.size() > boundary.size()) {
+          grow_at = be.to;
+          break;
+        }
+      }
+      if (grow_at < 0) loops.push_back(std::move(loop));
+    }
+    if (grow_at < 0) {
+      // The hole's edges should be the older, well-sized ones: an edge far shorter than its
+      // ends' target (left by the retries at half length) takes its ends' triangles into the
+      // hole too.
+      bool grew = false;
+      for (const std::vector<int>& loop : loops)
+        for (std::size_t i = 0; i < loop.size(); ++i) {
+          const int a = loop[i], b = loop[(i + 1) % loop.size()];
+          const double l = (mesh_.positions[a] - mesh_.positions[b]).norm();
+          if (l >= kShortEdge * std::min(target_[a], target_[b])) continue;
+          for (const int v : {a, b})
+            if (static_cast<std::size_t>(v) >= first_vertex_ && !in_s[v]) in_s[v] = 1, grew = true;
+        }
+      if (!grew) {
+        // Remaining triangles cut off from the rest of the component by the hole (an island
+        // inside it) would be given a front of their own and capped from below: they join the
+        // hole. The component is the remaining triangles' largest edge-connected part.
+        std::vector<int> parent(nt - t0);
+        for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+        const auto find = [&](int x) {
+          while (parent[x] != x) x = parent[x] = parent[parent[x]];
+          return x;
+        };
+        for (const auto& [a, b, t] : edges) {
+          if (removed[t] || a > b) continue;
+          const auto [lo, hi] = owners(b, a);
+          for (auto it = lo; it != hi; ++it)
+            if (!removed[std::get<2>(*it)]) parent[find(t)] = find(std::get<2>(*it));
+        }
+        std::vector<int> count(parent.size(), 0);
+        int biggest = -1;
+        for (std::size_t t = 0; t < parent.size(); ++t)
+          if (!removed[t]) {
+            const int r = find(static_cast<int>(t));
+            if (++count[r] > (biggest < 0 ? 0 : count[biggest]) || (count[r] == count[biggest] && r < biggest)) biggest = r;
+          }
+        for (std::size_t t = 0; t < parent.size(); ++t)
+          if (!removed[t] && find(static_cast<int>(t)) != biggest)
+            for (const int v : mesh_.triangles[t0 + t])
+              if (!in_s[v]) in_s[v] = 1, grew = true;
+      }
+      if (!grew || grow == kGrowSteps) {
+        traced = true;
+        break;
+      }
+      continue;
+    }
+    if (static_cast<std::size_t>(grow_at) < first_vertex_ || in_s[grow_at]) return false;
+    in_s[grow_at] = 1;
+  }
+  if (!traced) return false;
+  // Apply: the absorbed fronts go, then the triangles, then the vertices left without one.
+  for (const int g : absorbed) {
+    Front& fr = fs_.fronts[g];
+    fr.alive = false;
+    fr.heap = {};
+  }
+  for (std::size_t n = 0; n < fs_.nodes.size(); ++n) {
+    const FrontNode& fn = fs_.nodes[n];
+    if (fn.front >= 0 && std::binary_search(absorbed.begin(), absorbed.end(), fn.front)) remove_node(static_cast<int>(n));
+  }
+  for (const int g : absorbed) fs_.fronts[g].size = 0;
+  std::vector<int> uses(nv, 0);
+  std::size_t kept = t0;
+  for (std::size_t t = t0; t < nt; ++t) {
+    const auto tri = mesh_.triangles[t];
+    if (removed[t - t0]) {
+      const Vec3& pa = mesh_.positions[tri[0]];
+      area_ -= 0.5 * (mesh_.positions[tri[1]] - pa).cross(mesh_.positions[tri[2]] - pa).norm();
+      continue;
+    }
+    for (const int v : tri) ++uses[v];
+    mesh_.triangles[kept++] = tri;
+  }
+  // Vertices of removed triangles that no remaining triangle uses (recomputed from the edges).
+  std::vector<char> had(nv, 0);
+  for (const auto& [a, b, t] : edges)
+    if (removed[t]) had[a] = 1;
+  mesh_.triangles.resize(kept);
+  for (std::size_t v = first_vertex_; v < nv; ++v)
+    if (had[v] && uses[v] == 0 && !dead_[v]) {
+      dead_[v] = 1;
+      vertex_hash_.remove(static_cast<int>(v), mesh_.positions[v]);
+    }
+
+  // The hole's loops as new fronts (two-point loops enclose nothing).
+  for (const std::vector<int>& loop : loops) {
+    if (loop.size() < 3) continue;
+    const int g = fs_.new_front();
+    std::vector<int> nodes;
+    nodes.reserve(loop.size());
+    for (const int v : loop) nodes.push_back(insert_node(v, g));
+    for (std::size_t i = 0; i < nodes.size(); ++i) link(nodes[i], nodes[(i + 1) % nodes.size()]);
+    for (const int n : nodes) refresh(n);
+    stack_.push_back(g);
+  }
+  if (place >= 0) ++rollback_places_[place].second;
+  else rollback_places_.emplace_back(center, 1);
+  ++rollbacks_;
+  return true;
+}
+
+void Tracker::compact() {
+  if (std::find(dead_.begin(), dead_.end(), 1) == dead_.end()) return;
+  const std::size_t nv = mesh_.positions.size();
+  dead_.resize(nv, 0);
+  std::vector<int> remap(nv, -1);
+  int m = 0;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (dead_[v]) continue;
+    remap[v] = m;
+    mesh_.positions[m] = mesh_.positions[v];
+    mesh_.normals[m] = mesh_.normals[v];
+    target_[m] = target_[v];
+    mac_[m] = mac_[v];
+    shape_index_[m] = shape_index_[v];
+    front_refs_[m] = front_refs_[v];
+    ++m;
+  }
+  mesh_.positions.resize(m);
+  mesh_.normals.resize(m);
+  target_.resize(m);
+  mac_.resize(m);
+  shape_index_.resize(m);
+  front_refs_.resize(m);
+  for (auto& tri : mesh_.triangles)
+    for (int& v : tri) v = remap[v];
+  dead_.assign(m, 0);
+  vertex_hash_ = SpatialHash(s_.hash_cell);
+  for (int v = 0; v < m; ++v) vertex_hash_.insert(v, mesh_.positions[v]);
+}
+
+}  // namespace cdp::adaptive
