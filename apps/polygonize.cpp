@@ -75,6 +75,12 @@ int main(int argc, char** argv) {
                                    ->capture_default_str()
                                    ->type_name("N")
                                    ->transform(cdp::app::integer_in(2, kIntMax));
+    app.add_option("--threads", threads,
+                   "threads of the seed grid (thread-safe fields) and of the adaptive method's final check "
+                   "(0: all cores, at most 8); the mesh is the same on any number")
+        ->capture_default_str()
+        ->type_name("N")
+        ->transform(cdp::app::integer_in(0, kIntMax));
     CLI::Option* max_triangles_option =
         app.add_option("--max-triangles", max_triangles, "stop with an error beyond N triangles")
             ->type_name("N")
@@ -119,13 +125,6 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"improved", "paper"}));
     adaptive_group->add_flag("--curvature", adaptive_options.curvature_properties,
                              "write mac and shape_index per vertex (PLY)");
-    adaptive_group
-        ->add_option("--threads", threads,
-                     "threads of the seed grid and the final check (0: all cores, at most 8); the mesh is "
-                     "the same on any number")
-        ->capture_default_str()
-        ->type_name("N")
-        ->transform(cdp::app::integer_in(0, kIntMax));
 
     cdp::MarchingOptions marching_options;
     std::string traversal = "continuation";
@@ -186,6 +185,7 @@ int main(int argc, char** argv) {
       o.traversal = traversal == "grid" ? cdp::Traversal::Grid : cdp::Traversal::Continuation;
       if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
       if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
+      o.threads = threads;
       reporter.phase("meshing");
       o.progress = progress;
       result = name_field(field_path, [&] { return method == "mc" ? cdp::marching_cubes(*field, o) : cdp::marching_tetrahedra(*field, o); });

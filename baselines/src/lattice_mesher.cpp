@@ -75,6 +75,7 @@ class LatticeMesher {
     tolerance_ = options.root_tolerance > 0 ? options.root_tolerance : 1e-6 * h_;
     if (!std::isfinite(tolerance_)) throw InvalidInputError(std::string(method_) + ": root_tolerance must be finite");
     if (options.seed_resolution < 2) throw InvalidInputError(std::string(method_) + ": seed_resolution must be at least 2");
+    if (options.threads < 0) throw InvalidInputError(std::string(method_) + ": threads must be 0 (all cores) or positive");
   }
 
   void run_grid();
@@ -503,6 +504,7 @@ void LatticeMesher::complete_from_sign_changes(const SeedGrid& grid, std::size_t
 void LatticeMesher::run_continuation() {
   SeedOptions seed_options;
   seed_options.resolution = options_.seed_resolution;
+  seed_options.threads = options_.threads;
   seed_options.require_closed_in_box = options_.require_closed_in_box;
   const SeedGrid grid = sample_seed_grid(field_, seed_options);
   const std::vector<SurfaceSeed> found = find_surface_seeds(field_, grid, seed_options.resolution);

@@ -27,6 +27,7 @@ struct Options {
   std::optional<long long> precision, seed_resolution, max_triangles;
   std::optional<std::string> triangle_count, traversal, face_ambiguity;
   std::optional<bool> check_self_intersections;
+  std::optional<long long> threads;
 };
 
 std::string number_text(double v) { return py::str(py::float_(v)); }
@@ -85,6 +86,7 @@ AdaptiveOptions adaptive_options(const Options& o) {
   if (o.seed_resolution) a.seed_resolution = static_cast<int>(integer_in(o.seed_resolution, "seed_resolution", 2, INT_MAX));
   if (o.max_triangles) a.max_triangles = static_cast<std::size_t>(integer_in(o.max_triangles, "max_triangles", 1, INT_MAX));
   if (o.check_self_intersections) a.check_self_intersections = *o.check_self_intersections;
+  if (o.threads) a.threads = static_cast<int>(integer_in(o.threads, "threads", 0, INT_MAX));
   return a;
 }
 
@@ -108,6 +110,7 @@ MarchingOptions marching_options(const Options& o) {
   }
   if (o.seed_resolution) m.seed_resolution = static_cast<int>(integer_in(o.seed_resolution, "seed_resolution", 2, INT_MAX));
   if (o.max_triangles) m.max_triangles = static_cast<std::size_t>(integer_in(o.max_triangles, "max_triangles", 1, INT_MAX));
+  if (o.threads) m.threads = static_cast<int>(integer_in(o.threads, "threads", 0, INT_MAX));
   return m;
 }
 
@@ -150,6 +153,8 @@ stats is build/bin/polygonize's STATS.json as a dict (without "field").
 method "adaptive" (the paper's tracker): factor (default 3: edge = minimum radius of curvature /
 factor) or tolerance (chord deviation), min_edge, max_edge, triangle_count ("hartmann" or
 "paper"), seed_resolution, max_triangles, check_self_intersections.
+Both: threads (0, the default, all cores, at most 8; 1 the calling thread only) for the seed grid of
+a thread-safe field and the adaptive method's final check; the mesh is the same on any number.
 method "mc" or "mt" (Marching Cubes / Tetrahedra): cell or precision (0..5, data-driven models),
 traversal ("continuation" or "grid"), face_ambiguity (mc: "asymptotic_decider", "join_inside",
 "separate_inside"), seed_resolution, max_triangles.
@@ -165,10 +170,11 @@ void bind_meshing(py::module_& m) {
          std::optional<double> min_edge, std::optional<double> max_edge, std::optional<double> cell,
          std::optional<long long> precision, std::optional<std::string> traversal, std::optional<std::string> face_ambiguity,
          std::optional<std::string> triangle_count, std::optional<long long> seed_resolution,
-         std::optional<long long> max_triangles, std::optional<bool> check_self_intersections, bool return_normals,
-         py::object progress, py::object phase) {
-        Options o{method, factor, tolerance, min_edge, max_edge, cell, precision, seed_resolution, max_triangles,
-                  triangle_count, traversal, face_ambiguity, check_self_intersections};
+         std::optional<long long> max_triangles, std::optional<bool> check_self_intersections,
+         std::optional<long long> threads, bool return_normals, py::object progress, py::object phase) {
+        Options o{method,        factor,         tolerance,      min_edge,       max_edge,
+                  cell,          precision,      seed_resolution, max_triangles, triangle_count,
+                  traversal,     face_ambiguity, check_self_intersections, threads};
         return run(field, o, return_normals, progress, phase);
       },
       py::arg("field"), py::arg("method") = "adaptive", py::kw_only(), py::arg("factor") = py::none(),
@@ -176,7 +182,8 @@ void bind_meshing(py::module_& m) {
       py::arg("cell") = py::none(), py::arg("precision") = py::none(), py::arg("traversal") = py::none(),
       py::arg("face_ambiguity") = py::none(), py::arg("triangle_count") = py::none(),
       py::arg("seed_resolution") = py::none(), py::arg("max_triangles") = py::none(),
-      py::arg("check_self_intersections") = py::none(), py::arg("return_normals") = false,
+      py::arg("check_self_intersections") = py::none(), py::arg("threads") = py::none(),
+      py::arg("return_normals") = false,
       py::arg("progress") = py::none(), py::arg("phase") = py::none(), kPolygonizeDoc);
 
   const auto marching = [](const char* method) {

@@ -65,6 +65,7 @@ def test_progress_and_phase_callbacks(sphere):
     (lambda s: cdp.polygonize(s, "marching"), 'method must be "adaptive", "mc" or "mt", not "marching"'),
     (lambda s: cdp.polygonize(s, triangle_count="floor"), 'triangle_count must be "hartmann" or "paper", not "floor"'),
     (lambda s: cdp.polygonize(s, seed_resolution=1), "seed_resolution must be an integer in [2, 2147483647], not 1"),
+    (lambda s: cdp.polygonize(s, threads=-1), "threads must be an integer in [0, 2147483647], not -1"),
     (lambda s: cdp.marching_cubes(s, cell=0), "cell must be a positive number, not 0.0"),
     (lambda s: cdp.marching_cubes(s, traversal="walk"), 'traversal must be "continuation" or "grid", not "walk"'),
     (lambda s: cdp.marching_cubes(s, cell=1e-9), None),
@@ -98,6 +99,9 @@ def test_algorithm_errors_are_runtime_error_subclasses():
     ("adaptive", ["--tolerance", "0.002", "--min-edge", "0.01"], {"tolerance": 0.002, "min_edge": 0.01}),
     ("mc", ["--cell", "0.05"], {"cell": 0.05}),
     ("mt", ["--cell", "0.08", "--traversal", "grid"], {"cell": 0.08, "traversal": "grid"}),
+    # Different thread counts on the two sides: the same arrays.
+    ("adaptive", ["--factor", "3", "--threads", "1"], {"factor": 3, "threads": 2}),
+    ("mc", ["--cell", "0.05", "--threads", "2"], {"cell": 0.05, "threads": 1}),
 ])
 def test_same_arrays_as_the_polygonize_program(tmp_path, method, flags, options):
     field_path = tmp_path / "field.json"

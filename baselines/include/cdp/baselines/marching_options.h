@@ -48,6 +48,9 @@ struct MarchingOptions {
   double root_tolerance = 0;
   // Cells of the coarse sign-change grid that seeds the continuation (longest side of the box).
   int seed_resolution = 32;
+  // Threads sampling that grid for a thread-safe field (Field::thread_safe): 0 all cores (at
+  // most 8), 1 the caller's only. The mesh is the same on any number.
+  int threads = 0;
   // Reject fields whose surface leaves the lattice (F < 0 on its outer boundary) with
   // NoSurfaceError; when false the mesh is clipped there and left open.
   bool require_closed_in_box = true;
