@@ -38,13 +38,6 @@ std::string read_text(const fs::path& path) {
   return ss.str();
 }
 
-bool same_rays(const std::vector<cdp::Ray>& a, const std::vector<cdp::Ray>& b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (a[i].origin != b[i].origin || a[i].direction != b[i].direction) return false;
-  return true;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -121,25 +114,16 @@ int main(int argc, char** argv) {
       throw cdp::InvalidInputError(field_path + ": " + e.what());  // the rays are fitted to the field's box
     }
     const std::string key = cdp::ground_truth_key(field_text, options.camera, options.raycast);
-    std::optional<cdp::GroundTruth> truth;
     bool cached = false;
-    if (!cache_dir.empty()) {
-      truth = cdp::load_ground_truth(cache_dir, key);
-      // A cache written by another build whose rays differ is stale: recompute it.
-      if (truth && !same_rays(truth->rays, rays)) truth.reset();
-      cached = truth.has_value();
-    }
-    if (!truth) {
-      reporter.phase("casting rays at the implicit surface");
-      truth = cdp::compute_ground_truth(*field, std::move(rays), options.raycast);
-      if (!cache_dir.empty()) cdp::save_ground_truth(*truth, cache_dir, key);
-    }
+    const cdp::GroundTruth truth = cdp::cached_ground_truth(
+        *field, std::move(rays), options.raycast, cache_dir, key, &cached,
+        [&] { reporter.phase("casting rays at the implicit surface"); });
     const double gt_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     reporter.phase("measuring the mesh");
     nlohmann::json metrics;
     try {
-      metrics = cdp::evaluate_mesh(*field, mesh, *truth, options, normals_source, key);
+      metrics = cdp::evaluate_mesh(*field, mesh, truth, options, normals_source, key);
     } catch (const cdp::InvalidInputError& e) {
       throw cdp::InvalidInputError(mesh_path + ": " + e.what());  // what is wrong is the mesh
     }

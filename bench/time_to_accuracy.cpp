@@ -102,13 +102,6 @@ std::string read_text(const std::string& path) {
   return ss.str();
 }
 
-bool same_rays(const std::vector<Ray>& a, const std::vector<Ray>& b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (a[i].origin != b[i].origin || a[i].direction != b[i].direction) return false;
-  return true;
-}
-
 // One rung of a ladder: a parameter value and the run it stands for.
 struct Step {
   std::string param;  // "factor", "tolerance/diag", "precision", "cell/diag"
@@ -223,16 +216,15 @@ GroundTruth ground_truth(const std::string& name, const std::string& path, const
   const std::string key = ground_truth_key(read_text(path), camera, raycast);
   const std::string dir = std::string(CDP_SOURCE_DIR) + "/results/cache";
   std::vector<Ray> rays = make_camera_rays(field.bounds(), camera);
-  std::optional<GroundTruth> truth = load_ground_truth(dir, key);
-  if (truth && same_rays(truth->rays, rays)) {
+  const std::size_t n = rays.size();
+  bool cached = false;
+  GroundTruth truth = cached_ground_truth(field, std::move(rays), raycast, dir, key, &cached, [&] {
+    std::fprintf(stderr, "[time to accuracy] %s: computing the ground truth (%zu rays), saved as %s/gt_%s.bin\n",
+                 name.c_str(), n, dir.c_str(), key.c_str());
+  });
+  if (cached)
     std::fprintf(stderr, "[time to accuracy] %s: ground truth from %s/gt_%s.bin\n", name.c_str(), dir.c_str(), key.c_str());
-    return std::move(*truth);
-  }
-  std::fprintf(stderr, "[time to accuracy] %s: computing the ground truth (%zu rays), saved as %s/gt_%s.bin\n",
-               name.c_str(), rays.size(), dir.c_str(), key.c_str());
-  GroundTruth computed = compute_ground_truth(field, std::move(rays), raycast);
-  save_ground_truth(computed, dir, key);
-  return computed;
+  return truth;
 }
 
 // Runs one step and measures it as evaluate does (phong and depth only).

@@ -176,4 +176,27 @@ std::optional<GroundTruth> load_ground_truth(const std::filesystem::path& dir, c
   return t;
 }
 
+GroundTruth cached_ground_truth(const Field& field, std::vector<Ray> rays, const RaycastOptions& raycast,
+                                const std::filesystem::path& dir, const std::string& key, bool* cached,
+                                const std::function<void()>& before_casting) {
+  if (!dir.empty()) {
+    std::optional<GroundTruth> truth = load_ground_truth(dir, key);
+    const auto same_rays = [&](const std::vector<Ray>& stored) {
+      if (stored.size() != rays.size()) return false;
+      for (std::size_t i = 0; i < rays.size(); ++i)
+        if (stored[i].origin != rays[i].origin || stored[i].direction != rays[i].direction) return false;
+      return true;
+    };
+    if (truth && same_rays(truth->rays)) {
+      if (cached) *cached = true;
+      return std::move(*truth);
+    }
+  }
+  if (cached) *cached = false;
+  if (before_casting) before_casting();
+  GroundTruth truth = compute_ground_truth(field, std::move(rays), raycast);
+  if (!dir.empty()) save_ground_truth(truth, dir, key);
+  return truth;
+}
+
 }  // namespace cdp

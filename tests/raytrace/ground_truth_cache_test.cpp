@@ -66,6 +66,37 @@ TEST(GroundTruthCache, RoundTripIsBitExact) {
   EXPECT_EQ(files, 1u);
 }
 
+TEST(GroundTruthCache, CachedGroundTruthCastsOnceAndRecastsForOtherRays) {
+  const test::TempDir dir("gt_cache_policy");
+  const Torus torus(Vec3::Zero(), 1.0, 0.3);
+  CameraOptions camera;
+  camera.views = 2;
+  camera.resolution = 8;
+  const std::vector<Ray> rays = make_camera_rays(torus.bounds(), camera);
+  const std::string key = ground_truth_key(kField, camera, {});
+  int casts = 0;
+  bool cached = true;
+  const GroundTruth first = cached_ground_truth(torus, rays, {}, dir.path, key, &cached, [&] { ++casts; });
+  EXPECT_FALSE(cached);
+  EXPECT_EQ(casts, 1);
+  EXPECT_TRUE(load_ground_truth(dir.path, key).has_value());  // saved
+  const GroundTruth second = cached_ground_truth(torus, rays, {}, dir.path, key, &cached, [&] { ++casts; });
+  EXPECT_TRUE(cached);
+  EXPECT_EQ(casts, 1);
+  ASSERT_EQ(second.hits.size(), first.hits.size());
+  for (std::size_t i = 0; i < first.hits.size(); ++i) EXPECT_EQ(second.hits[i].t, first.hits[i].t);
+  // A file cast along other rays under the same key (another build's cameras) is stale.
+  std::vector<Ray> moved = rays;
+  moved.front().origin.x() += 1e-3;
+  cached_ground_truth(torus, moved, {}, dir.path, key, &cached, [&] { ++casts; });
+  EXPECT_FALSE(cached);
+  EXPECT_EQ(casts, 2);
+  // Without a folder nothing is read or written.
+  cached_ground_truth(torus, rays, {}, "", key, &cached, [&] { ++casts; });
+  EXPECT_FALSE(cached);
+  EXPECT_EQ(casts, 3);
+}
+
 TEST(GroundTruthCache, DamagedOrForeignFilesAreErrors) {
   const test::TempDir dir("gt_cache_bad");
   const Sphere sphere(Vec3::Zero(), 1.0);

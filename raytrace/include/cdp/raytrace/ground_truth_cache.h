@@ -6,8 +6,10 @@
 #include <cdp/raytrace/implicit_raycast.h>
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace cdp {
 
@@ -28,5 +30,13 @@ void save_ground_truth(const GroundTruth& truth, const std::filesystem::path& di
 // Empty when there is no file for the key; throws InvalidInputError naming the file when it
 // exists but is not a complete ground truth of this format and key.
 std::optional<GroundTruth> load_ground_truth(const std::filesystem::path& dir, const std::string& key);
+
+// The ground truth of `field` along `rays`: read from `dir` when it holds one for `key` cast
+// along the same rays (a file written by a build whose rays differ is stale and is cast again),
+// otherwise cast now (`before_casting` is called first) and, when `dir` is not empty, saved
+// there. `cached` (optional) tells which. The one cache policy of evaluate and the benchmarks.
+GroundTruth cached_ground_truth(const Field& field, std::vector<Ray> rays, const RaycastOptions& raycast,
+                                const std::filesystem::path& dir, const std::string& key, bool* cached = nullptr,
+                                const std::function<void()>& before_casting = {});
 
 }  // namespace cdp
