@@ -136,13 +136,6 @@ bool Tracker::rollback(int f, int node, bool at_node) {
     fronts.insert(f);
     absorbed.assign(fronts.begin(), fronts.end());
 
-    const auto stays = [&](int a, int b) {  // a triangle with edge a -> b stays, or none exists
-      const auto [lo, hi] = owners(a, b);
-      if (lo == hi) return true;
-      for (auto it = lo; it != hi; ++it)
-        if (!removed[std::get<2>(*it)]) return true;
-      return false;
-    };
     const auto remains = [&](int a, int b) {  // a triangle with edge a -> b stays
       const auto [lo, hi] = owners(a, b);
       for (auto it = lo; it != hi; ++it)
@@ -155,9 +148,11 @@ bool Tracker::rollback(int f, int node, bool at_node) {
       const FrontNode& fn = fs_.nodes[n];
       if (fn.front < 0 || !fronts.count(fn.front)) continue;
       const int a = fn.vertex, b = fs_.nodes[fn.next].vertex;
-      // A front edge with no triangle on either side (a bridge of a split or a merge) goes when
-      // one of its ends is in the hole's middle, and stays otherwise.
-      if (!stays(b, a) || ((in_s[a] || in_s[b]) && owners(b, a).first == owners(b, a).second)) continue;
+      // A front edge stays when the triangle owning it (edge b -> a) stays; one with no triangle
+      // on either side (a bridge of a split or a merge) goes when one of its ends is in the
+      // hole's middle, and stays otherwise.
+      const auto [lo, hi] = owners(b, a);
+      if (lo == hi ? in_s[a] || in_s[b] : !remains(b, a)) continue;
       edge_from_node[n] = static_cast<int>(boundary.size());
       boundary.push_back({a, b, static_cast<int>(n), fn.next});
     }
