@@ -12,6 +12,7 @@
 #include <cdp/io/field_factory.h>
 #include <cdp/io/json_reader.h>
 
+#include <csignal>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -243,14 +244,27 @@ int spawn_and_wait(const std::vector<std::string>& argv, const fs::path& log) {
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  // The child starts with no signal blocked and default handlers: it would otherwise inherit the
+  // mask BlockSignals sets below, ignore the interrupt passed on to it and be killed 5 s later,
+  // with its temporary output file left behind.
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  sigset_t none, ours;
+  sigemptyset(&none);
+  sigemptyset(&ours);
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&ours, sig);
+  posix_spawnattr_setsigmask(&attr, &none);
+  posix_spawnattr_setsigdefault(&attr, &ours);
+  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
   pid_t pid;
   int rc = 0;
   {
     // Signals wait until the child is registered, so that an interrupt reaches it too.
     cdp::app::BlockSignals block;
-    rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+    rc = posix_spawn(&pid, args[0], &actions, &attr, args.data(), environ);
     if (rc == 0) cdp::app::register_child(pid);
   }
+  posix_spawnattr_destroy(&attr);
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) return -1;
   int status = 0;
