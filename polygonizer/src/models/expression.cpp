@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <limits>
 #include <new>
 #include <numbers>
 #include <vector>
@@ -30,16 +32,46 @@ constexpr int kMaxStack = 64;
 constexpr int kMaxNesting = 256;
 constexpr int kMaxHeight = 10000;
 
+// What a run does at the branch points (min, max, abs, numbered in program order): nothing
+// beyond taking the branch (Free); also report at each the branch taken and how far the surface
+// where it would switch lies, to first order (Record: Jet1 only); take given branches (Forced).
+enum class Branching { Free, Record, Forced };
+
+struct BranchLog {
+  const std::uint8_t* forced = nullptr;  // Forced: the branch to take at each branch point
+  std::uint8_t* taken = nullptr;         // Record: the branch taken
+  double* distance = nullptr;            // Record: |a - b| / |grad (a - b)| (|u| / |grad u| for abs)
+};
+
 struct ExpressionProgram {
   std::vector<Instruction> code;
+  int branch_points = 0;
 
   template <class T>
   T run(const T& x, const T& y, const T& z) const {
+    return run<T, Branching::Free>(x, y, z, BranchLog{});
+  }
+
+  // Branch 0 is the first argument of min and max and +u for abs; 1 the second argument and -u.
+  template <class T, Branching mode>
+  T run(const T& x, const T& y, const T& z, [[maybe_unused]] const BranchLog& record) const {
     using std::abs, std::cos, std::exp, std::log, std::max, std::min, std::pow, std::sin, std::sqrt, std::tan;
     // Raw storage: constructing kMaxStack jets per call would cost more than the formula.
     alignas(T) unsigned char storage[sizeof(T) * kMaxStack];
     T* stack = reinterpret_cast<T*>(storage);
     int top = -1;
+    [[maybe_unused]] int branch_point = 0;
+    // At a branch point: the branch to take, given that `natural` is the one the values choose.
+    [[maybe_unused]] const auto choose = [&](bool natural, const T& a, const T& b) {
+      const int k = branch_point++;
+      if constexpr (mode == Branching::Forced) return record.forced[k] != 0;
+      if constexpr (mode == Branching::Record) {
+        record.taken[k] = natural ? 1 : 0;
+        const double gap = std::abs(a.v - b.v), slope = (a.g - b.g).norm();
+        record.distance[k] = gap == 0.0 ? 0.0 : slope > 0.0 ? gap / slope : std::numeric_limits<double>::infinity();
+      }
+      return natural;
+    };
     for (const Instruction& in : code) {
       switch (in.op) {
         case Op::Const: new (&stack[++top]) T(in.constant); break;
@@ -51,8 +83,16 @@ struct ExpressionProgram {
         case Op::Mul: --top; stack[top] = stack[top] * stack[top + 1]; break;
         case Op::Div: --top; stack[top] = stack[top] / stack[top + 1]; break;
         case Op::Pow: --top; stack[top] = pow(stack[top], stack[top + 1]); break;
-        case Op::Min: --top; stack[top] = min(stack[top], stack[top + 1]); break;
-        case Op::Max: --top; stack[top] = max(stack[top], stack[top + 1]); break;
+        case Op::Min:
+          --top;
+          if constexpr (mode == Branching::Free) stack[top] = min(stack[top], stack[top + 1]);
+          else if (choose(stack[top + 1].v < stack[top].v, stack[top], stack[top + 1])) stack[top] = stack[top + 1];
+          break;
+        case Op::Max:
+          --top;
+          if constexpr (mode == Branching::Free) stack[top] = max(stack[top], stack[top + 1]);
+          else if (choose(stack[top].v < stack[top + 1].v, stack[top], stack[top + 1])) stack[top] = stack[top + 1];
+          break;
         case Op::Neg: stack[top] = -stack[top]; break;
         case Op::PowConst: stack[top] = pow(stack[top], in.constant); break;
         case Op::Sqrt: stack[top] = sqrt(stack[top]); break;
@@ -61,7 +101,10 @@ struct ExpressionProgram {
         case Op::Sin: stack[top] = sin(stack[top]); break;
         case Op::Cos: stack[top] = cos(stack[top]); break;
         case Op::Tan: stack[top] = tan(stack[top]); break;
-        case Op::Abs: stack[top] = abs(stack[top]); break;
+        case Op::Abs:
+          if constexpr (mode == Branching::Free) stack[top] = abs(stack[top]);
+          else if (choose(stack[top].v < 0, stack[top], -stack[top])) stack[top] = -stack[top];
+          break;
       }
     }
     return stack[0];
@@ -284,6 +327,8 @@ Expression::Expression(const std::string& formula, const std::map<std::string, d
   }
   detail::Parser parser(formula_, params);
   detail::Parser::emit(parser.parse(), program_->code);
+  for (const auto& in : program_->code)
+    if (in.op == detail::Op::Min || in.op == detail::Op::Max || in.op == detail::Op::Abs) ++program_->branch_points;
   if (detail::stack_depth(program_->code) > detail::kMaxStack)
     throw InvalidInputError("expression: formula nested too deeply (more than " +
                             std::to_string(detail::kMaxStack) + " pending operands)");
@@ -306,6 +351,63 @@ double Expression::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& he
   gradient = r.g;
   hessian = r.h;
   return r.v;
+}
+
+namespace {
+
+// At most this many branch points are split into both branches at one point, the nearest
+// switches first: 2^6 = 64 pieces, more than any corner of a CSG shape has (a cube's has 3),
+// and a bound on the work for formulas with many nearly tied min and max.
+constexpr int kMaxSplitBranchPoints = 6;
+
+}  // namespace
+
+std::vector<FieldPiece> Expression::eval_pieces(const Vec3& p, double radius) const {
+  const int n = program_->branch_points;
+  std::vector<std::uint8_t> taken(static_cast<std::size_t>(n));
+  std::vector<double> distance(static_cast<std::size_t>(n));
+  const Jet1 r = program_->run<Jet1, detail::Branching::Record>(
+      Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2),
+      detail::BranchLog{nullptr, taken.data(), distance.data()});
+  (void)r;
+  std::vector<int> split;
+  for (int k = 0; k < n; ++k)
+    if (distance[static_cast<std::size_t>(k)] <= radius) split.push_back(k);
+  // The nearest switches (ties: the earlier branch point), then back in program order.
+  std::stable_sort(split.begin(), split.end(), [&](int a, int b) {
+    return distance[static_cast<std::size_t>(a)] < distance[static_cast<std::size_t>(b)];
+  });
+  if (split.size() > static_cast<std::size_t>(kMaxSplitBranchPoints)) split.resize(kMaxSplitBranchPoints);
+  std::sort(split.begin(), split.end());
+  std::vector<FieldPiece> out;
+  for (std::uint32_t mask = 0; mask < (1u << split.size()); ++mask) {
+    std::vector<std::uint8_t> branch = taken;
+    for (std::size_t j = 0; j < split.size(); ++j)
+      if (mask >> j & 1u) branch[static_cast<std::size_t>(split[j])] ^= 1u;
+    FieldPiece piece = eval_piece(p, branch);
+    // Different branches often give the same function (a choice inside an argument that is not
+    // taken): the same numbers at p, bit for bit, are one piece.
+    const bool seen = std::any_of(out.begin(), out.end(), [&](const FieldPiece& q) {
+      return q.value == piece.value && q.gradient == piece.gradient && q.hessian == piece.hessian;
+    });
+    if (!seen) out.push_back(std::move(piece));
+  }
+  return out;
+}
+
+FieldPiece Expression::eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+  if (branch.size() != static_cast<std::size_t>(program_->branch_points))
+    throw InvalidInputError("expression: a piece's branch has " + std::to_string(branch.size()) +
+                            " choices, the formula " + std::to_string(program_->branch_points) + " branch points");
+  const Jet2 r = program_->run<Jet2, detail::Branching::Forced>(
+      Jet2::variable(p.x(), 0), Jet2::variable(p.y(), 1), Jet2::variable(p.z(), 2),
+      detail::BranchLog{branch.data(), nullptr, nullptr});
+  FieldPiece piece;
+  piece.branch = branch;
+  piece.value = r.v;
+  piece.gradient = r.g;
+  piece.hessian = r.h;
+  return piece;
 }
 
 }  // namespace cdp

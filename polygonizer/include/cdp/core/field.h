@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace cdp {
 
@@ -46,6 +47,16 @@ struct EvaluationCounts {
   EvaluationCounts operator-(const EvaluationCounts& o) const {
     return {value - o.value, value_gradient - o.value_gradient, gradient_hessian - o.gradient_hessian};
   }
+};
+
+// One smooth piece of a field built with min, max or abs (a CSG shape): which argument the
+// model takes at each of its branch points, and the piece's value, gradient and Hessian at a
+// point. Creases of the surface lie where two pieces are zero, corners where three are.
+struct FieldPiece {
+  std::vector<std::uint8_t> branch;  // the model's own encoding: give it back to Field::piece
+  double value = 0;
+  Vec3 gradient = Vec3::Zero();
+  Mat3 hessian = Mat3::Zero();
 };
 
 class Field {
@@ -89,6 +100,26 @@ class Field {
   void gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians, std::size_t n) const {
     n_gradient_hessian_.fetch_add(n, std::memory_order_relaxed);
     eval_gradients_hessians(points, values, gradients, hessians, n);
+  }
+
+  // The smooth pieces of the field near p: one per choice of branches of its min, max and abs
+  // that is taken somewhere within `radius` of p (to first order: a branch point counts when
+  // the surface where its two arguments are equal lies within `radius`), each evaluated at p,
+  // distinct pieces only, the branches as taken at p first. One piece where the field is smooth
+  // within `radius`; none from a model that does not report its pieces (then it is treated as
+  // smooth everywhere). Counted as one value_gradient and one gradient_hessian per piece.
+  std::vector<FieldPiece> pieces(const Vec3& p, double radius) const {
+    n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+    std::vector<FieldPiece> out = eval_pieces(p, radius);
+    n_gradient_hessian_.fetch_add(out.size(), std::memory_order_relaxed);
+    return out;
+  }
+  // The piece with `branch` (from pieces()) at another point: the same smooth function, its
+  // branches fixed, wherever p is. Throws InvalidInputError for a branch the model cannot have
+  // made. Counted as one gradient_hessian.
+  FieldPiece piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+    n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
+    return eval_piece(p, branch);
   }
 
   // A box that contains the surface (the model's own, or the "bounds" given in its JSON).
@@ -155,6 +186,14 @@ class Field {
                                        std::size_t n) const {
     for (std::size_t i = 0; i < n; ++i) values[i] = eval_gradient_hessian(points[i], gradients[i], hessians[i]);
   }
+
+  // Models built from min, max and abs override both (models/expression.h does).
+  virtual std::vector<FieldPiece> eval_pieces(const Vec3& p, double radius) const {
+    (void)p;
+    (void)radius;
+    return {};
+  }
+  virtual FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const;
 
   Box bounds_;
 

@@ -29,6 +29,11 @@ class Expression : public Field {
   double eval_value(const Vec3& p) const override;
   double eval_value_gradient(const Vec3& p, Vec3& gradient) const override;
   double eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const override;
+  // Each min, max and abs is a branch point, numbered in the order the formula is evaluated
+  // (arguments before the call); a branch is 0 for the first argument (+u for abs), 1 for the
+  // second (-u).
+  std::vector<FieldPiece> eval_pieces(const Vec3& p, double radius) const override;
+  FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
 
  private:
   std::string formula_;

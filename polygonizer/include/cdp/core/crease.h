@@ -1,0 +1,46 @@
+// Creases and corners of a field built with min, max and abs (a CSG shape), from its pieces
+// (Field::pieces): a crease is where two pieces are zero, a corner where three are. The first
+// building block of crease-aware meshing: a point is moved onto a crease or corner by Newton's
+// method on the pieces' equations together.
+#pragma once
+
+#include <cdp/core/field.h>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace cdp {
+
+struct CreaseOptions {
+  int max_iterations = 40;
+  // Converged when every piece's |F_i| / |grad F_i| is below this. Non-positive: 1e-10 times the
+  // field's bounding-box diagonal (as the Newton projection onto the surface).
+  double tolerance = 0;
+  // One step moves at most this far. Non-positive: 0.1 diagonal.
+  double max_step = 0;
+};
+
+// DependentGradients: the pieces' gradients are (nearly) linearly dependent there (pieces
+// tangent to each other, or three pieces meeting along a line), so the crease is not defined.
+enum class CreaseStatus { Converged, MaxIterations, DependentGradients, NotFinite };
+
+const char* to_string(CreaseStatus status);
+
+struct CreaseProjection {
+  Vec3 point = Vec3::Zero();
+  CreaseStatus status = CreaseStatus::MaxIterations;
+  int iterations = 0;
+  double residual = 0;  // the largest |F_i| / |grad F_i| at `point`
+  bool ok() const { return status == CreaseStatus::Converged; }
+};
+
+// Moves `start` onto the common zero set of the pieces `branches` (from Field::pieces): with two,
+// the nearest point of their crease curve (minimum-norm Newton steps, J^T (J J^T)^-1 F); with
+// three, their corner (Newton on the 3 x 3 system). Throws InvalidInputError for a number of
+// pieces other than 2 or 3.
+CreaseProjection project_to_crease(const Field& field, const Vec3& start,
+                                   std::span<const std::vector<std::uint8_t>> branches,
+                                   const CreaseOptions& options = {});
+
+}  // namespace cdp

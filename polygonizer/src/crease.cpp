@@ -1,0 +1,78 @@
+#include <cdp/core/crease.h>
+#include <cdp/core/errors.h>
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+
+namespace cdp {
+
+namespace {
+
+// Gradients whose Gram matrix has a determinant below this fraction of the product of their
+// squared lengths are taken as dependent: for two pieces, an angle below about 1e-4 rad (1e-8 =
+// sin^2), where a Newton step would be 1e4 times the residual and no longer meaningful.
+constexpr double kDependentGradients = 1e-8;
+
+}  // namespace
+
+const char* to_string(CreaseStatus status) {
+  switch (status) {
+    case CreaseStatus::Converged: return "converged";
+    case CreaseStatus::MaxIterations: return "max_iterations";
+    case CreaseStatus::DependentGradients: return "dependent_gradients";
+    case CreaseStatus::NotFinite: return "not_finite";
+  }
+  return "unknown";
+}
+
+CreaseProjection project_to_crease(const Field& field, const Vec3& start,
+                                   std::span<const std::vector<std::uint8_t>> branches, const CreaseOptions& options) {
+  const int n = static_cast<int>(branches.size());
+  if (n != 2 && n != 3)
+    throw InvalidInputError("project_to_crease: needs 2 pieces (a crease) or 3 (a corner), not " + std::to_string(n));
+  const double diag = field.bounds().diagonal();
+  const double tol = options.tolerance > 0 ? options.tolerance : 1e-10 * diag;
+  const double max_step = options.max_step > 0 ? options.max_step : 0.1 * diag;
+  CreaseProjection out;
+  out.point = start;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> J(n, 3);
+  Eigen::VectorXd F(n);
+  for (int it = 0;; ++it) {
+    double residual = 0, product = 1;
+    for (int i = 0; i < n; ++i) {
+      const FieldPiece piece = field.piece(out.point, branches[static_cast<std::size_t>(i)]);
+      const double g = piece.gradient.norm();
+      if (!std::isfinite(piece.value) || !piece.gradient.allFinite()) {
+        out.status = CreaseStatus::NotFinite;
+        return out;
+      }
+      J.row(i) = piece.gradient.transpose();
+      F(i) = piece.value;
+      residual = std::max(residual, g > 0 ? std::abs(piece.value) / g : std::numeric_limits<double>::infinity());
+      product *= g * g;
+    }
+    out.residual = residual;
+    out.iterations = it;
+    if (residual <= tol) {
+      out.status = CreaseStatus::Converged;
+      return out;
+    }
+    if (it >= options.max_iterations) {
+      out.status = CreaseStatus::MaxIterations;
+      return out;
+    }
+    const Eigen::MatrixXd gram = J * J.transpose();
+    if (!(gram.determinant() > kDependentGradients * product)) {
+      out.status = CreaseStatus::DependentGradients;
+      return out;
+    }
+    // The smallest step that zeroes the linearised pieces: in their gradients' span.
+    Vec3 step = -J.transpose() * gram.ldlt().solve(F);
+    if (const double len = step.norm(); len > max_step) step *= max_step / len;
+    out.point += step;
+  }
+}
+
+}  // namespace cdp

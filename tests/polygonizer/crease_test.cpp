@@ -1,0 +1,162 @@
+// The pieces of a creased field (Field::pieces, the expression model) and the projection onto
+// its creases and corners (crease.h), against closed forms: a cube's faces, edges and corners,
+// two unioned spheres' circle, a capped cylinder's rims.
+#include <gtest/gtest.h>
+
+#include <cdp/core/crease.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/models/analytic.h>
+#include <cdp/core/models/expression.h>
+
+#include <cmath>
+#include <set>
+
+namespace cdp {
+namespace {
+
+Expression expression(const std::string& formula, double half = 2) {
+  return Expression(formula, {}, Box{Vec3::Constant(-half), Vec3::Constant(half)});
+}
+
+const char* kCube = "max(abs(x),max(abs(y),abs(z)))-1";
+
+// The pieces' gradients at p, as a set (order-free comparison).
+std::set<std::array<double, 3>> gradients(const std::vector<FieldPiece>& pieces) {
+  std::set<std::array<double, 3>> out;
+  for (const auto& q : pieces) out.insert({q.gradient.x(), q.gradient.y(), q.gradient.z()});
+  return out;
+}
+
+TEST(FieldPieces, ACubeHasOnePieceOnAFaceTwoOnAnEdgeThreeAtACorner) {
+  const Expression cube = expression(kCube);
+  // On a face, away from the edges: the face's plane x - 1.
+  auto face = cube.pieces(Vec3(1, 0.5, 0.2), 0.1);
+  ASSERT_EQ(face.size(), 1u);
+  EXPECT_EQ(face[0].gradient, Vec3(1, 0, 0));
+  EXPECT_DOUBLE_EQ(face[0].value, 0);
+  // Near the edge x = y = 1 (within the radius): the two faces' planes, the face the point is
+  // on first.
+  auto edge = cube.pieces(Vec3(1, 0.95, 0.2), 0.1);
+  ASSERT_EQ(edge.size(), 2u);
+  EXPECT_EQ(edge[0].gradient, Vec3(1, 0, 0));
+  EXPECT_EQ(edge[1].gradient, Vec3(0, 1, 0));
+  EXPECT_NEAR(edge[1].value, 0.95 - 1, 1e-16);
+  EXPECT_EQ(edge[1].hessian, Mat3::Zero());
+  // The same point with a radius that does not reach the edge.
+  EXPECT_EQ(cube.pieces(Vec3(1, 0.95, 0.2), 0.01).size(), 1u);
+  // A corner: three planes.
+  auto corner = cube.pieces(Vec3(0.98, -0.99, 1.0), 0.05);
+  EXPECT_EQ(gradients(corner), (std::set<std::array<double, 3>>{{1, 0, 0}, {0, -1, 0}, {0, 0, 1}}));
+}
+
+TEST(FieldPieces, APieceKeepsItsBranchesAwayFromWhereItWasFound) {
+  const Expression cube = expression(kCube);
+  const auto edge = cube.pieces(Vec3(1, 0.95, 0.2), 0.1);
+  ASSERT_EQ(edge.size(), 2u);
+  // The y-face's plane y - 1, evaluated far inside the x-face's part of the field.
+  const FieldPiece far = cube.piece(Vec3(1.5, -0.3, 0.7), edge[1].branch);
+  EXPECT_DOUBLE_EQ(far.value, -1.3);
+  EXPECT_EQ(far.gradient, Vec3(0, 1, 0));
+  EXPECT_THROW(cube.piece(Vec3::Zero(), {0, 1}), InvalidInputError);  // the cube has 5 branch points
+}
+
+TEST(FieldPieces, DerivativesOfAPieceMatchFiniteDifferences) {
+  // Two unioned spheres: min of two distances; each piece is one sphere's distance.
+  const Expression spheres = expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)");
+  const Vec3 p(0.01, 0.8, 0.3);
+  const auto pieces = spheres.pieces(p, 0.05);
+  ASSERT_EQ(pieces.size(), 2u);
+  for (const auto& q : pieces) {
+    const double h = 1e-6;
+    for (int a = 0; a < 3; ++a) {
+      const Vec3 e = Vec3::Unit(a) * h;
+      const FieldPiece plus = spheres.piece(p + e, q.branch), minus = spheres.piece(p - e, q.branch);
+      EXPECT_NEAR((plus.value - minus.value) / (2 * h), q.gradient[a], 1e-8);
+      EXPECT_NEAR(((plus.gradient - minus.gradient) / (2 * h) - q.hessian.col(a)).norm(), 0, 1e-7);
+    }
+  }
+  // The piece whose centre is (0.5, 0, 0): its value is the distance to that centre minus 1.
+  const bool first_is_right = pieces[0].gradient.x() < 0;
+  const FieldPiece& right = first_is_right ? pieces[0] : pieces[1];
+  EXPECT_NEAR(right.value, (p - Vec3(0.5, 0, 0)).norm() - 1, 1e-15);
+}
+
+TEST(FieldPieces, SmoothModelsReportNoPiecesAndCountTheirEvaluations) {
+  const Sphere sphere(Vec3::Zero(), 1.0);
+  EXPECT_TRUE(sphere.pieces(Vec3(1, 0, 0), 0.1).empty());
+  // The empty branch is the field itself.
+  const FieldPiece whole = sphere.piece(Vec3(2, 0, 0), {});
+  EXPECT_DOUBLE_EQ(whole.value, sphere.value(Vec3(2, 0, 0)));
+  EXPECT_THROW(sphere.piece(Vec3::Zero(), {1}), InvalidInputError);
+  const Expression cube = expression(kCube);
+  cube.reset_counts();
+  const auto corner = cube.pieces(Vec3(1, 1, 1), 0.01);
+  EXPECT_EQ(corner.size(), 3u);
+  EXPECT_EQ(cube.counts().value_gradient, 1u);
+  EXPECT_EQ(cube.counts().gradient_hessian, 3u);
+}
+
+std::vector<std::vector<std::uint8_t>> branches(const std::vector<FieldPiece>& pieces) {
+  std::vector<std::vector<std::uint8_t>> out;
+  for (const auto& q : pieces) out.push_back(q.branch);
+  return out;
+}
+
+TEST(CreaseProjection, LandsOnTheCircleWhereTwoSpheresMeet) {
+  const Expression spheres = expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)");
+  const Vec3 start(0.05, 0.8, 0.2);
+  const auto b = branches(spheres.pieces(start, 0.1));
+  ASSERT_EQ(b.size(), 2u);
+  // With the default tolerance (1e-10 of the box diagonal), within it.
+  const double tol = 1e-10 * spheres.bounds().diagonal();
+  const CreaseProjection coarse = project_to_crease(spheres, start, b);
+  ASSERT_TRUE(coarse.ok()) << to_string(coarse.status);
+  EXPECT_LE(coarse.residual, tol);
+  EXPECT_LE(std::abs(coarse.point.x()), tol);
+  EXPECT_LE(std::abs(std::hypot(coarse.point.y(), coarse.point.z()) - std::sqrt(0.75)), tol);
+  // Newton's convergence is quadratic: a tighter tolerance costs a step or two.
+  CreaseOptions tight;
+  tight.tolerance = 1e-14;
+  const CreaseProjection r = project_to_crease(spheres, start, b, tight);
+  ASSERT_TRUE(r.ok()) << to_string(r.status);
+  EXPECT_LE(r.iterations, coarse.iterations + 2);
+  // The circle x = 0, y^2 + z^2 = 3/4; the minimum-norm steps keep the point's direction
+  // around the x axis.
+  EXPECT_NEAR(r.point.x(), 0, 1e-12);
+  EXPECT_NEAR(std::hypot(r.point.y(), r.point.z()), std::sqrt(0.75), 1e-12);
+  EXPECT_NEAR(std::atan2(r.point.z(), r.point.y()), std::atan2(start.z(), start.y()), 1e-9);
+  EXPECT_NEAR(spheres.value(r.point), 0, 1e-12);
+}
+
+TEST(CreaseProjection, LandsOnACubesEdgeAndCornerAndACylindersRim) {
+  const Expression cube = expression(kCube);
+  const Vec3 near_edge(1.02, 0.97, 0.3);
+  const auto edge = project_to_crease(cube, near_edge, branches(cube.pieces(near_edge, 0.1)));
+  ASSERT_TRUE(edge.ok());
+  EXPECT_LE((edge.point - Vec3(1, 1, 0.3)).norm(), 1e-12);
+  const Vec3 near_corner(0.97, -1.03, 0.99);
+  const auto corner_pieces = cube.pieces(near_corner, 0.1);
+  ASSERT_EQ(corner_pieces.size(), 3u);
+  const auto corner = project_to_crease(cube, near_corner, branches(corner_pieces));
+  ASSERT_TRUE(corner.ok());
+  EXPECT_LE((corner.point - Vec3(1, -1, 1)).norm(), 1e-12);
+
+  const Expression cylinder = expression("max(sqrt(x^2+y^2)-1, abs(z)-1)");
+  const Vec3 near_rim(0.6, 0.75, -0.98);
+  const auto rim = project_to_crease(cylinder, near_rim, branches(cylinder.pieces(near_rim, 0.1)));
+  ASSERT_TRUE(rim.ok());
+  EXPECT_NEAR(rim.point.z(), -1, 1e-12);
+  EXPECT_NEAR(std::hypot(rim.point.x(), rim.point.y()), 1, 1e-12);
+}
+
+TEST(CreaseProjection, ReportsTangentPiecesAndRefusesOtherCounts) {
+  // Two planes that are parallel (x = 0 and x = 0.5): no crease between them.
+  const Expression slab = expression("max(x-0.5, -x)");
+  const auto b = branches(slab.pieces(Vec3(0.25, 0, 0), 1));
+  ASSERT_EQ(b.size(), 2u);
+  EXPECT_EQ(project_to_crease(slab, Vec3(0.25, 0, 0), b).status, CreaseStatus::DependentGradients);
+  EXPECT_THROW(project_to_crease(slab, Vec3::Zero(), std::vector<std::vector<std::uint8_t>>{b[0]}), InvalidInputError);
+}
+
+}  // namespace
+}  // namespace cdp
