@@ -1,0 +1,48 @@
+// The creases of a CSG surface as polylines: every curve where two pieces of a min/max/abs
+// field (Field::pieces) meet on the surface, traced from crossings of a grid, ending at corners
+// (where a third piece meets them) or closing on themselves. The exact creases the sharp-feature
+// measures compare a mesh with, and what crease-aware meshing will start from.
+#pragma once
+
+#include <cdp/core/crease.h>
+#include <cdp/core/field.h>
+
+#include <vector>
+
+namespace cdp {
+
+struct CreaseTracingOptions {
+  // Grid cells along the box's longest side whose sign changes are searched for creases: a
+  // crease passing within about one cell of a crossed grid edge is found (one whose whole length
+  // fits between crossings, shorter than about a cell, can be missed).
+  int resolution = 32;
+  // Step along a crease: at most max_spacing, shortened (down to min_spacing) so that the
+  // crease's tangent turns by at most max_turn radians a step. Non-positive spacings: 0.02 and
+  // 0.0005 of the box diagonal.
+  double max_spacing = 0;
+  double min_spacing = 0;
+  double max_turn = 0.1;
+  // The largest number of points of all polylines together (a bound on the work).
+  std::size_t max_points = 1'000'000;
+  CreaseOptions newton;  // the projection onto the crease at each step
+};
+
+struct CreaseCurve {
+  std::vector<Vec3> points;  // on both pieces to within the Newton tolerance
+  bool closed = false;       // a loop: the last point connects back to the first
+  // For an open curve, whether each end is a corner (three pieces meet there) rather than a
+  // place where tracing stopped (a crease that fades out: the two pieces become tangent).
+  bool starts_at_corner = false, ends_at_corner = false;
+};
+
+struct CreaseTracingResult {
+  std::vector<CreaseCurve> curves;
+  std::vector<Vec3> corners;  // every corner once
+  std::size_t stops = 0;      // curve ends that are not corners (tangent pieces, failed projections)
+};
+
+// Throws InvalidInputError for a resolution below 2, LimitExceededError past max_points. A field
+// that reports no pieces (a smooth model) has no creases.
+CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions& options = {});
+
+}  // namespace cdp

@@ -1,0 +1,226 @@
+#include <cdp/core/crease_curves.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/newton_projection.h>
+#include <cdp/core/surface_seeds.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+
+namespace cdp {
+
+namespace {
+
+using Branch = std::vector<std::uint8_t>;
+
+// Gradients of one piece seen at two points are "the same piece" when their directions agree to
+// this (cosine): pieces at a crease differ by the crease's dihedral angle, which this project's
+// shapes keep well above the 2.6 degrees it allows.
+constexpr double kSamePieceCosine = 0.999;
+// A point on two pieces to within the Newton tolerance tol lies within tol / sin(angle / 2) of
+// where their branch switches (angle: the crease's dihedral angle); this many tolerances cover
+// angles down to about 6 degrees and are still far below any step.
+constexpr double kActiveRadius = 20;
+// How many times a step is halved when the tangent turns too much or the projection fails.
+constexpr int kMaxHalvings = 12;
+
+// Points already on a curve, hashed by cell, to skip grid crossings near a traced crease.
+class PointGrid {
+ public:
+  explicit PointGrid(double cell) : cell_(cell) {}
+  void insert(const Vec3& p) { cells_[key(cell_of(p))].push_back(p); }
+  bool any_within(const Vec3& p, double r) const {
+    const auto c = cell_of(p);
+    const int reach = static_cast<int>(std::ceil(r / cell_));
+    for (int dz = -reach; dz <= reach; ++dz)
+      for (int dy = -reach; dy <= reach; ++dy)
+        for (int dx = -reach; dx <= reach; ++dx) {
+          const auto it = cells_.find(key({c[0] + dx, c[1] + dy, c[2] + dz}));
+          if (it == cells_.end()) continue;
+          for (const Vec3& q : it->second)
+            if ((q - p).squaredNorm() <= r * r) return true;
+        }
+    return false;
+  }
+
+ private:
+  std::array<std::int64_t, 3> cell_of(const Vec3& p) const {
+    return {static_cast<std::int64_t>(std::floor(p.x() / cell_)), static_cast<std::int64_t>(std::floor(p.y() / cell_)),
+            static_cast<std::int64_t>(std::floor(p.z() / cell_))};
+  }
+  static std::uint64_t key(const std::array<std::int64_t, 3>& c) {
+    return static_cast<std::uint64_t>(c[0]) * 0x9E3779B97F4A7C15ull ^ static_cast<std::uint64_t>(c[1]) * 0xC2B2AE3D27D4EB4Full ^
+           static_cast<std::uint64_t>(c[2]) * 0x165667B19E3779F9ull;
+  }
+  double cell_;
+  std::unordered_map<std::uint64_t, std::vector<Vec3>> cells_;
+};
+
+struct Tracer {
+  const Field& field;
+  const CreaseTracingOptions& o;
+  double max_spacing, min_spacing, tol;
+  std::size_t points = 0;
+
+  // The pieces taken on the surface right at p: those whose switch lies within a radius of
+  // the Newton tolerance's size.
+  std::vector<FieldPiece> active(const Vec3& p) const { return field.pieces(p, kActiveRadius * tol); }
+
+  // Whether both pieces (gradients g1, g2) are among those taken at p: then p is on the crease
+  // of the surface, not on an intersection of pieces that another branch hides.
+  bool both_active(const Vec3& p, const Vec3& g1, const Vec3& g2) const {
+    bool f1 = false, f2 = false;
+    for (const FieldPiece& q : active(p)) {
+      const Vec3 g = q.gradient.normalized();
+      f1 = f1 || g.dot(g1.normalized()) > kSamePieceCosine;
+      f2 = f2 || g.dot(g2.normalized()) > kSamePieceCosine;
+    }
+    return f1 && f2;
+  }
+
+  FieldPiece piece(const Vec3& p, const Branch& b) const { return field.piece(p, b); }
+
+  Vec3 tangent(const Vec3& p, const Branch& a, const Branch& b) const {
+    return piece(p, a).gradient.cross(piece(p, b).gradient).normalized();
+  }
+
+  // A third piece whose zero set lies within `reach` of p and which is taken there: the corner
+  // of the three, if the projection reaches one on the surface within 2 reach.
+  bool corner_near(const Vec3& p, const Branch& a, const Branch& b, double reach, Vec3& corner) const {
+    const Vec3 ga = piece(p, a).gradient.normalized(), gb = piece(p, b).gradient.normalized();
+    for (const FieldPiece& q : field.pieces(p, reach)) {
+      const Vec3 g = q.gradient.normalized();
+      if (g.dot(ga) > kSamePieceCosine || g.dot(gb) > kSamePieceCosine) continue;
+      if (!(std::abs(q.value) <= reach * q.gradient.norm())) continue;
+      const std::vector<Branch> three{a, b, q.branch};
+      const CreaseProjection c = project_to_crease(field, p, three, o.newton);
+      if (!c.ok() || (c.point - p).norm() > 2 * reach) continue;
+      if (!both_active(c.point, ga, g)) continue;
+      corner = c.point;
+      return true;
+    }
+    return false;
+  }
+
+  // Walks from `start` along the crease of a and b in direction `dir` (+1 or -1 times the
+  // tangent ga x gb) until a corner, back at `loop_to` (a loop), or a stop. Appends the points
+  // after `start`.
+  enum class End { Corner, Loop, Stop };
+  End walk(const Vec3& start, const Branch& a, const Branch& b, double dir, const Vec3* loop_to,
+           std::vector<Vec3>& out) {
+    Vec3 p = start;
+    Vec3 t = dir * tangent(p, a, b);
+    double step = max_spacing;
+    double travelled = 0;
+    for (;;) {
+      if (++points > o.max_points)
+        throw LimitExceededError("trace_creases: more than " + std::to_string(o.max_points) +
+                                 " crease points (CreaseTracingOptions::max_points)");
+      Vec3 corner;
+      if (corner_near(p, a, b, step, corner)) {
+        if ((corner - p).norm() <= kActiveRadius * tol) return End::Corner;  // p is the corner
+        // Only ahead: a corner behind is where this walk started.
+        if ((corner - p).dot(t) > 0) {
+          out.push_back(corner);
+          return End::Corner;
+        }
+      }
+      // Predictor along the tangent, corrector onto the crease; shorter steps where the crease
+      // turns fast or the projection fails.
+      bool moved = false;
+      for (int h = 0; h <= kMaxHalvings && step >= min_spacing; ++h, step *= 0.5) {
+        const std::vector<Branch> two{a, b};
+        const CreaseProjection c = project_to_crease(field, p + step * t, two, o.newton);
+        if (!c.ok()) continue;
+        const Vec3 tn = dir * tangent(c.point, a, b);
+        // The turn bound sets the spacing, down to min_spacing: a crease that turns faster still
+        // is followed at min_spacing (less than a right angle a step).
+        const bool last = h == kMaxHalvings || 0.5 * step < min_spacing;
+        const double turn = last ? 0.0 : std::cos(o.max_turn);
+        if (!tn.allFinite() || tn.dot(t) <= turn || (c.point - p).dot(t) <= 0) continue;
+        if (!both_active(c.point, piece(c.point, a).gradient, piece(c.point, b).gradient)) continue;
+        travelled += (c.point - p).norm();
+        p = c.point;
+        t = tn;
+        moved = true;
+        break;
+      }
+      if (!moved) return End::Stop;
+      step = std::min(max_spacing, 2 * step);
+      // Back within a step of the start: the segment from p closes the loop.
+      if (loop_to && travelled > 2 * max_spacing && (p - *loop_to).norm() < step) {
+        if ((p - *loop_to).norm() > min_spacing) out.push_back(p);
+        return End::Loop;
+      }
+      out.push_back(p);
+    }
+  }
+};
+
+}  // namespace
+
+CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions& options) {
+  CreaseTracingResult result;
+  const Box& box = field.bounds();
+  const double diag = box.diagonal();
+  Tracer tr{field, options, options.max_spacing > 0 ? options.max_spacing : 0.02 * diag,
+            options.min_spacing > 0 ? options.min_spacing : 0.0005 * diag,
+            options.newton.tolerance > 0 ? options.newton.tolerance : 1e-10 * diag};
+  SeedOptions so;
+  so.resolution = options.resolution;
+  so.require_closed_in_box = false;
+  const SeedGrid grid = sample_seed_grid(field, so);
+  // A model without pieces has no creases (and costs only the grid).
+  if (field.pieces(box.center(), grid.h).empty()) return result;
+  PointGrid traced(grid.h);
+  std::vector<Vec3> corners;
+  grid.for_each_sign_change([&](const std::array<int, 3>& ia, const std::array<int, 3>& ib) {
+    const Vec3 pa = grid.point(ia[0], ia[1], ia[2]), pb = grid.point(ib[0], ib[1], ib[2]);
+    const double fa = grid.value(ia[0], ia[1], ia[2]), fb = grid.value(ib[0], ib[1], ib[2]);
+    const ProjectionResult s = project_to_surface(field, pa + fa / (fa - fb) * (pb - pa));
+    if (!s.ok() || traced.any_within(s.point, grid.h)) return;
+    // The two pieces taken nearest the crossing whose crease lies within a cell.
+    const std::vector<FieldPiece> near = field.pieces(s.point, grid.h);
+    if (near.size() < 2) return;
+    for (std::size_t i = 0; i < near.size(); ++i)
+      for (std::size_t j = i + 1; j < near.size(); ++j) {
+        const std::vector<Branch> two{near[i].branch, near[j].branch};
+        const CreaseProjection c = project_to_crease(field, s.point, two, options.newton);
+        if (!c.ok() || (c.point - s.point).norm() > 2 * grid.h || traced.any_within(c.point, grid.h)) continue;
+        if (!tr.both_active(c.point, tr.piece(c.point, two[0]).gradient, tr.piece(c.point, two[1]).gradient)) continue;
+        // Trace both ways from c: a loop comes back to c; otherwise the curve runs from one
+        // end to the other.
+        CreaseCurve curve;
+        std::vector<Vec3> forward, backward;
+        const auto fe = tr.walk(c.point, two[0], two[1], 1, &c.point, forward);
+        if (fe == Tracer::End::Loop) {
+          curve.closed = true;
+          curve.points.push_back(c.point);
+          curve.points.insert(curve.points.end(), forward.begin(), forward.end());
+        } else {
+          const auto be = tr.walk(c.point, two[0], two[1], -1, nullptr, backward);
+          curve.points.assign(backward.rbegin(), backward.rend());
+          curve.points.push_back(c.point);
+          curve.points.insert(curve.points.end(), forward.begin(), forward.end());
+          curve.starts_at_corner = be == Tracer::End::Corner;
+          curve.ends_at_corner = fe == Tracer::End::Corner;
+          result.stops += (be == Tracer::End::Stop) + (fe == Tracer::End::Stop);
+          if (curve.starts_at_corner) corners.push_back(curve.points.front());
+          if (curve.ends_at_corner) corners.push_back(curve.points.back());
+        }
+        for (const Vec3& q : curve.points) traced.insert(q);
+        result.curves.push_back(std::move(curve));
+        return;
+      }
+  });
+  // Corners once: the ends of several curves meet at each, each found to the Newton tolerance.
+  for (const Vec3& c : corners) {
+    const bool seen = std::any_of(result.corners.begin(), result.corners.end(),
+                                  [&](const Vec3& q) { return (q - c).norm() <= tr.min_spacing; });
+    if (!seen) result.corners.push_back(c);
+  }
+  return result;
+}
+
+}  // namespace cdp
