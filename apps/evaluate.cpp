@@ -151,6 +151,12 @@ int main(int argc, char** argv) {
     const auto& under = metrics["min_angle_deg"]["share_under"];
     std::printf("smallest angles under 10/20/30 deg: %.4f %.4f %.4f  mesh-surface distance max %.4g\n",
                 num(under["10"]), num(under["20"]), num(under["30"]), num(metrics["hausdorff_estimate"]));
+    if (const auto& c = metrics["creases"]; c["curves"].get<std::size_t>() > 0)
+      std::printf("creases: %zu curves, %zu corners  crease-to-edge distance mean %.4g max %.4g  edge-Chamfer %.4g "
+                  "(%zu sharp edges)\n",
+                  c["curves"].get<std::size_t>(), c["corners"].get<std::size_t>(),
+                  num(c["crease_to_mesh_edges"]["mean"]), num(c["crease_to_mesh_edges"]["max"]), num(c["edge_chamfer"]),
+                  c["sharp_edges"].get<std::size_t>());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "evaluate: %s\n", e.what());

@@ -1,3 +1,4 @@
+#include <cdp/raytrace/crease_distance.h>
 #include <cdp/raytrace/embree_scene.h>
 #include <cdp/raytrace/evaluate.h>
 #include <cdp/raytrace/field_cost.h>
@@ -131,6 +132,21 @@ nlohmann::json evaluate_mesh(const Field& field, const Mesh& mesh, const GroundT
                           {"method", "distance from every ground-truth ray hit to the nearest mesh point"}};
   // fmax: a side without samples (--samples 0) leaves the other side's maximum.
   j["hausdorff_estimate"] = number(std::fmax(ms.max, sm.max));
+  // The sharp-feature measures, for fields that report their pieces (CSG expressions).
+  const CreaseDistance creases = crease_distance(field, mesh);
+  const auto stats = [&](const SampleStats& s) {
+    return nlohmann::json{{"mean", number(s.mean)}, {"max", number(s.max)}, {"count", s.count}};
+  };
+  j["creases"] = {{"curves", creases.crease_curves},
+                  {"corners", creases.corners},
+                  {"points", creases.crease_points},
+                  {"sharp_edges", creases.sharp_edges},
+                  {"crease_to_mesh_edges", stats(creases.crease_to_mesh_edges)},
+                  {"crease_to_sharp_edges", stats(creases.crease_to_sharp_edges)},
+                  {"sharp_edges_to_crease", stats(creases.sharp_edges_to_crease)},
+                  {"edge_chamfer", number(creases.edge_chamfer)},
+                  {"method", "exact creases traced on the field's min/max/abs pieces against the mesh's edges; "
+                             "sharp: dihedral angle over 30 degrees"}};
   const FieldCost cost = measure_field_cost(field, mesh);
   j["field_cost"] = {{"value_us", 1e6 * cost.value_seconds},
                      {"value_gradient_us", 1e6 * cost.value_gradient_seconds},
