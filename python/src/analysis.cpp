@@ -2,6 +2,7 @@
 // evaluate program on arrays.
 #include "bindings.h"
 
+#include <cdp/core/crease_curves.h>
 #include <cdp/core/curvature.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/newton_projection.h>
@@ -190,6 +191,32 @@ py::dict evaluate(const Field& field, py::handle vertices, py::handle faces, py:
   return from_json(metrics);
 }
 
+py::dict trace_creases_py(const Field& field, std::optional<int> resolution, std::optional<double> max_spacing,
+                          std::optional<double> min_spacing, std::optional<double> max_turn) {
+  CreaseTracingOptions o;
+  if (resolution) o.resolution = *resolution;
+  if (max_spacing) o.max_spacing = *max_spacing;
+  if (min_spacing) o.min_spacing = *min_spacing;
+  if (max_turn) o.max_turn = *max_turn;
+  if (o.resolution < 2) throw InvalidInputError("resolution must be at least 2");
+  if (!(o.max_turn > 0) || !std::isfinite(o.max_spacing) || !std::isfinite(o.min_spacing))
+    throw InvalidInputError("max_turn must be positive, spacings finite");
+  CreaseTracingResult r;
+  {
+    py::gil_scoped_release release;
+    r = trace_creases(field, o);
+  }
+  py::list curves;
+  for (const CreaseCurve& c : r.curves)
+    curves.append(py::dict("points"_a = to_array(c.points), "closed"_a = c.closed,
+                           "starts_at_corner"_a = c.starts_at_corner, "ends_at_corner"_a = c.ends_at_corner));
+  py::dict d;
+  d["curves"] = curves;
+  d["corners"] = to_array(r.corners);
+  d["stops"] = r.stops;
+  return d;
+}
+
 }  // namespace
 
 void bind_analysis(py::module_& m) {
@@ -204,6 +231,14 @@ void bind_analysis(py::module_& m) {
         "(N,) bool, status (N,) str (converged, max_iterations, vanishing_gradient, too_far, not_finite, out_of_range, "
         "no_progress), iterations (N,) int32, residual (N,) = |F| / |grad F| at the point. Defaults: 40 iterations, "
         "tolerance 1e-10, max_step 0.1 and max_travel 0.5 of the box diagonal.");
+  m.def("trace_creases", &trace_creases_py, py::arg("field"), py::kw_only(), py::arg("resolution") = py::none(),
+        py::arg("max_spacing") = py::none(), py::arg("min_spacing") = py::none(), py::arg("max_turn") = py::none(),
+        "The creases of a CSG field (an expression with min, max or abs) as polylines on both pieces: a dict with "
+        "curves (a list of dicts: points (N, 3), closed, starts_at_corner, ends_at_corner), corners (K, 3) and stops "
+        "(curve ends that are not corners). Found from the crossed edges of a grid of `resolution` cells (32); steps "
+        "of at most max_spacing (0.02 of the box diagonal), shortened down to min_spacing (0.0005) so that the "
+        "tangent turns at most max_turn (0.1 rad) a step. Fields that do not report pieces (the other models, "
+        "Python callables) have none.");
   m.def("evaluate", &evaluate, py::arg("field"), py::arg("vertices"), py::arg("faces"), py::kw_only(),
         py::arg("normals") = py::none(), py::arg("views") = 8, py::arg("resolution") = 64,
         py::arg("projection") = "perspective", py::arg("samples") = 20000,

@@ -93,3 +93,26 @@ def test_evaluate_a_callable_field():
     assert field.python_calls > 0
     assert b["rays"]["surface_hits"] == a["rays"]["surface_hits"]
     assert b["depth_error"]["mean"] == pytest.approx(a["depth_error"]["mean"], rel=1e-6)
+
+
+def test_trace_creases_of_a_cube_and_a_capped_cylinder():
+    cube = cdp.expression("max(abs(x),max(abs(y),abs(z)))-1", bounds=[[-1.5] * 3, [1.5] * 3])
+    r = cdp.trace_creases(cube)
+    assert len(r["curves"]) == 12 and r["stops"] == 0
+    assert r["corners"].shape == (8, 3)
+    assert np.allclose(np.abs(r["corners"]), 1, atol=1e-9)
+    for c in r["curves"]:
+        assert not c["closed"] and c["starts_at_corner"] and c["ends_at_corner"]
+        # Every point on two faces.
+        assert (np.sum(np.isclose(np.abs(c["points"]), 1, atol=1e-9), axis=1) >= 2).all()
+    cylinder = cdp.expression("max(sqrt(x^2+y^2)-1, abs(z)-1)", bounds=[[-1.5] * 3, [1.5] * 3])
+    rims = cdp.trace_creases(cylinder, max_spacing=0.05)
+    assert [c["closed"] for c in rims["curves"]] == [True, True]
+    for c in rims["curves"]:
+        p = c["points"]
+        assert np.allclose(np.hypot(p[:, 0], p[:, 1]), 1) and np.allclose(np.abs(p[:, 2]), 1)
+        assert np.linalg.norm(np.diff(p, axis=0), axis=1).max() <= 0.05 * 1.0001
+    # A smooth model reports no pieces, so no creases.
+    assert cdp.trace_creases(cdp.sphere(radius=1))["curves"] == []
+    with pytest.raises(ValueError):
+        cdp.trace_creases(cube, resolution=1)
