@@ -170,9 +170,9 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
   SeedOptions so;
   so.resolution = options.resolution;
   so.require_closed_in_box = false;
+  // A model without pieces has no creases (and costs one evaluation, not a grid).
+  if (field.pieces(box.center(), seed_grid_spacing(field, so)).empty()) return result;
   const SeedGrid grid = sample_seed_grid(field, so);
-  // A model without pieces has no creases (and costs only the grid).
-  if (field.pieces(box.center(), grid.h).empty()) return result;
   PointGrid traced(grid.h);
   std::vector<Vec3> corners;
   grid.for_each_sign_change([&](const std::array<int, 3>& ia, const std::array<int, 3>& ib) {
