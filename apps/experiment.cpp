@@ -353,6 +353,11 @@ int summarize(const Experiment& e, const Paths& p) {
       {"components", "/metrics/topology/components"},
       {"genus", "/metrics/topology/genus"},
       {"self_intersections", "/metrics/topology/self_intersections/pairs"},
+      {"crease_curves", "/metrics/creases/curves"},
+      {"crease_to_edges_max", "/metrics/creases/crease_to_mesh_edges/max"},
+      {"crease_to_edges_mean", "/metrics/creases/crease_to_mesh_edges/mean"},
+      {"edge_chamfer", "/metrics/creases/edge_chamfer"},
+      {"sharp_edges", "/metrics/creases/sharp_edges"},
   };
   nlohmann::json summary{{"experiment", e.name}, {"description", e.description}, {"seed", e.seed}, {"runs", nlohmann::json::array()}};
   std::ostringstream csv;

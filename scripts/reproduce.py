@@ -13,7 +13,8 @@ PY = sys.executable or "/usr/bin/python3"
 # Table 1 first: the others reuse its cached ground truth where they share a model. Then the
 # same protocol beyond the bunny (claims_by_model.py), and the examples.
 EXPERIMENTS = ["table1", "igea_vis4004", "horse_mpu", "tanglecube", "random_blobs", "torus", "blobs_example",
-               "double_torus"]
+               "double_torus", "creases_cube", "creases_capped_cylinder", "creases_box_minus_ball",
+               "creases_two_spheres", "creases_hollow_sphere"]
 
 
 # experiment's exit status when it ran but some of its runs failed: the tables show those runs
@@ -48,6 +49,7 @@ def main():
     step("Table 1 and claims", [PY, "scripts/table1.py", "--build", a.build])
     step("claims on every model", [PY, "scripts/claims_by_model.py"])
     step("plots", [PY, "scripts/plots.py"])
+    step("sharp features", [PY, "scripts/sharp_features.py"])
     if os.path.exists(os.path.join(ROOT, "scripts", "figures.py")):
         step("figures", [PY, "scripts/figures.py", "--build", a.build, "--jobs", str(a.jobs)])
     step("results/README.md", [PY, "scripts/results_readme.py", "--seconds", str(round(time.time() - start))])

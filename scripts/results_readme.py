@@ -25,6 +25,12 @@ def main():
             with open(p) as f:
                 text = f.read()
             parts += [text.replace("\n# ", "\n## ").replace("# ", "## ", 1), ""]
+    sharp = os.path.join(r, "sharp_features.md")
+    if os.path.exists(sharp):
+        with open(sharp) as f:
+            text = f.read()
+        parts += [text.replace("\n## ", "\n### ").replace("# ", "## ", 1), "",
+                  "![sharp features](sharp_features.png)", ""]
     plots = sorted(glob.glob(os.path.join(r, "plots", "*.png")))
     if plots:
         parts += ["## Plots", ""] + ["![{0}](plots/{0})".format(os.path.basename(p)) for p in plots] + [""]
