@@ -80,6 +80,9 @@ std::vector<HardSurface> hard_surfaces() {
        expression("max(abs(0.8*x+0.6*y),max(abs(-0.48*x+0.64*y+0.6*z),abs(0.36*x-0.48*y+0.8*z)))-1", 2), 1, 0,
        {1, 2, 3, 5}},
       {"capped_cylinder", expression("max(sqrt(x^2+y^2)-1, abs(z)-1)", 1.5), 1, 0, {1, 2, 3, 5}},
+      // A box with a ball taken out: each face's round hole meets the ball in a 34-degree wedge,
+      // which the tracker takes for two sheets (the sharp-features issue's shapes; fails today).
+      {"box_minus_ball", expression("max(max(abs(x),max(abs(y),abs(z)))-1, 1.2-sqrt(x^2+y^2+z^2))", 1.5), 1, 5, {}},
       {"gyroid_ball",
        expression("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)", 2.2), -1, -1, {}, {2}},
       {"barth_ball",
