@@ -468,6 +468,9 @@ class Improver {
     if (neighbours(c).size() < 4 || neighbours(d).size() < 4) return false;
     // The merged vertex: a crease end stays where it is; otherwise the midpoint, on the surface.
     Vec3 x, nx;
+    // Across a ridge narrower than the edge (the landing's normal within 30 degrees of neither
+    // end's, see lands_between), the merged vertex stands for both flanks.
+    bool ridge = false;
     if (ca || cb) {
       x = ca ? P(a) : P(b);
       nx = ca ? m_.normals[a] : m_.normals[b];
@@ -485,6 +488,7 @@ class Improver {
       x = pr.point;
       nx = g.normalized();
       if (!lands_between(nx, m_.normals[a], m_.normals[b])) return false;
+      ridge = !(nx.dot(m_.normals[a]) > kMoveNormalCos && nx.dot(m_.normals[b]) > kMoveNormalCos);
     }
     std::vector<int> old;  // every triangle around a or b
     for (int w : vt_[a]) old.push_back(w);
@@ -505,13 +509,26 @@ class Improver {
     }
     const double floor = facing_floor(old);
     const Vec3 saved = m_.positions[a], saved_n = m_.normals[a];
+    const Vec3 flank_a = m_.normals[a], flank_b = m_.normals[b];
     m_.positions[a] = x;
     m_.normals[a] = nx;
     double after = std::numeric_limits<double>::infinity();
     bool faces = true;
     for (const Tri& s : added) {
       after = std::min(after, tri_min_angle(s));
-      faces = faces && faces_surface(s, floor);
+      if (!ridge) {
+        faces = faces && faces_surface(s, floor);
+        continue;
+      }
+      // On a ridge the crest's normal is up to half the ridge's turn (50-75 degrees on the horse)
+      // from either flank, so a triangle lying on a flank faces it edge-on; at the merged corner
+      // it must face one of the three normals the vertex stands for (crest, either flank), at the
+      // other corners their own as everywhere.
+      const Vec3 fn = face_normal(s);
+      for (int v : s) {
+        const double c = v == a ? std::max({fn.dot(nx), fn.dot(flank_a), fn.dot(flank_b)}) : fn.dot(m_.normals[v]);
+        faces = faces && c > floor;
+      }
     }
     bool ok = after > before + kMinGain && faces;
     double new_dist = 0;
