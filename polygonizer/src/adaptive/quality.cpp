@@ -45,6 +45,9 @@ constexpr double kCreaseFlatCos = 0.985;
 // A moved vertex keeps its surface normal within about 30 degrees: Newton must land it on the
 // same sheet and the same side of any crease nearby.
 constexpr double kMoveNormalCos = 0.866;
+// How far off the arc between an edge's end normals its collapsed midpoint's normal may turn
+// (see lands_between): the 30 degrees a moved vertex's normal may turn (kMoveNormalCos = cos 30).
+constexpr double kArcSlack = 30 * 3.14159265358979323846 / 180;
 // Tangential moves tried, as shares of the way to each target (see try_move).
 constexpr double kMoveShares[] = {1.0, 0.5, 0.25};
 // A needle's shortest edge is collapsed when it is shorter than this share of the triangle's
@@ -196,6 +199,20 @@ class Improver {
     if (worst_new <= allowed) return true;
     for (int t : removed) allowed = std::max(allowed, estimate_distance(m_.triangles[t]));
     return worst_new <= allowed;
+  }
+
+  // Whether the normal n where an edge's midpoint landed belongs to the edge: within about 30
+  // degrees of both ends' normals, or on the arc between them, its angles to the two ends adding
+  // up to at most theirs plus kArcSlack. Either keeps Newton on the same sheet (a landing on
+  // another sheet turns the normal far off both); the arc admits what the first refuses where
+  // the ends' normals are far apart: an edge across a ridge narrower than itself, below the
+  // sizing's resolution (the horse MPU model has one of radius 1e-4 near (-0.012, 0.081, 0.073)
+  // under edges of 1.5-5e-4, min_edge 5.9e-4: its ends' normals are 100-150 degrees apart, and
+  // no normal is within 30 degrees of both), which may now collapse onto the ridge.
+  static bool lands_between(const Vec3& n, const Vec3& na, const Vec3& nb) {
+    if (n.dot(na) > kMoveNormalCos && n.dot(nb) > kMoveNormalCos) return true;
+    const auto angle = [](const Vec3& p, const Vec3& q) { return std::atan2(p.cross(q).norm(), p.dot(q)); };
+    return angle(na, n) + angle(n, nb) <= angle(na, nb) + kArcSlack;
   }
 
   // ---- crease vertices
@@ -451,6 +468,9 @@ class Improver {
     if (neighbours(c).size() < 4 || neighbours(d).size() < 4) return false;
     // The merged vertex: a crease end stays where it is; otherwise the midpoint, on the surface.
     Vec3 x, nx;
+    // Across a ridge narrower than the edge (the landing's normal within 30 degrees of neither
+    // end's, see lands_between), the merged vertex stands for both flanks.
+    bool ridge = false;
     if (ca || cb) {
       x = ca ? P(a) : P(b);
       nx = ca ? m_.normals[a] : m_.normals[b];
@@ -467,7 +487,8 @@ class Improver {
       if (!(g.squaredNorm() > 0)) return false;
       x = pr.point;
       nx = g.normalized();
-      if (!(nx.dot(m_.normals[a]) > kMoveNormalCos && nx.dot(m_.normals[b]) > kMoveNormalCos)) return false;
+      if (!lands_between(nx, m_.normals[a], m_.normals[b])) return false;
+      ridge = !(nx.dot(m_.normals[a]) > kMoveNormalCos && nx.dot(m_.normals[b]) > kMoveNormalCos);
     }
     std::vector<int> old;  // every triangle around a or b
     for (int w : vt_[a]) old.push_back(w);
@@ -488,13 +509,26 @@ class Improver {
     }
     const double floor = facing_floor(old);
     const Vec3 saved = m_.positions[a], saved_n = m_.normals[a];
+    const Vec3 flank_a = m_.normals[a], flank_b = m_.normals[b];
     m_.positions[a] = x;
     m_.normals[a] = nx;
     double after = std::numeric_limits<double>::infinity();
     bool faces = true;
     for (const Tri& s : added) {
       after = std::min(after, tri_min_angle(s));
-      faces = faces && faces_surface(s, floor);
+      if (!ridge) {
+        faces = faces && faces_surface(s, floor);
+        continue;
+      }
+      // On a ridge the crest's normal is up to half the ridge's turn (50-75 degrees on the horse)
+      // from either flank, so a triangle lying on a flank faces it edge-on; at the merged corner
+      // it must face one of the three normals the vertex stands for (crest, either flank), at the
+      // other corners their own as everywhere.
+      const Vec3 fn = face_normal(s);
+      for (int v : s) {
+        const double c = v == a ? std::max({fn.dot(nx), fn.dot(flank_a), fn.dot(flank_b)}) : fn.dot(m_.normals[v]);
+        faces = faces && c > floor;
+      }
     }
     bool ok = after > before + kMinGain && faces;
     double new_dist = 0;
