@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <numbers>
 #include <numeric>
 #include <vector>
 
@@ -47,7 +48,7 @@ constexpr double kCreaseFlatCos = 0.985;
 constexpr double kMoveNormalCos = 0.866;
 // How far off the arc between an edge's end normals its collapsed midpoint's normal may turn
 // (see lands_between): the 30 degrees a moved vertex's normal may turn (kMoveNormalCos = cos 30).
-constexpr double kArcSlack = 30 * 3.14159265358979323846 / 180;
+constexpr double kArcSlack = 30 * std::numbers::pi / 180;
 // Tangential moves tried, as shares of the way to each target (see try_move).
 constexpr double kMoveShares[] = {1.0, 0.5, 0.25};
 // A needle's shortest edge is collapsed when it is shorter than this share of the triangle's
