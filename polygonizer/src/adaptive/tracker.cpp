@@ -1,5 +1,6 @@
 #include "tracker.h"
 
+#include <cdp/core/crease.h>
 #include <cdp/core/errors.h>
 
 #include <chrono>
@@ -431,6 +432,38 @@ std::optional<std::pair<int, int>> Tracker::thin_feature_at(int node) const {
   return best;
 }
 
+std::optional<Tracker::AcuteCrease> Tracker::acute_crease_between(const Vec3& a, const Vec3& b) const {
+  // Each point on its own piece (to a tenth of their distance), the two pieces' crease within
+  // two min_edge of their midpoint: a wedge. Two pieces whose zero sets run side by side without
+  // meeting (a slab between two shapes) have no crease there, and a smooth field no pieces.
+  const double d = (a - b).norm();
+  const Vec3 mid = 0.5 * (a + b);
+  const double reach = 2 * s_.sizing.min_edge;
+  const std::vector<FieldPiece> pieces = field_.pieces(mid, reach);
+  if (pieces.size() < 2) return std::nullopt;
+  const auto nearest_piece = [&](const Vec3& p) {
+    int best = -1;
+    double best_r = 0.1 * d;
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      const FieldPiece q = field_.piece(p, pieces[i].branch);
+      const double r = std::abs(q.value) / q.gradient.norm();
+      if (r <= best_r) best_r = r, best = static_cast<int>(i);
+    }
+    return best;
+  };
+  const int ia = nearest_piece(a), ib = nearest_piece(b);
+  if (ia < 0 || ib < 0 || ia == ib) return std::nullopt;
+  const std::vector<std::vector<std::uint8_t>> two{pieces[static_cast<std::size_t>(ia)].branch,
+                                                   pieces[static_cast<std::size_t>(ib)].branch};
+  const CreaseProjection c = project_to_crease(field_, mid, two);
+  if (!c.ok() || (c.point - mid).norm() > reach) return std::nullopt;
+  const Vec3 na = field_.piece(c.point, two[0]).gradient.normalized();
+  const Vec3 nb = field_.piece(c.point, two[1]).gradient.normalized();
+  // Outward normals n_a, n_b: the faces meet at pi minus the angle between them.
+  const double between = std::atan2(na.cross(nb).norm(), na.dot(nb));
+  return AcuteCrease{c.point, 180.0 - between * 180.0 / std::numbers::pi};
+}
+
 bool Tracker::zip_spike(int node) {
   // After a merge a front may pass twice through one vertex. Once the points between the two
   // passes are used up, the front runs p -> y -> p (both sides of edge p-y are meshed) or
@@ -495,7 +528,18 @@ void Tracker::step(int& f) {
       const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
       std::string message = "adaptive: a front of " + std::to_string(fs_.fronts[f].size) + " points near " + format_point(p) +
                             " cannot advance even at a quarter of min_edge";
-      if (const auto thin = thin_feature_at(node)) {
+      const auto thin = thin_feature_at(node);
+      const auto crease = thin ? acute_crease_between(mesh_.positions[thin->first], mesh_.positions[thin->second])
+                               : std::nullopt;
+      if (crease) {
+        const auto& [u, w] = *thin;
+        message += ": the surface there folds into a crease whose faces meet at " +
+                   std::to_string(static_cast<int>(std::lround(crease->degrees))) + " degrees, near " +
+                   format_point(crease->point) + " (the points " + format_point(mesh_.positions[u]) + " and " +
+                   format_point(mesh_.positions[w]) + " on its two faces are " +
+                   std::to_string((mesh_.positions[u] - mesh_.positions[w]).norm()) +
+                   " apart): creases this sharp are not meshed yet (crease-aware meshing is open work)";
+      } else if (thin) {
         const auto& [u, w] = *thin;
         message += ": the surface there has two sheets facing opposite ways " +
                    std::to_string((mesh_.positions[u] - mesh_.positions[w]).norm()) + " apart, near " +

@@ -199,6 +199,14 @@ class Tracker {
   // For the error of a front that cannot advance: the closest pair (a vertex of node's front,
   // a mesh vertex) within min_edge whose normals face opposite ways, if any.
   std::optional<std::pair<int, int>> thin_feature_at(int node) const;
+  // For the same error: whether two such points lie on the two faces of a crease of the field
+  // (Field::pieces) that passes near them, a wedge rather than a slab; its point and the angle
+  // between its faces, seen from inside, in degrees.
+  struct AcuteCrease {
+    Vec3 point;
+    double degrees;
+  };
+  std::optional<AcuteCrease> acute_crease_between(const Vec3& a, const Vec3& b) const;
   double local_edge_length(int node) const;
 
   // --- rollback.cpp
