@@ -17,6 +17,16 @@ EXPERIMENTS = ["table1", "igea_vis4004", "horse_mpu", "tanglecube", "random_blob
                "creases_two_spheres", "creases_hollow_sphere"]
 
 
+# Experiments whose failed runs are a measured result, not a broken reproduction: the adaptive
+# method does not mesh every creased shape yet (acute creases, the sharp-features issue), and these
+# experiments are the baseline that shows it. Their failures are listed at the end and in
+# results/sharp_features.md; a failure anywhere else still fails `make reproduce`.
+KNOWN_FAILURES = {
+    name: "the adaptive method does not mesh every creased shape yet (see results/sharp_features.md)"
+    for name in ("creases_cube", "creases_capped_cylinder", "creases_box_minus_ball", "creases_two_spheres",
+                 "creases_hollow_sphere")
+}
+
 # experiment's exit status when it ran but some of its runs failed: the tables show those runs
 # as failed with their reasons, so the reproduction goes on and reports them at the end.
 SOME_RUNS_FAILED = 2
@@ -54,6 +64,9 @@ def main():
         step("figures", [PY, "scripts/figures.py", "--build", a.build, "--jobs", str(a.jobs)])
     step("results/README.md", [PY, "scripts/results_readme.py", "--seconds", str(round(time.time() - start))])
     print("reproduce: finished in {:.1f} min".format((time.time() - start) / 60))
+    for name in [n for n in with_failures if n in KNOWN_FAILURES]:
+        print("reproduce: runs failed in {}: known, {}".format(name, KNOWN_FAILURES[name]))
+    with_failures = [n for n in with_failures if n not in KNOWN_FAILURES]
     if with_failures:
         sys.exit("reproduce: runs failed in " + ", ".join(with_failures) +
                  " (listed as failed, with their reasons, in results/NAME/summary.csv and the tables)")
