@@ -490,6 +490,9 @@ class Improver {
       nx = g.normalized();
       if (!lands_between(nx, m_.normals[a], m_.normals[b])) return false;
       ridge = !(nx.dot(m_.normals[a]) > kMoveNormalCos && nx.dot(m_.normals[b]) > kMoveNormalCos);
+      // Not across a crease of the field (two of its min/max/abs pieces meet within the edge):
+      // that edge stands on both faces of a real crease, which a collapse would round off.
+      if (ridge && field_.pieces(x, l).size() > 1) return false;
     }
     std::vector<int> old;  // every triangle around a or b
     for (int w : vt_[a]) old.push_back(w);
