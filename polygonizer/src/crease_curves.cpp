@@ -1,5 +1,6 @@
 #include <cdp/core/crease_curves.h>
 #include <cdp/core/errors.h>
+#include <cdp/core/grid_cell.h>
 #include <cdp/core/newton_projection.h>
 #include <cdp/core/surface_seeds.h>
 
@@ -45,14 +46,8 @@ class PointGrid {
   }
 
  private:
-  std::array<std::int64_t, 3> cell_of(const Vec3& p) const {
-    return {static_cast<std::int64_t>(std::floor(p.x() / cell_)), static_cast<std::int64_t>(std::floor(p.y() / cell_)),
-            static_cast<std::int64_t>(std::floor(p.z() / cell_))};
-  }
-  static std::uint64_t key(const std::array<std::int64_t, 3>& c) {
-    return static_cast<std::uint64_t>(c[0]) * 0x9E3779B97F4A7C15ull ^ static_cast<std::uint64_t>(c[1]) * 0xC2B2AE3D27D4EB4Full ^
-           static_cast<std::uint64_t>(c[2]) * 0x165667B19E3779F9ull;
-  }
+  GridCell cell_of(const Vec3& p) const { return grid_cell(p, cell_); }
+  static std::uint64_t key(const GridCell& c) { return grid_cell_key(c); }
   double cell_;
   std::unordered_map<std::uint64_t, std::vector<Vec3>> cells_;
 };

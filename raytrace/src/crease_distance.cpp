@@ -1,5 +1,7 @@
 #include <cdp/raytrace/crease_distance.h>
 
+#include <cdp/core/grid_cell.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -37,8 +39,8 @@ class SegmentGrid {
       for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
         for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
           for (std::int64_t x = lo[0]; x <= hi[0]; ++x) cells_[key({x, y, z})].push_back(static_cast<int>(i));
-      lo_ = i == 0 ? lo : std::array<std::int64_t, 3>{std::min(lo_[0], lo[0]), std::min(lo_[1], lo[1]), std::min(lo_[2], lo[2])};
-      hi_ = i == 0 ? hi : std::array<std::int64_t, 3>{std::max(hi_[0], hi[0]), std::max(hi_[1], hi[1]), std::max(hi_[2], hi[2])};
+      lo_ = i == 0 ? lo : GridCell{std::min(lo_[0], lo[0]), std::min(lo_[1], lo[1]), std::min(lo_[2], lo[2])};
+      hi_ = i == 0 ? hi : GridCell{std::max(hi_[0], hi[0]), std::max(hi_[1], hi[1]), std::max(hi_[2], hi[2])};
     }
   }
   bool empty() const { return segments_.empty(); }
@@ -71,17 +73,11 @@ class SegmentGrid {
   }
 
  private:
-  std::array<std::int64_t, 3> cell_of(const Vec3& p) const {
-    return {static_cast<std::int64_t>(std::floor(p.x() / cell_)), static_cast<std::int64_t>(std::floor(p.y() / cell_)),
-            static_cast<std::int64_t>(std::floor(p.z() / cell_))};
-  }
-  static std::uint64_t key(const std::array<std::int64_t, 3>& c) {
-    return static_cast<std::uint64_t>(c[0]) * 0x9E3779B97F4A7C15ull ^ static_cast<std::uint64_t>(c[1]) * 0xC2B2AE3D27D4EB4Full ^
-           static_cast<std::uint64_t>(c[2]) * 0x165667B19E3779F9ull;
-  }
+  GridCell cell_of(const Vec3& p) const { return grid_cell(p, cell_); }
+  static std::uint64_t key(const GridCell& c) { return grid_cell_key(c); }
   std::vector<Segment> segments_;
   double cell_ = 1;
-  std::array<std::int64_t, 3> lo_{0, 0, 0}, hi_{0, 0, 0};
+  GridCell lo_{0, 0, 0}, hi_{0, 0, 0};
   std::unordered_map<std::uint64_t, std::vector<int>> cells_;
 };
 
