@@ -19,6 +19,7 @@
 #include <map>
 #include <memory>
 #include <random>
+#include <set>
 #include <sstream>
 
 #include "common/test_fields.h"
@@ -193,8 +194,14 @@ std::vector<Case> all_cases() {
   const auto surfaces = hard_surfaces();
   for (std::size_t s = 0; s < surfaces.size(); ++s) {
 #if defined(__SANITIZE_ADDRESS__)
-    // Several times slower under the sanitizers: every fourth surface at factor 2.
-    if (s % 4 == 0) out.push_back({s, 2});
+    // Several times slower under the sanitizers: a subset at factor 2, named so that a surface
+    // added to the list does not change it: a crease, acute creases that fail (the gyroid ball, the
+    // box minus a ball), a cavity, a needle, genus 5 and a few blob fields. The runaways (the Barth
+    // ball, the fifty blobs: 264 s under the sanitizers) are left to the normal build.
+    static const std::set<std::string> kUnderSanitizers = {
+        "cube", "gyroid_ball", "box_minus_ball", "hollow_sphere", "needle", "tanglecube",
+        "random_blobs_1", "random_blobs_5", "random_blobs_9", "random_blobs_13", "random_blobs_17"};
+    if (kUnderSanitizers.count(surfaces[s].name)) out.push_back({s, 2});
     continue;
 #endif
     const bool random = surfaces[s].name.rfind("random_blobs", 0) == 0;
