@@ -128,13 +128,14 @@ struct Tracer {
         const std::vector<Branch> two{a, b};
         const CreaseProjection c = project_to_crease(field, p + step * t, two, o.newton);
         if (!c.ok()) continue;
-        const Vec3 tn = dir * tangent(c.point, a, b);
+        const Vec3 ga = piece(c.point, a).gradient, gb = piece(c.point, b).gradient;
+        const Vec3 tn = dir * ga.cross(gb).normalized();
         // The turn bound sets the spacing, down to min_spacing: a crease that turns faster still
         // is followed at min_spacing (less than a right angle a step).
         const bool last = h == kMaxHalvings || 0.5 * step < min_spacing;
         const double turn = last ? 0.0 : std::cos(o.max_turn);
         if (!tn.allFinite() || tn.dot(t) <= turn || (c.point - p).dot(t) <= 0) continue;
-        if (!both_active(c.point, piece(c.point, a).gradient, piece(c.point, b).gradient)) continue;
+        if (!both_active(c.point, ga, gb)) continue;
         travelled += (c.point - p).norm();
         p = c.point;
         t = tn;

@@ -366,10 +366,10 @@ std::vector<FieldPiece> Expression::eval_pieces(const Vec3& p, double radius) co
   const int n = program_->branch_points;
   std::vector<std::uint8_t> taken(static_cast<std::size_t>(n));
   std::vector<double> distance(static_cast<std::size_t>(n));
-  const Jet1 r = program_->run<Jet1, detail::Branching::Record>(
-      Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2),
-      detail::BranchLog{nullptr, taken.data(), distance.data()});
-  (void)r;
+  // Only the record of the branches is wanted, not the value.
+  program_->run<Jet1, detail::Branching::Record>(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1),
+                                                 Jet1::variable(p.z(), 2),
+                                                 detail::BranchLog{nullptr, taken.data(), distance.data()});
   std::vector<int> split;
   for (int k = 0; k < n; ++k)
     if (distance[static_cast<std::size_t>(k)] <= radius) split.push_back(k);
