@@ -166,8 +166,8 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
   SeedOptions so;
   so.resolution = options.resolution;
   so.require_closed_in_box = false;
-  // A model without pieces has no creases (and costs one evaluation, not a grid).
-  if (field.pieces(box.center(), seed_grid_spacing(field, so)).empty()) return result;
+  // A model without branch points has no creases (and costs nothing, not a grid).
+  if (!field.has_pieces()) return result;
   const SeedGrid grid = sample_seed_grid(field, so);
   PointGrid traced(grid.h);
   std::vector<Vec3> corners;
@@ -188,6 +188,7 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
         // Trace both ways from c: a loop comes back to c; otherwise the curve runs from one
         // end to the other.
         CreaseCurve curve;
+        curve.pieces = {two[0], two[1]};
         std::vector<Vec3> forward, backward;
         const auto fe = tr.walk(c.point, two[0], two[1], 1, &c.point, forward);
         if (fe == Tracer::End::Loop) {

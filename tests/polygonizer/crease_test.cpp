@@ -84,6 +84,13 @@ TEST(FieldPieces, DerivativesOfAPieceMatchFiniteDifferences) {
   EXPECT_NEAR(right.value, (p - Vec3(0.5, 0, 0)).norm() - 1, 1e-15);
 }
 
+TEST(FieldPieces, OnlyModelsWithBranchPointsHavePieces) {
+  EXPECT_TRUE(expression(kCube).has_pieces());
+  EXPECT_TRUE(expression("abs(x)-1").has_pieces());
+  EXPECT_FALSE(expression("x^2+y^2+z^2-1").has_pieces());
+  EXPECT_FALSE(Sphere(Vec3::Zero(), 1.0).has_pieces());
+}
+
 TEST(FieldPieces, SmoothModelsReportNoPiecesAndCountTheirEvaluations) {
   const Sphere sphere(Vec3::Zero(), 1.0);
   EXPECT_TRUE(sphere.pieces(Vec3(1, 0, 0), 0.1).empty());

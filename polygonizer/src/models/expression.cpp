@@ -362,6 +362,8 @@ constexpr int kMaxSplitBranchPoints = 6;
 
 }  // namespace
 
+bool Expression::has_pieces() const { return program_->branch_points > 0; }
+
 std::vector<FieldPiece> Expression::eval_pieces(const Vec3& p, double radius) const {
   const int n = program_->branch_points;
   std::vector<std::uint8_t> taken(static_cast<std::size_t>(n));

@@ -7,6 +7,8 @@
 #include <cdp/core/crease.h>
 #include <cdp/core/field.h>
 
+#include <array>
+#include <cstdint>
 #include <vector>
 
 namespace cdp {
@@ -33,6 +35,8 @@ struct CreaseCurve {
   // For an open curve, whether each end is a corner (three pieces meet there) rather than a
   // place where tracing stopped (a crease that fades out: the two pieces become tangent).
   bool starts_at_corner = false, ends_at_corner = false;
+  // The branches (Field::piece) of the two pieces that meet along it.
+  std::array<std::vector<std::uint8_t>, 2> pieces;
 };
 
 struct CreaseTracingResult {

@@ -24,6 +24,7 @@ class Expression : public Field {
   std::string type_name() const override { return "expression"; }
   bool thread_safe() const override { return true; }  // evaluation reads immutable data only
   const std::string& formula() const { return formula_; }
+  bool has_pieces() const override;  // a min, max or abs anywhere in the formula
 
  protected:
   double eval_value(const Vec3& p) const override;
