@@ -83,6 +83,15 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
   return hit;
 }
 
+bool Tracker::leaves_patch(int u, int w) const {
+  const auto on_loop = [&](int v) {
+    return static_cast<std::size_t>(v) < loop_vertex_.size() && loop_vertex_[static_cast<std::size_t>(v)];
+  };
+  if (!patch_test_ || !on_loop(u) || !on_loop(w) || patch_test_(mesh_.positions[u], mesh_.positions[w])) return false;
+  ++patch_refusals_;
+  return true;
+}
+
 bool Tracker::can_bridge(int node, int q) const {
   const FrontNode& n = fs_.nodes[node];
   const FrontNode& m = fs_.nodes[q];
@@ -107,8 +116,10 @@ bool Tracker::can_bridge(int node, int q) const {
   // Each point must see the other inside its unmeshed sector, else the bridge would cross
   // triangles already made.
   if (!in_sector(node, x, kSectorMargin) || !in_sector(q, p, kSectorMargin)) return false;
-  (void)p;
-  return crossed_front_edge(n.vertex, vm, x, n.vertex) < 0;
+  if (crossed_front_edge(n.vertex, vm, x, n.vertex) >= 0) return false;
+  // Last, as it evaluates the field: between two loop vertices of a piece's patches, a bridge
+  // may cut across what the piece does not cover (two loops passing close by each other).
+  return !leaves_patch(n.vertex, vm);
 }
 
 double Tracker::bridge_quality(int node, int q) const {

@@ -36,6 +36,7 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   const double theta = n.angle;
   int count = triangle_count(s_.rule, theta, (mesh_.positions[va] - mesh_.positions[vb]).norm(), delta);
   if (count <= 1 && mesh_.normals[va].dot(mesh_.normals[vb]) < kFoldCosine) count = 2;
+  if (count <= 1 && leaves_patch(va, vb)) count = 2;
 
   if (count <= 1) {
     const int q = find_closing_obstacle(node);

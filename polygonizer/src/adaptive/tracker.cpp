@@ -189,6 +189,10 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
     const double dist = (w.at - origin).norm();
     if (dist < 0.25 * d || dist > 1.75 * d) break;
     if (over_finished_mesh(w.placed->point, w.placed->curvature.normal, d)) break;
+    if (point_test_ && !point_test_(w.placed->point, d)) {
+      ++patch_refusals_;
+      break;
+    }
     out.push_back(*w.placed);
   }
   return out;
@@ -351,6 +355,55 @@ bool Tracker::mesh_from_seed(const Vec3& seed) {
   stack_.push_back(f);
   run_fronts();
   return true;
+}
+
+std::vector<std::vector<int>> Tracker::mesh_from_loops(std::span<const std::vector<Placed>> loops) {
+  first_vertex_ = mesh_.positions.size();
+  first_triangle_ = mesh_.triangles.size();
+  std::vector<std::vector<int>> ids;
+  std::vector<int> nodes;
+  for (const std::vector<Placed>& loop : loops) {
+    if (loop.size() < 3) throw std::logic_error("adaptive: a boundary loop of fewer than three points");
+    const int f = fs_.new_front();
+    std::vector<int>& v = ids.emplace_back();
+    const std::size_t first = nodes.size();
+    for (const Placed& p : loop) {
+      v.push_back(add_vertex(p));
+      loop_vertex_.resize(mesh_.positions.size(), 0);
+      loop_vertex_[static_cast<std::size_t>(v.back())] = 1;
+      nodes.push_back(insert_node(v.back(), f));
+    }
+    for (std::size_t k = first; k < nodes.size(); ++k) link(nodes[k], nodes[k + 1 < nodes.size() ? k + 1 : first]);
+    // A loop vertex asks for no longer edges than the loop's own next to it: the loop was spaced
+    // for both sides of a crease, and the fronts grow from it at the grading's pace (a flat cap
+    // on a cylinder would otherwise start with edges ten times its rim's, as spikes).
+    const std::size_t m = v.size();
+    for (std::size_t k = 0; k < m; ++k) {
+      const Vec3& p = mesh_.positions[v[k]];
+      const double around = 0.5 * ((mesh_.positions[v[(k + 1) % m]] - p).norm() + (mesh_.positions[v[(k + m - 1) % m]] - p).norm());
+      target_[v[k]] = std::min(target_[v[k]], around);
+    }
+    stack_.push_back(f);
+  }
+  for (const int n : nodes) refresh(n);
+  run_fronts();
+  return ids;
+}
+
+void Tracker::adopt_finished(std::span<const double> target, std::span<const double> mac,
+                             std::span<const double> shape_index) {
+  const std::size_t n = mesh_.positions.size();
+  if (target.size() != n || mac.size() != n || shape_index.size() != n || !target_.empty())
+    throw std::logic_error("adaptive: adopt_finished needs one value per vertex, before any vertex of its own");
+  target_.assign(target.begin(), target.end());
+  mac_.assign(mac.begin(), mac.end());
+  shape_index_.assign(shape_index.begin(), shape_index.end());
+  front_refs_.assign(n, 0);
+  for (std::size_t v = 0; v < n; ++v) vertex_hash_.insert(static_cast<int>(v), mesh_.positions[v]);
+  for (const auto& t : mesh_.triangles) {
+    const Vec3& pa = mesh_.positions[t[0]];
+    area_ += 0.5 * (mesh_.positions[t[1]] - pa).cross(mesh_.positions[t[2]] - pa).norm();
+  }
 }
 
 void Tracker::check_limits() {

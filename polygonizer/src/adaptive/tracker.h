@@ -19,6 +19,7 @@
 #include <cdp/core/errors.h>
 #include <cdp/core/newton_projection.h>
 
+#include <functional>
 #include <optional>
 #include <queue>
 #include <span>
@@ -86,11 +87,40 @@ inline constexpr double kMaxTurnCosine = 0.2588;
 
 class Tracker {
  public:
+  // A surface point with its curvature (one gradient_hessian evaluation), ready to become a vertex.
+  struct Placed {
+    Vec3 point;
+    Curvature curvature;
+  };
+
   Tracker(const Field& field, const Settings& settings, Mesh& mesh);
 
   // Meshes the component through `seed` (a point on the surface). Returns false when not even
   // the first hexagon could be placed there (the caller tries another seed).
   bool mesh_from_seed(const Vec3& seed);
+  // Meshes the region bounded by `loops`, each a closed polygon of new vertices (at least three)
+  // with the unmeshed region on its left seen from outside (front.h): the loops become the
+  // fronts, and their edges stay as they are, each getting one triangle. Returns the vertex ids
+  // given to the loops' points. Crease-aware meshing starts each piece's patches this way.
+  std::vector<std::vector<int>> mesh_from_loops(std::span<const std::vector<Placed>> loops);
+  // Takes the vertices and triangles already in the mesh (meshed elsewhere, with these
+  // per-vertex targets and curvature properties) as finished surface: the fronts treat them as
+  // they treat their own finished mesh, and the area bound counts them.
+  void adopt_finished(std::span<const double> target, std::span<const double> mac, std::span<const double> shape_index);
+  // For a tracker meshing one piece's patches (crease_patches.h): whether a straight edge between
+  // two points of the loops runs inside the patches rather than across a region the piece does
+  // not cover (two loops of the piece pass close by each other there). Bridges between two loop
+  // vertices must pass it.
+  using PatchTest = std::function<bool(const Vec3&, const Vec3&)>;
+  void set_patch_test(PatchTest test) { patch_test_ = std::move(test); }
+  // And whether a new point (placed with step d) lies in the patches: a front that crosses its
+  // boundary (through a neck narrower than its edges) would go on over the piece's surface
+  // beyond the patch, where the CSG field takes another piece. Such placements are refused.
+  using PointTest = std::function<bool(const Vec3&, double)>;
+  void set_point_test(PointTest test) { point_test_ = std::move(test); }
+  // Whether an edge between vertices u and w would leave the patches (both loop vertices, and
+  // the patch test fails; counted). Bridges are refused then, and closures expand instead.
+  bool leaves_patch(int u, int w) const;
 
   void set_progress(ProgressCallback cb) { progress_ = std::move(cb); }
   // The surface's area as the seed grid measures it (0: unknown). Progress is reported against
@@ -119,6 +149,8 @@ class Tracker {
   double hessian_seconds() const { return hessian_seconds_; }
   // Stuck regions undone and re-meshed (see rollback.cpp).
   std::size_t rollbacks() const { return rollbacks_; }
+  // Bridges refused because they would leave the patches (set_patch_test).
+  std::size_t patch_refusals() const { return patch_refusals_; }
   // Drops the vertices rollbacks left without a triangle, renumbering the rest (a no-op when
   // there was no rollback). Call once, after the last seed.
   void compact();
@@ -127,11 +159,6 @@ class Tracker {
   const std::vector<double>& vertex_edge_length() const { return target_; }
 
  private:
-  // A surface point with its curvature (one gradient_hessian evaluation), ready to become a vertex.
-  struct Placed {
-    Vec3 point;
-    Curvature curvature;
-  };
   // One new point's walk along the surface (see place_points).
   struct Walk {
     Vec3 at, normal, heading;
@@ -275,6 +302,10 @@ class Tracker {
   mutable PlacementBuffers placement_;
   mutable DerivativeBuffers derivatives_;
   ProgressCallback progress_;
+  PatchTest patch_test_;
+  PointTest point_test_;
+  std::vector<char> loop_vertex_;  // vertices given by mesh_from_loops
+  mutable std::size_t patch_refusals_ = 0;
 };
 
 }  // namespace cdp::adaptive
