@@ -44,6 +44,7 @@ struct Run {
   std::string parameter_name;   // factor, tolerance, cell, precision
   double parameter = 0;
   std::string variant;          // adaptive: improved or paper (AdaptiveOptions::variant)
+  std::string creases;          // adaptive: follow or ignore (AdaptiveOptions::creases)
   std::vector<std::string> polygonize_args;  // after FIELD -o MESH
 };
 
@@ -129,7 +130,7 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
   for (auto& run : r.objects("runs")) {
     const std::string method = run.choice("method", {"adaptive", "mc", "mt"});
     if (method == "adaptive")
-      run.check_keys({"method", "label", "factor", "tolerance", "min_edge", "max_edge", "variant"});
+      run.check_keys({"method", "label", "factor", "tolerance", "min_edge", "max_edge", "variant", "creases"});
     else run.check_keys({"method", "label", "cell", "precision", "traversal"});
     std::vector<std::string> sweep_keys =
         method == "adaptive" ? std::vector<std::string>{"factor", "tolerance"} : std::vector<std::string>{"cell", "precision"};
@@ -143,11 +144,14 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
     const std::vector<double> values = numbers_or_number(run, key);
     std::vector<std::string> fixed{"--method", method};
     std::vector<std::string> known{"method", sweep_keys[0], sweep_keys[1]};
-    std::string variant;
+    std::string variant, creases;
     if (method == "adaptive") {
       known.push_back("variant");
       variant = run.choice("variant", {"improved", "paper"}, "improved");
       fixed.insert(fixed.end(), {"--variant", variant});
+      known.push_back("creases");
+      creases = run.choice("creases", {"follow", "ignore"}, "follow");
+      fixed.insert(fixed.end(), {"--creases", creases});
       for (const char* k : {"min_edge", "max_edge"}) {
         known.push_back(k);
         if (run.has(k)) {
@@ -176,6 +180,7 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
       x.parameter_name = key;
       x.parameter = v;
       x.variant = variant;
+      x.creases = creases;
       x.id = method + (label.empty() ? "" : "_" + label) + "_" + key + format_number(v);
       x.polygonize_args = fixed;
       x.polygonize_args.insert(x.polygonize_args.end(), {"--" + key, format_number(v)});
@@ -367,6 +372,7 @@ int summarize(const Experiment& e, const Paths& p) {
   for (const Run& r : e.runs) {
     nlohmann::json run{{"id", r.id}, {"method", r.method}, {"parameter_name", r.parameter_name}, {"parameter", r.parameter}};
     if (!r.variant.empty()) run["variant"] = r.variant;
+    if (!r.creases.empty()) run["creases"] = r.creases;
     run["stats"] = read_optional(p.run_dir(r) / "stats.json");
     run["metrics"] = read_optional(p.run_dir(r) / "metrics.json");
     const nlohmann::json status = read_optional(p.run_dir(r) / "status.json");

@@ -123,6 +123,14 @@ int main(int argc, char** argv) {
         ->capture_default_str()
         ->type_name("NAME")
         ->check(CLI::IsMember({"improved", "paper"}));
+    std::string creases = "follow";
+    adaptive_group
+        ->add_option("--creases", creases,
+                     "follow (trace the creases of a min/max/abs field first and mesh along them) or ignore "
+                     "(mesh across them as across curvature)")
+        ->capture_default_str()
+        ->type_name("HOW")
+        ->check(CLI::IsMember({"follow", "ignore"}));
     adaptive_group->add_flag("--curvature", adaptive_options.curvature_properties,
                              "write mac and shape_index per vertex (PLY)");
 
@@ -173,6 +181,7 @@ int main(int argc, char** argv) {
       cdp::AdaptiveOptions& o = adaptive_options;
       if (tolerance->count() > 0) o.sizing = cdp::SizingMode::Tolerance;
       o.variant = variant == "paper" ? cdp::Variant::Paper : cdp::Variant::Improved;
+      o.creases = creases == "ignore" ? cdp::CreaseHandling::Ignore : cdp::CreaseHandling::Follow;
       o.triangle_count = triangle_count == "paper" ? cdp::TriangleCountRule::PaperFloor : cdp::TriangleCountRule::Hartmann;
       if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
       if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);

@@ -28,6 +28,7 @@ struct Options {
   std::optional<std::string> triangle_count, traversal, face_ambiguity;
   std::optional<bool> check_self_intersections;
   std::optional<long long> threads;
+  std::optional<std::string> creases;
 };
 
 std::string number_text(double v) { return py::str(py::float_(v)); }
@@ -61,6 +62,7 @@ void check_applies(const Options& o) {
     refuse(o.min_edge.has_value(), "min_edge");
     refuse(o.max_edge.has_value(), "max_edge");
     refuse(o.triangle_count.has_value(), "triangle_count");
+    refuse(o.creases.has_value(), "creases");
     refuse(o.check_self_intersections.has_value(), "check_self_intersections");
     if (o.method == "mt") refuse(o.face_ambiguity.has_value(), "face_ambiguity");
   }
@@ -82,6 +84,11 @@ AdaptiveOptions adaptive_options(const Options& o) {
     if (*o.triangle_count == "hartmann") a.triangle_count = TriangleCountRule::Hartmann;
     else if (*o.triangle_count == "paper") a.triangle_count = TriangleCountRule::PaperFloor;
     else throw InvalidInputError("triangle_count must be \"hartmann\" or \"paper\", not \"" + *o.triangle_count + "\"");
+  }
+  if (o.creases) {
+    if (*o.creases == "follow") a.creases = CreaseHandling::Follow;
+    else if (*o.creases == "ignore") a.creases = CreaseHandling::Ignore;
+    else throw InvalidInputError("creases must be \"follow\" or \"ignore\", not \"" + *o.creases + "\"");
   }
   if (o.seed_resolution) a.seed_resolution = static_cast<int>(integer_in(o.seed_resolution, "seed_resolution", 2, INT_MAX));
   if (o.max_triangles) a.max_triangles = static_cast<std::size_t>(integer_in(o.max_triangles, "max_triangles", 1, INT_MAX));
@@ -152,7 +159,8 @@ stats is build/bin/polygonize's STATS.json as a dict (without "field").
 
 method "adaptive" (the paper's tracker): factor (default 3: edge = minimum radius of curvature /
 factor) or tolerance (chord deviation), min_edge, max_edge, triangle_count ("hartmann" or
-"paper"), seed_resolution, max_triangles, check_self_intersections.
+"paper"), creases ("follow", the default: mesh edges along the creases of a min/max/abs field, or
+"ignore"), seed_resolution, max_triangles, check_self_intersections.
 Both: threads (0, the default, all cores, at most 8; 1 the calling thread only) for the seed grid of
 a thread-safe field and the adaptive method's final check; the mesh is the same on any number.
 method "mc" or "mt" (Marching Cubes / Tetrahedra): cell or precision (0..5, data-driven models),
@@ -171,10 +179,11 @@ void bind_meshing(py::module_& m) {
          std::optional<long long> precision, std::optional<std::string> traversal, std::optional<std::string> face_ambiguity,
          std::optional<std::string> triangle_count, std::optional<long long> seed_resolution,
          std::optional<long long> max_triangles, std::optional<bool> check_self_intersections,
-         std::optional<long long> threads, bool return_normals, py::object progress, py::object phase) {
+         std::optional<long long> threads, std::optional<std::string> creases, bool return_normals, py::object progress,
+         py::object phase) {
         Options o{method,        factor,         tolerance,      min_edge,       max_edge,
                   cell,          precision,      seed_resolution, max_triangles, triangle_count,
-                  traversal,     face_ambiguity, check_self_intersections, threads};
+                  traversal,     face_ambiguity, check_self_intersections, threads, creases};
         return run(field, o, return_normals, progress, phase);
       },
       py::arg("field"), py::arg("method") = "adaptive", py::kw_only(), py::arg("factor") = py::none(),
@@ -183,7 +192,7 @@ void bind_meshing(py::module_& m) {
       py::arg("face_ambiguity") = py::none(), py::arg("triangle_count") = py::none(),
       py::arg("seed_resolution") = py::none(), py::arg("max_triangles") = py::none(),
       py::arg("check_self_intersections") = py::none(), py::arg("threads") = py::none(),
-      py::arg("return_normals") = false,
+      py::arg("creases") = py::none(), py::arg("return_normals") = false,
       py::arg("progress") = py::none(), py::arg("phase") = py::none(), kPolygonizeDoc);
 
   const auto marching = [](const char* method) {

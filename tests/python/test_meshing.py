@@ -49,6 +49,13 @@ def test_progress_and_phase_callbacks(sphere):
     cdp.polygonize(cdp.torus(major_radius=1, minor_radius=0.3), factor=3, progress=fractions.append, phase=phases.append)
     # The default variant repairs slivers after meshing (polygonizer/src/adaptive/quality.h).
     assert phases == ["sampling the seed grid", "meshing", "repairing triangles", "checking the mesh"]
+    # A field with creases meshes along them first.
+    phases.clear()
+    cube = cdp.field_from_json({"type": "expression", "value": "max(abs(x),max(abs(y),abs(z)))-1",
+                                "bounds": [[-1.6, -1.6, -1.6], [1.5, 1.5, 1.5]]})
+    cdp.polygonize(cube, factor=3, phase=phases.append)
+    assert phases == ["sampling the seed grid", "meshing along creases", "meshing", "repairing triangles",
+                      "checking the mesh"]
     assert fractions and fractions[-1] == 1.0
     fractions.clear()
     cdp.marching_cubes(sphere, cell=0.05, progress=fractions.append)
@@ -64,6 +71,8 @@ def test_progress_and_phase_callbacks(sphere):
     (lambda s: cdp.polygonize(s, min_edge=float("nan")), "min_edge must be a positive number, not nan"),
     (lambda s: cdp.polygonize(s, "marching"), 'method must be "adaptive", "mc" or "mt", not "marching"'),
     (lambda s: cdp.polygonize(s, triangle_count="floor"), 'triangle_count must be "hartmann" or "paper", not "floor"'),
+    (lambda s: cdp.polygonize(s, creases="sharp"), 'creases must be "follow" or "ignore", not "sharp"'),
+    (lambda s: cdp.polygonize(s, "mc", creases="follow"), 'creases does not apply to method "mc"'),
     (lambda s: cdp.polygonize(s, seed_resolution=1), "seed_resolution must be an integer in [2, 2147483647], not 1"),
     (lambda s: cdp.polygonize(s, threads=-1), "threads must be an integer in [0, 2147483647], not -1"),
     (lambda s: cdp.marching_cubes(s, cell=0), "cell must be a positive number, not 0.0"),
@@ -120,3 +129,17 @@ def test_same_arrays_as_the_polygonize_program(tmp_path, method, flags, options)
     timing = {"seconds", "curvature_seconds", "hessian_seconds", "seed_grid_seconds", "field"}
     assert {k: v for k, v in stats.items() if k not in timing} == \
         {k: v for k, v in program_stats.items() if k not in timing}
+
+
+def test_creases_are_followed_or_ignored():
+    # A cube: followed, its 12 creases are edges of the mesh (and the stats say so); ignored, the
+    # tracker meshes across them.
+    cube = cdp.field_from_json({"type": "expression", "value": "max(abs(x+0.0137),max(abs(y+0.0137),abs(z+0.0137)))-1",
+                                "bounds": [[-1.6, -1.6, -1.6], [1.6, 1.6, 1.6]]})
+    V, F, stats = cdp.polygonize(cube, factor=3)
+    assert stats["creases"]["followed"] and stats["creases"]["curves"] == 12 and stats["creases"]["corners"] == 8
+    shifted = V + 0.0137
+    on_two_faces = (np.abs(np.abs(shifted) - 1) < 1e-9).sum(axis=1) >= 2
+    assert on_two_faces.sum() == stats["creases"]["vertices"]
+    V, F, stats = cdp.polygonize(cube, factor=3, creases="ignore")
+    assert not stats["creases"]["followed"] and stats["creases"]["handling"] == "ignore"

@@ -1,10 +1,12 @@
 // polygonize_adaptive: resolves the options, finds seeds on every component, runs the tracker
 // from each seed not yet covered, and fills in the common statistics.
+#include "crease_patches.h"
 #include "quality.h"
 #include "seeding.h"
 #include "tracker.h"
 
 #include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/crease_curves.h>
 #include <cdp/core/curvature.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_topology.h>
@@ -21,6 +23,8 @@
 namespace cdp {
 
 const char* to_string(SizingMode mode) { return mode == SizingMode::Factor ? "factor" : "tolerance"; }
+
+const char* to_string(CreaseHandling creases) { return creases == CreaseHandling::Follow ? "follow" : "ignore"; }
 
 const char* to_string(TriangleCountRule rule) {
   return rule == TriangleCountRule::PaperFloor ? "paper_floor" : "hartmann";
@@ -190,54 +194,122 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   Mesh& mesh = result.mesh;
   std::optional<adaptive::Tracker> tracker;
   adaptive::SeedingReport seeding;
+  // Crossed grid edges per unit area average 1.5 / h^2 over all orientations (Crofton); with
+  // fewer than kMeasuredCrossings the surface is too small for the grid to measure.
+  constexpr std::size_t kMeasuredCrossings = 64;
+  const double estimated_area = grid_crossings >= kMeasuredCrossings ? grid_crossings * grid.h * grid.h / 1.5 : 0.0;
+
+  // Creases first (CreaseHandling::Follow): the patches they bound are meshed from them, and the
+  // seeding below meets that mesh as finished surface, so only components without creases are
+  // left to it.
+  std::optional<adaptive::CreaseMesh> creased;
+  std::size_t crease_components = 0;
+  std::string crease_fallback;
+  CreaseTracingResult traced;
+  if (options.creases == CreaseHandling::Follow && options.variant == Variant::Improved) {
+    try {
+      CreaseTracingOptions co;
+      co.resolution = options.seed_resolution;
+      traced = trace_creases(field, co);  // no work for a field without pieces
+      if (!traced.curves.empty()) {
+        enter("meshing along creases");
+        creased = adaptive::mesh_crease_patches(field, traced, settings, estimated_area);
+        crease_components = analyze_topology(creased->mesh).components;
+      }
+    } catch (const NoSurfaceError& e) {
+      creased.reset();
+      crease_fallback = e.what();
+    } catch (const LimitExceededError& e) {
+      creased.reset();
+      crease_fallback = e.what();
+    }
+  }
+
   const auto mesh_surface = [&](bool rollback) {
     mesh = Mesh{};
     settings.rollback = rollback;
     tracker.emplace(field, settings, mesh);
-    // Crossed grid edges per unit area average 1.5 / h^2 over all orientations (Crofton); with
-    // fewer than kMeasuredCrossings the surface is too small for the grid to measure.
-    constexpr std::size_t kMeasuredCrossings = 64;
-    if (grid_crossings >= kMeasuredCrossings) tracker->set_estimated_area(grid_crossings * grid.h * grid.h / 1.5);
+    if (estimated_area > 0) tracker->set_estimated_area(estimated_area);
     if (options.progress) tracker->set_progress(options.progress);
+    if (creased) {
+      mesh.positions = creased->mesh.positions;
+      mesh.normals = creased->mesh.normals;
+      mesh.triangles = creased->mesh.triangles;
+      tracker->adopt_finished(creased->target, creased->mac, creased->shape_index);
+    }
     seeding = adaptive::seed_every_component(field, grid, s.sizing.min_edge, settings.hash_cell, *tracker, mesh);
     tracker->compact();
   };
 
-  enter("meshing");
   bool remeshed = false;
-  try {
-    mesh_surface(false);
-  } catch (const adaptive::StalledFrontError& stalled) {
-    // A stalled front is where a front that ran over finished mesh ends, thousands of steps
-    // later (the MPU models at some factors): the surface is meshed again from the start with
-    // the rollbacks on, which undo such places where they begin. Surfaces that mesh without
-    // them are never meshed with them, so they come out exactly as before. When the second
-    // run fails too, or its mesh fails the checks below (a rollback has been seen to leave a
-    // non-manifold edge: the printed triangle count on the bunny VIS-800 at factor 1), the
-    // first run's error stands.
+  const auto mesh_everything = [&] {
+    enter("meshing");
+    remeshed = false;
     try {
-      remeshed = true;
-      mesh_surface(true);
-      if (seeding.uncovered > 0) throw NoSurfaceError("uncovered sign changes");
-      check_mesh(mesh, seeding.seeds, options.check_self_intersections, options.threads);
-    } catch (const std::exception&) {
-      throw stalled;
+      mesh_surface(false);
+    } catch (const adaptive::StalledFrontError& stalled) {
+      // A stalled front is where a front that ran over finished mesh ends, thousands of steps
+      // later (the MPU models at some factors): the surface is meshed again from the start with
+      // the rollbacks on, which undo such places where they begin. Surfaces that mesh without
+      // them are never meshed with them, so they come out exactly as before. When the second
+      // run fails too, or its mesh fails the checks below (a rollback has been seen to leave a
+      // non-manifold edge: the printed triangle count on the bunny VIS-800 at factor 1), the
+      // first run's error stands.
+      try {
+        remeshed = true;
+        mesh_surface(true);
+        if (seeding.uncovered > 0) throw NoSurfaceError("uncovered sign changes");
+        check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+      } catch (const std::exception&) {
+        throw stalled;
+      }
     }
+    if (mesh.triangles.empty() && seeding.sign_changes == 0) {
+      std::ostringstream msg;
+      msg << "adaptive: no zero crossing of the field in its box " << format_point(field.bounds().min) << " - "
+          << format_point(field.bounds().max) << " at seed resolution " << options.seed_resolution
+          << " (F is " << (grid.values[0] < 0 ? "negative" : "positive") << " everywhere sampled)";
+      throw NoSurfaceError(msg.str());
+    }
+    if (mesh.triangles.empty())
+      throw NoSurfaceError("adaptive: the field changes sign but no seed could be meshed (vanishing gradient)");
+    if (seeding.uncovered > 0)
+      throw NoSurfaceError("adaptive: " + std::to_string(seeding.uncovered) +
+                           " sign changes of the field are not covered by the mesh, the first near " +
+                           format_point(seeding.first_uncovered) +
+                           " (a singular point or a feature thinner than min_edge?)");
+  };
+  // A crease-aware mesh that fails on the way (a component left to the seeds that then stalls,
+  // patches that intersect) is not the end: the surface is meshed again as a smooth one, and
+  // the stats say why.
+  const auto fall_back = [&](const std::exception& e) {
+    if (!creased) return false;
+    crease_fallback = e.what();
+    creased.reset();
+    crease_components = 0;
+    mesh_everything();
+    return true;
+  };
+  // An error of the smooth meshing says what the crease-aware one ran into first.
+  const auto why = [&](const std::exception& e) {
+    return crease_fallback.empty() ? std::string(e.what())
+                                   : std::string(e.what()) + " (meshed as smooth after crease-aware meshing failed: " +
+                                         crease_fallback + ")";
+  };
+  try {
+    try {
+      mesh_everything();
+      if (creased) check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+    } catch (const NoSurfaceError& e) {
+      if (!fall_back(e)) throw;
+    } catch (const LimitExceededError& e) {
+      if (!fall_back(e)) throw;
+    }
+  } catch (const NoSurfaceError& e) {
+    throw NoSurfaceError(why(e));
+  } catch (const LimitExceededError& e) {
+    throw LimitExceededError(why(e));
   }
-  if (mesh.triangles.empty() && seeding.sign_changes == 0) {
-    std::ostringstream msg;
-    msg << "adaptive: no zero crossing of the field in its box " << format_point(field.bounds().min) << " - "
-        << format_point(field.bounds().max) << " at seed resolution " << options.seed_resolution
-        << " (F is " << (grid.values[0] < 0 ? "negative" : "positive") << " everywhere sampled)";
-    throw NoSurfaceError(msg.str());
-  }
-  if (mesh.triangles.empty())
-    throw NoSurfaceError("adaptive: the field changes sign but no seed could be meshed (vanishing gradient)");
-  if (seeding.uncovered > 0)
-    throw NoSurfaceError("adaptive: " + std::to_string(seeding.uncovered) +
-                         " sign changes of the field are not covered by the mesh, the first near " +
-                         format_point(seeding.first_uncovered) +
-                         " (a singular point or a feature thinner than min_edge?)");
 
   adaptive::QualityReport quality;
   const bool repair = options.variant == Variant::Improved;
@@ -271,15 +343,26 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
 
   enter("checking the mesh");
   PolygonizeStats& st = result.stats;
-  st.components = check_mesh(mesh, seeding.seeds, options.check_self_intersections, options.threads);
+  st.components =
+      check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
   st.method = "adaptive";
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   st.field_evaluations = field.counts() - before;
   st.triangles = mesh.num_triangles();
   st.vertices = mesh.num_vertices();
-  st.splits = tracker->splits();
-  st.merges = tracker->merges();
+  st.splits = tracker->splits() + (creased ? creased->splits : 0);
+  st.merges = tracker->merges() + (creased ? creased->merges : 0);
   st.extra["seeds"] = seeding.seeds;
+  st.extra["creases.handling"] = to_string(options.variant == Variant::Improved ? options.creases : CreaseHandling::Ignore);
+  st.extra["creases.followed"] = creased.has_value();
+  st.extra["creases.curves"] = traced.curves.size();
+  st.extra["creases.corners"] = traced.corners.size();
+  st.extra["creases.vertices"] = creased ? creased->crease_vertices : 0;
+  st.extra["creases.pieces"] = creased ? creased->pieces : 0;
+  st.extra["creases.components"] = crease_components;
+  st.extra["creases.fallback"] = crease_fallback;
+  st.extra["creases.steps"] = creased ? creased->steps : 0;
+  st.extra["creases.patch_refusals"] = creased ? creased->patch_refusals : 0;
   st.extra["seed_grid_seconds"] = seed_grid_seconds;
   st.extra["curvature_seconds"] = tracker->curvature_seconds();
   st.extra["hessian_seconds"] = tracker->hessian_seconds();

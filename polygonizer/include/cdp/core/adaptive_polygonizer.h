@@ -48,6 +48,18 @@ enum class Variant {
   Paper,
 };
 
+// What the adaptive method does with the creases and corners of a CSG field (one whose model
+// reports its pieces: Field::pieces; other models are smooth and have none).
+enum class CreaseHandling {
+  // Trace the creases first and mesh each piece's patches from them (src/adaptive/
+  // crease_patches.h): mesh edges run along the creases, and crease vertices lie on both pieces.
+  // Where the creases cannot be laid out as patch boundaries, or a patch cannot be meshed, the
+  // surface is meshed as if it were smooth (stats "creases.followed" says which).
+  Follow,
+  // Mesh across creases as across curvature (the paper's method; Variant::Paper always does).
+  Ignore,
+};
+
 struct AdaptiveOptions {
   Variant variant = Variant::Improved;
   SizingMode sizing = SizingMode::Factor;
@@ -69,6 +81,7 @@ struct AdaptiveOptions {
   // from it and on the same side of the surface, triggers a split or a merge instead of the
   // expansion. The paper uses 1; a little more also catches front edges passing close by.
   double collision_factor = 1.3;
+  CreaseHandling creases = CreaseHandling::Follow;
   // Cells along the longest side of the box of the sign-change grid that finds the seeds and
   // checks that every component was meshed. Components smaller than about one cell can be
   // missed; raise this to catch them.
@@ -90,7 +103,8 @@ struct AdaptiveOptions {
   std::size_t max_steps = 0;
   // Called now and then with an estimate of the fraction of the meshing done.
   ProgressCallback progress;
-  // Called on entering each phase: "sampling the seed grid", "meshing", "checking the mesh".
+  // Called on entering each phase: "sampling the seed grid", "meshing along creases" (a field
+  // with creases, CreaseHandling::Follow), "meshing", "repairing triangles", "checking the mesh".
   PhaseCallback phase;
 };
 
@@ -107,6 +121,7 @@ struct AdaptiveOptions {
 PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& options = {});
 
 const char* to_string(SizingMode mode);
+const char* to_string(CreaseHandling creases);
 const char* to_string(TriangleCountRule rule);
 const char* to_string(Variant variant);
 

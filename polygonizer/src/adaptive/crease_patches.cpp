@@ -1,0 +1,498 @@
+#include "crease_patches.h"
+#include "spatial_hash.h"
+
+#include <cdp/core/crease.h>
+#include <cdp/core/curvature.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <utility>
+
+namespace cdp::adaptive {
+
+namespace {
+
+using Branch = std::vector<std::uint8_t>;
+
+// Pieces whose unit gradients at one point agree to this cosine are the same piece (as in
+// crease_curves.cpp: creases this project meshes have dihedral angles far above 2.6 degrees).
+constexpr double kSamePieceCosine = 0.999;
+// A curve end is the corner it names when within this share of the diagonal (trace_creases
+// merges corners found from several curves within its min_spacing, 0.0005 of the diagonal).
+constexpr double kCornerMatch = 5e-4;
+// The side test of orient_darts steps this share of min_edge off the crease: far beyond the
+// Newton tolerance, far inside the patch next to a crease sample.
+constexpr double kSideProbe = 0.05;
+// Fewest edges of a crease: two for a curve between corners (so that two curves joining the
+// same two corners bound a patch of at least four vertices), three for a loop.
+constexpr std::size_t kMinOpenEdges = 2, kMinLoopEdges = 3;
+
+std::string format_point(const Vec3& p) {
+  return "(" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " + std::to_string(p.z()) + ")";
+}
+
+// A piece as a field of its own: the smooth function with the piece's branches fixed. Its zero
+// set continues past the crease (where the CSG field takes another piece), so the fronts of its
+// patches walk on a smooth surface, and the patch's boundary keeps them inside.
+class PieceField final : public Field {
+ public:
+  PieceField(const Field& field, Branch branch) : field_(field), branch_(std::move(branch)) {
+    set_bounds(field.bounds());
+  }
+  std::string type_name() const override { return field_.type_name() + " piece"; }
+  bool thread_safe() const override { return field_.thread_safe(); }
+
+ protected:
+  double eval_value(const Vec3& p) const override { return field_.piece(p, branch_).value; }
+  double eval_value_gradient(const Vec3& p, Vec3& gradient) const override {
+    const FieldPiece q = field_.piece(p, branch_);
+    gradient = q.gradient;
+    return q.value;
+  }
+  double eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const override {
+    const FieldPiece q = field_.piece(p, branch_);
+    gradient = q.gradient;
+    hessian = q.hessian;
+    return q.value;
+  }
+
+ private:
+  const Field& field_;
+  Branch branch_;
+};
+
+// Vertices on creases, shared by the pieces that meet there.
+struct CreaseVertices {
+  std::vector<Vec3> points;
+  int add(const Vec3& p) {
+    points.push_back(p);
+    return static_cast<int>(points.size()) - 1;
+  }
+};
+
+struct LaidCurve {
+  std::vector<int> vertices;  // along the traced direction; a loop does not repeat its first
+  bool closed = false;
+  int start_corner = -1, end_corner = -1;  // indices into the corner list (open curves)
+  std::array<Branch, 2> pieces;
+};
+
+// One side of a crease as a patch boundary: the curve's vertices in the order that has the
+// piece's patch on the left seen from outside.
+struct Dart {
+  int curve = -1, side = -1;
+  std::vector<int> vertices;
+  int from = -1, to = -1;  // corners (open curves)
+};
+
+// How far apart parts of the crease network that are not neighbours along it may come before
+// they bound the spacing: another part is a point whose distance along the creases (on the
+// same curve, or through a corner both curves end at) is over kOtherPart times its distance in
+// space. Two creases that pass close by each other bound a strip of patch between them, and
+// crease edges longer than the strip is wide make chords that cut across the strip, from both
+// sides (the gyroid ball at factor 1 came out with edges of four triangles there).
+constexpr double kOtherPart = 2;
+
+// For every traced point of every curve: the distance to the nearest other part of the creases
+// (infinity when none is within `reach`).
+std::vector<std::vector<double>> crease_feature_size(const CreaseTracingResult& creases, std::span<const int> start_corner,
+                                                     std::span<const int> end_corner, double reach) {
+  struct Where {
+    std::size_t curve, index;
+  };
+  std::vector<Where> where;
+  std::vector<std::vector<double>> arc(creases.curves.size()), out(creases.curves.size());
+  SpatialHash hash(reach);
+  for (std::size_t c = 0; c < creases.curves.size(); ++c) {
+    const std::vector<Vec3>& P = creases.curves[c].points;
+    arc[c].assign(P.size(), 0.0);
+    for (std::size_t i = 1; i < P.size(); ++i) arc[c][i] = arc[c][i - 1] + (P[i] - P[i - 1]).norm();
+    out[c].assign(P.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < P.size(); ++i) {
+      hash.insert(static_cast<int>(where.size()), P[i]);
+      where.push_back({c, i});
+    }
+  }
+  // Distance along the creases from (c, i) to (d, j): along one curve (either way round a
+  // loop), or through a corner the two curves share; infinity otherwise.
+  const auto along = [&](std::size_t c, std::size_t i, std::size_t d, std::size_t j) {
+    const auto& ac = arc[c];
+    const double length = ac.back() + (creases.curves[c].closed
+                                           ? (creases.curves[c].points.back() - creases.curves[c].points.front()).norm()
+                                           : 0.0);
+    double best = std::numeric_limits<double>::infinity();
+    if (c == d) {
+      best = std::abs(ac[i] - ac[j]);
+      if (creases.curves[c].closed) best = std::min(best, length - best);
+    }
+    const double to_start_c = ac[i], to_end_c = ac.back() - ac[i];
+    const double to_start_d = arc[d][j], to_end_d = arc[d].back() - arc[d][j];
+    for (const auto& [kc, lc] : {std::pair{start_corner[c], to_start_c}, std::pair{end_corner[c], to_end_c}})
+      for (const auto& [kd, ld] : {std::pair{start_corner[d], to_start_d}, std::pair{end_corner[d], to_end_d}})
+        if (kc >= 0 && kc == kd) best = std::min(best, lc + ld);
+    return best;
+  };
+  for (const Where& w : where) {
+    const Vec3& p = creases.curves[w.curve].points[w.index];
+    double& best = out[w.curve][w.index];
+    hash.for_each_near(p, reach, [&](int id) {
+      const Where& o = where[static_cast<std::size_t>(id)];
+      const double d = (creases.curves[o.curve].points[o.index] - p).norm();
+      if (d >= best || d > reach) return;
+      if (along(w.curve, w.index, o.curve, o.index) > kOtherPart * d) best = d;
+    });
+  }
+  return out;
+}
+
+double piece_edge_length(const Field& field, const Sizing& sizing, const Vec3& p, const Branch& b) {
+  const FieldPiece q = field.piece(p, b);
+  return edge_length(sizing, curvature_from_derivatives(q.gradient, q.hessian).min_radius);
+}
+
+// The crease as vertices about one target edge length apart, where the target at a point is the
+// smallest the sizing gives for either side's curvature and for the crease's own (a circle
+// through three consecutive traced points): the fronts of both sides start from these edges, so
+// they must suit both. Every vertex is moved onto the crease (both pieces to the Newton
+// tolerance). The ends of an open curve are its corners' vertices.
+LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span<const double> feature_size,
+                         const Sizing& sizing, std::span<const int> corner_vertex, std::span<const Vec3> corners,
+                         double diagonal, CreaseVertices& cv) {
+  LaidCurve out;
+  out.closed = curve.closed;
+  out.pieces = curve.pieces;
+  const std::vector<Vec3>& P = curve.points;
+  const std::size_t n = P.size();
+  if (n < 2) throw CreaseLayoutError("adaptive: a crease traced as a single point near " + format_point(P.at(0)));
+  if (!curve.closed) {
+    const auto match = [&](const Vec3& p) {
+      for (std::size_t i = 0; i < corners.size(); ++i)
+        if ((corners[i] - p).norm() <= kCornerMatch * diagonal) return static_cast<int>(i);
+      throw CreaseLayoutError("adaptive: a crease ends without a corner near " + format_point(p) +
+                              " (its pieces become tangent there)");
+    };
+    if (!curve.starts_at_corner || !curve.ends_at_corner)
+      throw CreaseLayoutError("adaptive: a crease ends without a corner near " +
+                              format_point(curve.starts_at_corner ? P.back() : P.front()) +
+                              " (its pieces become tangent there)");
+    out.start_corner = match(P.front());
+    out.end_corner = match(P.back());
+    if (out.start_corner == out.end_corner && n < 4)
+      throw CreaseLayoutError("adaptive: a crease returns to its corner at once near " + format_point(P.front()));
+  }
+  // Segments of the polyline (a loop's last one closes it) and the target at each point.
+  const std::size_t segments = curve.closed ? n : n - 1;
+  const auto at = [&](std::size_t i) -> const Vec3& { return P[i % n]; };
+  std::vector<double> h(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    double len = std::min(piece_edge_length(field, sizing, P[i], curve.pieces[0]),
+                          piece_edge_length(field, sizing, P[i], curve.pieces[1]));
+    const bool interior = curve.closed || (i > 0 && i + 1 < n);
+    if (interior) {
+      const Vec3 a = P[i] - at(i + n - 1), b = at(i + 1) - P[i];
+      const double turn = std::atan2(a.cross(b).norm(), a.dot(b));
+      const double radius = turn > 0 ? 0.5 * (a.norm() + b.norm()) / turn : std::numeric_limits<double>::infinity();
+      len = std::min(len, edge_length(sizing, radius));
+    }
+    h[i] = std::max(sizing.min_edge, std::min(len, feature_size[i]));
+  }
+  // Equal steps of the integral of ds / h: edges follow the target and change smoothly.
+  std::vector<double> cumulative(segments + 1, 0.0);
+  for (std::size_t j = 0; j < segments; ++j) {
+    const double len = (at(j + 1) - at(j)).norm();
+    cumulative[j + 1] = cumulative[j] + len * 0.5 * (1 / h[j] + 1 / h[(j + 1) % n]);
+  }
+  const double total = cumulative.back();
+  const std::size_t edges =
+      std::max(curve.closed ? kMinLoopEdges : kMinOpenEdges, static_cast<std::size_t>(std::ceil(total - 1e-9)));
+  const std::vector<Branch> two{curve.pieces[0], curve.pieces[1]};
+  CreaseOptions co;
+  co.tolerance = 1e-10 * diagonal;
+  std::size_t j = 0;
+  const std::size_t first = curve.closed ? 0 : 1;
+  if (!curve.closed) out.vertices.push_back(corner_vertex[static_cast<std::size_t>(out.start_corner)]);
+  for (std::size_t k = first; k < edges; ++k) {
+    const double s = total * static_cast<double>(k) / static_cast<double>(edges);
+    while (j + 1 < segments && cumulative[j + 1] < s) ++j;
+    const double span = cumulative[j + 1] - cumulative[j];
+    const double t = span > 0 ? std::clamp((s - cumulative[j]) / span, 0.0, 1.0) : 0.0;
+    const Vec3 guess = at(j) + t * (at(j + 1) - at(j));
+    if (k == 0) {
+      out.vertices.push_back(cv.add(P[0]));  // a traced point: on the crease already
+      continue;
+    }
+    const CreaseProjection c = project_to_crease(field, guess, two, co);
+    if (!c.ok() || (c.point - guess).norm() > 0.5 * std::max(h[j], h[(j + 1) % n]))
+      throw CreaseLayoutError("adaptive: a crease vertex could not be put on its crease near " + format_point(guess) +
+                              " (" + to_string(c.status) + ")");
+    out.vertices.push_back(cv.add(c.point));
+  }
+  if (!curve.closed) out.vertices.push_back(corner_vertex[static_cast<std::size_t>(out.end_corner)]);
+  return out;
+}
+
+// The two darts of a laid curve. The side of each piece's patch is found next to a vertex in the
+// middle of the curve: a point a little off the crease on the piece's own zero set, to the left
+// of the crease's direction seen from the piece's outside, is in the piece's patch when the CSG
+// field takes that piece there.
+std::array<Dart, 2> orient_darts(const Field& field, const LaidCurve& c, int index, const CreaseVertices& cv,
+                                 double min_edge) {
+  std::array<Dart, 2> out;
+  const std::size_t m = c.vertices.size() / 2;  // interior for open curves (at least three vertices)
+  const Vec3& p = cv.points[static_cast<std::size_t>(c.vertices[m])];
+  const Vec3 along = cv.points[static_cast<std::size_t>(c.vertices[(m + 1) % c.vertices.size()])] -
+                     cv.points[static_cast<std::size_t>(c.vertices[m - (m > 0 ? 1 : 0)])];
+  for (int side = 0; side < 2; ++side) {
+    const Branch& mine = c.pieces[static_cast<std::size_t>(side)];
+    const Branch& other = c.pieces[static_cast<std::size_t>(1 - side)];
+    const Vec3 n = field.piece(p, mine).gradient.normalized();
+    Vec3 t = along - n * n.dot(along);
+    Vec3 left = n.cross(t);
+    if (!(left.squaredNorm() > 0) || !left.allFinite())
+      throw CreaseLayoutError("adaptive: a crease without a direction near " + format_point(p));
+    left.normalize();
+    Vec3 q = p + kSideProbe * min_edge * left;
+    for (int it = 0; it < 3; ++it) {  // onto the piece's zero set: Newton along its gradient
+      const FieldPiece f = field.piece(q, mine);
+      q -= f.value / f.gradient.squaredNorm() * f.gradient;
+    }
+    const double F = field.value(q);
+    const double mine_value = field.piece(q, mine).value, other_value = field.piece(q, other).value;
+    const bool on_left = std::abs(F - mine_value) < std::abs(F - other_value);
+    Dart& d = out[static_cast<std::size_t>(side)];
+    d.curve = index;
+    d.side = side;
+    d.vertices = c.vertices;
+    d.from = c.start_corner;
+    d.to = c.end_corner;
+    if (!on_left) {
+      std::reverse(d.vertices.begin(), d.vertices.end());
+      std::swap(d.from, d.to);
+    }
+  }
+  // The two sides' patches lie on opposite sides of the crease, so their boundaries run opposite ways.
+  if (out[0].vertices.front() == out[1].vertices.front() && out[0].vertices.size() > 2 &&
+      out[0].vertices[1] == out[1].vertices[1])
+    throw CreaseLayoutError("adaptive: both sides of the crease near " + format_point(p) +
+                            " take the same piece's patch to the same side");
+  return out;
+}
+
+struct Cycle {
+  Branch piece;
+  std::vector<int> vertices;  // closed polygon, patch on the left
+};
+
+// The boundary cycles of the pieces' patches: a loop's dart is a cycle by itself; a dart that
+// ends at a corner goes on with the dart of the same piece that leaves the corner (the pieces
+// compared by their gradients at the corner, since one piece may carry several branch codes).
+std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>& curves,
+                                const std::vector<Dart>& darts, std::span<const Vec3> corners) {
+  std::vector<Cycle> cycles;
+  std::vector<char> used(darts.size(), 0);
+  const auto piece_of = [&](const Dart& d) -> const Branch& {
+    return curves[static_cast<std::size_t>(d.curve)].pieces[static_cast<std::size_t>(d.side)];
+  };
+  for (std::size_t start = 0; start < darts.size(); ++start) {
+    if (used[start]) continue;
+    Cycle cycle;
+    cycle.piece = piece_of(darts[start]);
+    std::size_t d = start;
+    for (std::size_t guard = 0;; ++guard) {
+      if (guard > darts.size()) throw CreaseLayoutError("adaptive: a patch boundary that does not close");
+      used[d] = 1;
+      const Dart& dart = darts[d];
+      if (dart.to < 0) {  // a loop
+        cycle.vertices = dart.vertices;
+        break;
+      }
+      cycle.vertices.insert(cycle.vertices.end(), dart.vertices.begin(), dart.vertices.end() - 1);
+      const Vec3& corner = corners[static_cast<std::size_t>(dart.to)];
+      const Vec3 g = field.piece(corner, piece_of(dart)).gradient.normalized();
+      std::size_t next = darts.size();
+      for (std::size_t e = 0; e < darts.size(); ++e) {
+        if (darts[e].from != dart.to || darts[e].curve == dart.curve) continue;
+        if (field.piece(corner, piece_of(darts[e])).gradient.normalized().dot(g) <= kSamePieceCosine) continue;
+        if (next != darts.size())
+          throw CreaseLayoutError("adaptive: a piece meets the corner " + format_point(corner) +
+                                  " more than once; its patch boundary is ambiguous");
+        next = e;
+      }
+      if (next == darts.size())
+        throw CreaseLayoutError("adaptive: a patch boundary breaks off at the corner " + format_point(corner));
+      if (next == start) break;
+      if (used[next]) throw CreaseLayoutError("adaptive: patch boundaries cross at the corner " + format_point(corner));
+      d = next;
+    }
+    if (cycle.vertices.size() < 3) throw CreaseLayoutError("adaptive: a patch bounded by fewer than three crease vertices");
+    cycles.push_back(std::move(cycle));
+  }
+  return cycles;
+}
+
+// Whether branch codes a and b give the same function: equal values and gradients at three
+// fixed points of the box (codes that differ only at branch points the piece does not pass
+// through name one piece).
+bool same_function(const Field& field, const Branch& a, const Branch& b) {
+  if (a == b) return true;
+  const Box& box = field.bounds();
+  for (const double s : {0.5, 0.31, 0.73}) {
+    const Vec3 p = box.min + Vec3(s, 1 - s, s * s).cwiseProduct(box.size());
+    const FieldPiece fa = field.piece(p, a), fb = field.piece(p, b);
+    const double scale = 1 + std::abs(fa.value) + fa.gradient.norm();
+    if (std::abs(fa.value - fb.value) > 1e-12 * scale || (fa.gradient - fb.gradient).norm() > 1e-12 * scale)
+      return false;
+  }
+  return true;
+}
+
+// Whether the straight edge a-b (two crease vertices of the piece `branch`) runs over the
+// piece's patches: its midpoint, moved onto the piece, is where the CSG field takes the piece.
+// Elsewhere the field takes another piece, whose value there is about the distance to its zero
+// set; a share kOutsidePatch of the edge's length tells that from the tolerance of points on
+// the crease (a chord of a curved crease leaves the patch by its sagitta only).
+bool inside_patch(const Field& field, const Branch& branch, const Vec3& a, const Vec3& b) {
+  constexpr double kOutsidePatch = 0.1;
+  Vec3 m = 0.5 * (a + b);
+  FieldPiece q;
+  for (int it = 0; it < 3; ++it) {
+    q = field.piece(m, branch);
+    if (!(q.gradient.squaredNorm() > 0)) return false;
+    m -= q.value / q.gradient.squaredNorm() * q.gradient;
+  }
+  q = field.piece(m, branch);
+  return std::abs(field.value(m) - q.value) <= kOutsidePatch * (a - b).norm() * q.gradient.norm();
+}
+
+// Whether x, a point of the piece `branch` placed with step d, lies in the piece's patches: the
+// CSG field takes the piece there, up to the same share of d.
+bool in_patch(const Field& field, const Branch& branch, const Vec3& x, double d) {
+  constexpr double kOutsidePatch = 0.1;
+  const FieldPiece q = field.piece(x, branch);
+  return std::abs(field.value(x) - q.value) <= kOutsidePatch * d * q.gradient.norm();
+}
+
+}  // namespace
+
+CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& creases, const Settings& settings,
+                               double estimated_area) {
+  CreaseMesh out;
+  const double diagonal = settings.diagonal;
+  CreaseVertices cv;
+  std::vector<int> corner_vertex;
+  for (const Vec3& c : creases.corners) corner_vertex.push_back(cv.add(c));
+
+  // The corners at the curves' ends, for the feature size (resample_curve checks them).
+  std::vector<int> start_corner(creases.curves.size(), -1), end_corner(creases.curves.size(), -1);
+  for (std::size_t c = 0; c < creases.curves.size(); ++c) {
+    const CreaseCurve& curve = creases.curves[c];
+    if (curve.closed || curve.points.empty()) continue;
+    for (std::size_t k = 0; k < creases.corners.size(); ++k) {
+      if ((creases.corners[k] - curve.points.front()).norm() <= kCornerMatch * diagonal) start_corner[c] = static_cast<int>(k);
+      if ((creases.corners[k] - curve.points.back()).norm() <= kCornerMatch * diagonal) end_corner[c] = static_cast<int>(k);
+    }
+  }
+  const auto feature = crease_feature_size(creases, start_corner, end_corner, settings.sizing.max_edge);
+  std::vector<LaidCurve> curves;
+  for (std::size_t c = 0; c < creases.curves.size(); ++c)
+    curves.push_back(resample_curve(field, creases.curves[c], feature[c], settings.sizing, corner_vertex, creases.corners,
+                                    diagonal, cv));
+  std::vector<Dart> darts;
+  for (std::size_t i = 0; i < curves.size(); ++i)
+    for (Dart& d : orient_darts(field, curves[i], static_cast<int>(i), cv, settings.sizing.min_edge))
+      darts.push_back(std::move(d));
+  const std::vector<Cycle> cycles = trace_cycles(field, curves, darts, creases.corners);
+
+  // Cycles grouped by piece: the patches of one piece are meshed by one tracker, so that the
+  // boundaries of one patch (a face with a hole) meet and merge.
+  std::vector<std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < cycles.size(); ++i) {
+    bool placed = false;
+    for (auto& g : groups)
+      if (same_function(field, cycles[g.front()].piece, cycles[i].piece)) {
+        g.push_back(i);
+        placed = true;
+        break;
+      }
+    if (!placed) groups.push_back({i});
+  }
+
+  const std::size_t nc = cv.points.size();
+  Mesh& mesh = out.mesh;
+  mesh.positions = cv.points;
+  mesh.normals.assign(nc, Vec3::Zero());
+  out.target.assign(nc, std::numeric_limits<double>::infinity());
+  out.mac.assign(nc, 0.0);
+  out.shape_index.assign(nc, 0.0);
+  for (const auto& group : groups) {
+    const Branch& branch = cycles[group.front()].piece;
+    const PieceField piece(field, branch);
+    std::vector<std::vector<Tracker::Placed>> loops;
+    for (const std::size_t i : group) {
+      std::vector<Tracker::Placed>& loop = loops.emplace_back();
+      for (const int v : cycles[i].vertices) {
+        const Vec3& p = cv.points[static_cast<std::size_t>(v)];
+        const FieldPiece q = field.piece(p, branch);
+        loop.push_back({p, curvature_from_derivatives(q.gradient, q.hessian)});
+      }
+    }
+    Mesh part;
+    Tracker tracker(piece, settings, part);
+    if (estimated_area > 0) tracker.set_estimated_area(estimated_area);
+    tracker.set_patch_test([&field, &branch](const Vec3& a, const Vec3& b) { return inside_patch(field, branch, a, b); });
+    tracker.set_point_test([&field, &branch](const Vec3& x, double d) { return in_patch(field, branch, x, d); });
+    const std::vector<std::vector<int>> ids = tracker.mesh_from_loops(loops);
+    // The part's vertices: the loops' are crease vertices, the rest are appended.
+    std::vector<int> to_global(part.positions.size(), -1);
+    for (std::size_t l = 0; l < ids.size(); ++l)
+      for (std::size_t k = 0; k < ids[l].size(); ++k)
+        to_global[static_cast<std::size_t>(ids[l][k])] = cycles[group[l]].vertices[k];
+    const auto& target = tracker.vertex_edge_length();
+    const auto& mac = tracker.vertex_mac();
+    const auto& shape = tracker.vertex_shape_index();
+    for (std::size_t v = 0; v < part.positions.size(); ++v) {
+      int& g = to_global[v];
+      if (g < 0) {
+        g = static_cast<int>(mesh.positions.size());
+        mesh.positions.push_back(part.positions[v]);
+        mesh.normals.push_back(part.normals[v]);
+        out.target.push_back(target[v]);
+        out.mac.push_back(mac[v]);
+        out.shape_index.push_back(shape[v]);
+      } else {
+        // A crease vertex: the mean of its pieces' normals (per-side normals are the mesh's
+        // corners' business), the smallest target, the largest curvature.
+        const auto gv = static_cast<std::size_t>(g);
+        mesh.normals[gv] += part.normals[v];
+        out.target[gv] = std::min(out.target[gv], target[v]);
+        if (mac[v] >= out.mac[gv]) out.mac[gv] = mac[v], out.shape_index[gv] = shape[v];
+      }
+    }
+    for (const auto& t : part.triangles)
+      mesh.triangles.push_back({to_global[static_cast<std::size_t>(t[0])], to_global[static_cast<std::size_t>(t[1])],
+                                to_global[static_cast<std::size_t>(t[2])]});
+    out.steps += tracker.steps();
+    out.splits += tracker.splits();
+    out.merges += tracker.merges();
+    out.patch_refusals += tracker.patch_refusals();
+  }
+  for (std::size_t v = 0; v < nc; ++v) {
+    if (!(mesh.normals[v].squaredNorm() > 0))
+      throw CreaseLayoutError("adaptive: a crease vertex no patch reached near " + format_point(mesh.positions[v]));
+    mesh.normals[v].normalize();
+  }
+  for (const LaidCurve& c : curves)
+    for (std::size_t k = 0; k + 1 < c.vertices.size() + (c.closed ? 1 : 0); ++k)
+      out.crease_edges.push_back({c.vertices[k], c.vertices[(k + 1) % c.vertices.size()]});
+  out.crease_vertices = nc;
+  out.curves = curves.size();
+  out.corners = creases.corners.size();
+  out.pieces = groups.size();
+  out.cycles = cycles.size();
+  return out;
+}
+
+}  // namespace cdp::adaptive
