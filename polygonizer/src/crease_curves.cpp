@@ -26,12 +26,15 @@ constexpr double kActiveRadius = 20;
 // How many times a step is halved when the tangent turns too much or the projection fails.
 constexpr int kMaxHalvings = 12;
 
-// Points already on a curve, hashed by cell, to skip grid crossings near a traced crease.
+// Points already on a curve (with the curve's and the point's index), hashed by cell, to skip
+// grid crossings whose crease is traced already.
 class PointGrid {
  public:
   explicit PointGrid(double cell) : cell_(cell) {}
-  void insert(const Vec3& p) { cells_[key(cell_of(p))].push_back(p); }
-  bool any_within(const Vec3& p, double r) const {
+  void insert(const Vec3& p, std::size_t curve, std::size_t index) { cells_[key(cell_of(p))].push_back({p, curve, index}); }
+  // Whether fn(curve, index) holds for a point within r of p (visited in a fixed order).
+  template <class Fn>
+  bool any_within(const Vec3& p, double r, Fn&& fn) const {
     const auto c = cell_of(p);
     const int reach = static_cast<int>(std::ceil(r / cell_));
     for (int dz = -reach; dz <= reach; ++dz)
@@ -39,18 +42,36 @@ class PointGrid {
         for (int dx = -reach; dx <= reach; ++dx) {
           const auto it = cells_.find(key({c[0] + dx, c[1] + dy, c[2] + dz}));
           if (it == cells_.end()) continue;
-          for (const Vec3& q : it->second)
-            if ((q - p).squaredNorm() <= r * r) return true;
+          for (const Entry& e : it->second)
+            if ((e.p - p).squaredNorm() <= r * r && fn(e.curve, e.index)) return true;
         }
     return false;
   }
 
  private:
+  struct Entry {
+    Vec3 p;
+    std::size_t curve, index;
+  };
   GridCell cell_of(const Vec3& p) const { return grid_cell(p, cell_); }
   static std::uint64_t key(const GridCell& c) { return grid_cell_key(c); }
   double cell_;
-  std::unordered_map<std::uint64_t, std::vector<Vec3>> cells_;
+  std::unordered_map<std::uint64_t, std::vector<Entry>> cells_;
 };
+
+// Distance from p to segment a-b.
+double segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
+}
+
+// A point on a crease lies on a traced polyline of it when it is this share of the longest step
+// from one of its segments: the segments are chords of a curve turning at most max_turn (0.1) a
+// step, which stray from it by under 0.0125 of the step; another crease of the same two pieces
+// passing close by (two of the gyroid ball's loops come within 0.18) is farther.
+constexpr double kOnTracedCurve = 0.05;
 
 struct Tracer {
   const Field& field;
@@ -175,7 +196,7 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
     const Vec3 pa = grid.point(ia[0], ia[1], ia[2]), pb = grid.point(ib[0], ib[1], ib[2]);
     const double fa = grid.value(ia[0], ia[1], ia[2]), fb = grid.value(ib[0], ib[1], ib[2]);
     const ProjectionResult s = project_to_surface(field, pa + fa / (fa - fb) * (pb - pa));
-    if (!s.ok() || traced.any_within(s.point, grid.h)) return;
+    if (!s.ok()) return;
     // The two pieces taken nearest the crossing whose crease lies within a cell.
     const std::vector<FieldPiece> near = field.pieces(s.point, grid.h);
     if (near.size() < 2) return;
@@ -183,8 +204,26 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
       for (std::size_t j = i + 1; j < near.size(); ++j) {
         const std::vector<Branch> two{near[i].branch, near[j].branch};
         const CreaseProjection c = project_to_crease(field, s.point, two, options.newton);
-        if (!c.ok() || (c.point - s.point).norm() > 2 * grid.h || traced.any_within(c.point, grid.h)) continue;
-        if (!tr.both_active(c.point, tr.piece(c.point, two[0]).gradient, tr.piece(c.point, two[1]).gradient)) continue;
+        if (!c.ok() || (c.point - s.point).norm() > 2 * grid.h) continue;
+        const Vec3 g0 = tr.piece(c.point, two[0]).gradient.normalized(), g1 = tr.piece(c.point, two[1]).gradient.normalized();
+        // Traced already: c lies on a traced polyline (a crossing is only skipped for the crease it
+        // projects onto, so that a short crease right next to another, a sliver of a face between
+        // two spheres 0.03 long, is not taken for it).
+        const auto on_traced = [&](std::size_t k, std::size_t i) {
+          const std::vector<Vec3>& P = result.curves[k].points;
+          const double tol = kOnTracedCurve * tr.max_spacing;
+          const bool closed = result.curves[k].closed;
+          const std::size_t n = P.size();
+          if (i + 1 < n || closed) {
+            if (segment_distance(c.point, P[i], P[(i + 1) % n]) <= tol) return true;
+          }
+          if (i > 0 || closed) {
+            if (segment_distance(c.point, P[(i + n - 1) % n], P[i]) <= tol) return true;
+          }
+          return n == 1 && (P[0] - c.point).norm() <= tol;
+        };
+        if (traced.any_within(c.point, tr.max_spacing, on_traced)) continue;
+        if (!tr.both_active(c.point, g0, g1)) continue;
         // Trace both ways from c: a loop comes back to c; otherwise the curve runs from one
         // end to the other.
         CreaseCurve curve;
@@ -206,7 +245,7 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
           if (curve.starts_at_corner) corners.push_back(curve.points.front());
           if (curve.ends_at_corner) corners.push_back(curve.points.back());
         }
-        for (const Vec3& q : curve.points) traced.insert(q);
+        for (std::size_t i = 0; i < curve.points.size(); ++i) traced.insert(curve.points[i], result.curves.size(), i);
         result.curves.push_back(std::move(curve));
         return;
       }
