@@ -181,9 +181,10 @@ TEST(AdaptiveCreases, SameMeshOnAnyThreadCount) {
 }
 
 TEST(AdaptiveCreases, ALayoutThatFailsFallsBackToSmoothMeshingAndSaysWhy) {
-  // Two spheres on a bar whose top face shows only a strip 0.03 wide between them: the grid
-  // misses the strip's short creases, so a corner's patch boundary cannot be followed. The
-  // surface is meshed as a smooth one and the stats say why.
+  // Two spheres on a bar whose top face shows only a strip 0.03 wide between them, where four
+  // pieces meet within 0.03: the tracing of a crease stops there short of its corner, so the
+  // patch boundaries cannot be followed. The surface is meshed as a smooth one and the stats
+  // say why.
   const auto field = test::field_from_json(expression(
       "min(min(sqrt((x-0.5)^2+y^2+z^2)-0.85, sqrt((x+0.5)^2+y^2+z^2)-0.85), "
       "max(abs(x)-1.2,max(abs(y+0.9)-0.25,abs(z)-0.25)))",
@@ -192,8 +193,27 @@ TEST(AdaptiveCreases, ALayoutThatFailsFallsBackToSmoothMeshingAndSaysWhy) {
   o.factor = 1;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
   EXPECT_FALSE(r.stats.extra.at("creases.followed").get<bool>());
-  EXPECT_NE(r.stats.extra.at("creases.fallback").get<std::string>().find("patch boundary"), std::string::npos);
+  EXPECT_NE(r.stats.extra.at("creases.fallback").get<std::string>().find("corner"), std::string::npos);
+  EXPECT_EQ(r.stats.extra.at("creases.tracing_resolution").get<int>(), 64);  // tried twice
   EXPECT_TRUE(analyze_topology(r.mesh).watertight());
+}
+
+TEST(AdaptiveCreases, IgnoredAcuteCreasesAreNamedWhereTheFrontStalls) {
+  // Meshed across its creases, the box minus a ball stalls at a hole's rim, where the face meets
+  // the ball at 34 degrees; the error names that crease and its angle, not a thin feature.
+  const auto field =
+      test::field_from_json(expression("max(max(abs(x),max(abs(y),abs(z)))-1, 1.2-sqrt(x^2+y^2+z^2))", -1.5, 1.5));
+  AdaptiveOptions o;
+  o.factor = 5;
+  o.creases = CreaseHandling::Ignore;
+  try {
+    polygonize_adaptive(*field, o);
+    FAIL() << "meshed across its acute creases: update this test";
+  } catch (const LimitExceededError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("folds into a crease whose faces meet at 34 degrees"), std::string::npos) << what;
+    EXPECT_EQ(what.find("thinner than min_edge"), std::string::npos) << what;
+  }
 }
 
 }  // namespace

@@ -38,6 +38,11 @@ namespace {
 // goal is every triangle at 20 degrees or more and 99% at 30 or more, and aiming the repair at
 // the higher bound leaves the lower one a margin.
 constexpr double kRepairBelowDegrees = 30;
+// Creases are traced on the seed grid first and, when they cannot be laid out as patch boundaries
+// (a corner whose boundary breaks off: a short crease between crossings of the grid was
+// missed), once more on a grid twice as fine (eight times the values, on a field cheap enough
+// to have min/max/abs branches: an expression).
+constexpr int kCreaseTracings = 2;
 // Variant::Improved with a tolerance sizes edges for a sagitta of this share of eps, and the
 // refinement of quality.h splits what still exceeds eps. A triangle deviates more than its
 // edges (an equilateral one with edges of sagitta s bulges 4/3 s at its centre: circumradius
@@ -206,22 +211,30 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   std::size_t crease_components = 0;
   std::string crease_fallback;
   CreaseTracingResult traced;
+  int crease_tracing_resolution = 0;
   if (options.creases == CreaseHandling::Follow && options.variant == Variant::Improved) {
-    try {
-      CreaseTracingOptions co;
-      co.resolution = options.seed_resolution;
-      traced = trace_creases(field, co);  // no work for a field without pieces
-      if (!traced.curves.empty()) {
-        enter("meshing along creases");
-        creased = adaptive::mesh_crease_patches(field, traced, settings, estimated_area);
-        crease_components = analyze_topology(creased->mesh).components;
+    CreaseTracingOptions co;
+    co.resolution = options.seed_resolution;
+    for (int attempt = 0; attempt < kCreaseTracings; ++attempt, co.resolution *= 2) {
+      try {
+        crease_tracing_resolution = co.resolution;
+        traced = trace_creases(field, co);  // no work for a field without pieces
+        if (!traced.curves.empty()) {
+          if (attempt == 0) enter("meshing along creases");
+          creased = adaptive::mesh_crease_patches(field, traced, settings, estimated_area);
+          crease_components = analyze_topology(creased->mesh).components;
+          crease_fallback.clear();
+        }
+        break;
+      } catch (const adaptive::CreaseLayoutError& e) {
+        crease_fallback = e.what();  // a crease the grid missed? A finer one may find it
+      } catch (const NoSurfaceError& e) {
+        crease_fallback = e.what();
+        break;
+      } catch (const LimitExceededError& e) {
+        crease_fallback = e.what();
+        break;
       }
-    } catch (const NoSurfaceError& e) {
-      creased.reset();
-      crease_fallback = e.what();
-    } catch (const LimitExceededError& e) {
-      creased.reset();
-      crease_fallback = e.what();
     }
   }
 
@@ -362,6 +375,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["creases.components"] = crease_components;
   st.extra["creases.fallback"] = crease_fallback;
   st.extra["creases.steps"] = creased ? creased->steps : 0;
+  st.extra["creases.tracing_resolution"] = crease_tracing_resolution;
   st.extra["creases.patch_refusals"] = creased ? creased->patch_refusals : 0;
   st.extra["seed_grid_seconds"] = seed_grid_seconds;
   st.extra["curvature_seconds"] = tracker->curvature_seconds();

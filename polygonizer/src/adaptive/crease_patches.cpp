@@ -78,6 +78,9 @@ struct LaidCurve {
   bool closed = false;
   int start_corner = -1, end_corner = -1;  // indices into the corner list (open curves)
   std::array<Branch, 2> pieces;
+  // The largest distance between an edge's midpoint and the crease (the chords' sagitta): how
+  // far the patch's polygonal boundary strays from the patch.
+  double sagitta = 0;
 };
 
 // One side of a crease as a patch boundary: the curve's vertices in the order that has the
@@ -231,6 +234,13 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
     out.vertices.push_back(cv.add(c.point));
   }
   if (!curve.closed) out.vertices.push_back(corner_vertex[static_cast<std::size_t>(out.end_corner)]);
+  const std::size_t m = out.vertices.size();
+  for (std::size_t k = 0; k + (curve.closed ? 0 : 1) < m; ++k) {
+    const Vec3 mid = 0.5 * (cv.points[static_cast<std::size_t>(out.vertices[k])] +
+                            cv.points[static_cast<std::size_t>(out.vertices[(k + 1) % m])]);
+    const CreaseProjection c = project_to_crease(field, mid, two, co);
+    if (c.ok()) out.sagitta = std::max(out.sagitta, (c.point - mid).norm());
+  }
   return out;
 }
 
@@ -284,6 +294,7 @@ std::array<Dart, 2> orient_darts(const Field& field, const LaidCurve& c, int ind
 struct Cycle {
   Branch piece;
   std::vector<int> vertices;  // closed polygon, patch on the left
+  double sagitta = 0;         // the largest of its curves' (LaidCurve::sagitta)
 };
 
 // The boundary cycles of the pieces' patches: a loop's dart is a cycle by itself; a dart that
@@ -307,9 +318,11 @@ std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>
       const Dart& dart = darts[d];
       if (dart.to < 0) {  // a loop
         cycle.vertices = dart.vertices;
+        cycle.sagitta = curves[static_cast<std::size_t>(dart.curve)].sagitta;
         break;
       }
       cycle.vertices.insert(cycle.vertices.end(), dart.vertices.begin(), dart.vertices.end() - 1);
+      cycle.sagitta = std::max(cycle.sagitta, curves[static_cast<std::size_t>(dart.curve)].sagitta);
       const Vec3& corner = corners[static_cast<std::size_t>(dart.to)];
       const Vec3 g = field.piece(corner, piece_of(dart)).gradient.normalized();
       std::size_t next = darts.size();
@@ -368,11 +381,13 @@ bool inside_patch(const Field& field, const Branch& branch, const Vec3& a, const
 }
 
 // Whether x, a point of the piece `branch` placed with step d, lies in the piece's patches: the
-// CSG field takes the piece there, up to the same share of d.
-bool in_patch(const Field& field, const Branch& branch, const Vec3& x, double d) {
+// CSG field takes the piece there, up to the same share of d and twice the boundary's sagitta.
+// The boundary polygon's chords stray from the crease by up to `sagitta`, into the neighbouring
+// patch where the crease bends away from this one, and points next to them may too.
+bool in_patch(const Field& field, const Branch& branch, const Vec3& x, double d, double sagitta) {
   constexpr double kOutsidePatch = 0.1;
   const FieldPiece q = field.piece(x, branch);
-  return std::abs(field.value(x) - q.value) <= kOutsidePatch * d * q.gradient.norm();
+  return std::abs(field.value(x) - q.value) <= (kOutsidePatch * d + 2 * sagitta) * q.gradient.norm();
 }
 
 }  // namespace
@@ -440,10 +455,15 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
       }
     }
     Mesh part;
-    Tracker tracker(piece, settings, part);
+    Settings patch_settings = settings;
+    patch_settings.look_ahead = true;
+    Tracker tracker(piece, patch_settings, part);
     if (estimated_area > 0) tracker.set_estimated_area(estimated_area);
     tracker.set_patch_test([&field, &branch](const Vec3& a, const Vec3& b) { return inside_patch(field, branch, a, b); });
-    tracker.set_point_test([&field, &branch](const Vec3& x, double d) { return in_patch(field, branch, x, d); });
+    double sagitta = 0;
+    for (const std::size_t i : group) sagitta = std::max(sagitta, cycles[i].sagitta);
+    tracker.set_point_test(
+        [&field, &branch, sagitta](const Vec3& x, double d) { return in_patch(field, branch, x, d, sagitta); });
     const std::vector<std::vector<int>> ids = tracker.mesh_from_loops(loops);
     // The part's vertices: the loops' are crease vertices, the rest are appended.
     std::vector<int> to_global(part.positions.size(), -1);

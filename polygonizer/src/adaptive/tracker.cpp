@@ -304,7 +304,14 @@ double Tracker::local_edge_length(int node) const {
   // The paper evaluates the heuristic at the point and at both front neighbours and keeps the
   // smallest, so that an expansion never outruns a region of higher curvature next to it.
   const FrontNode& n = fs_.nodes[node];
-  return std::min({target_[n.vertex], target_[fs_.nodes[n.prev].vertex], target_[fs_.nodes[n.next].vertex]});
+  double delta = std::min({target_[n.vertex], target_[fs_.nodes[n.prev].vertex], target_[fs_.nodes[n.next].vertex]});
+  if (!s_.look_ahead) return delta;
+  const Vec3& p = mesh_.positions[n.vertex];
+  front_hash_.for_each_near(p, delta / kLookAheadGradation, [&](int q) {
+    const int w = fs_.nodes[q].vertex;
+    delta = std::min(delta, target_[w] + kLookAheadGradation * (mesh_.positions[w] - p).norm());
+  });
+  return delta;
 }
 
 bool Tracker::mesh_from_seed(const Vec3& seed) {

@@ -16,6 +16,10 @@ struct Mesh {
   std::vector<Vec3> positions;
   std::vector<Vec3> normals;                    // per vertex, unit length; empty if not computed
   std::vector<std::array<int, 3>> triangles;    // counter-clockwise seen from outside
+  // Normals per triangle corner, for vertices on a crease of the surface (one normal per side);
+  // empty when the vertex normals serve. Where given, they replace `normals` for shading and the
+  // Phong error (raytrace's phong_normal). Not written to files.
+  std::vector<std::array<Vec3, 3>> corner_normals;
   std::map<std::string, std::vector<double>> vertex_scalars;  // e.g. "mac", "shape_index"
 
   std::size_t num_vertices() const { return positions.size(); }
