@@ -72,7 +72,8 @@ int main(int argc, char** argv) {
         ->transform(cdp::app::integer_in(1, 100000000));
     app.add_option("--cache", cache_dir, "keep the ground truth in DIR and reuse it")->type_name("DIR")->check(cdp::app::path_name());
     app.add_option("--normals", normals_choice,
-                   "vertex normals of the Phong error: field (the gradient at the vertices), file or mesh "
+                   "vertex normals of the Phong error: field (the gradient at the vertices; each side's at the "
+                   "vertices on creases of a min/max/abs field), file or mesh "
                    "(area-weighted); default: file when the mesh has them, else field")
         ->type_name("NAME")
         ->check(CLI::IsMember({"field", "file", "mesh"}));
@@ -100,7 +101,10 @@ int main(int argc, char** argv) {
         throw cdp::InvalidInputError(mesh_path + ": --normals file, but the mesh file has no vertex normals");
     } else if (normals_choice == "field") {
       mesh.normals = cdp::field_normals(*field, mesh);
-      normals_source = "field (normalized gradient at the vertices)";
+      mesh.corner_normals = cdp::field_corner_normals(*field, mesh, mesh.normals);
+      normals_source = mesh.corner_normals.empty()
+                           ? "field (normalized gradient at the vertices)"
+                           : "field (normalized gradient at the vertices, each side's at creases)";
     } else {
       mesh.normals = cdp::area_weighted_normals(mesh);
       normals_source = "mesh (area-weighted face normals)";

@@ -58,6 +58,7 @@ struct Experiment {
   int views = 6;
   int resolution = 128;
   std::string projection = "perspective";
+  std::string normals;  // evaluate --normals; empty: evaluate's default (the file's)
   bool keep_meshes = true;
 };
 
@@ -118,12 +119,13 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
 
   if (r.has("evaluation")) {
     auto ev = r.object("evaluation");
-    ev.check_keys({"views", "resolution", "projection"});
+    ev.check_keys({"views", "resolution", "projection", "normals"});
     e.views = static_cast<int>(ev.integer("views", 6));
     e.resolution = static_cast<int>(ev.integer("resolution", 128));
     e.projection = ev.choice("projection", {"perspective", "orthographic"}, "perspective");
     if (e.views < 1 || e.resolution < 1) ev.fail("views and resolution must be positive");
-    ev.finish({"views", "resolution", "projection"});
+    if (ev.has("normals")) e.normals = ev.choice("normals", {"file", "field", "mesh"}, "file");
+    ev.finish({"views", "resolution", "projection", "normals"});
   }
   e.keep_meshes = r.boolean("keep_meshes", true);
 
@@ -222,6 +224,7 @@ std::vector<std::vector<std::string>> run_commands(const Experiment& e, const Pa
                                 p.cache.string(),
                                 "-o",
                                 (p.run_dir(r) / "metrics.json").string()};
+  if (!e.normals.empty()) eval.insert(eval.end(), {"--normals", e.normals});
   return {poly, eval};
 }
 

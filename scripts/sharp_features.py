@@ -13,8 +13,12 @@ import matplotlib.pyplot as plt  # noqa: E402
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SHAPES = [("cube", "cube"), ("capped_cylinder", "capped cylinder"), ("box_minus_ball", "box minus ball"),
           ("two_spheres", "two unioned spheres"), ("hollow_sphere", "hollow sphere")]
-METHODS = [("adaptive", "factor", "Ours (factor)", "C0", "o"), ("adaptive", "tolerance", "Ours (tolerance)", "C2", "s"),
-           ("mc", "cell", "Marching Cubes", "C1", "v")]
+# (method, swept parameter, whether the run's id carries the "smooth" label (creases ignored), legend, colour, marker)
+METHODS = [("adaptive", "factor", False, "Ours, along creases (factor)", "C0", "o"),
+           ("adaptive", "tolerance", False, "Ours, along creases (tolerance)", "C2", "s"),
+           ("adaptive", "factor", True, "Ours, creases ignored (factor)", "C3", "x"),
+           ("adaptive", "tolerance", True, "Ours, creases ignored (tolerance)", "C4", "+"),
+           ("mc", "cell", False, "Marching Cubes", "C1", "v")]
 
 
 def rows_of(shape):
@@ -42,9 +46,13 @@ def main():
              "The creases are traced exactly on the field's `min`/`max`/`abs` pieces (`trace_creases`); "
              "*crease to edges* is the distance from the crease points to the nearest mesh edge (its max is the "
              "Hausdorff distance from the creases to the edges), *edge-Chamfer* the mean of the distances between "
-             "the creases and the mesh's sharp edges (dihedral angle over 30 degrees) both ways. The adaptive method "
-             "does not trace creases yet (the sharp-features issue): these rows are the baseline that crease-aware "
-             "meshing is to beat; the hollow sphere has no crease on its surface (its two sheets never meet).", ""]
+             "the creases and the mesh's sharp edges (dihedral angle over 30 degrees) both ways. Rows `adaptive_*` "
+             "mesh along the creases (the default: creases traced first, each piece's patches meshed from them, "
+             "`polygonizer/src/adaptive/crease_patches.h`), so the creases are mesh edges and the distance is the "
+             "chords' sagitta on a curved crease, 0 to rounding on a straight one; rows `adaptive_smooth_*` mesh "
+             "across them as the tracker did before (`--creases ignore`). The Phong error uses the field's normals, "
+             "each side's at a vertex on a crease (`evaluate --normals field`). The hollow sphere has no crease on "
+             "its surface (its two sheets never meet).", ""]
     fig, axes = plt.subplots(1, 4, figsize=(18, 4.2))
     plotted = set()
     for shape, title in SHAPES:
@@ -66,12 +74,14 @@ def main():
             continue
         ax = axes[len(plotted)]
         plotted.add(shape)
-        for method, param, label, color, marker in METHODS:
+        for method, param, smooth, label, color, marker in METHODS:
             pts = sorted((num(r, "triangles"), num(r, "crease_to_edges_max")) for r in rows
                          if r["status"] == "ok" and r["method"] == method and r["parameter_name"] == param
+                         and r["id"].startswith(method + "_smooth_") == smooth
                          and num(r, "triangles") and num(r, "crease_to_edges_max"))
             if pts:
-                ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=marker, color=color, label=label)
+                # Edges exactly on a straight crease are 0 away: drawn at the bottom of the log axis.
+                ax.plot([p[0] for p in pts], [max(p[1], 1e-12) for p in pts], marker=marker, color=color, label=label)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("triangles")

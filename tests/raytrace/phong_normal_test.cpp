@@ -57,5 +57,35 @@ TEST(FieldNormals, AreTheNormalizedGradientAtEachVertex) {
   EXPECT_EQ(field_normals(f, centre)[0], Vec3::Zero());
 }
 
+TEST(PhongNormal, CornerNormalsGiveEachSideOfACreaseItsOwnNormal) {
+  // A cube mesh on its exact creases: every vertex is a corner of the cube, where the vertex
+  // normal (the field's gradient, one face's) blends across faces; the corner normals are each
+  // triangle's own face normal, so the Phong normal is the face's everywhere.
+  const Expression cube("max(abs(x),max(abs(y),abs(z)))-1", {}, Box{Vec3::Constant(-1.5), Vec3::Constant(1.5)});
+  Mesh m;
+  for (int i = 0; i < 8; ++i) m.positions.push_back(Vec3(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1));
+  m.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                 {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  m.normals = field_normals(cube, m);
+  bool blended = false;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const auto& tri = m.triangles[t];
+    const Vec3 face = (m.positions[tri[1]] - m.positions[tri[0]]).cross(m.positions[tri[2]] - m.positions[tri[0]]).normalized();
+    blended = blended || !phong_normal(m, static_cast<int>(t), 1.0 / 3, 1.0 / 3).isApprox(face, 1e-12);
+  }
+  EXPECT_TRUE(blended);  // vertex normals alone cannot be right on every face
+  m.corner_normals = field_corner_normals(cube, m, m.normals);
+  ASSERT_EQ(m.corner_normals.size(), m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const auto& tri = m.triangles[t];
+    const Vec3 face = (m.positions[tri[1]] - m.positions[tri[0]]).cross(m.positions[tri[2]] - m.positions[tri[0]]).normalized();
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE(m.corner_normals[t][k].isApprox(face, 1e-12)) << t << " " << k;
+    EXPECT_TRUE(phong_normal(m, static_cast<int>(t), 0.2, 0.3).isApprox(face, 1e-12));
+  }
+  // A smooth field has no creases: no corner normals.
+  const Sphere sphere(Vec3::Zero(), 1.0);
+  EXPECT_TRUE(field_corner_normals(sphere, m, m.normals).empty());
+}
+
 }  // namespace
 }  // namespace cdp

@@ -4,12 +4,14 @@
 #include <cdp/core/field.h>
 #include <cdp/core/mesh.h>
 
+#include <array>
 #include <vector>
 
 namespace cdp {
 
 // normalize((1-u-v) n0 + u n1 + v n2) of triangle `triangle`; zero when the blend vanishes
-// (opposite vertex normals). Requires mesh.normals.
+// (opposite vertex normals). Requires mesh.normals; the triangle's corner normals replace them
+// when the mesh has them (Mesh::corner_normals).
 Vec3 phong_normal(const Mesh& mesh, int triangle, double u, double v);
 
 // Vertex normals as the normalized sum of the incident triangles' area vectors, for meshes
@@ -21,5 +23,14 @@ std::vector<Vec3> area_weighted_normals(const Mesh& mesh);
 // mesh these (evaluate --normals field) compares meshes, not normal estimators. Zero where the
 // gradient vanishes or is not finite.
 std::vector<Vec3> field_normals(const Field& field, const Mesh& mesh);
+
+// For a field with creases (Field::has_pieces): the field's normal at every triangle corner, the
+// normal of the piece the triangle lies on where the corner's vertex is on a crease (two or more
+// pieces within kCornerPieceRadius of the diagonal), the vertex's entry of `vertex_normals`
+// elsewhere. So that a mesh whose edges follow a crease is shaded and measured with each side's
+// normal rather than their blend; a mesh whose vertices miss the creases gets its vertex normals.
+// Empty for a field without creases.
+std::vector<std::array<Vec3, 3>> field_corner_normals(const Field& field, const Mesh& mesh,
+                                                      const std::vector<Vec3>& vertex_normals);
 
 }  // namespace cdp
