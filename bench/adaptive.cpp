@@ -1,7 +1,8 @@
 // The adaptive polygonizer: torus and tanglecube at several factors, the bunny VIS-800 of the
 // paper's Table 1 beside Marching Tetrahedra and Marching Cubes at the paper's precision, and a
 // scaling series from 10^4 to 10^6 triangles on the torus, where bookkeeping that grows faster
-// than linearly would show as a rising time per triangle. Times are the polygonizers' own
+// than linearly would show as a rising time per triangle; and two CSG shapes meshed along their
+// creases. Times are the polygonizers' own
 // stats.seconds (manual time), as in STATS.json.
 #include <cdp/baselines/marching_cubes.h>
 #include <cdp/baselines/marching_tetrahedra.h>
@@ -82,6 +83,32 @@ void BM_Adaptive(benchmark::State& state) {
 BENCHMARK(BM_Adaptive)
     ->ArgNames({"shape", "factor"})
     ->ArgsProduct({{kTorus, kTanglecube}, {2, 3, 5}})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+
+// CSG shapes meshed along their creases (AdaptiveOptions::creases, crease_patches.h): the
+// tracing, the layout and one tracker per piece against the plain tracker. The capped cylinder
+// both ways (the ratio is the crease handling's cost there); the box minus a ball only along its
+// creases (across them it stalls at its holes' acute rims).
+void BM_AdaptiveCreases(benchmark::State& state) {
+  const bool box = state.range(0) == 1;
+  const bool follow = state.range(1) == 1;
+  const Expression field(box ? "max(max(abs(x),max(abs(y),abs(z)))-1, 1.2-sqrt(x^2+y^2+z^2))"
+                             : "max(sqrt(x^2+y^2)-1, abs(z)-1)",
+                         {}, Box{Vec3::Constant(-1.5137), Vec3::Constant(1.5)});
+  AdaptiveOptions o;
+  o.sizing = SizingMode::Tolerance;
+  o.tolerance = 1e-3;
+  o.creases = follow ? CreaseHandling::Follow : CreaseHandling::Ignore;
+  run_adaptive(state, field, o);
+  state.SetLabel(std::string(box ? "box_minus_ball" : "capped_cylinder") + "/adaptive/creases_" +
+                 (follow ? "follow" : "ignore"));
+}
+BENCHMARK(BM_AdaptiveCreases)
+    ->ArgNames({"shape", "follow"})
+    ->Args({0, 0})
+    ->Args({0, 1})
+    ->Args({1, 1})
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 
