@@ -89,7 +89,7 @@ std::vector<HardSurface> hard_surfaces() {
       {"box_minus_ball", expression("max(max(abs(x),max(abs(y),abs(z)))-1, 1.2-sqrt(x^2+y^2+z^2))", 1.5), 1, 5,
        {1, 2, 3, 5}},
       {"gyroid_ball",
-       expression("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)", 2.2), -1, -1, {2, 3}},
+       expression("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)", 2.2), -1, -1, {1, 2, 3}},
       {"barth_ball",
        expression("max(4*(2.618034*x^2-y^2)*(2.618034*y^2-z^2)*(2.618034*z^2-x^2)-4.236068*(x^2+y^2+z^2-1)^2+0.01, "
                   "x^2+y^2+z^2-3.5)",

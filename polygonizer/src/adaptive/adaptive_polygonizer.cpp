@@ -309,14 +309,54 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
                                    : std::string(e.what()) + " (meshed as smooth after crease-aware meshing failed: " +
                                          crease_fallback + ")";
   };
+  adaptive::QualityReport quality;
+  const bool repair = options.variant == Variant::Improved;
+  const double tolerance = positive_or_default_tolerance(options, s);
+  // The repair, the curvature properties and the final checks of a mesh made; returns its components.
+  const auto repair_and_check = [&] {
+    quality = {};
+    if (repair) {
+      enter("repairing triangles");
+      adaptive::QualityOptions qo;
+      qo.improve_below = kRepairBelowDegrees * std::numbers::pi / 180;
+      qo.tolerance = s.sizing.mode == SizingMode::Tolerance ? tolerance : 0;
+      qo.diagonal = s.diagonal;
+      qo.min_edge = s.sizing.min_edge;
+      quality = adaptive::improve_mesh(field, mesh, qo);
+    }
+    if (s.curvature_properties) {
+      if (quality.moves + quality.collapses + quality.splits + quality.inserts == 0) {
+        mesh.vertex_scalars["mac"] = tracker->vertex_mac();
+        mesh.vertex_scalars["shape_index"] = tracker->vertex_shape_index();
+      } else {
+        // The repair moved, removed or added vertices: measure them all where they are now.
+        std::vector<double> mac(mesh.positions.size()), shape(mesh.positions.size());
+        for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+          const Curvature c = curvature_at(field, mesh.positions[v]);
+          mac[v] = c.mac;
+          shape[v] = c.shape_index;
+        }
+        mesh.vertex_scalars["mac"] = std::move(mac);
+        mesh.vertex_scalars["shape_index"] = std::move(shape);
+      }
+    }
+    enter("checking the mesh");
+    return check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+  };
+  std::size_t components = 0;
   try {
     try {
       mesh_everything();
-      if (creased) check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+      // The patches' topology before the repair works on it; intersections after (the repair
+      // removes some that chords on the two faces of an acute crease make).
+      if (creased) check_mesh(mesh, seeding.seeds + crease_components, false, options.threads);
+      components = repair_and_check();
     } catch (const NoSurfaceError& e) {
       if (!fall_back(e)) throw;
+      components = repair_and_check();
     } catch (const LimitExceededError& e) {
       if (!fall_back(e)) throw;
+      components = repair_and_check();
     }
   } catch (const NoSurfaceError& e) {
     throw NoSurfaceError(why(e));
@@ -324,40 +364,8 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     throw LimitExceededError(why(e));
   }
 
-  adaptive::QualityReport quality;
-  const bool repair = options.variant == Variant::Improved;
-  const double tolerance = positive_or_default_tolerance(options, s);
-  if (repair) {
-    enter("repairing triangles");
-    adaptive::QualityOptions qo;
-    qo.improve_below = kRepairBelowDegrees * std::numbers::pi / 180;
-    qo.tolerance = s.sizing.mode == SizingMode::Tolerance ? tolerance : 0;
-    qo.diagonal = s.diagonal;
-    qo.min_edge = s.sizing.min_edge;
-    quality = adaptive::improve_mesh(field, mesh, qo);
-  }
-
-  if (s.curvature_properties) {
-    if (quality.moves + quality.collapses + quality.splits + quality.inserts == 0) {
-      mesh.vertex_scalars["mac"] = tracker->vertex_mac();
-      mesh.vertex_scalars["shape_index"] = tracker->vertex_shape_index();
-    } else {
-      // The repair moved, removed or added vertices: measure them all where they are now.
-      std::vector<double> mac(mesh.positions.size()), shape(mesh.positions.size());
-      for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-        const Curvature c = curvature_at(field, mesh.positions[v]);
-        mac[v] = c.mac;
-        shape[v] = c.shape_index;
-      }
-      mesh.vertex_scalars["mac"] = std::move(mac);
-      mesh.vertex_scalars["shape_index"] = std::move(shape);
-    }
-  }
-
-  enter("checking the mesh");
   PolygonizeStats& st = result.stats;
-  st.components =
-      check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+  st.components = components;
   st.method = "adaptive";
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   st.field_evaluations = field.counts() - before;

@@ -98,6 +98,10 @@ struct Dart {
 // crease edges longer than the strip is wide make chords that cut across the strip, from both
 // sides (the gyroid ball at factor 1 came out with edges of four triangles there).
 constexpr double kOtherPart = 2;
+// Crease edges are at most this share of the distance to another part: two edges across the
+// strip between them, so that its fronts have room for a point inside it (with one, the gyroid
+// ball at factor 1 still had both sides join the two creases by the same edge).
+constexpr double kFeatureShare = 0.5;
 
 // For every traced point of every curve: the distance to the nearest other part of the creases
 // (infinity when none is within `reach`).
@@ -200,7 +204,7 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
       const double radius = turn > 0 ? 0.5 * (a.norm() + b.norm()) / turn : std::numeric_limits<double>::infinity();
       len = std::min(len, edge_length(sizing, radius));
     }
-    h[i] = std::max(sizing.min_edge, std::min(len, feature_size[i]));
+    h[i] = std::max(sizing.min_edge, std::min(len, kFeatureShare * feature_size[i]));
   }
   // Equal steps of the integral of ds / h: edges follow the target and change smoothly.
   std::vector<double> cumulative(segments + 1, 0.0);
