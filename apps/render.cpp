@@ -12,6 +12,7 @@
 #include <cdp/io/atomic_write.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/io/mesh_io.h>
+#include <cdp/raytrace/phong_normal.h>
 
 #include <nlohmann/json.hpp>
 
@@ -76,7 +77,8 @@ int main(int argc, char** argv) {
     app.add_option("--range", range, "the colour map's range (default: 2nd to 98th percentile)")
         ->type_name("LO,HI")
         ->check(cdp::app::numbers(2, "LO,HI"));
-    app.add_option("--field", field_path, "the field, for mac and shape_index of meshes without them and for --directions")
+    app.add_option("--field", field_path, "the field, for mac and shape_index of meshes without them, for --directions and for each side's "
+                   "normal at vertices on creases")
         ->type_name("FIELD.json")
         ->check(cdp::app::path_name());
     app.add_flag("--directions", options.directions, "draw the principal directions (needs --field)");
@@ -120,6 +122,12 @@ int main(int argc, char** argv) {
       }
     }
     options.field = field.get();
+    // With the field, a vertex on a crease of a min/max/abs field is shaded with each side's
+    // normal rather than their blend (the file's vertex normals cannot hold two).
+    if (field) {
+      if (mesh.normals.size() != mesh.positions.size()) mesh.normals = cdp::area_weighted_normals(mesh);
+      mesh.corner_normals = cdp::field_corner_normals(*field, mesh, mesh.normals);
+    }
     const cdp::RenderResult result = cdp::render_mesh(mesh, options);
     // A picture of the background alone is a camera pointed away from the mesh, not a picture
     // of it: written with exit 0 it would pass for one.
