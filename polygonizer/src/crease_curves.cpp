@@ -15,10 +15,6 @@ namespace {
 
 using Branch = std::vector<std::uint8_t>;
 
-// Gradients of one piece seen at two points are "the same piece" when their directions agree to
-// this (cosine): pieces at a crease differ by the crease's dihedral angle, which this project's
-// shapes keep well above the 2.6 degrees it allows.
-constexpr double kSamePieceCosine = 0.999;
 // A point on two pieces to within the Newton tolerance tol lies within tol / sin(angle / 2) of
 // where their branch switches (angle: the crease's dihedral angle); this many tolerances cover
 // angles down to about 6 degrees and are still far below any step.

@@ -75,13 +75,14 @@ std::vector<std::array<Vec3, 3>> field_corner_normals(const Field& field, const 
       const Vec3 q = mesh.positions[v] + kTowardCentroid * (centroid - mesh.positions[v]);
       Vec3 g;
       field.value_gradient(q, g);
+      g.normalize();
       // The piece at the vertex whose gradient points as the field's does there.
       double best = -2;
       for (const FieldPiece& piece : pieces[v]) {
         const double len = piece.gradient.norm();
         if (!(len > 0) || !std::isfinite(len)) continue;
         const Vec3 n = piece.gradient / len;
-        const double agree = n.dot(g.normalized());
+        const double agree = n.dot(g);
         if (agree > best) best = agree, out[t][k] = n;
       }
     }

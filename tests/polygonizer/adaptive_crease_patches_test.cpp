@@ -51,17 +51,6 @@ std::vector<std::pair<int, int>> sharp_edges(const Mesh& mesh) {
   return out;
 }
 
-double smallest_angle_degrees(const Mesh& mesh) {
-  double best = 180;
-  for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 u = mesh.positions[t[(k + 1) % 3]] - mesh.positions[t[k]];
-      const Vec3 v = mesh.positions[t[(k + 2) % 3]] - mesh.positions[t[k]];
-      best = std::min(best, std::atan2(u.cross(v).norm(), u.dot(v)) * 180 / std::numbers::pi);
-    }
-  return best;
-}
-
 void expect_valid(const PolygonizeResult& r, int genus) {
   const MeshTopology t = analyze_topology(r.mesh);
   EXPECT_TRUE(t.watertight());
@@ -98,7 +87,7 @@ TEST(AdaptiveCreases, CubeEdgesLieOnTheCreasesAndCoverThem) {
       length += (pa - pb).norm();
     }
     EXPECT_NEAR(length, 24, 1e-8) << "factor " << factor;
-    EXPECT_GE(smallest_angle_degrees(r.mesh), 20) << "factor " << factor;
+    EXPECT_GE(test::shape_stats(r.mesh).min_angle_degrees, 20) << "factor " << factor;
   }
 }
 
@@ -142,7 +131,7 @@ TEST(AdaptiveCreases, CappedCylinderRimsAreMeshEdges) {
     }
     EXPECT_LE(length, 4 * std::numbers::pi);
     EXPECT_GE(length, 0.95 * 4 * std::numbers::pi) << "factor " << factor;
-    EXPECT_GE(smallest_angle_degrees(r.mesh), 20) << "factor " << factor;
+    EXPECT_GE(test::shape_stats(r.mesh).min_angle_degrees, 20) << "factor " << factor;
   }
 }
 

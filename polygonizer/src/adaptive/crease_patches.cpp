@@ -17,9 +17,6 @@ namespace {
 
 using Branch = std::vector<std::uint8_t>;
 
-// Pieces whose unit gradients at one point agree to this cosine are the same piece (as in
-// crease_curves.cpp: creases this project meshes have dihedral angles far above 2.6 degrees).
-constexpr double kSamePieceCosine = 0.999;
 // A curve end is the corner it names when within this share of the diagonal (trace_creases
 // merges corners found from several curves within its min_spacing, 0.0005 of the diagonal).
 constexpr double kCornerMatch = 5e-4;
@@ -29,10 +26,6 @@ constexpr double kSideProbe = 0.05;
 // Fewest edges of a crease: two for a curve between corners (so that two curves joining the
 // same two corners bound a patch of at least four vertices), three for a loop.
 constexpr std::size_t kMinOpenEdges = 2, kMinLoopEdges = 3;
-
-std::string format_point(const Vec3& p) {
-  return "(" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " + std::to_string(p.z()) + ")";
-}
 
 // A piece as a field of its own: the smooth function with the piece's branches fixed. Its zero
 // set continues past the crease (where the CSG field takes another piece), so the fronts of its
@@ -111,12 +104,15 @@ std::vector<std::vector<double>> crease_feature_size(const CreaseTracingResult& 
     std::size_t curve, index;
   };
   std::vector<Where> where;
+  // Arc length at each point, and each curve's length (a loop's with its closing segment).
   std::vector<std::vector<double>> arc(creases.curves.size()), out(creases.curves.size());
+  std::vector<double> length(creases.curves.size());
   SpatialHash hash(reach);
   for (std::size_t c = 0; c < creases.curves.size(); ++c) {
     const std::vector<Vec3>& P = creases.curves[c].points;
     arc[c].assign(P.size(), 0.0);
     for (std::size_t i = 1; i < P.size(); ++i) arc[c][i] = arc[c][i - 1] + (P[i] - P[i - 1]).norm();
+    length[c] = arc[c].back() + (creases.curves[c].closed ? (P.back() - P.front()).norm() : 0.0);
     out[c].assign(P.size(), std::numeric_limits<double>::infinity());
     for (std::size_t i = 0; i < P.size(); ++i) {
       hash.insert(static_cast<int>(where.size()), P[i]);
@@ -127,13 +123,10 @@ std::vector<std::vector<double>> crease_feature_size(const CreaseTracingResult& 
   // loop), or through a corner the two curves share; infinity otherwise.
   const auto along = [&](std::size_t c, std::size_t i, std::size_t d, std::size_t j) {
     const auto& ac = arc[c];
-    const double length = ac.back() + (creases.curves[c].closed
-                                           ? (creases.curves[c].points.back() - creases.curves[c].points.front()).norm()
-                                           : 0.0);
     double best = std::numeric_limits<double>::infinity();
     if (c == d) {
       best = std::abs(ac[i] - ac[j]);
-      if (creases.curves[c].closed) best = std::min(best, length - best);
+      if (creases.curves[c].closed) best = std::min(best, length[c] - best);
     }
     const double to_start_c = ac[i], to_end_c = ac.back() - ac[i];
     const double to_start_d = arc[d][j], to_end_d = arc[d].back() - arc[d][j];
@@ -366,13 +359,15 @@ bool same_function(const Field& field, const Branch& a, const Branch& b) {
   return true;
 }
 
+// The patch tests' margin, as a share of an edge's length or a placement's step (see below).
+constexpr double kOutsidePatch = 0.1;
+
 // Whether the straight edge a-b (two crease vertices of the piece `branch`) runs over the
 // piece's patches: its midpoint, moved onto the piece, is where the CSG field takes the piece.
 // Elsewhere the field takes another piece, whose value there is about the distance to its zero
 // set; a share kOutsidePatch of the edge's length tells that from the tolerance of points on
 // the crease (a chord of a curved crease leaves the patch by its sagitta only).
 bool inside_patch(const Field& field, const Branch& branch, const Vec3& a, const Vec3& b) {
-  constexpr double kOutsidePatch = 0.1;
   Vec3 m = 0.5 * (a + b);
   FieldPiece q;
   for (int it = 0; it < 3; ++it) {
@@ -389,7 +384,6 @@ bool inside_patch(const Field& field, const Branch& branch, const Vec3& a, const
 // The boundary polygon's chords stray from the crease by up to `sagitta`, into the neighbouring
 // patch where the crease bends away from this one, and points next to them may too.
 bool in_patch(const Field& field, const Branch& branch, const Vec3& x, double d, double sagitta) {
-  constexpr double kOutsidePatch = 0.1;
   const FieldPiece q = field.piece(x, branch);
   return std::abs(field.value(x) - q.value) <= (kOutsidePatch * d + 2 * sagitta) * q.gradient.norm();
 }
@@ -508,14 +502,8 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
       throw CreaseLayoutError("adaptive: a crease vertex no patch reached near " + format_point(mesh.positions[v]));
     mesh.normals[v].normalize();
   }
-  for (const LaidCurve& c : curves)
-    for (std::size_t k = 0; k + 1 < c.vertices.size() + (c.closed ? 1 : 0); ++k)
-      out.crease_edges.push_back({c.vertices[k], c.vertices[(k + 1) % c.vertices.size()]});
   out.crease_vertices = nc;
-  out.curves = curves.size();
-  out.corners = creases.corners.size();
   out.pieces = groups.size();
-  out.cycles = cycles.size();
   return out;
 }
 

@@ -38,9 +38,7 @@ struct CreaseMesh {
   Mesh mesh;  // closed where every patch closed; its first `crease_vertices` vertices lie on creases
   // Per vertex, as the tracker keeps them (Tracker::vertex_edge_length, vertex_mac, vertex_shape_index).
   std::vector<double> target, mac, shape_index;
-  std::size_t crease_vertices = 0, curves = 0, corners = 0, pieces = 0, cycles = 0;
-  // Crease edges: consecutive vertices along a crease, as vertex pairs.
-  std::vector<std::array<int, 2>> crease_edges;
+  std::size_t crease_vertices = 0, pieces = 0;
   std::size_t steps = 0, splits = 0, merges = 0;
   // Bridges, closures and placements the patch tests refused (Tracker::patch_refusals).
   std::size_t patch_refusals = 0;

@@ -25,11 +25,6 @@ constexpr double kShortLanding = 0.75;
 constexpr int kWalkLegs = 4;
 // A new point this close to a finished vertex (in units of the step) lies on finished mesh.
 constexpr double kOverMesh = 0.3;
-
-// Points in the tracker's error messages: "(x, y, z)", six decimals.
-std::string format_point(const Vec3& p) {
-  return "(" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " + std::to_string(p.z()) + ")";
-}
 }  // namespace
 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
@@ -376,10 +371,10 @@ std::vector<std::vector<int>> Tracker::mesh_from_loops(std::span<const std::vect
     const std::size_t first = nodes.size();
     for (const Placed& p : loop) {
       v.push_back(add_vertex(p));
-      loop_vertex_.resize(mesh_.positions.size(), 0);
-      loop_vertex_[static_cast<std::size_t>(v.back())] = 1;
       nodes.push_back(insert_node(v.back(), f));
     }
+    loop_vertex_.resize(mesh_.positions.size(), 0);
+    for (const int w : v) loop_vertex_[static_cast<std::size_t>(w)] = 1;
     for (std::size_t k = first; k < nodes.size(); ++k) link(nodes[k], nodes[k + 1 < nodes.size() ? k + 1 : first]);
     // A loop vertex asks for no longer edges than the loop's own next to it: the loop was spaced
     // for both sides of a crease, and the fronts grow from it at the grading's pace (a flat cap

@@ -22,6 +22,7 @@
 #include <functional>
 #include <optional>
 #include <queue>
+#include <string>
 #include <span>
 #include <tuple>
 #include <utility>
@@ -96,6 +97,11 @@ inline constexpr double kMaxTurnCosine = 0.2588;
 // point's target (with edges of about the target, 1.4 times an edge's length an edge, about the
 // grading's kGrowth).
 inline constexpr double kLookAheadGradation = 0.4;
+
+// Points in the tracker's error messages (and the crease layout's): "(x, y, z)", six decimals.
+inline std::string format_point(const Vec3& p) {
+  return "(" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " + std::to_string(p.z()) + ")";
+}
 
 class Tracker {
  public:
