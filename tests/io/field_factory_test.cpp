@@ -68,7 +68,7 @@ TEST(FieldFactory, UnknownAndMisspelledKeysAreNamed) {
 
 TEST(FieldFactory, WrongTypesAndValuesAreNamed) {
   const std::string unknown = error_of(R"({"type": "spher", "radius": 1})");
-  EXPECT_EQ(unknown.rfind("<test>: type: unknown model type \"spher\" (known: blobs, double_torus, ", 0), 0u)
+  EXPECT_EQ(unknown.rfind("<test>: type: unknown model type \"spher\" (known: blobs, capped_cylinder, double_torus, ", 0), 0u)
       << unknown;
   EXPECT_NE(unknown.find(", sphere, "), std::string::npos) << unknown;
   EXPECT_EQ(error_of(R"({"radius": 1})"), "<test>: type: missing required key");

@@ -114,13 +114,17 @@ TEST(AdaptiveCreases, IgnoringCreasesMeshesAsBefore) {
 TEST(AdaptiveCreases, CappedCylinderRimsAreMeshEdges) {
   // max(sqrt(x^2+y^2)-1, |z|-1): two circular rims of radius 1 at z = +-1. Sharp edges are
   // chords of the rims (both ends on a rim to the Newton tolerance), and their total length is
-  // the two circles' perimeter up to the chords' shortfall.
-  const auto field = test::field_from_json(expression("max(sqrt(x^2+y^2)-1, abs(z)-1)", -1.5, 1.5));
+  // the two circles' perimeter up to the chords' shortfall. The same shape compiled (a C++
+  // functor over jets, models/autodiff_field.h) reports the same pieces and is meshed alike.
+  for (const std::string& json : {expression("max(sqrt(x^2+y^2)-1, abs(z)-1)", -1.5, 1.5),
+                                  std::string(R"({"type": "capped_cylinder"})")})
   for (const double factor : {1.0, 2.0, 3.0, 5.0, 10.0}) {
+    const auto field = test::field_from_json(json);
     AdaptiveOptions o;
     o.factor = factor;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
     expect_valid(r, 0);
+    EXPECT_EQ(r.stats.extra.at("creases.curves").get<std::size_t>(), 2u) << json;
     double length = 0;
     for (const auto& [a, b] : sharp_edges(r.mesh)) {
       for (const Vec3& p : {r.mesh.positions[a], r.mesh.positions[b]}) {

@@ -7,6 +7,7 @@
 #include <cdp/core/crease_curves.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/models/analytic.h>
+#include <cdp/core/models/compiled.h>
 #include <cdp/core/models/expression.h>
 
 #include <cmath>
@@ -275,6 +276,48 @@ TEST(CreaseCurves, TheGyroidAndBarthBallsRimsAreAllFoundOnce) {
 TEST(CreaseCurves, SmoothFieldsHaveNone) {
   EXPECT_TRUE(trace_creases(Sphere(Vec3::Zero(), 1)).curves.empty());
   EXPECT_TRUE(trace_creases(expression("x^2+y^2+z^2-1")).curves.empty());
+}
+
+}  // namespace
+}  // namespace cdp
+
+namespace cdp {
+namespace {
+
+// A compiled model (autodiff_field.h) written with min, max and abs has the same pieces as the
+// expression of the same formula: its jets record and force the branches as the interpreter does.
+TEST(CompiledPieces, ACompiledCappedCylinderHasTheExpressionsPieces) {
+  const auto compiled = compiled_models().at("capped_cylinder")();
+  const Expression e = expression("max(sqrt(x^2+y^2)-1, abs(z)-1)", 1.5);
+  EXPECT_TRUE(compiled->has_pieces());
+  EXPECT_FALSE(compiled_models().at("tanglecube")()->has_pieces());
+  const Vec3 points[] = {{0.2, 0.1, 1.0}, {0.99, 0.05, 0.5}, {0.6, 0.8, 0.98}, {0.7071, -0.7071, -1.0}, {0.1, 0.2, 0}};
+  std::size_t creased = 0;
+  for (const Vec3& p : points) {
+    const auto a = compiled->pieces(p, 0.05), b = e.pieces(p, 0.05);
+    ASSERT_EQ(a.size(), b.size()) << p.transpose();
+    creased += a.size() > 1;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i].branch, b[i].branch);
+      EXPECT_NEAR(a[i].value, b[i].value, 1e-14);
+      EXPECT_LE((a[i].gradient - b[i].gradient).norm(), 1e-13);
+      EXPECT_LE((a[i].hessian - b[i].hessian).norm(), 1e-12);
+      // The piece evaluated elsewhere with its branches fixed.
+      const Vec3 far(0.1, -0.4, 0.3);
+      const FieldPiece fa = compiled->piece(far, a[i].branch), fb = e.piece(far, b[i].branch);
+      EXPECT_NEAR(fa.value, fb.value, 1e-14);
+      EXPECT_LE((fa.gradient - fb.gradient).norm(), 1e-13);
+    }
+  }
+  EXPECT_EQ(creased, 2u);  // near the rims: the side and a cap
+  EXPECT_THROW(compiled->piece(Vec3::Zero(), {0}), InvalidInputError);
+  // Traced from its pieces: the two rims.
+  const CreaseTracingResult r = trace_creases(*compiled);
+  EXPECT_EQ(r.curves.size(), 2u);
+  for (const CreaseCurve& c : r.curves) {
+    EXPECT_TRUE(c.closed);
+    for (const Vec3& q : c.points) EXPECT_NEAR(std::hypot(q.x(), q.y()), 1.0, 1e-9);
+  }
 }
 
 }  // namespace

@@ -83,6 +83,7 @@ INSTANTIATE_TEST_SUITE_P(
                       "params": {"a": 2.5},
                       "bounds": [[-1.5, -1.5, -1.5], [1.5, 1.5, 1.5]]})J"},
         ModelCase{"compiled_double_torus", R"J({"type": "double_torus"})J"},
+        ModelCase{"compiled_capped_cylinder", R"J({"type": "capped_cylinder"})J"},
         ModelCase{"compiled_tanglecube", R"J({"type": "tanglecube"})J"}),
     [](const auto& info) { return info.param.name; });
 

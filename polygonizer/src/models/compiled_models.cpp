@@ -6,6 +6,9 @@
 
 #include <cdp/core/models/compiled.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace cdp {
 
 namespace {
@@ -29,6 +32,16 @@ struct Tanglecube {
   }
 };
 
+// A cylinder with flat caps, max(sqrt(x^2 + y^2) - 1, |z| - 1): a CSG shape, whose two circular
+// creases are traced from its pieces (min, max and abs are its branch points) and meshed along.
+struct CappedCylinder {
+  template <class T>
+  T operator()(const T& x, const T& y, const T& z) const {
+    using std::abs, std::max, std::sqrt;
+    return max(sqrt(x * x + y * y) - 1.0, abs(z) - 1.0);
+  }
+};
+
 template <class Fn>
 CompiledModelMaker compiled(const std::string& name, const Box& bounds) {
   return [name, bounds]() -> std::unique_ptr<Field> {
@@ -40,6 +53,7 @@ CompiledModelMaker compiled(const std::string& name, const Box& bounds) {
 
 std::map<std::string, CompiledModelMaker> compiled_models() {
   return {
+      {"capped_cylinder", compiled<CappedCylinder>("capped_cylinder", Box{{-1.5, -1.5, -1.5}, {1.5, 1.5, 1.5}})},
       {"double_torus", compiled<DoubleTorus>("double_torus", Box{{-0.3, -0.7, -0.3}, {2.3, 0.7, 0.3}})},
       {"tanglecube", compiled<Tanglecube>("tanglecube", Box{{-3, -3, -3}, {3, 3, 3}})},
   };

@@ -353,15 +353,6 @@ double Expression::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& he
   return r.v;
 }
 
-namespace {
-
-// At most this many branch points are split into both branches at one point, the nearest
-// switches first: 2^6 = 64 pieces, more than any corner of a CSG shape has (a cube's has 3),
-// and a bound on the work for formulas with many nearly tied min and max.
-constexpr int kMaxSplitBranchPoints = 6;
-
-}  // namespace
-
 bool Expression::has_pieces() const { return program_->branch_points > 0; }
 
 std::vector<FieldPiece> Expression::eval_pieces(const Vec3& p, double radius) const {
@@ -372,29 +363,8 @@ std::vector<FieldPiece> Expression::eval_pieces(const Vec3& p, double radius) co
   program_->run<Jet1, detail::Branching::Record>(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1),
                                                  Jet1::variable(p.z(), 2),
                                                  detail::BranchLog{nullptr, taken.data(), distance.data()});
-  std::vector<int> split;
-  for (int k = 0; k < n; ++k)
-    if (distance[static_cast<std::size_t>(k)] <= radius) split.push_back(k);
-  // The nearest switches (ties: the earlier branch point), then back in program order.
-  std::stable_sort(split.begin(), split.end(), [&](int a, int b) {
-    return distance[static_cast<std::size_t>(a)] < distance[static_cast<std::size_t>(b)];
-  });
-  if (split.size() > static_cast<std::size_t>(kMaxSplitBranchPoints)) split.resize(kMaxSplitBranchPoints);
-  std::sort(split.begin(), split.end());
-  std::vector<FieldPiece> out;
-  for (std::uint32_t mask = 0; mask < (1u << split.size()); ++mask) {
-    std::vector<std::uint8_t> branch = taken;
-    for (std::size_t j = 0; j < split.size(); ++j)
-      if (mask >> j & 1u) branch[static_cast<std::size_t>(split[j])] ^= 1u;
-    FieldPiece piece = eval_piece(p, branch);
-    // Different branches often give the same function (a choice inside an argument that is not
-    // taken): the same numbers at p, bit for bit, are one piece.
-    const bool seen = std::any_of(out.begin(), out.end(), [&](const FieldPiece& q) {
-      return q.value == piece.value && q.gradient == piece.gradient && q.hessian == piece.hessian;
-    });
-    if (!seen) out.push_back(std::move(piece));
-  }
-  return out;
+  return pieces_near_branches(taken, distance, radius,
+                              [&](const std::vector<std::uint8_t>& branch) { return eval_piece(p, branch); });
 }
 
 FieldPiece Expression::eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {

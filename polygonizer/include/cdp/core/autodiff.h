@@ -10,7 +10,10 @@
 #include <cdp/core/field.h>
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <type_traits>
+#include <vector>
 
 namespace cdp {
 
@@ -139,16 +142,64 @@ inline Jet<O> tan(const Jet<O>& u) {
   const double d = 1.0 + t * t;
   return chain(u, t, d, 2.0 * t * d);
 }
+
+namespace detail {
+
+// The branch points of a model written over jets (AutodiffField): while a BranchTrace is
+// installed on this thread (BranchTraceScope), every min, max and abs of jets is a branch
+// point, numbered in the order the calls happen, and either records the branch it takes and
+// how far its switch lies (the pieces near a point, Field::pieces) or takes a given branch
+// (one piece evaluated elsewhere, Field::piece). Branch 0 is the first argument of min and max
+// and +u for abs, 1 the second argument and -u, as in expressions. Without a trace (every
+// ordinary evaluation) they only cost the test of a null pointer.
+struct BranchTrace {
+  const std::vector<std::uint8_t>* forced = nullptr;  // take these branches; record when null
+  std::vector<std::uint8_t> taken;                    // recorded: the branch taken
+  std::vector<double> distance;                       // recorded: |a - b| / |grad (a - b)|
+  std::size_t calls = 0;                              // branch points met
+};
+
+inline thread_local BranchTrace* active_branch_trace = nullptr;
+
+class BranchTraceScope {
+ public:
+  explicit BranchTraceScope(BranchTrace& trace) : previous_(active_branch_trace) { active_branch_trace = &trace; }
+  ~BranchTraceScope() { active_branch_trace = previous_; }
+  BranchTraceScope(const BranchTraceScope&) = delete;
+  BranchTraceScope& operator=(const BranchTraceScope&) = delete;
+
+ private:
+  BranchTrace* previous_;
+};
+
+// Whether a branch point between a and b takes branch 1, given that the values choose
+// `natural` (a branch point past the forced ones takes its natural branch and is counted, so
+// that the caller sees the mismatch).
+template <int O>
+bool take_branch(BranchTrace& t, bool natural, const Jet<O>& a, const Jet<O>& b) {
+  const std::size_t k = t.calls++;
+  if (t.forced) return k < t.forced->size() ? (*t.forced)[k] != 0 : natural;
+  t.taken.push_back(natural ? 1 : 0);
+  const double gap = std::abs(a.v - b.v), slope = (a.g - b.g).norm();
+  t.distance.push_back(gap == 0.0 ? 0.0 : slope > 0.0 ? gap / slope : std::numeric_limits<double>::infinity());
+  return natural;
+}
+
+}  // namespace detail
+
 template <int O>
 inline Jet<O> abs(const Jet<O>& u) {
+  if (detail::BranchTrace* t = detail::active_branch_trace) return detail::take_branch(*t, u.v < 0, u, -u) ? -u : u;
   return u.v < 0 ? -u : u;
 }
 template <int O>
 inline Jet<O> min(const Jet<O>& a, const Jet<O>& b) {
+  if (detail::BranchTrace* t = detail::active_branch_trace) return detail::take_branch(*t, b.v < a.v, a, b) ? b : a;
   return b.v < a.v ? b : a;
 }
 template <int O>
 inline Jet<O> max(const Jet<O>& a, const Jet<O>& b) {
+  if (detail::BranchTrace* t = detail::active_branch_trace) return detail::take_branch(*t, a.v < b.v, a, b) ? b : a;
   return a.v < b.v ? b : a;
 }
 // u^p for a constant exponent: exact for negative u when p is an integer.

@@ -11,6 +11,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -190,13 +191,28 @@ class Field {
     for (std::size_t i = 0; i < n; ++i) values[i] = eval_gradient_hessian(points[i], gradients[i], hessians[i]);
   }
 
-  // Models built from min, max and abs override both (models/expression.h does).
+  // Models built from min, max and abs override both (models/expression.h and
+  // models/autodiff_field.h do, each with pieces_near_branches below).
   virtual std::vector<FieldPiece> eval_pieces(const Vec3& p, double radius) const {
     (void)p;
     (void)radius;
     return {};
   }
   virtual FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const;
+
+  // The pieces near p from one evaluation's record of its branch points: `taken` the branch each
+  // took (0: first argument of min and max, +u for abs; 1: second argument, -u) and `distance`
+  // how far its switch lies, to first order (|a - b| / |grad (a - b)|, |u| / |grad u| for abs).
+  // Every combination of the switches within `radius` (the nearest kMaxSplitBranchPoints) is
+  // evaluated with `piece`; equal pieces (the same numbers bit for bit) are kept once, the
+  // branches as taken first.
+  static std::vector<FieldPiece> pieces_near_branches(
+      const std::vector<std::uint8_t>& taken, const std::vector<double>& distance, double radius,
+      const std::function<FieldPiece(const std::vector<std::uint8_t>&)>& piece);
+  // At most this many branch points are split into both branches at one point, the nearest
+  // switches first: 2^6 = 64 pieces, more than any corner of a CSG shape has (a cube's has 3),
+  // and a bound on the work for formulas with many nearly tied min and max.
+  static constexpr int kMaxSplitBranchPoints = 6;
 
   Box bounds_;
 

@@ -4,11 +4,19 @@
 // Derived classes provide  template <class T> T evaluate(const T& x, const T& y, const T& z) const
 // and call it with T = double, Jet1 and Jet2. Inside, write `using std::sqrt;` (and so on) so
 // that plain numbers find the standard functions and jets find the ones in autodiff.h.
+//
+// CSG: a model built with min, max and abs (written unqualified, after `using std::max;` and so
+// on) reports its smooth pieces (Field::pieces, Field::piece), so that its creases are traced
+// and meshed along as an expression's are. Its calls of min, max and abs are its branch points,
+// numbered in the order they happen; that order and their number must not depend on the point
+// (no `if` on a value around them): a piece evaluated where they differ is an InvalidInputError.
 #pragma once
 
 #include <cdp/core/autodiff.h>
+#include <cdp/core/errors.h>
 #include <cdp/core/field.h>
 
+#include <atomic>
 #include <string>
 #include <utility>
 
@@ -20,6 +28,17 @@ template <class Derived>
 class AutodiffField : public Field {
  public:
   bool thread_safe() const override { return true; }
+  // Whether evaluate calls min, max or abs (counted once, at the centre of the box).
+  bool has_pieces() const override {
+    int n = branch_points_.load(std::memory_order_relaxed);
+    if (n < 0) {
+      detail::BranchTrace trace;
+      record(bounds().center(), trace);
+      n = static_cast<int>(trace.calls);
+      branch_points_.store(n, std::memory_order_relaxed);
+    }
+    return n > 0;
+  }
 
  protected:
   double eval_value(const Vec3& p) const override { return self().evaluate(p.x(), p.y(), p.z()); }
@@ -34,9 +53,40 @@ class AutodiffField : public Field {
     hessian = r.h;
     return r.v;
   }
+  std::vector<FieldPiece> eval_pieces(const Vec3& p, double radius) const override {
+    detail::BranchTrace trace;
+    record(p, trace);
+    if (trace.calls == 0) return {};
+    return pieces_near_branches(trace.taken, trace.distance, radius,
+                                [&](const std::vector<std::uint8_t>& branch) { return eval_piece(p, branch); });
+  }
+  FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override {
+    detail::BranchTrace trace;
+    trace.forced = &branch;
+    Jet2 r;
+    {
+      detail::BranchTraceScope scope(trace);
+      r = self().evaluate(Jet2::variable(p.x(), 0), Jet2::variable(p.y(), 1), Jet2::variable(p.z(), 2));
+    }
+    if (trace.calls != branch.size())
+      throw InvalidInputError(this->type_name() + ": a piece's branch has " + std::to_string(branch.size()) +
+                              " choices, the model made " + std::to_string(trace.calls) +
+                              " calls of min, max and abs at the point (their number must not depend on the point)");
+    FieldPiece piece;
+    piece.branch = branch;
+    piece.value = r.v;
+    piece.gradient = r.g;
+    piece.hessian = r.h;
+    return piece;
+  }
 
  private:
   const Derived& self() const { return static_cast<const Derived&>(*this); }
+  void record(const Vec3& p, detail::BranchTrace& trace) const {
+    detail::BranchTraceScope scope(trace);
+    self().evaluate(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2));
+  }
+  mutable std::atomic<int> branch_points_{-1};  // unknown until has_pieces is first asked
 };
 
 // A compiled model from a functor with a templated call operator, registered by name with
