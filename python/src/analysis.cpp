@@ -151,13 +151,48 @@ py::dict project(const Field& field, py::handle points_in, std::optional<long lo
   return d;
 }
 
+// Each triangle corner's normal (F, 3, 3): the field's normalized gradient at the vertex, or at a
+// vertex on a crease of a CSG field the gradient of the piece the triangle lies on
+// (field_corner_normals), so that a mesh whose edges follow the creases is shaded sharp there.
+py::array_t<double> corner_normals(const Field& field, py::handle vertices, py::handle faces) {
+  const Mesh mesh = mesh_from(vertices, faces, py::none());
+  std::vector<Vec3> normals;
+  std::vector<std::array<Vec3, 3>> corners;
+  {
+    py::gil_scoped_release release;
+    normals = field_normals(field, mesh);
+    corners = field_corner_normals(field, mesh, normals);
+  }
+  py::array_t<double> out({static_cast<py::ssize_t>(mesh.triangles.size()), py::ssize_t{3}, py::ssize_t{3}});
+  auto o = out.mutable_unchecked<3>();
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& n = corners.empty() ? normals[static_cast<std::size_t>(mesh.triangles[t][k])] : corners[t][k];
+      for (int c = 0; c < 3; ++c) o(t, k, c) = n[c];
+    }
+  return out;
+}
+
 py::dict evaluate(const Field& field, py::handle vertices, py::handle faces, py::handle normals, long long views,
                   long long resolution, const std::string& projection, long long samples) {
-  Mesh mesh = mesh_from(vertices, faces, normals);
+  // normals: an (N, 3) array, "field" (the field's, each side's at creases, as `evaluate
+  // --normals field`), "mesh" or None (area-weighted).
+  std::string choice;
+  if (py::isinstance<py::str>(normals)) {
+    choice = normals.cast<std::string>();
+    if (choice != "field" && choice != "mesh")
+      throw InvalidInputError("normals: expected an (N, 3) array, \"field\", \"mesh\" or None, not \"" + choice + "\"");
+  }
+  Mesh mesh = mesh_from(vertices, faces, choice.empty() ? normals : py::none());
   std::string normals_source = "given";
-  if (mesh.normals.empty()) {
+  if (choice == "field") {
+    mesh.normals = field_normals(field, mesh);
+    mesh.corner_normals = field_corner_normals(field, mesh, mesh.normals);
+    normals_source = mesh.corner_normals.empty() ? "field (normalized gradient at the vertices)"
+                                                 : "field (normalized gradient at the vertices, each side's at creases)";
+  } else if (mesh.normals.empty()) {
     mesh.normals = area_weighted_normals(mesh);
-    normals_source = "area_weighted (no normals given)";
+    normals_source = choice == "mesh" ? "mesh (area-weighted face normals)" : "area_weighted (no normals given)";
   }
   // The program's ranges (build/bin/evaluate --views, --rays, --samples).
   const auto range = [](long long v, const char* name, long long lo, long long hi) {
@@ -233,7 +268,7 @@ void bind_analysis(py::module_& m) {
         "tolerance 1e-10, max_step 0.1 and max_travel 0.5 of the box diagonal.");
   m.def("trace_creases", &trace_creases_py, py::arg("field"), py::kw_only(), py::arg("resolution") = py::none(),
         py::arg("max_spacing") = py::none(), py::arg("min_spacing") = py::none(), py::arg("max_turn") = py::none(),
-        "The creases of a CSG field (an expression with min, max or abs) as polylines on both pieces: a dict with "
+        "The creases of a CSG field (an expression or a compiled model with min, max or abs) as polylines on both pieces: a dict with "
         "curves (a list of dicts: points (N, 3), closed, starts_at_corner, ends_at_corner), corners (K, 3) and stops "
         "(curve ends that are not corners). Found from the crossed edges of a grid of `resolution` cells (32); steps "
         "of at most max_spacing (0.02 of the box diagonal), shortened down to min_spacing (0.0005) so that the "
@@ -243,8 +278,14 @@ void bind_analysis(py::module_& m) {
         py::arg("normals") = py::none(), py::arg("views") = 8, py::arg("resolution") = 64,
         py::arg("projection") = "perspective", py::arg("samples") = 20000,
         "build/bin/evaluate on arrays: the metrics dict (schema cdp-metrics/1, raytrace/README.md) of a mesh against "
-        "the exact ray-cast surface of its field, without cache and without the \"files\" entry. Without normals the "
-        "mesh gets area-weighted vertex normals, as the program does for files without normals.");
+        "the exact ray-cast surface of its field, without cache and without the \"files\" entry. normals: an (N, 3) "
+        "array, \"field\" (the field's normalized gradient, and at vertices on a crease of a CSG field each side's "
+        "normal, as evaluate --normals field) or \"mesh\"/None (area-weighted vertex normals).");
+  m.def("corner_normals", &corner_normals, py::arg("field"), py::arg("vertices"), py::arg("faces"),
+        "The normal at each triangle corner, (F, 3, 3): the field's normalized gradient at the vertex, or, at a "
+        "vertex on a crease of a CSG field (min, max, abs), the normal of the piece the triangle lies on, so that a "
+        "mesh whose edges follow the creases (the adaptive method's) is shaded sharp there. For rendering and for "
+        "Phong errors.");
 }
 
 }  // namespace cdp::python
