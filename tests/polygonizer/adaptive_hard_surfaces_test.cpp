@@ -109,7 +109,7 @@ std::vector<HardSurface> hard_surfaces() {
       {"thin_torus", R"({"type": "torus", "major_radius": 1, "minor_radius": 0.01})", 1, 1, {1, 2, 3, 5}},
       {"tiny_blobs", blobs_json(7, 50, -4.5, 4.5, 0.1, 0.1, 0.5, R"("bounds": [[-5,-5,-5],[5,5,5]], )"), 50, 0,
        {1, 2, 3, 5}},
-      {"fifty_blobs", blobs_json(3, 50, -2, 2, 0.5, 1.0), -1, -1, {3, 5}},
+      {"fifty_blobs", blobs_json(3, 50, -2, 2, 0.5, 1.0), -1, -1, {1, 2, 3, 5}},
   };
   for (unsigned seed = 1; seed <= 20; ++seed)
     v.push_back({"random_blobs_" + std::to_string(seed), blobs_json(100 + seed, 2 + seed % 5, -1.6, 1.6, 0.7, 1.3),

@@ -259,8 +259,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     enter("meshing");
     remeshed = false;
     try {
-      mesh_surface(false);
+      mesh_surface(settings.anticipate);  // the careful run has the rollbacks on from the start
     } catch (const adaptive::StalledFrontError& stalled) {
+      if (settings.anticipate) throw;
       // A stalled front is where a front that ran over finished mesh ends, thousands of steps
       // later (the MPU models at some factors): the surface is meshed again from the start with
       // the rollbacks on, which undo such places where they begin. Surfaces that mesh without
@@ -344,7 +345,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     return check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
   };
   std::size_t components = 0;
-  try {
+  const auto attempt = [&] {
     try {
       mesh_everything();
       // The patches' topology before the repair works on it; intersections after (the repair
@@ -357,6 +358,32 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     } catch (const LimitExceededError& e) {
       if (!fall_back(e)) throw;
       components = repair_and_check();
+    }
+  };
+  // A run that fails (a stalled front, a mesh that fails the checks) is made once more with
+  // Settings::anticipate and the rollbacks on from the start: where a front with long edges met
+  // a neck narrower than them (the fifty blobs at factor 2 capped one off, and a second seed
+  // then meshed the whole blob again over the first mesh), the new points are placed closer.
+  // Only after a failure, so that every surface that meshed before comes out bit for bit as
+  // before; when the careful run fails too, the first error stands.
+  bool careful = false;
+  const auto retry_carefully = [&] {
+    if (options.variant != Variant::Improved) return false;
+    settings.anticipate = careful = true;
+    try {
+      attempt();
+      return true;
+    } catch (const std::exception&) {
+      return false;
+    }
+  };
+  try {
+    try {
+      attempt();
+    } catch (const NoSurfaceError&) {
+      if (!retry_carefully()) throw;
+    } catch (const LimitExceededError&) {
+      if (!retry_carefully()) throw;
     }
   } catch (const NoSurfaceError& e) {
     throw NoSurfaceError(why(e));
@@ -399,9 +426,11 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["steps"] = tracker->steps();
   st.extra["search_visits"] = tracker->search_visits();
   st.extra["deferrals"] = tracker->deferrals();
+  st.extra["anticipations"] = tracker->anticipations();
   st.extra["forced_closures"] = tracker->forced_closures();
   st.extra["rollbacks"] = tracker->rollbacks();
   st.extra["remeshed_with_rollbacks"] = remeshed;
+  st.extra["remeshed_carefully"] = careful;
   st.extra["crease_points"] = tracker->crease_points();
   st.extra["over_mesh_rejections"] = tracker->over_mesh();
   st.extra["min_angle_degrees"] = min_angle_degrees(mesh);

@@ -5,12 +5,16 @@
 #include "tracker.h"
 #include "triangle_count.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace cdp::adaptive {
 
 namespace {
 constexpr double kGrowth = 1.5;
+// See expand: a new point may ask for edges down to this share of the length it was placed at
+// before it is placed again closer (the grading's kGrowth the other way, with a margin).
+constexpr double kAnticipate = 0.5;
 // Closing an angle joins prev and next by an edge; when their normals are more than 100 degrees
 // apart the two lie around a bend tighter than the edges (a thin neck of the tanglecube at
 // factor 1 got a triangle whose corners' normals were 155 degrees apart, folded over its
@@ -66,8 +70,20 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     dirs[k - 1] = std::cos(t) * e0 + std::sin(t) * e1;
   }
   std::vector<Placed> placed;
-  for (double d = delta; d >= 0.24 * s_.sizing.min_edge && placed.size() < dirs.size(); d *= 0.5)
+  for (double d = delta; d >= 0.24 * s_.sizing.min_edge; d *= 0.5) {
     placed = place_points(n.vertex, dirs, d);
+    if (placed.size() < dirs.size()) continue;
+    // Settings::anticipate: a new point whose own target is below kAnticipate times the length
+    // it was placed at lies where the surface turns much faster than at the front (a neck
+    // ahead, a small blob): its edges would be too long for it, and an edge longer than a neck
+    // is wide jumps it. Placed again at half the length, down to min_edge.
+    if (!s_.anticipate || 0.5 * d < s_.sizing.min_edge) break;
+    const bool too_long = std::any_of(placed.begin(), placed.end(), [&](const Placed& x) {
+      return zone_capped(x.point, edge_length(s_.sizing, x.curvature.min_radius)) < kAnticipate * d;
+    });
+    if (!too_long) break;
+    ++anticipations_;
+  }
   if (placed.size() < static_cast<std::size_t>(count - 1)) return {false, -1};
 
   // A new point landing close to a front point the collision test did not see (beyond

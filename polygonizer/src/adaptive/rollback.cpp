@@ -308,6 +308,16 @@ bool Tracker::rollback(int f, int node, bool at_node) {
   if (place >= 0) ++rollback_places_[place].second;
   else rollback_places_.emplace_back(center, 1);
   ++rollbacks_;
+  // Settings::anticipate: the hole is meshed again with edges at most half as long as the stuck
+  // front's longest target (a quarter at the second rollback there, ...): where the fronts went
+  // wrong, the sizing asked for edges too long for how fast the surface turns there.
+  if (!s_.anticipate) return true;
+  const double finer = std::max(s_.sizing.min_edge, longest_target * std::ldexp(1.0, -(times + 1)));
+  const FinerZone zone{center, radius + longest_target, finer};
+  finer_zones_.push_back(zone);
+  vertex_hash_.for_each_near(zone.center, zone.radius, [&](int w) {
+    if (static_cast<std::size_t>(w) >= first_vertex_ && !dead_[w]) target_[w] = zone_capped(mesh_.positions[w], target_[w]);
+  });
   return true;
 }
 

@@ -61,7 +61,7 @@ int Tracker::add_vertex(const Placed& placed) {
   const int v = static_cast<int>(mesh_.positions.size());
   mesh_.positions.push_back(placed.point);
   mesh_.normals.push_back(c.normal);
-  target_.push_back(edge_length(s_.sizing, c.min_radius));
+  target_.push_back(zone_capped(placed.point, edge_length(s_.sizing, c.min_radius)));
   mac_.push_back(c.mac);
   shape_index_.push_back(c.shape_index);
   front_refs_.push_back(0);

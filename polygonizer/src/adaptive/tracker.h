@@ -45,6 +45,13 @@ struct Settings {
   // polygonize_adaptive turns it on only to mesh a surface again after a StalledFrontError, so
   // that every surface meshed without it comes out as before.
   bool rollback = false;
+  // Whether an expansion whose new point asks for edges far shorter than it was placed at
+  // places it again closer (expand_point.cpp), and rollbacks mesh their holes with shorter
+  // edges (rollback.cpp). polygonize_adaptive turns both on, with the rollbacks, only to mesh
+  // a surface again after a run that failed (a front that crossed a neck narrower than its
+  // edges: the fifty blobs at factors 1 and 2), so that every surface meshed without it comes
+  // out as before.
+  bool anticipate = false;
   // Whether an expansion's edge length also looks at the front points around it (within a few
   // edges, on any front): no longer than their targets plus kLookAheadGradation times their
   // distance. On for the fronts of crease patches, whose loops prescribe short edges that fronts
@@ -154,6 +161,8 @@ class Tracker {
   std::size_t splits() const { return splits_; }
   std::size_t merges() const { return merges_; }
   std::size_t deferrals() const { return deferrals_; }
+  // Placements made again at half the length because the new point asked for far shorter edges.
+  std::size_t anticipations() const { return anticipations_; }
   // Small stuck fronts closed ear by ear without the expansion's tests.
   std::size_t forced_closures() const { return forced_closures_; }
   // Points placed on a crease, with the mean normal of its two sides.
@@ -311,9 +320,21 @@ class Tracker {
   // where the current component's vertices and triangles begin.
   std::vector<char> dead_;
   std::vector<std::pair<Vec3, int>> rollback_places_;
+  // Balls where a rollback meshes again with shorter edges: (centre, radius, longest edge).
+  struct FinerZone {
+    Vec3 center;
+    double radius, edge;
+  };
+  std::vector<FinerZone> finer_zones_;
+  // The target edge length at p: `target`, capped by the finer zones p is in.
+  double zone_capped(const Vec3& p, double target) const {
+    for (const FinerZone& z : finer_zones_)
+      if ((p - z.center).squaredNorm() < z.radius * z.radius) target = std::min(target, z.edge);
+    return target;
+  }
   std::size_t rollbacks_ = 0, first_vertex_ = 0, first_triangle_ = 0;
   std::uint64_t window_visits_ = 0;  // search_visits() at the start of the current window
-  std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0, forced_closures_ = 0;
+  std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0, forced_closures_ = 0, anticipations_ = 0;
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;
   mutable double curvature_seconds_ = 0, hessian_seconds_ = 0;
   mutable std::size_t crease_points_ = 0, over_mesh_ = 0;
