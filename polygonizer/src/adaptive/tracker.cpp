@@ -62,6 +62,7 @@ int Tracker::add_vertex(const Placed& placed) {
   mesh_.positions.push_back(placed.point);
   mesh_.normals.push_back(c.normal);
   target_.push_back(zone_capped(placed.point, edge_length(s_.sizing, c.min_radius)));
+  if (c.min_radius < tightest_.first) tightest_ = {c.min_radius, placed.point};
   mac_.push_back(c.mac);
   shape_index_.push_back(c.shape_index);
   front_refs_.push_back(0);

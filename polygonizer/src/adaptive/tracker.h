@@ -20,6 +20,7 @@
 #include <cdp/core/newton_projection.h>
 
 #include <functional>
+#include <limits>
 #include <optional>
 #include <queue>
 #include <string>
@@ -161,6 +162,10 @@ class Tracker {
   std::size_t splits() const { return splits_; }
   std::size_t merges() const { return merges_; }
   std::size_t deferrals() const { return deferrals_; }
+  // The vertex where the surface bends most tightly (smallest radius of curvature) so far, and
+  // that radius (infinity before the first vertex): where it is below min_edge the sizing was
+  // clamped there, and an error names the place.
+  std::pair<double, Vec3> tightest_bend() const { return tightest_; }
   // Placements made again at half the length because the new point asked for far shorter edges.
   std::size_t anticipations() const { return anticipations_; }
   // Small stuck fronts closed ear by ear without the expansion's tests.
@@ -326,6 +331,7 @@ class Tracker {
     double radius, edge;
   };
   std::vector<FinerZone> finer_zones_;
+  std::pair<double, Vec3> tightest_{std::numeric_limits<double>::infinity(), Vec3::Zero()};
   // The target edge length at p: `target`, capped by the finer zones p is in.
   double zone_capped(const Vec3& p, double target) const {
     for (const FinerZone& z : finer_zones_)
