@@ -15,6 +15,8 @@
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_topology.h>
 
+#include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -253,6 +255,21 @@ TEST(AdaptiveResultCheck, AMeshThatIntersectsItselfIsAnErrorNotAResult) {
   o.check_self_intersections = false;
   const PolygonizeResult r = polygonize_adaptive(*f, o);
   EXPECT_GT(test::count_self_intersections(r.mesh), 0u);
+}
+
+}  // namespace
+}  // namespace cdp
+
+namespace cdp {
+namespace {
+
+// Not a test: writes each hard surface's field as NAME.json into $CDP_HARD_SURFACES_DIR, for
+// sweeps beyond the suite's factors (build/bin/test_polygonizer
+// --gtest_also_run_disabled_tests --gtest_filter='*WriteFields*').
+TEST(HardSurfaceFields, DISABLED_WriteFields) {
+  const char* dir = std::getenv("CDP_HARD_SURFACES_DIR");
+  if (!dir) GTEST_SKIP() << "set CDP_HARD_SURFACES_DIR";
+  for (const HardSurface& h : hard_surfaces()) std::ofstream(std::string(dir) + "/" + h.name + ".json") << h.json << "\n";
 }
 
 }  // namespace
