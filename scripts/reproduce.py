@@ -22,8 +22,6 @@ EXPERIMENTS = ["table1", "igea_vis4004", "horse_mpu", "tanglecube", "random_blob
 # experiments are the baseline that shows it. Their failures are listed at the end and in
 # results/sharp_features.md; a failure anywhere else still fails `make reproduce`.
 KNOWN_FAILURES = {
-    "creases_capped_cylinder": "meshing across the creases (runs labelled smooth) intersects itself at tolerance "
-                               "5e-4 (see results/sharp_features.md)",
     "creases_box_minus_ball": "meshing across the creases (runs labelled smooth) stalls at the holes' acute rims "
                               "(see results/sharp_features.md)",
 }

@@ -274,3 +274,30 @@ TEST(HardSurfaceFields, DISABLED_WriteFields) {
 
 }  // namespace
 }  // namespace cdp
+
+namespace cdp {
+namespace {
+
+// A tolerance far coarser than the curvature asks for chords longer than the radius: around the
+// needle's tips (radii 5, 0.05, 0.05) eps = 1e-2 gives edges of 0.035 on a tube 0.04 thick, and
+// the fronts crossed it (the mesh intersected itself in 1136 pairs). The careful run after that
+// failure turns the normal by at most a radian per edge and meshes it.
+TEST(AdaptiveCarefulRun, ACoarseToleranceOnTheNeedleMeshesOnTheSecondRun) {
+  const auto field = test::field_from_json(R"({"type": "ellipsoid", "radii": [5, 0.05, 0.05]})");
+  AdaptiveOptions o;
+  o.sizing = SizingMode::Tolerance;
+  o.tolerance = 1e-2;
+  const PolygonizeResult r = polygonize_adaptive(*field, o);
+  const MeshTopology t = analyze_topology(r.mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.genus, 0);
+  EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
+  EXPECT_TRUE(r.stats.extra.at("remeshed_carefully").get<bool>());
+  // A surface that meshes the first time never gets the careful run.
+  o.tolerance = 1e-3;
+  EXPECT_FALSE(polygonize_adaptive(*field, o).stats.extra.at("remeshed_carefully").get<bool>());
+}
+
+}  // namespace
+}  // namespace cdp

@@ -378,14 +378,18 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   // A run that fails (a stalled front, a mesh that fails the checks) is made once more with
   // Settings::anticipate and the rollbacks on from the start: where a front with long edges met
   // a neck narrower than them (the fifty blobs at factor 2 capped one off, and a second seed
-  // then meshed the whole blob again over the first mesh), the new points are placed closer.
+  // then meshed the whole blob again over the first mesh), the new points are placed closer,
+  // and no edge turns the normal by more than a radian (a coarse tolerance on the needle).
   // Only after a failure, so that every surface that meshed before comes out bit for bit as
   // before; when the careful run fails too, the first error stands.
+  // The careful run's edges turn the normal by at most one radian (Sizing::max_turn).
+  constexpr double kCarefulMaxTurn = 1;
   bool careful = false;
   const auto retry_carefully = [&] {
     note_tightest();
     if (options.variant != Variant::Improved) return false;
     settings.anticipate = careful = true;
+    settings.sizing.max_turn = kCarefulMaxTurn;
     try {
       attempt();
       return true;

@@ -15,6 +15,7 @@ double edge_length(const Sizing& s, double min_radius) {
   double l = s.max_edge;
   if (std::isfinite(min_radius) && min_radius > 0) {
     l = s.mode == SizingMode::Factor ? min_radius / s.factor : chord_for_deviation(min_radius, s.tolerance);
+    if (s.max_turn > 0) l = std::min(l, min_radius * s.max_turn);
   }
   return std::clamp(l, s.min_edge, s.max_edge);
 }
