@@ -93,8 +93,13 @@ std::vector<HardSurface> hard_surfaces() {
       // which the crease-blind tracker takes for two sheets; crease-aware meshing meshes it.
       {"box_minus_ball", expression("max(max(abs(x),max(abs(y),abs(z)))-1, 1.2-sqrt(x^2+y^2+z^2))", 1.5), 1, 5,
        {1, 2, 3, 5}},
+      // One component of genus 34: marching cubes of cell 0.01 gives a main component of genus 34
+      // and 45 bubbles of 16 triangles where single grid points fall inside the acute rims (cells
+      // of 0.03, 0.02, 0.015 also split the rims: 31, 28, 16 components, genus 31 in all), so
+      // the marching reference of the suite's grids is not stable here and the count is given.
       {"gyroid_ball",
-       expression("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)", 2.2), -1, -1, {1, 2, 3}},
+       expression("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)", 2.2), 1, 34,
+       {1, 2, 3, 5}},
       {"barth_ball",
        expression("max(4*(2.618034*x^2-y^2)*(2.618034*y^2-z^2)*(2.618034*z^2-x^2)-4.236068*(x^2+y^2+z^2-1)^2+0.01, "
                   "x^2+y^2+z^2-3.5)",
@@ -218,9 +223,6 @@ std::vector<Case> all_cases() {
 #endif
     const bool random = surfaces[s].name.rfind("random_blobs", 0) == 0;
     for (double k : random ? std::vector<double>{1, 2, 5} : std::vector<double>{1, 2, 3, 5}) {
-      // Left out: a front runs away there and takes minutes to reach the area bound (see the
-      // known limits in polygonizer/README.md).
-      if (surfaces[s].name == "gyroid_ball" && k == 5) continue;
       out.push_back({s, k});
     }
   }
