@@ -374,12 +374,7 @@ FieldPiece Expression::eval_piece(const Vec3& p, const std::vector<std::uint8_t>
   const Jet2 r = program_->run<Jet2, detail::Branching::Forced>(
       Jet2::variable(p.x(), 0), Jet2::variable(p.y(), 1), Jet2::variable(p.z(), 2),
       detail::BranchLog{branch.data(), nullptr, nullptr});
-  FieldPiece piece;
-  piece.branch = branch;
-  piece.value = r.v;
-  piece.gradient = r.g;
-  piece.hessian = r.h;
-  return piece;
+  return piece_from_jet(branch, r);
 }
 
 }  // namespace cdp

@@ -226,6 +226,16 @@ inline Jet<O> pow(double a, const Jet<O>& w) {
   return r;
 }
 
+// A field's piece (Field::pieces) from its branches and a second-order jet of it.
+inline FieldPiece piece_from_jet(const std::vector<std::uint8_t>& branch, const Jet2& r) {
+  FieldPiece piece;
+  piece.branch = branch;
+  piece.value = r.v;
+  piece.gradient = r.g;
+  piece.hessian = r.h;
+  return piece;
+}
+
 // Value of a plain number or a jet, for code templated on the scalar type.
 inline double value_of(double x) { return x; }
 template <int O>

@@ -72,12 +72,7 @@ class AutodiffField : public Field {
       throw InvalidInputError(this->type_name() + ": a piece's branch has " + std::to_string(branch.size()) +
                               " choices, the model made " + std::to_string(trace.calls) +
                               " calls of min, max and abs at the point (their number must not depend on the point)");
-    FieldPiece piece;
-    piece.branch = branch;
-    piece.value = r.v;
-    piece.gradient = r.g;
-    piece.hessian = r.h;
-    return piece;
+    return piece_from_jet(branch, r);
   }
 
  private:
