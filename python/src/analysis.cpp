@@ -186,6 +186,7 @@ py::dict evaluate(const Field& field, py::handle vertices, py::handle faces, py:
   Mesh mesh = mesh_from(vertices, faces, choice.empty() ? normals : py::none());
   std::string normals_source = "given";
   if (choice == "field") {
+    py::gil_scoped_release release;
     mesh.normals = field_normals(field, mesh);
     mesh.corner_normals = field_corner_normals(field, mesh, mesh.normals);
     normals_source = mesh.corner_normals.empty() ? "field (normalized gradient at the vertices)"

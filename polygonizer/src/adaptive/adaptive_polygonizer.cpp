@@ -238,9 +238,17 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     }
   }
 
+  // The radius of curvature every run met at their tightest bend, and where: below min_edge the
+  // surface has detail that edges of min_edge cannot follow (the perturbed Barth sextic's necks
+  // bend with a radius of 0.0083, min_edge is 0.0145), and a failure is reported as such.
+  std::pair<double, Vec3> tightest{std::numeric_limits<double>::infinity(), Vec3::Zero()};
+  const auto note_tightest = [&] {
+    if (tracker && tracker->tightest_bend().first < tightest.first) tightest = tracker->tightest_bend();
+  };
   const auto mesh_surface = [&](bool rollback) {
     mesh = Mesh{};
     settings.rollback = rollback;
+    note_tightest();  // of the run this one replaces
     tracker.emplace(field, settings, mesh);
     if (estimated_area > 0) tracker->set_estimated_area(estimated_area);
     if (options.progress) tracker->set_progress(options.progress);
@@ -255,6 +263,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   };
 
   bool remeshed = false;
+  bool no_crossing = false;  // the seeding found no sign change at all
   const auto mesh_everything = [&] {
     enter("meshing");
     remeshed = false;
@@ -279,6 +288,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       }
     }
     if (mesh.triangles.empty() && seeding.sign_changes == 0) {
+      no_crossing = true;
       std::ostringstream msg;
       msg << "adaptive: no zero crossing of the field in its box " << format_point(field.bounds().min) << " - "
           << format_point(field.bounds().max) << " at seed resolution " << options.seed_resolution
@@ -305,13 +315,6 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     return true;
   };
   // An error of the smooth meshing says what the crease-aware one ran into first.
-  // The radius of curvature the runs met at their tightest bend, and where: below min_edge the
-  // surface has detail that edges of min_edge cannot follow (the perturbed Barth sextic's necks
-  // bend with a radius of 0.0083, min_edge is 0.0145), and a failure is reported as such.
-  std::pair<double, Vec3> tightest{std::numeric_limits<double>::infinity(), Vec3::Zero()};
-  const auto note_tightest = [&] {
-    if (tracker && tracker->tightest_bend().first < tightest.first) tightest = tracker->tightest_bend();
-  };
   const auto why = [&](const std::exception& e) {
     note_tightest();
     std::string message = e.what();
@@ -381,19 +384,27 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   // then meshed the whole blob again over the first mesh), the new points are placed closer,
   // and no edge turns the normal by more than a radian (a coarse tolerance on the needle).
   // Only after a failure, so that every surface that meshed before comes out bit for bit as
-  // before; when the careful run fails too, the first error stands.
+  // before; when the careful run fails too, the first error stands. The careful run meshes the
+  // surface as smooth when the crease-aware meshing of the first attempt failed (fall_back has
+  // dropped it by then).
   // The careful run's edges turn the normal by at most one radian (Sizing::max_turn).
   constexpr double kCarefulMaxTurn = 1;
   bool careful = false;
+  // Not after a run stopped by the caller's own bounds (max_triangles, max_steps: the careful run
+  // makes shorter edges and would pass them sooner), nor for a field whose seeding found no sign
+  // change (not even by its search for small components); only the polygonizer's own errors are retried (an exception from a callable field or
+  // a cancellation goes on unchanged).
   const auto retry_carefully = [&] {
-    note_tightest();
-    if (options.variant != Variant::Improved) return false;
+    if (options.variant != Variant::Improved || options.max_triangles > 0 || options.max_steps > 0 || no_crossing)
+      return false;
     settings.anticipate = careful = true;
     settings.sizing.max_turn = kCarefulMaxTurn;
     try {
       attempt();
       return true;
-    } catch (const std::exception&) {
+    } catch (const NoSurfaceError&) {
+      return false;
+    } catch (const LimitExceededError&) {
       return false;
     }
   };

@@ -69,10 +69,17 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     const double t = k * theta / count;
     dirs[k - 1] = std::cos(t) * e0 + std::sin(t) * e1;
   }
-  std::vector<Placed> placed;
+  std::vector<Placed> placed, complete;
   for (double d = delta; d >= 0.24 * s_.sizing.min_edge; d *= 0.5) {
     placed = place_points(n.vertex, dirs, d);
-    if (placed.size() < dirs.size()) continue;
+    if (placed.size() < dirs.size()) {
+      // A placement again at half the length that fails keeps the one it was to replace.
+      if (!complete.empty()) {
+        placed = std::move(complete);
+        break;
+      }
+      continue;
+    }
     // Settings::anticipate: a new point whose own target is below kAnticipate times the length
     // it was placed at lies where the surface turns much faster than at the front (a neck
     // ahead, a small blob): its edges would be too long for it, and an edge longer than a neck
@@ -83,6 +90,7 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     });
     if (!too_long) break;
     ++anticipations_;
+    complete = placed;
   }
   if (placed.size() < static_cast<std::size_t>(count - 1)) return {false, -1};
 

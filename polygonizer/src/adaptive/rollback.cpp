@@ -305,14 +305,22 @@ bool Tracker::rollback(int f, int node, bool at_node) {
     for (const int n : nodes) refresh(n);
     stack_.push_back(g);
   }
-  if (place >= 0) ++rollback_places_[place].second;
-  else rollback_places_.emplace_back(center, 1);
+  if (place >= 0) {
+    ++rollback_places_[place].second;
+  } else {
+    rollback_places_.emplace_back(center, 1);
+    rollback_place_targets_.push_back(longest_target);
+  }
   ++rollbacks_;
   // Settings::anticipate: the hole is meshed again with edges at most half as long as the stuck
   // front's longest target (a quarter at the second rollback there, ...): where the fronts went
   // wrong, the sizing asked for edges too long for how fast the surface turns there.
   if (!s_.anticipate) return true;
-  const double finer = std::max(s_.sizing.min_edge, longest_target * std::ldexp(1.0, -(times + 1)));
+  // Halved from the place's first stuck front's longest target (later ones are already capped
+  // by the zones made here before).
+  const std::size_t at = place >= 0 ? static_cast<std::size_t>(place) : rollback_places_.size() - 1;
+  const double finer =
+      std::max(s_.sizing.min_edge, rollback_place_targets_[at] * std::ldexp(1.0, -(times + 1)));
   const FinerZone zone{center, radius + longest_target, finer};
   finer_zones_.push_back(zone);
   vertex_hash_.for_each_near(zone.center, zone.radius, [&](int w) {

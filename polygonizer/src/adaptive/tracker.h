@@ -43,8 +43,9 @@ struct Settings {
   bool grading = true;
   double diagonal = 1;
   // Whether regions where the tracker goes wrong are undone and meshed again (rollback.cpp).
-  // polygonize_adaptive turns it on only to mesh a surface again after a StalledFrontError, so
-  // that every surface meshed without it comes out as before.
+  // polygonize_adaptive turns it on only to mesh a surface again after a StalledFrontError, and
+  // in the careful run after any failure (anticipate), so that every surface meshed without it
+  // comes out as before.
   bool rollback = false;
   // Whether an expansion whose new point asks for edges far shorter than it was placed at
   // places it again closer (expand_point.cpp), and rollbacks mesh their holes with shorter
@@ -331,6 +332,7 @@ class Tracker {
     double radius, edge;
   };
   std::vector<FinerZone> finer_zones_;
+  std::vector<double> rollback_place_targets_;  // per rollback place: its first longest target
   std::pair<double, Vec3> tightest_{std::numeric_limits<double>::infinity(), Vec3::Zero()};
   // The target edge length at p: `target`, capped by the finer zones p is in.
   double zone_capped(const Vec3& p, double target) const {

@@ -116,7 +116,8 @@ class Field {
     return out;
   }
   // Whether the model may report more than one piece anywhere (it has branch points: min, max,
-  // abs). Free; a model without them is smooth and has no creases.
+  // abs). Cheap (a compiled model counts its branch points once, with one evaluation); a model
+  // without them is smooth and has no creases.
   virtual bool has_pieces() const { return false; }
   // The piece with `branch` (from pieces()) at another point: the same smooth function, its
   // branches fixed, wherever p is. Throws InvalidInputError for a branch the model cannot have

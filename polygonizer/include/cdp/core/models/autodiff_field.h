@@ -10,6 +10,10 @@
 // and meshed along as an expression's are. Its calls of min, max and abs are its branch points,
 // numbered in the order they happen; that order and their number must not depend on the point
 // (no `if` on a value around them): a piece evaluated where they differ is an InvalidInputError.
+// Qualified calls (`std::max(a, b)`) still compile on jets, through their comparison, but are
+// not branch points: the model then counts as smooth there. Arguments are evaluated in an order
+// C++ leaves open, so the numbering of nested calls in one argument list (max(abs(x), abs(y)))
+// may differ between compilers; within one build it is fixed, which is all pieces need.
 #pragma once
 
 #include <cdp/core/autodiff.h>
