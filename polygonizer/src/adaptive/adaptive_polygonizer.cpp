@@ -3,6 +3,7 @@
 #include "crease_patches.h"
 #include "quality.h"
 #include "seeding.h"
+#include "spatial_hash.h"
 #include "tracker.h"
 
 #include <cdp/core/adaptive_polygonizer.h>
@@ -17,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 #include <optional>
 #include <sstream>
 
@@ -107,6 +109,59 @@ std::string format_point(const Vec3& p) {
   std::ostringstream s;
   s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
   return s.str();
+}
+
+// A careful run (see polygonize_adaptive) must not trade its first run's error for a mesh that
+// splits one piece of surface into two: a front that crossed a neck narrower than its edges and
+// closed on each side leaves two closed components facing each other across the solid (random
+// blob field 19 at --tolerance 3e-2 came out with 6 components where the surface has 5). Such a
+// split shows as two vertices of different components, close together (within twice the longest
+// edge at each), each lying inward of the other's side (the segment between them leaves each
+// through its inside), with the field negative along it (sampled at a quarter, half and three
+// quarters). Returns the midpoint of such a segment, if any.
+// It also finds a cavity's wall closer than that to the outer wall (a shell thinner than two
+// edges), which the careful run then gives up on too: its first error stands.
+std::optional<Vec3> split_across_solid(const Field& field, const Mesh& mesh) {
+  const std::size_t nv = mesh.positions.size();
+  std::vector<int> parent(nv);
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  std::vector<double> longest(nv, 0.0);  // each vertex's longest edge
+  double cell = 0;
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3];
+      parent[find(a)] = find(b);
+      const double l = (mesh.positions[a] - mesh.positions[b]).norm();
+      longest[a] = std::max(longest[a], l);
+      longest[b] = std::max(longest[b], l);
+      cell = std::max(cell, l);
+    }
+  if (!(cell > 0)) return std::nullopt;
+  adaptive::SpatialHash hash(2 * cell);
+  for (std::size_t v = 0; v < nv; ++v)
+    if (longest[v] > 0) hash.insert(static_cast<int>(v), mesh.positions[v]);
+  std::optional<Vec3> found;
+  for (std::size_t a = 0; a < nv && !found; ++a) {
+    if (!(longest[a] > 0)) continue;
+    const Vec3& pa = mesh.positions[a];
+    const double reach = 2 * longest[a];
+    hash.for_each_near(pa, reach, [&](int b) {
+      if (found || find(b) == find(static_cast<int>(a))) return;
+      const Vec3 d = mesh.positions[b] - pa;
+      if (d.norm() > std::min(reach, 2 * longest[b]) || !(mesh.normals[a].dot(d) < 0) ||
+          !(mesh.normals[b].dot(-d) < 0))
+        return;
+      // Inside all along (sampled): two separate solids have outside between them.
+      for (const double u : {0.25, 0.5, 0.75})
+        if (!(field.value(pa + u * d) < 0)) return;
+      found = pa + 0.5 * d;
+    });
+  }
+  return found;
 }
 
 // The last line of defence against a wrong mesh with exit 0: the tracker's own output must be
@@ -401,7 +456,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     settings.sizing.max_turn = kCarefulMaxTurn;
     try {
       attempt();
-      return true;
+      return !split_across_solid(field, mesh).has_value();
     } catch (const NoSurfaceError&) {
       return false;
     } catch (const LimitExceededError&) {
