@@ -329,8 +329,9 @@ TEST(Faults, InterruptingAnExperimentStopsItsChildren) {
   for (const pid_t k : kids) {
     for (int i = 0; i < 100 && process_alive(k) && command_name(k) != "polygonize"; ++i)
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    if (command_name(k) == "polygonize")
+    if (command_name(k) == "polygonize") {
       EXPECT_EQ(blocked_signals(k) & interrupt_bits(), 0u) << "child " << k;
+    }
   }
   kill(c.pid, SIGINT);
   int status = 0;
