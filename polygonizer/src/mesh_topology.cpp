@@ -1,29 +1,11 @@
 #include <cdp/core/mesh_topology.h>
+#include "union_find.h"
 
 #include <algorithm>
-#include <numeric>
 
 namespace cdp {
 
 namespace {
-
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(std::size_t n) { reset(n); }
-  // n singletons again, keeping the allocation (one union-find serves every vertex's fan).
-  void reset(std::size_t n) {
-    parent.resize(n);
-    std::iota(parent.begin(), parent.end(), 0);
-  }
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(int a, int b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 struct HalfEdge {
   int lo, hi;       // undirected key

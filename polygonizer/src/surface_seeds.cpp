@@ -1,4 +1,5 @@
 #include "parallel.h"
+#include "union_find.h"
 
 #include <cdp/core/errors.h>
 #include <cdp/core/newton_projection.h>
@@ -7,7 +8,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numeric>
 #include <sstream>
 
 namespace cdp {
@@ -88,19 +88,6 @@ SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options) {
 }
 
 namespace {
-
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(int a, int b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 struct Crossing {
   Vec3 a, b;      // grid edge end points, F(a) < 0 <= F(b) or the reverse

@@ -5,6 +5,7 @@
 #include "seeding.h"
 #include "spatial_hash.h"
 #include "tracker.h"
+#include "union_find.h"
 
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/crease_curves.h>
@@ -18,7 +19,6 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
-#include <numeric>
 #include <optional>
 #include <sstream>
 
@@ -123,18 +123,13 @@ std::string format_point(const Vec3& p) {
 // edges), which the careful run then gives up on too: its first error stands.
 std::optional<Vec3> split_across_solid(const Field& field, const Mesh& mesh) {
   const std::size_t nv = mesh.positions.size();
-  std::vector<int> parent(nv);
-  std::iota(parent.begin(), parent.end(), 0);
-  const auto find = [&](int a) {
-    while (parent[a] != a) a = parent[a] = parent[parent[a]];
-    return a;
-  };
+  UnionFind sets(nv);
   std::vector<double> longest(nv, 0.0);  // each vertex's longest edge
   double cell = 0;
   for (const auto& t : mesh.triangles)
     for (int k = 0; k < 3; ++k) {
       const int a = t[k], b = t[(k + 1) % 3];
-      parent[find(a)] = find(b);
+      sets.unite(a, b);
       const double l = (mesh.positions[a] - mesh.positions[b]).norm();
       longest[a] = std::max(longest[a], l);
       longest[b] = std::max(longest[b], l);
@@ -150,7 +145,8 @@ std::optional<Vec3> split_across_solid(const Field& field, const Mesh& mesh) {
     const Vec3& pa = mesh.positions[a];
     const double reach = 2 * longest[a];
     hash.for_each_near(pa, reach, [&](int b) {
-      if (found || find(b) == find(static_cast<int>(a))) return;
+      // The test is symmetric in a and b: each pair once.
+      if (found || b <= static_cast<int>(a) || sets.find(b) == sets.find(static_cast<int>(a))) return;
       const Vec3 d = mesh.positions[b] - pa;
       if (d.norm() > std::min(reach, 2 * longest[b]) || !(mesh.normals[a].dot(d) < 0) ||
           !(mesh.normals[b].dot(-d) < 0))
