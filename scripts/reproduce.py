@@ -59,6 +59,7 @@ def main():
     step("claims on every model", [PY, "scripts/claims_by_model.py"])
     step("plots", [PY, "scripts/plots.py"])
     step("sharp features", [PY, "scripts/sharp_features.py"])
+    step("topology sweep", [PY, "scripts/topology_sweep.py", "--build", a.build, "--jobs", str(a.jobs)])
     if os.path.exists(os.path.join(ROOT, "scripts", "figures.py")):
         step("figures", [PY, "scripts/figures.py", "--build", a.build, "--jobs", str(a.jobs)])
     step("results/README.md", [PY, "scripts/results_readme.py", "--seconds", str(round(time.time() - start))])
