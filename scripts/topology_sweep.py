@@ -148,11 +148,15 @@ def main():
                                                               r["genus"], r["reference_components"],
                                                               r["reference_genus"]) for r in wrong]
         lines += ["", "To see one: `build/bin/polygonize --factor 1 results/topology_sweep/fields/FIELD.json -o "
-                  "out.ply` (or the run's `--tolerance`). Open (issue 12). Where examined (blobs19 at `--factor 1`, "
-                  "and the fifty blobs of the hard-surface suite at `--tolerance 3e-2`), a front with long edges "
+                  "out.ply` (or the run's `--tolerance`). Open (issue 12). Where examined (blobs19 at `--factor 1` "
+                  "and 2, the fifty blobs of the hard-surface suite at `--tolerance 3e-2`), a front with long edges "
                   "met a junction between blobs whose curvature rises ahead of it and closed on each side of it: "
-                  "two closed pieces where the surface has one. The sizing reads the curvature at the point it "
-                  "expands, not along the edge it makes; the genus losses have not been examined one by one."]
+                  "two closed pieces where the surface has one. Those are found after the run (two components "
+                  "facing each other across the solid, joined by surface the mesh does not cover, with a cap "
+                  "beside them: `polygonizer/src/adaptive/surface_gaps.h`) and end in a clear error when the "
+                  "careful run cannot mesh them either. The wrong runs listed lose a handle within one component, "
+                  "which that test does not look for (it compares two components); they have not been examined "
+                  "one by one. The sizing reads the curvature at the point it expands, not along the edge it makes."]
     errors = [r for r in rows if r["verdict"] == "error"]
     if errors:
         lines += ["", "Clear errors (a run that cannot be completed is a defect too, issue 12, but not a silent one):",

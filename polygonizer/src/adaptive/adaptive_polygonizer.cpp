@@ -4,8 +4,8 @@
 #include "quality.h"
 #include "seeding.h"
 #include "spatial_hash.h"
+#include "surface_gaps.h"
 #include "tracker.h"
-#include "union_find.h"
 
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/crease_curves.h>
@@ -109,55 +109,6 @@ std::string format_point(const Vec3& p) {
   std::ostringstream s;
   s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
   return s.str();
-}
-
-// A careful run (see polygonize_adaptive) must not trade its first run's error for a mesh that
-// splits one piece of surface into two: a front that crossed a neck narrower than its edges and
-// closed on each side leaves two closed components facing each other across the solid (random
-// blob field 19 at --tolerance 3e-2 came out with 6 components where the surface has 5). Such a
-// split shows as two vertices of different components, close together (within twice the longest
-// edge at each), each lying inward of the other's side (the segment between them leaves each
-// through its inside), with the field negative along it (sampled at a quarter, half and three
-// quarters). Returns the midpoint of such a segment, if any.
-// It also finds a cavity's wall closer than that to the outer wall (a shell thinner than two
-// edges), which the careful run then gives up on too: its first error stands.
-std::optional<Vec3> split_across_solid(const Field& field, const Mesh& mesh) {
-  const std::size_t nv = mesh.positions.size();
-  UnionFind sets(nv);
-  std::vector<double> longest(nv, 0.0);  // each vertex's longest edge
-  double cell = 0;
-  for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const int a = t[k], b = t[(k + 1) % 3];
-      sets.unite(a, b);
-      const double l = (mesh.positions[a] - mesh.positions[b]).norm();
-      longest[a] = std::max(longest[a], l);
-      longest[b] = std::max(longest[b], l);
-      cell = std::max(cell, l);
-    }
-  if (!(cell > 0)) return std::nullopt;
-  adaptive::SpatialHash hash(2 * cell);
-  for (std::size_t v = 0; v < nv; ++v)
-    if (longest[v] > 0) hash.insert(static_cast<int>(v), mesh.positions[v]);
-  std::optional<Vec3> found;
-  for (std::size_t a = 0; a < nv && !found; ++a) {
-    if (!(longest[a] > 0)) continue;
-    const Vec3& pa = mesh.positions[a];
-    const double reach = 2 * longest[a];
-    hash.for_each_near(pa, reach, [&](int b) {
-      // The test is symmetric in a and b: each pair once.
-      if (found || b <= static_cast<int>(a) || sets.find(b) == sets.find(static_cast<int>(a))) return;
-      const Vec3 d = mesh.positions[b] - pa;
-      if (d.norm() > std::min(reach, 2 * longest[b]) || !(mesh.normals[a].dot(d) < 0) ||
-          !(mesh.normals[b].dot(-d) < 0))
-        return;
-      // Inside all along (sampled): two separate solids have outside between them.
-      for (const double u : {0.25, 0.5, 0.75})
-        if (!(field.value(pa + u * d) < 0)) return;
-      found = pa + 0.5 * d;
-    });
-  }
-  return found;
 }
 
 // The last line of defence against a wrong mesh with exit 0: the tracker's own output must be
@@ -428,6 +379,14 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       if (!fall_back(e)) throw;
       components = repair_and_check();
     }
+    // The checks above pass a front that crossed a neck narrower than its edges and closed on
+    // each side of it: two closed components where the surface has one (surface_gaps.h).
+    if (components > 1)
+      if (const auto at = adaptive::uncovered_between_components(field, mesh))
+        throw NoSurfaceError("adaptive: two components of the mesh face each other across the solid near " +
+                             format_point(*at) +
+                             ", where the surface joins them: a front closed on each side of a neck narrower "
+                             "than its edges");
   };
   // A run that fails (a stalled front, a mesh that fails the checks) is made once more with
   // Settings::anticipate and the rollbacks on from the start: where a front with long edges met
@@ -452,7 +411,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     settings.sizing.max_turn = kCarefulMaxTurn;
     try {
       attempt();
-      return !split_across_solid(field, mesh).has_value();
+      // Stricter than attempt's own test: no two components may face each other across the
+      // solid at all, joined or not (a shell thinner than two edges keeps its first error).
+      return adaptive::facing_across_solid(field, mesh, 1).empty();
     } catch (const NoSurfaceError&) {
       return false;
     } catch (const LimitExceededError&) {
