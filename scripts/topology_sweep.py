@@ -72,12 +72,11 @@ def main():
     fields_dir = os.path.join(a.out, "fields")
     os.makedirs(fields_dir, exist_ok=True)
     work = tempfile.TemporaryDirectory(prefix="topology_sweep.")  # meshes and stats: only counts are kept
-    names = []
-    for seed in range(1, FEW + DENSE + 1):
-        name = "blobs{:02d}".format(seed)
+    fields = {"blobs{:02d}".format(seed): blobs(seed) for seed in range(1, FEW + DENSE + 1)}
+    names = list(fields)
+    for name, field in fields.items():
         with open(os.path.join(fields_dir, name + ".json"), "w") as f:
-            json.dump(blobs(seed), f, indent=1)
-        names.append(name)
+            json.dump(field, f, indent=1)
 
     def job(name, key, args):
         field = os.path.join(fields_dir, name + ".json")
@@ -101,21 +100,24 @@ def main():
 
     rows = []
     for name in names:
-        refs = [done[(name, "mc{}".format(i))][0] for i in range(len(REFERENCE_CELLS))]
-        if any(r is None for r in refs):
-            raise SystemExit("topology_sweep: marching cubes failed on {}: {}".format(name, done[(name, "mc0")][1]))
+        refs = []
+        for i in range(len(REFERENCE_CELLS)):
+            stats, error = done[(name, "mc{}".format(i))]
+            if stats is None:
+                raise SystemExit("topology_sweep: marching cubes failed on {}: {}".format(name, error))
+            refs.append(stats)
         ref = topology(refs[0])
         stable = all(topology(r) == ref for r in refs)
         for kind, value in RUNS:
             stats, error = done[(name, kind + value)]
+            got = topology(stats) if stats else (None, None)
             if not stable:
                 verdict = "reference unstable"
             elif stats is None:
                 verdict = "error"
             else:
-                verdict = "correct" if topology(stats) == ref else "wrong"
-            got = topology(stats) if stats else (None, None)
-            rows.append({"field": name, "blobs": len(blobs(int(name[5:]))["blobs"]), "run": "{} {}".format(kind, value),
+                verdict = "correct" if got == ref else "wrong"
+            rows.append({"field": name, "blobs": len(fields[name]["blobs"]), "run": "{} {}".format(kind, value),
                          "verdict": verdict, "components": got[0], "genus": got[1],
                          "reference_components": ref[0], "reference_genus": ref[1],
                          "triangles": stats["triangles"] if stats else "",
