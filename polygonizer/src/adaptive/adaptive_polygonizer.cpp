@@ -476,6 +476,8 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["remeshed_carefully"] = careful;
   st.extra["crease_points"] = tracker->crease_points();
   st.extra["over_mesh_rejections"] = tracker->over_mesh();
+  note_tightest();
+  st.extra["curvature.min_radius"] = std::isfinite(tightest.first) ? tightest.first : -1.0;
   st.extra["min_angle_degrees"] = min_angle_degrees(mesh);
   st.extra["edge_length.min"] = s.sizing.min_edge;
   st.extra["edge_length.max"] = s.sizing.max_edge;

@@ -22,7 +22,25 @@ constexpr double kAnticipate = 0.5;
 // degrees with a margin: a cube's faces meet at exactly 90, and an edge across that crease
 // is right.
 constexpr double kFoldCosine = -0.1736;
+// An expansion whose new points fold across the surface (folds_across) is tried with this many
+// more points at most before a shorter length: more points turn the normal less between
+// neighbours. With none, the fifty blobs of the hard-surface suite stalled at factor 1.
+constexpr int kExtraPointsOnFold = 2;
 }  // namespace
+
+bool Tracker::folds_across(int vb, const std::vector<Placed>& placed, int va) const {
+  // Each new point is checked against the expanded point only (place_points); two of them, or
+  // one and a neighbour, can still lie on sheets facing apart, each within the turn allowed
+  // from the middle: the new front edge between them then spans a fold or a gap of the
+  // surface, the way a closed angle does (kFoldCosine). A random blob field at factor 1 closed
+  // a tunnel so, with a membrane across the air whose corners' normals were 131 degrees apart.
+  const Vec3* last = &mesh_.normals[vb];
+  for (const Placed& x : placed) {
+    if (last->dot(x.curvature.normal) < kFoldCosine) return true;
+    last = &x.curvature.normal;
+  }
+  return last->dot(mesh_.normals[va]) < kFoldCosine;
+}
 
 void Tracker::close_angle(int node) {
   const FrontNode n = fs_.nodes[node];
@@ -64,18 +82,42 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
 
   // Where Newton cannot place a point at full length (a nearby sheet, a vanishing gradient),
   // try shorter edges before giving up on this point for now.
-  std::vector<Vec3> dirs(count - 1);
-  for (int k = 1; k < count; ++k) {
-    const double t = k * theta / count;
-    dirs[k - 1] = std::cos(t) * e0 + std::sin(t) * e1;
-  }
+  std::vector<Vec3> dirs;
+  // The points at length d: count - 1 of them, or up to kExtraPointsOnFold more where those would
+  // fold across the surface (folds_across; above min_edge, like place_points' own turn bound).
+  // Empty or short when they cannot all be placed. A count that helped is kept for the shorter
+  // lengths the careful run's anticipation tries next.
+  int fan = count;
+  const auto place_at = [&](double d) {
+    for (int c = fan; c <= count + kExtraPointsOnFold; ++c) {
+      dirs.resize(c - 1);
+      for (int k = 1; k < c; ++k) {
+        const double t = k * theta / c;
+        dirs[k - 1] = std::cos(t) * e0 + std::sin(t) * e1;
+      }
+      std::vector<Placed> got = place_points(n.vertex, dirs, d);
+      if (got.size() < dirs.size()) {
+        if (c == fan) return got;
+        continue;
+      }
+      if (d <= s_.sizing.min_edge || !folds_across(vb, got, va)) {
+        fan = c;
+        return got;
+      }
+    }
+    fan = count;
+    return std::vector<Placed>{};
+  };
   std::vector<Placed> placed, complete;
+  std::size_t wanted = 0, complete_wanted = 0;  // how many points placed and complete should have
   for (double d = delta; d >= 0.24 * s_.sizing.min_edge; d *= 0.5) {
-    placed = place_points(n.vertex, dirs, d);
-    if (placed.size() < dirs.size()) {
+    placed = place_at(d);
+    wanted = dirs.size();
+    if (placed.size() < wanted) {
       // A placement again at half the length that fails keeps the one it was to replace.
       if (!complete.empty()) {
         placed = std::move(complete);
+        wanted = complete_wanted;
         break;
       }
       continue;
@@ -91,8 +133,9 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     if (!too_long) break;
     ++anticipations_;
     complete = placed;
+    complete_wanted = wanted;
   }
-  if (placed.size() < static_cast<std::size_t>(count - 1)) return {false, -1};
+  if (wanted == 0 || placed.size() < wanted) return {false, -1};
 
   // A new point landing close to a front point the collision test did not see (beyond
   // collision_factor * delta of the candidate) would make a sliver or an overlap: bridge to

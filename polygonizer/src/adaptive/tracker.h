@@ -306,6 +306,7 @@ class Tracker {
   // front node in the way.
   ExpandOutcome expand(int node, double delta);
   void close_angle(int node);
+  bool folds_across(int vb, const std::vector<Placed>& placed, int va) const;
 
   // --- split_front.cpp, merge_fronts.cpp
   void split_front(int p, int q);
