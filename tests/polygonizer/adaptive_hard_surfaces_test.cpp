@@ -281,6 +281,15 @@ TEST(HardSurfaceFields, DISABLED_WriteFields) {
 namespace cdp {
 namespace {
 
+// A closed, manifold mesh without self-intersections with the surface's components and genus.
+void expect_topology(const Mesh& mesh, std::size_t components, int genus) {
+  const MeshTopology t = analyze_topology(mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.components, components);
+  EXPECT_EQ(t.genus, genus);
+  EXPECT_EQ(test::count_self_intersections(mesh), 0u);
+}
+
 // A tolerance far coarser than the curvature asks for chords longer than the radius: around the
 // needle's tips (radii 5, 0.05, 0.05) eps = 1e-2 gives edges of 0.035 on a tube 0.04 thick, and
 // the fronts crossed it (the mesh intersected itself in 1136 pairs); the careful run after that
@@ -294,11 +303,7 @@ TEST(AdaptiveCarefulRun, ACoarseToleranceOnTheNeedleAndABlobFieldAtFactorOneMesh
   o.sizing = SizingMode::Tolerance;
   o.tolerance = 1e-2;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
-  const MeshTopology t = analyze_topology(r.mesh);
-  EXPECT_TRUE(t.watertight());
-  EXPECT_EQ(t.components, 1u);
-  EXPECT_EQ(t.genus, 0);
-  EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
+  expect_topology(r.mesh, 1u, 0);
   EXPECT_FALSE(r.stats.extra.at("remeshed_carefully").get<bool>());  // true without folds_across
 
   const auto blobs = test::field_from_json(R"({"type": "blobs", "kernel": "wyvill", "threshold": 0.3, "blobs": [
@@ -311,11 +316,7 @@ TEST(AdaptiveCarefulRun, ACoarseToleranceOnTheNeedleAndABlobFieldAtFactorOneMesh
   AdaptiveOptions f1;
   f1.factor = 1;
   const PolygonizeResult b = polygonize_adaptive(*blobs, f1);
-  const MeshTopology bt = analyze_topology(b.mesh);
-  EXPECT_TRUE(bt.watertight());
-  EXPECT_EQ(bt.components, 2u);  // marching cubes at cells 0.048 and 0.036 agree: 2 spheres
-  EXPECT_EQ(bt.genus, 0);
-  EXPECT_EQ(test::count_self_intersections(b.mesh), 0u);
+  expect_topology(b.mesh, 2, 0);  // marching cubes at cells 0.048 and 0.036 agree: 2 spheres
   EXPECT_TRUE(b.stats.extra.at("remeshed_carefully").get<bool>());
   // A surface that meshes the first time never gets the careful run.
   o.tolerance = 1e-3;
@@ -459,11 +460,7 @@ TEST(AdaptiveFolds, ATunnelNarrowerThanTheEdgesKeepsItsHandle) {
   AdaptiveOptions o;
   o.factor = 1;
   const PolygonizeResult r = polygonize_adaptive(*blobs33, o);
-  const MeshTopology t = analyze_topology(r.mesh);
-  EXPECT_TRUE(t.watertight());
-  EXPECT_EQ(t.components, 7u);
-  EXPECT_EQ(t.genus, 1);
-  EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
+  expect_topology(r.mesh, 7u, 1);
 }
 
 TEST(AdaptiveNeckCut, AShellIsNotACut) {
