@@ -168,7 +168,7 @@ def main():
                   "suite at `--tolerance 3e-2` closed a front on each side of a junction, two closed pieces where "
                   "the surface has one (found after the run: `polygonizer/src/adaptive/surface_gaps.h`, a clear "
                   "error when the careful run cannot mesh them either); blobs33 at `--factor 1` spanned a tunnel "
-                  "narrower than its edges with triangles whose corners' normals were up to 131 degrees apart "
+                  "narrower than its edges with triangles whose corners' normals were up to 162 degrees apart "
                   "(expansions that fold so are now placed again: `Tracker::folds_across`). The runs listed lose "
                   "a handle within one component; no test after the run looks for that, and they have not been "
                   "located one by one.".format(below, len(wrong), correct_below)]

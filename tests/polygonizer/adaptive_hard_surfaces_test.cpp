@@ -400,7 +400,7 @@ TEST(AdaptiveNeckCut, TwoComponentsWhereTheSurfaceHasOneAreAnError) {
 // blobs33 of the topology sweep (53 Wyvill blobs; 7 components, total genus 1 by marching cubes
 // of cells 0.048 and 0.036) at factor 1 lost its handle with exit 0: fronts on the two sides of
 // a tunnel narrower than the edges joined across it with triangles whose corners' normals were
-// up to 131 degrees apart. Expansions that fold so are placed again (Tracker::folds_across).
+// up to 162 degrees apart. Expansions that fold so are placed again (Tracker::folds_across).
 TEST(AdaptiveFolds, ATunnelNarrowerThanTheEdgesKeepsItsHandle) {
   const auto blobs33 = test::field_from_json(R"({"type": "blobs", "kernel": "wyvill", "threshold": 0.3, "blobs": [
     {"center": [1.3125525085236793, 1.4919900208790082, 1.6826469958982142], "radius": 0.8128388723222941},

@@ -33,7 +33,7 @@ bool Tracker::folds_across(int vb, const std::vector<Placed>& placed, int va) co
   // one and a neighbour, can still lie on sheets facing apart, each within the turn allowed
   // from the middle: the new front edge between them then spans a fold or a gap of the
   // surface, the way a closed angle does (kFoldCosine). A random blob field at factor 1 closed
-  // a tunnel so, with a membrane across the air whose corners' normals were 131 degrees apart.
+  // a tunnel so, with a membrane across the air whose corners' normals were 131-162 degrees apart.
   const Vec3* last = &mesh_.normals[vb];
   for (const Placed& x : placed) {
     if (last->dot(x.curvature.normal) < kFoldCosine) return true;
