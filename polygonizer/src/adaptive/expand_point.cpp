@@ -85,8 +85,8 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   std::vector<Vec3> dirs;
   // The points at length d: count - 1 of them, or up to kExtraPointsOnFold more where those would
   // fold across the surface (folds_across; above min_edge, like place_points' own turn bound).
-  // Empty or short when they cannot all be placed. A count that helped is kept for the shorter
-  // lengths the careful run's anticipation tries next.
+  // Empty when they cannot all be placed. A count that helped is kept for the shorter lengths the
+  // careful run's anticipation tries next.
   int fan = count;
   const auto place_at = [&](double d) {
     for (int c = fan; c <= count + kExtraPointsOnFold; ++c) {
@@ -97,7 +97,7 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
       }
       std::vector<Placed> got = place_points(n.vertex, dirs, d);
       if (got.size() < dirs.size()) {
-        if (c == fan) return got;
+        if (c == fan) return std::vector<Placed>{};
         continue;
       }
       if (d <= s_.sizing.min_edge || !folds_across(vb, got, va)) {
@@ -109,15 +109,12 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     return std::vector<Placed>{};
   };
   std::vector<Placed> placed, complete;
-  std::size_t wanted = 0, complete_wanted = 0;  // how many points placed and complete should have
   for (double d = delta; d >= 0.24 * s_.sizing.min_edge; d *= 0.5) {
     placed = place_at(d);
-    wanted = dirs.size();
-    if (placed.size() < wanted) {
+    if (placed.empty()) {
       // A placement again at half the length that fails keeps the one it was to replace.
       if (!complete.empty()) {
         placed = std::move(complete);
-        wanted = complete_wanted;
         break;
       }
       continue;
@@ -133,9 +130,8 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     if (!too_long) break;
     ++anticipations_;
     complete = placed;
-    complete_wanted = wanted;
   }
-  if (wanted == 0 || placed.size() < wanted) return {false, -1};
+  if (placed.empty()) return {false, -1};
 
   // A new point landing close to a front point the collision test did not see (beyond
   // collision_factor * delta of the candidate) would make a sliver or an overlap: bridge to
