@@ -365,7 +365,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     return check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
   };
   std::size_t components = 0;
+  adaptive::NeckSearch necks;
   const auto attempt = [&] {
+    necks = {};
     try {
       mesh_everything();
       // The patches' topology before the repair works on it; intersections after (the repair
@@ -387,6 +389,18 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
                              format_point(*at) +
                              ", where the surface joins them: a front closed on each side of a neck narrower "
                              "than its edges");
+    // They pass a mesh that stepped over a neck or a tunnel narrower than its edges, too: a
+    // handle too few, each component whole (missed_necks.h).
+    necks = adaptive::find_missed_neck(field, mesh, tracker->critical_starts());
+    if (!necks.missed.empty()) {
+      const adaptive::MissedNeck& m = necks.missed.front();
+      std::ostringstream msg;
+      msg << "adaptive: the mesh " << (m.value < 0 ? "cuts a neck of the solid" : "closes a tunnel") << " about "
+          << m.width << " wide near " << format_point(m.point) << " (F has a saddle there, F = " << m.value
+          << ", and it lies " << (m.value < 0 ? "outside" : "inside") << " the mesh)"
+          << (m.width < s.sizing.min_edge ? ", narrower than min_edge" : "") << ": a front stepped over it";
+      throw NoSurfaceError(msg.str());
+    }
   };
   // A run that fails (a stalled front, a mesh that fails the checks) is made once more with
   // Settings::anticipate and the rollbacks on from the start: where a front with long edges met
@@ -409,16 +423,31 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       return false;
     settings.anticipate = careful = true;
     settings.sizing.max_turn = kCarefulMaxTurn;
-    try {
-      attempt();
-      // Stricter than attempt's own test: no two components may face each other across the
-      // solid at all, joined or not (a shell thinner than two edges keeps its first error).
-      return adaptive::facing_across_solid(field, mesh, 1).empty();
-    } catch (const NoSurfaceError&) {
-      return false;
-    } catch (const LimitExceededError&) {
-      return false;
+    // A neck or tunnel a run stepped over is approached with edges as short as its radius (not
+    // below min_edge) from kNeckZoneEdges of that run's edges around it, so that the fronts reach
+    // it with edges that cannot jump it: the grading lets them grow back only by kGrowth per
+    // edge, and a front outside the ball places points at most an edge into it. A careful run
+    // that steps over another one is made again with a ball there too, at most kCarefulRuns in
+    // all (blobs30 of the topology sweep at factors 1 and 2: the careful run, its curvature
+    // sizing finer everywhere, met a second neck).
+    constexpr double kNeckZoneEdges = 3;
+    constexpr int kCarefulRuns = 3;
+    for (int run = 0; run < kCarefulRuns; ++run) {
+      for (const adaptive::MissedNeck& m : necks.missed)
+        settings.finer_zones.push_back(
+            {m.point, 0.5 * m.width + kNeckZoneEdges * m.edge, std::max(s.sizing.min_edge, 0.5 * m.width)});
+      try {
+        attempt();
+        // Stricter than attempt's own test: no two components may face each other across the
+        // solid at all, joined or not (a shell thinner than two edges keeps its first error).
+        return adaptive::facing_across_solid(field, mesh, 1).empty();
+      } catch (const NoSurfaceError&) {
+        if (necks.missed.empty()) return false;
+      } catch (const LimitExceededError&) {
+        return false;
+      }
     }
+    return false;
   };
   try {
     try {
@@ -476,6 +505,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["remeshed_carefully"] = careful;
   st.extra["crease_points"] = tracker->crease_points();
   st.extra["over_mesh_rejections"] = tracker->over_mesh();
+  st.extra["necks.walks"] = necks.walks;
+  st.extra["necks.critical_points"] = necks.critical_points;
+  st.extra["necks.tested"] = necks.tested;
   note_tightest();
   st.extra["curvature.min_radius"] = std::isfinite(tightest.first) ? tightest.first : -1.0;
   st.extra["min_angle_degrees"] = min_angle_degrees(mesh);

@@ -29,7 +29,7 @@ constexpr double kOverMesh = 0.3;
 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
     : field_(field), s_(settings), mesh_(mesh),
-      front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell) {}
+      front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell), finer_zones_(settings.finer_zones) {}
 
 void Tracker::measure(std::span<const Vec3> points, std::vector<std::optional<Placed>>& out) const {
   // Timed in two parts, so that the stats can show what the paper claims (curvature costs
@@ -46,7 +46,8 @@ void Tracker::measure(std::span<const Vec3> points, std::vector<std::optional<Pl
   out.assign(n, std::nullopt);
   for (std::size_t i = 0; i < n; ++i) {
     try {
-      out[i] = Placed{points[i], curvature_from_derivatives(d.gradients[i], d.hessians[i])};
+      out[i] = Placed{points[i], curvature_from_derivatives(d.gradients[i], d.hessians[i]),
+                      step_to_critical_point(d.gradients[i], d.hessians[i])};
     } catch (const NoSurfaceError&) {
     }
     if (out[i] && !out[i]->curvature.normal.allFinite()) out[i].reset();
@@ -63,6 +64,8 @@ int Tracker::add_vertex(const Placed& placed) {
   mesh_.normals.push_back(c.normal);
   target_.push_back(zone_capped(placed.point, edge_length(s_.sizing, c.min_radius)));
   if (c.min_radius < tightest_.first) tightest_ = {c.min_radius, placed.point};
+  if (placed.to_critical && placed.to_critical->norm() <= kCriticalReach * target_.back())
+    critical_starts_.push_back({placed.point, *placed.to_critical, target_.back()});
   mac_.push_back(c.mac);
   shape_index_.push_back(c.shape_index);
   front_refs_.push_back(0);

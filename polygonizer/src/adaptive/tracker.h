@@ -12,6 +12,7 @@
 
 #include "edge_length.h"
 #include "front.h"
+#include "missed_necks.h"
 #include "spatial_hash.h"
 
 #include <cdp/core/adaptive_polygonizer.h>
@@ -30,6 +31,12 @@
 #include <vector>
 
 namespace cdp::adaptive {
+
+// A ball where edges are at most `edge` long, whatever the curvature asks.
+struct FinerZone {
+  Vec3 center;
+  double radius, edge;
+};
 
 // Options with every default resolved.
 struct Settings {
@@ -54,6 +61,10 @@ struct Settings {
   // edges: the fifty blobs at factors 1 and 2), so that every surface meshed without it comes
   // out as before.
   bool anticipate = false;
+  // Balls the careful run meshes with shorter edges from the start: around the necks and tunnels
+  // the first run stepped over (missed_necks.h), which its fronts reached with edges too long to
+  // see them.
+  std::vector<FinerZone> finer_zones;
   // Whether an expansion's edge length also looks at the front points around it (within a few
   // edges, on any front): no longer than their targets plus kLookAheadGradation times their
   // distance. On for the fronts of crease patches, whose loops prescribe short edges that fronts
@@ -118,6 +129,10 @@ class Tracker {
   struct Placed {
     Vec3 point;
     Curvature curvature;
+    // The Newton step toward grad F = 0 from the point, where the Hessian is regular
+    // (missed_necks.h): vertices close to a critical point start the search for necks the
+    // fronts stepped over.
+    std::optional<Vec3> to_critical = std::nullopt;
   };
 
   Tracker(const Field& field, const Settings& settings, Mesh& mesh);
@@ -169,6 +184,8 @@ class Tracker {
   std::pair<double, Vec3> tightest_bend() const { return tightest_; }
   // Placements made again at half the length because the new point asked for far shorter edges.
   std::size_t anticipations() const { return anticipations_; }
+  // The vertices placed within kCriticalReach edges of a critical point of F (missed_necks.h).
+  const std::vector<CriticalStart>& critical_starts() const { return critical_starts_; }
   // Small stuck fronts closed ear by ear without the expansion's tests.
   std::size_t forced_closures() const { return forced_closures_; }
   // Points placed on a crease, with the mean normal of its two sides.
@@ -316,6 +333,7 @@ class Tracker {
   Settings s_;
   Mesh& mesh_;
   std::vector<double> target_, mac_, shape_index_;
+  std::vector<CriticalStart> critical_starts_;
   // Front edges by length (length, start node, end node), a max-heap with lazy deletion: an
   // entry is stale once its start node has left the fronts or links elsewhere.
   mutable std::priority_queue<std::tuple<double, int, int>> front_edges_;
@@ -327,11 +345,7 @@ class Tracker {
   // where the current component's vertices and triangles begin.
   std::vector<char> dead_;
   std::vector<std::pair<Vec3, int>> rollback_places_;
-  // Balls where a rollback meshes again with shorter edges: (centre, radius, longest edge).
-  struct FinerZone {
-    Vec3 center;
-    double radius, edge;
-  };
+  // Balls where edges are shorter (Settings::finer_zones, and where a rollback meshes again).
   std::vector<FinerZone> finer_zones_;
   std::vector<double> rollback_place_targets_;  // per rollback place: its first longest target
   std::pair<double, Vec3> tightest_{std::numeric_limits<double>::infinity(), Vec3::Zero()};

@@ -1,0 +1,199 @@
+#include "missed_necks.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace cdp::adaptive {
+
+namespace {
+
+// Newton on grad F = 0 converges in a few steps near a nondegenerate critical point; a walk that
+// has not settled by then, or has gone farther than kWalkReach edges, is given up.
+constexpr int kNewtonSteps = 16;
+constexpr double kWalkReach = 2 * kCriticalReach;
+// Settled: the next step below this share of the start's edge (far below any neck the test is
+// for; the noisy Hessians of the MPU models need not reach rounding for a walk to end).
+constexpr double kSettled = 1e-6;
+// Two walks that settle within this share of the edge reached the same critical point.
+constexpr double kSamePoint = 1e-4;
+// A start whose predicted critical point lies within this share of its step of one already
+// walked to (or found) is skipped: the vertices around a saddle all point at it.
+constexpr double kSameTarget = 0.5;
+// Critical points whose zero set lies farther than this many edges are not tested: a neck or
+// tunnel wider than a few edges is one the fronts follow, and the test costs a pass over the mesh.
+constexpr double kThinWaist = 2;
+// Bounds on the work whatever the field: walks started (each at most kNewtonSteps + 1 Hessians),
+// and critical points tested (each a walk up a column of the triangles' hash).
+constexpr std::size_t kMaxNeckWalks = 4096;
+constexpr std::size_t kMaxNeckTests = 1024;
+
+struct Critical {
+  Vec3 point;
+  double value = 0;
+  double radius = 0;  // where the quadratic model reaches zero, along the steepest such direction
+  double edge = 0;
+};
+
+}  // namespace
+
+std::optional<Vec3> step_to_critical_point(const Vec3& gradient, const Mat3& hessian) {
+  const Eigen::FullPivLU<Mat3> lu(hessian);
+  if (!lu.isInvertible()) return std::nullopt;
+  const Vec3 s = -lu.solve(gradient);
+  if (!s.allFinite()) return std::nullopt;
+  return s;
+}
+
+namespace {
+
+// The mean longest edge of the triangles: the hash's cell, so that a cell holds a few triangles.
+double mean_longest_edge(const Mesh& mesh) {
+  double sum = 0;
+  for (const auto& t : mesh.triangles) {
+    const Vec3 &a = mesh.positions[static_cast<std::size_t>(t[0])], &b = mesh.positions[static_cast<std::size_t>(t[1])],
+               &c = mesh.positions[static_cast<std::size_t>(t[2])];
+    sum += std::sqrt(std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}));
+  }
+  const double mean = mesh.triangles.empty() ? 1 : sum / static_cast<double>(mesh.triangles.size());
+  return mean > 0 && std::isfinite(mean) ? mean : 1;
+}
+
+}  // namespace
+
+MeshSides::MeshSides(const Mesh& mesh) : mesh_(mesh), hash_(mean_longest_edge(mesh)), seen_(mesh.triangles.size(), -1) {
+  top_ = -std::numeric_limits<double>::infinity();
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const auto& t = mesh.triangles[f];
+    const Vec3 &a = mesh.positions[static_cast<std::size_t>(t[0])], &b = mesh.positions[static_cast<std::size_t>(t[1])],
+               &c = mesh.positions[static_cast<std::size_t>(t[2])];
+    hash_.insert_box(static_cast<int>(f), a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c));
+    top_ = std::max(top_, std::max({a.z(), b.z(), c.z()}));
+  }
+}
+
+std::optional<bool> MeshSides::inside(const Vec3& p) const {
+  if (mesh_.triangles.empty() || !(p.z() <= top_)) return false;
+  // The side of p's projection from each edge, computed from the edge's lower vertex id so that
+  // the two triangles of an edge get exactly opposite values: p's projection is in at most one
+  // of them, whatever the rounding.
+  const auto side = [&](int u, int v) {
+    const bool flip = u > v;
+    if (flip) std::swap(u, v);
+    const Vec3 &a = mesh_.positions[static_cast<std::size_t>(u)], &b = mesh_.positions[static_cast<std::size_t>(v)];
+    const double d = (b.x() - a.x()) * (p.y() - a.y()) - (b.y() - a.y()) * (p.x() - a.x());
+    return flip ? -d : d;
+  };
+  ++stamp_;
+  int crossings = 0;
+  bool undecided = false;
+  hash_.any_in(p, Vec3(p.x(), p.y(), top_), [&](int f) {
+    if (seen_[static_cast<std::size_t>(f)] == stamp_) return false;
+    seen_[static_cast<std::size_t>(f)] = stamp_;
+    const auto& t = mesh_.triangles[static_cast<std::size_t>(f)];
+    const double d0 = side(t[1], t[2]), d1 = side(t[2], t[0]), d2 = side(t[0], t[1]);
+    if ((d0 < 0 || d1 < 0 || d2 < 0) && (d0 > 0 || d1 > 0 || d2 > 0)) return false;  // projection misses
+    const double sum = d0 + d1 + d2;
+    if (d0 == 0 || d1 == 0 || d2 == 0 || sum == 0) {
+      undecided = true;
+      return true;
+    }
+    const double z = (d0 * mesh_.positions[static_cast<std::size_t>(t[0])].z() +
+                      d1 * mesh_.positions[static_cast<std::size_t>(t[1])].z() +
+                      d2 * mesh_.positions[static_cast<std::size_t>(t[2])].z()) /
+                     sum;
+    if (z == p.z()) {
+      undecided = true;
+      return true;
+    }
+    if (z > p.z()) ++crossings;
+    return false;
+  });
+  if (undecided) return std::nullopt;
+  return crossings % 2 == 1;
+}
+
+NeckSearch find_missed_neck(const Field& field, const Mesh& mesh, std::span<const CriticalStart> starts) {
+  NeckSearch out;
+  if (starts.empty() || mesh.triangles.empty()) return out;
+  double mean_edge = 0;
+  for (const CriticalStart& s : starts) mean_edge += s.edge;
+  mean_edge /= static_cast<double>(starts.size());
+  if (!(mean_edge > 0) || !std::isfinite(mean_edge)) return out;
+  SpatialHash claimed(mean_edge);
+  std::vector<Vec3> targets;
+  std::vector<Critical> found;
+  const auto near_claimed = [&](const Vec3& q, double r) {
+    bool hit = false;
+    claimed.for_each_near(q, r, [&](int id) {
+      if ((targets[static_cast<std::size_t>(id)] - q).squaredNorm() <= r * r) hit = true;
+    });
+    return hit;
+  };
+  const auto claim = [&](const Vec3& q) {
+    claimed.insert(static_cast<int>(targets.size()), q);
+    targets.push_back(q);
+  };
+
+  for (const CriticalStart& start : starts) {
+    const double reach = start.step.norm();
+    if (!(reach <= kCriticalReach * start.edge) || !(start.edge > 0)) continue;
+    const Vec3 predicted = start.point + start.step;
+    if (near_claimed(predicted, kSameTarget * reach)) continue;
+    if (out.walks == kMaxNeckWalks) break;
+    ++out.walks;
+    claim(predicted);
+    Vec3 x = predicted;
+    bool settled = false;
+    double value = 0;
+    Vec3 g;
+    Mat3 H;
+    for (int it = 0; it < kNewtonSteps; ++it) {
+      value = field.gradient_hessian(x, g, H);
+      const auto s = step_to_critical_point(g, H);
+      if (!s) break;
+      if (s->norm() <= kSettled * start.edge) {  // value, g and H are those at x
+        settled = true;
+        break;
+      }
+      x += *s;
+      if ((x - start.point).norm() > kWalkReach * start.edge) break;
+    }
+    if (!settled || !std::isfinite(value) || value == 0) continue;  // F = 0: a singular point, not a neck
+    claim(x);
+    bool known = false;
+    for (const Critical& c : found)
+      if ((c.point - x).norm() <= kSamePoint * start.edge) known = true;
+    if (known) continue;
+    // The quadratic model F(c) + d^T H d / 2 reaches zero along eigenvectors whose eigenvalue has
+    // the opposite sign of F(c); the nearest such zero is the neck's or the tunnel's radius.
+    const Eigen::SelfAdjointEigenSolver<Mat3> eig(H, Eigen::EigenvaluesOnly);
+    double radius = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      const double lambda = eig.eigenvalues()[k];
+      if (lambda * value < 0) radius = std::min(radius, std::sqrt(2 * std::abs(value) / std::abs(lambda)));
+    }
+    found.push_back({x, value, radius, start.edge});
+  }
+  out.critical_points = found.size();
+
+  std::vector<const Critical*> thin;
+  for (const Critical& c : found)
+    if (c.radius <= kThinWaist * c.edge) thin.push_back(&c);
+  std::stable_sort(thin.begin(), thin.end(), [](const Critical* a, const Critical* b) { return a->radius < b->radius; });
+  if (thin.size() > kMaxNeckTests) thin.resize(kMaxNeckTests);
+  if (thin.empty()) return out;
+  const MeshSides sides(mesh);
+  for (const Critical* c : thin) {
+    ++out.tested;
+    const auto inside = sides.inside(c->point);
+    if (!inside || *inside == (c->value < 0)) continue;
+    out.missed.push_back({c->point, c->value, 2 * c->radius, c->edge});
+  }
+  return out;
+}
+
+}  // namespace cdp::adaptive
