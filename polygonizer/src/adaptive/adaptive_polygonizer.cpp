@@ -414,6 +414,39 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   // The careful run's edges turn the normal by at most one radian (Sizing::max_turn).
   constexpr double kCarefulMaxTurn = 1;
   bool careful = false;
+  // A neck or tunnel a run stepped over is approached with edges as short as its radius (not
+  // below min_edge) from kNeckZoneEdges of that run's edges around it, so that the fronts reach
+  // it with edges that cannot jump it: a front outside the ball places points at most about an
+  // edge into it, and the grading lets the edges grow back only by kGrowth per edge. (3 edges
+  // meshed the 11 runs of the topology sweep as well, with 1.1-2.9 times the triangles.)
+  constexpr double kNeckZoneEdges = 1.5;
+  const auto zone_missed_necks = [&] {
+    for (const adaptive::MissedNeck& m : necks.missed)
+      settings.finer_zones.push_back(
+          {m.point, 0.5 * m.width + kNeckZoneEdges * m.edge, std::max(s.sizing.min_edge, 0.5 * m.width)});
+  };
+  // A run whose mesh stepped over necks is first made again as it was, with the balls around
+  // them: the rest of its mesh passed every check, and the careful run's sizing is finer
+  // everywhere and fails more often (blobs38 of the topology sweep at factor 1: its careful mesh
+  // intersected itself far from the neck). Again while a run steps over more necks, at most
+  // kNeckRuns runs; the careful run follows when they fail, with the balls found so far.
+  constexpr int kNeckRuns = 3;
+  std::size_t neck_reruns = 0;
+  const auto rerun_around_necks = [&] {
+    if (options.variant != Variant::Improved || options.max_triangles > 0 || options.max_steps > 0) return false;
+    for (int run = 0; run < kNeckRuns && !necks.missed.empty(); ++run) {
+      zone_missed_necks();
+      ++neck_reruns;
+      try {
+        attempt();
+        return true;
+      } catch (const NoSurfaceError&) {
+      } catch (const LimitExceededError&) {
+        return false;
+      }
+    }
+    return false;
+  };
   // Not after a run stopped by the caller's own bounds (max_triangles, max_steps: the careful run
   // makes shorter edges and would pass them sooner), nor for a field whose seeding found no sign
   // change (not even by its search for small components); only the polygonizer's own errors are retried (an exception from a callable field or
@@ -423,19 +456,12 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       return false;
     settings.anticipate = careful = true;
     settings.sizing.max_turn = kCarefulMaxTurn;
-    // A neck or tunnel a run stepped over is approached with edges as short as its radius (not
-    // below min_edge) from kNeckZoneEdges of that run's edges around it, so that the fronts reach
-    // it with edges that cannot jump it: the grading lets them grow back only by kGrowth per
-    // edge, and a front outside the ball places points at most an edge into it. A careful run
-    // that steps over another one is made again with a ball there too, at most kCarefulRuns in
-    // all (blobs30 of the topology sweep at factors 1 and 2: the careful run, its curvature
-    // sizing finer everywhere, met a second neck).
-    constexpr double kNeckZoneEdges = 3;
+    // A careful run that steps over another neck is made again with a ball there too, at most
+    // kCarefulRuns in all (blobs30 of the topology sweep at factors 1 and 2: the careful run,
+    // its curvature sizing finer everywhere, met a second neck).
     constexpr int kCarefulRuns = 3;
     for (int run = 0; run < kCarefulRuns; ++run) {
-      for (const adaptive::MissedNeck& m : necks.missed)
-        settings.finer_zones.push_back(
-            {m.point, 0.5 * m.width + kNeckZoneEdges * m.edge, std::max(s.sizing.min_edge, 0.5 * m.width)});
+      zone_missed_necks();
       try {
         attempt();
         // Stricter than attempt's own test: no two components may face each other across the
@@ -453,7 +479,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     try {
       attempt();
     } catch (const NoSurfaceError&) {
-      if (!retry_carefully()) throw;
+      if (!rerun_around_necks() && !retry_carefully()) throw;
     } catch (const LimitExceededError&) {
       if (!retry_carefully()) throw;
     }
@@ -508,6 +534,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["necks.walks"] = necks.walks;
   st.extra["necks.critical_points"] = necks.critical_points;
   st.extra["necks.tested"] = necks.tested;
+  st.extra["necks.reruns"] = neck_reruns;
   note_tightest();
   st.extra["curvature.min_radius"] = std::isfinite(tightest.first) ? tightest.first : -1.0;
   st.extra["min_angle_degrees"] = min_angle_degrees(mesh);
