@@ -391,7 +391,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
                              "than its edges");
     // They pass a mesh that stepped over a neck or a tunnel narrower than its edges, too: a
     // handle too few, each component whole (missed_necks.h).
-    necks = adaptive::find_missed_neck(field, mesh, tracker->critical_starts());
+    necks = adaptive::find_missed_necks(field, mesh, tracker->critical_starts());
     if (!necks.missed.empty()) {
       const adaptive::MissedNeck& m = necks.missed.front();
       std::ostringstream msg;
@@ -432,8 +432,11 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   // kNeckRuns runs; the careful run follows when they fail, with the balls found so far.
   constexpr int kNeckRuns = 3;
   std::size_t neck_reruns = 0;
+  // Not after a run stopped by the caller's own bounds (max_triangles, max_steps: a run made
+  // again with shorter edges would pass them sooner), nor in paper mode.
+  const bool may_mesh_again = options.variant == Variant::Improved && options.max_triangles == 0 && options.max_steps == 0;
   const auto rerun_around_necks = [&] {
-    if (options.variant != Variant::Improved || options.max_triangles > 0 || options.max_steps > 0) return false;
+    if (!may_mesh_again) return false;
     for (int run = 0; run < kNeckRuns && !necks.missed.empty(); ++run) {
       zone_missed_necks();
       ++neck_reruns;
@@ -447,13 +450,11 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     }
     return false;
   };
-  // Not after a run stopped by the caller's own bounds (max_triangles, max_steps: the careful run
-  // makes shorter edges and would pass them sooner), nor for a field whose seeding found no sign
-  // change (not even by its search for small components); only the polygonizer's own errors are retried (an exception from a callable field or
-  // a cancellation goes on unchanged).
+  // As the reruns (may_mesh_again), and not for a field whose seeding found no sign change (not
+  // even by its search for small components); only the polygonizer's own errors are retried (an
+  // exception from a callable field or a cancellation goes on unchanged).
   const auto retry_carefully = [&] {
-    if (options.variant != Variant::Improved || options.max_triangles > 0 || options.max_steps > 0 || no_crossing)
-      return false;
+    if (!may_mesh_again || no_crossing) return false;
     settings.anticipate = careful = true;
     settings.sizing.max_turn = kCarefulMaxTurn;
     // A careful run that steps over another neck is made again with a ball there too, at most

@@ -116,7 +116,7 @@ std::optional<bool> MeshSides::inside(const Vec3& p) const {
   return crossings % 2 == 1;
 }
 
-NeckSearch find_missed_neck(const Field& field, const Mesh& mesh, std::span<const CriticalStart> starts) {
+NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<const CriticalStart> starts) {
   NeckSearch out;
   if (starts.empty() || mesh.triangles.empty()) return out;
   double mean_edge = 0;
@@ -139,10 +139,8 @@ NeckSearch find_missed_neck(const Field& field, const Mesh& mesh, std::span<cons
   };
 
   for (const CriticalStart& start : starts) {
-    const double reach = start.step.norm();
-    if (!(reach <= kCriticalReach * start.edge) || !(start.edge > 0)) continue;
     const Vec3 predicted = start.point + start.step;
-    if (near_claimed(predicted, kSameTarget * reach)) continue;
+    if (near_claimed(predicted, kSameTarget * start.step.norm())) continue;
     if (out.walks == kMaxNeckWalks) break;
     ++out.walks;
     claim(predicted);
@@ -164,10 +162,9 @@ NeckSearch find_missed_neck(const Field& field, const Mesh& mesh, std::span<cons
     }
     if (!settled || !std::isfinite(value) || value == 0) continue;  // F = 0: a singular point, not a neck
     claim(x);
-    bool known = false;
-    for (const Critical& c : found)
-      if ((c.point - x).norm() <= kSamePoint * start.edge) known = true;
-    if (known) continue;
+    if (std::any_of(found.begin(), found.end(),
+                    [&](const Critical& c) { return (c.point - x).norm() <= kSamePoint * start.edge; }))
+      continue;
     // The quadratic model F(c) + d^T H d / 2 reaches zero along eigenvectors whose eigenvalue has
     // the opposite sign of F(c); the nearest such zero is the neck's or the tunnel's radius.
     const Eigen::SelfAdjointEigenSolver<Mat3> eig(H, Eigen::EigenvaluesOnly);

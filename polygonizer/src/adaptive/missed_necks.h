@@ -54,12 +54,12 @@ struct NeckSearch {
   std::size_t tested = 0;           // thin enough to test against the mesh (at most kMaxNeckTests)
 };
 
-// Walks Newton from the starts whose step is at most kCriticalReach of their edge (in order,
-// skipping one whose predicted critical point is already found), keeps the critical points whose
+// Walks Newton from the starts (the tracker keeps only those whose step is at most kCriticalReach
+// of their edge; in order, skipping one whose predicted critical point is already claimed), keeps the critical points whose
 // quadratic model reaches zero within kThinWaist edges (the thin ones, which fronts can step
 // over), and tests each, thinnest first, for the side of the mesh it lies on (MeshSides). The
 // mesh must be closed (the tracker's checks come first).
-NeckSearch find_missed_neck(const Field& field, const Mesh& mesh, std::span<const CriticalStart> starts);
+NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<const CriticalStart> starts);
 
 // Which side of a closed mesh points lie on: the parity of the triangles a ray from the point
 // along +z crosses, the triangles hashed by their boxes once so that a query looks only at the
