@@ -79,6 +79,22 @@ void expect_sound(const Mesh& mesh, const std::string& what) {
   EXPECT_EQ(test::count_self_intersections(mesh), 0u) << what;
 }
 
+// The repair and the relaxation move vertices: each must still lie on the surface (first-order
+// distance within Newton's tolerance, 1e-10 of the diagonal, with room for rounding) and carry
+// the field's normal there.
+void expect_on_surface(const Field& field, const Mesh& mesh, const std::string& what) {
+  const double diagonal = field.bounds().diagonal();
+  std::size_t off = 0, turned = 0;
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    Vec3 g;
+    const double f = field.value_gradient(mesh.positions[v], g);
+    if (!(std::abs(f) <= 1e-8 * diagonal * g.norm())) ++off;
+    if (!(g.normalized().dot(mesh.normals[v]) > 1 - 1e-9)) ++turned;
+  }
+  EXPECT_EQ(off, 0u) << what << ": vertices off the surface";
+  EXPECT_EQ(turned, 0u) << what << ": normals that are not the field's";
+}
+
 struct SmoothCase {
   std::size_t surface;
   double factor;
@@ -86,6 +102,9 @@ struct SmoothCase {
 
 // The bound on smooth surfaces: no angle under 20 degrees, at most 1% of triangles with
 // one under 30. Prints the figures (the table the note quotes).
+// The bound on the mean over triangles of longest / shortest edge.
+constexpr double kMeanEdgeRatio = 1.25;
+
 AngleStatistics expect_smooth_angles(const Mesh& mesh, const std::string& what) {
   const AngleStatistics a = angle_statistics(mesh);
   std::cout << "angles " << what << ": " << mesh.num_triangles() << " triangles, min " << a.min_degrees
@@ -106,8 +125,14 @@ TEST_P(SmoothAngles, EveryTriangleAtLeast20Degrees) {
   const PolygonizeResult r = polygonize_adaptive(*field, o);
   const std::string what = s.name + " factor " + std::to_string(GetParam().factor);
   expect_sound(r.mesh, what);
+  expect_on_surface(*field, r.mesh, what);
   const AngleStatistics a = expect_smooth_angles(r.mesh, what);
   EXPECT_EQ(a.degenerate, 0u) << what;
+  // The relaxation's mean edge ratio (quality.cpp, relax). Factors 1 and 2 stay above on the
+  // graded surfaces (blobs_103 at factor 1: 1.28, chmutov4 at 2: 1.2501): their edge lengths
+  // change by up to the grading's 1.5 from one edge to the next, which moving vertices cannot
+  // undo (polygonizer README, Known limits).
+  if (GetParam().factor >= 3) EXPECT_LE(a.mean_edge_ratio, kMeanEdgeRatio) << what;
 }
 
 std::vector<SmoothCase> smooth_cases() {
@@ -157,7 +182,9 @@ TEST(AdaptiveAngles, BunnyVis800WorstTriangle) {
     const PolygonizeResult r = polygonize_adaptive(*field, o);
     const std::string what = "bunny vis800 factor " + std::to_string(k);
     expect_sound(r.mesh, what);
-    expect_smooth_angles(r.mesh, what);
+    const AngleStatistics a = expect_smooth_angles(r.mesh, what);
+    // 1.30 at factor 3 before the relaxation; factor 1 stays at 1.27 (see SmoothAngles).
+    if (k >= 3) EXPECT_LE(a.mean_edge_ratio, kMeanEdgeRatio) << what;
   }
   // The paper's method alone, for contrast: the slivers the repair removes are there.
   o.factor = 3;
@@ -263,7 +290,7 @@ TEST(AdaptivePaperVariant, SwitchesOffEveryAddition) {
   EXPECT_FALSE(x.at("grading").get<bool>());
   EXPECT_FALSE(x.at("quality_repair").get<bool>());
   EXPECT_FALSE(x.at("tolerance_refinement").get<bool>());
-  for (const char* k : {"quality.flips", "quality.moves", "quality.collapses", "quality.splits"})
+  for (const char* k : {"quality.flips", "quality.moves", "quality.relaxed", "quality.collapses", "quality.splits"})
     EXPECT_EQ(x.at(k).get<std::size_t>(), 0u) << k;
   expect_sound(p.mesh, "paper tanglecube");
 
@@ -274,6 +301,8 @@ TEST(AdaptivePaperVariant, SwitchesOffEveryAddition) {
   EXPECT_TRUE(d.stats.extra.at("grading").get<bool>());
   EXPECT_TRUE(d.stats.extra.at("quality_repair").get<bool>());
   EXPECT_GT(d.stats.extra.at("quality.flips").get<std::size_t>(), 0u);
+  EXPECT_GT(d.stats.extra.at("quality.relaxed").get<std::size_t>(), 0u);
+  EXPECT_LT(angle_statistics(d.mesh).mean_edge_ratio, angle_statistics(p.mesh).mean_edge_ratio);
   EXPECT_GT(angle_statistics(d.mesh).min_degrees, angle_statistics(p.mesh).min_degrees);
 
   // Tolerance: the paper sizes edges for a sagitta of eps at the point (edge_length reports the

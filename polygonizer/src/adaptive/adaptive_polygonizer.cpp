@@ -346,7 +346,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       quality = adaptive::improve_mesh(field, mesh, qo);
     }
     if (s.curvature_properties) {
-      if (quality.moves + quality.collapses + quality.splits + quality.inserts == 0) {
+      if (quality.moves + quality.relaxed + quality.collapses + quality.splits + quality.inserts == 0) {
         mesh.vertex_scalars["mac"] = tracker->vertex_mac();
         mesh.vertex_scalars["shape_index"] = tracker->vertex_shape_index();
       } else {
@@ -553,6 +553,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["quality.bad_after"] = quality.bad_after;
   st.extra["quality.flips"] = quality.flips;
   st.extra["quality.moves"] = quality.moves;
+  st.extra["quality.relaxed"] = quality.relaxed;
   st.extra["quality.collapses"] = quality.collapses;
   st.extra["quality.splits"] = quality.splits;
   st.extra["quality.inserts"] = quality.inserts;

@@ -1,15 +1,18 @@
-// Local repair of the few badly shaped triangles the fronts leave behind, and the check that
-// makes --tolerance a distance bound. Neither is a re-meshing: both start from the triangles
-// that fail their test (smallest angle under a bound; a sample farther from the surface than
-// the tolerance) and change only those triangles and their immediate neighbours (the stars of
-// the vertices involved), with operations that keep the surface, the topology and the
-// orientation: edge flips, tangential vertex moves projected back onto the surface by Newton,
-// edge collapses and edge splits at surface points. Every operation is tested before it is
-// applied (it must raise the smallest angle it touches, keep its triangles turned like the
+// Local repair of the few badly shaped triangles the fronts leave behind, a relaxation of the
+// stretched ones, and the check that makes --tolerance a distance bound. None is a re-meshing:
+// each starts from the triangles that fail its test (smallest angle under a bound; longest edge
+// over 1.3 times the shortest; a sample farther from the surface than the tolerance) and
+// changes only those triangles and their immediate neighbours (the stars of the vertices
+// involved), with operations that keep the surface, the topology and the orientation: edge
+// flips, tangential vertex moves projected back onto the surface by Newton, edge collapses and
+// edge splits at surface points. Every operation is tested before it is applied (it must raise
+// the smallest angle it touches, or for the relaxation lower the mean edge ratio of its star
+// without taking its smallest angle under 30 degrees; keep its triangles turned like the
 // surface, keep the chord deviation and, with a tolerance, the distance bound, and intersect no
 // triangle nearby), so the result is never worse than the input on any of these counts.
-// Deterministic: triangles are visited in a fixed order (smallest angle, then index), and every
-// loop is bounded by kQualityRounds rounds over a shrinking work list.
+// Deterministic: triangles are visited in a fixed order (smallest angle, then index; the
+// relaxation's vertices by index), and every loop is bounded (kQualityRounds rounds over a
+// shrinking work list, kRelaxSweeps sweeps).
 #pragma once
 
 #include <cdp/core/field.h>
@@ -23,6 +26,8 @@ struct QualityReport {
   std::size_t bad_before = 0;  // triangles under the angle bound before the pass
   std::size_t bad_after = 0;
   std::size_t flips = 0, moves = 0, collapses = 0;
+  // Vertices the relaxation moved (moves kept, over its sweeps).
+  std::size_t relaxed = 0;
   // Vertices added: splits of edges for the tolerance, inserts in the quad around a cap's
   // longest edge for the angles.
   std::size_t splits = 0, inserts = 0;
