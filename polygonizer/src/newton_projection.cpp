@@ -45,6 +45,7 @@ Limits resolve(const Field& field, const ProjectionOptions& options) {
 // and the batched projection both go through here, so their points follow the same arithmetic.
 bool newton_round(ProjectionResult& r, const Vec3& start, double f, const Vec3& g, const Limits& l) {
   if (r.iterations == 0) r.start_gradient = g;
+  r.gradient = g;
   const double g2 = g.squaredNorm();
   if (!std::isfinite(f) || !std::isfinite(g2)) {
     r.status = ProjectionStatus::NotFinite;

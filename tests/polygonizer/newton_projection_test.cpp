@@ -27,6 +27,15 @@ TEST(NewtonProjection, ConvergesOntoTheSurfaceFromNearbyPoints) {
   }
 }
 
+TEST(NewtonProjection, ReportsTheGradientWhereItLanded) {
+  // The quality pass takes the landed point's normal from the result instead of evaluating again.
+  Torus t(Vec3::Zero(), 1.0, 0.3);
+  const ProjectionResult r = project_to_surface(t, Vec3(0.8, 0.8, 0.2));
+  ASSERT_TRUE(r.ok()) << to_string(r.status);
+  EXPECT_EQ(r.gradient, t.gradient(r.point));
+  EXPECT_NE(r.gradient, r.start_gradient);
+}
+
 TEST(NewtonProjection, ConvergesQuadraticallyOnAPolynomialField) {
   const auto f = test::tanglecube();
   const ProjectionResult r = project_to_surface(*f, Vec3(2.0, 0.3, 0.1));

@@ -919,20 +919,17 @@ class Improver {
       }
       if (moving.empty()) break;
       const std::vector<ProjectionResult> landed = project_to_surface(field_, starts, opts);
-      std::vector<Vec3> points(moving.size()), grads(moving.size());
-      std::vector<double> values(moving.size());
-      for (std::size_t i = 0; i < moving.size(); ++i) points[i] = landed[i].ok() ? landed[i].point : P(moving[i]);
-      field_.values_gradients(points.data(), values.data(), grads.data(), points.size());
       bool changed = false;
       for (std::size_t i = 0; i < moving.size(); ++i) {
-        if (!landed[i].ok() || !(grads[i].squaredNorm() > 0)) continue;
+        if (!landed[i].ok() || !(landed[i].gradient.squaredNorm() > 0)) continue;
         const int v = moving[i];
-        const Vec3 ng = grads[i].normalized();
+        const Vec3 ng = landed[i].gradient.normalized();
+        const Vec3& target = landed[i].point;
         if (!(ng.dot(m_.normals[v]) > kMoveNormalCos)) continue;
         const StarShape before = star_shape(v);
         const double floor = facing_floor(vt_[v]);
         const Vec3 saved = P(v), saved_n = m_.normals[v];
-        m_.positions[v] = points[i];
+        m_.positions[v] = target;
         m_.normals[v] = ng;
         const StarShape after = star_shape(v);
         bool ok = after.mean_ratio < before.mean_ratio * (1 - kRelaxMinGain) &&
@@ -952,11 +949,12 @@ class Improver {
           for (int u : vt_[v]) old_dist = std::max(old_dist, estimate_distance(m_.triangles[u]));
           ok = new_dist <= old_dist;
         }
-        if (ok) ok = !star_intersects(v, points[i]);
+        if (ok) ok = !star_intersects(v, target);
         if (!ok) continue;
-        m_.positions[v] = points[i];
+        m_.positions[v] = target;
         m_.normals[v] = ng;
-        crease_[v] = -1;  // as try_move: asked again where it is now
+        // Unlike try_move, the crease test is not asked again (3 evaluations): v was not on a
+        // crease, and Newton lands it on one piece's zero set, on a crease only by accident.
         moved[v] = 1;
         for (int u : vt_[v]) {
           hash_box(u);

@@ -32,6 +32,9 @@ struct ProjectionResult {
   // The gradient at `start` (the first Newton evaluation; zero if there was none). Where it and
   // the gradient at `point` point different ways, the projection crossed a crease of the field.
   Vec3 start_gradient = Vec3::Zero();
+  // The gradient at the last point evaluated: when ok(), at `point` (so that a caller needing the
+  // normal there need not evaluate the field again).
+  Vec3 gradient = Vec3::Zero();
   bool ok() const { return status == ProjectionStatus::Converged; }
 };
 
