@@ -449,26 +449,15 @@ class Improver {
     centroid /= static_cast<double>(ring.size());
     const Vec3 x = P(v), n = m_.normals[v];
     // Two targets: the centroid of the neighbours (Laplacian smoothing), and the mean of the
-    // apexes of equilateral triangles over the star's outer edges, which pulls v towards where
-    // each of its triangles would be equilateral and opens small angles the centroid leaves.
-    Vec3 apex_mean = Vec3::Zero();
-    int apexes = 0;
-    for (int u : vt_[v]) {
-      const Tri& t = m_.triangles[u];
-      int k = 0;
-      while (t[k] != v) ++k;
-      const Vec3 &a = P(t[(k + 1) % 3]), &b = P(t[(k + 2) % 3]);
-      const Vec3 side = n.cross(b - a);  // towards v's side of edge a -> b, seen from outside
-      if (!(side.squaredNorm() > 0)) continue;
-      apex_mean += 0.5 * (a + b) + std::sqrt(3.0) / 2 * (b - a).norm() * side.normalized();
-      ++apexes;
-    }
+    // apexes of equilateral triangles over the star's outer edges (equilateral_step), which
+    // pulls v towards where each of its triangles would be equilateral and opens small angles
+    // the centroid leaves.
     std::vector<Vec3> steps;
-    for (const Vec3& target : {centroid, apexes > 0 ? Vec3(apex_mean / apexes) : centroid}) {
-      Vec3 step = target - x;
-      step -= n * n.dot(step);
-      steps.push_back(step);
-    }
+    Vec3 to_centroid = centroid - x;
+    to_centroid -= n * n.dot(to_centroid);
+    steps.push_back(to_centroid);
+    const Vec3 to_equilateral = equilateral_step(v);
+    steps.push_back(to_equilateral.squaredNorm() > 0 ? to_equilateral : to_centroid);
     double shortest = std::numeric_limits<double>::infinity();
     for (int w : ring) shortest = std::min(shortest, (P(w) - x).norm());
     double before = std::numeric_limits<double>::infinity();
@@ -835,7 +824,7 @@ class Improver {
       int k = 0;
       while (t[k] != v) ++k;
       const Vec3 &a = P(t[(k + 1) % 3]), &b = P(t[(k + 2) % 3]);
-      const Vec3 side = n.cross(b - a);
+      const Vec3 side = n.cross(b - a);  // towards v's side of edge a -> b, seen from outside
       if (!(side.squaredNorm() > 0)) continue;
       apex_mean += 0.5 * (a + b) + std::sqrt(3.0) / 2 * (b - a).norm() * side.normalized();
       ++apexes;
