@@ -32,7 +32,7 @@ EXTRA = [
     ("min_angle_mean", "Mean min angle (°)", "{:.1f}"),
 ]
 LABELS = {"adaptive_paper": "Ours, paper mode (the algorithm as printed, factor k: --variant paper)",
-          "adaptive": "Ours (adaptive, factor k: the paper plus grading and the local repair of slivers)",
+          "adaptive": "Ours (adaptive, factor k: the paper plus grading, the local repair of slivers and the relaxation of stretched triangles)",
           "mt": "Marching Tetrahedra (precision p)",
           "mc": "Marching Cubes (precision p)", "adaptive_tolerance": "Ours (adaptive, tolerance ε)"}
 
