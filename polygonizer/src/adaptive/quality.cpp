@@ -64,8 +64,11 @@ constexpr double kToleranceMargin = 0.9;
 // every offending triangle, and 24 halvings take any edge below min_edge.
 constexpr int kRefineRounds = 24;
 // relax: vertices of triangles whose longest edge exceeds this times their shortest are moved
-// (an equilateral triangle is 1; the fronts make 1.22 on average where sizes do not change, and
-// 1.3 takes about a third of the vertices on the bunny; 1.2 took more for the same result).
+// (an equilateral triangle is 1; the fronts make 1.22 on average where sizes do not change). On
+// the bunny VIS-800 at factor 3, 40 % of the triangles exceed it and 89 % of the vertices are
+// candidates: a smoothing of most of the mesh, though not a re-meshing (the connectivity stays).
+// 1.2 (98 % of the vertices) gained under 0.01 more; 1.4 left Chmutov's quartic and the Igea
+// VIS-4004 at factor 3 at 1.250 and 1.257.
 constexpr double kRelaxRatio = 1.3;
 // Sweeps of the relaxation: the second lowers the mean ratio by about another 0.01, a third by
 // under 0.005.

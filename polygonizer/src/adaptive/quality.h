@@ -1,11 +1,12 @@
 // Local repair of the few badly shaped triangles the fronts leave behind, a relaxation of the
-// stretched ones, and the check that makes --tolerance a distance bound. None is a re-meshing:
-// each starts from the triangles that fail its test (smallest angle under a bound; longest edge
-// over 1.3 times the shortest; a sample farther from the surface than the tolerance) and
-// changes only those triangles and their immediate neighbours (the stars of the vertices
-// involved), with operations that keep the surface, the topology and the orientation: edge
-// flips, tangential vertex moves projected back onto the surface by Newton, edge collapses and
-// edge splits at surface points. Every operation is tested before it is applied (it must raise
+// stretched ones (most vertices of a graded mesh), and the check that makes --tolerance a
+// distance bound. None is a re-meshing: each starts from the triangles that fail its test
+// (smallest angle under a bound; longest edge over 1.3 times the shortest; a sample farther
+// from the surface than the tolerance) and changes only those triangles and their immediate
+// neighbours (the stars of the vertices involved; the relaxation moves vertices along the
+// surface and changes no connectivity), with operations that keep the surface, the topology
+// and the orientation: edge flips, tangential vertex moves projected back onto the surface by
+// Newton, edge collapses and edge splits at surface points. Every operation is tested before it is applied (it must raise
 // the smallest angle it touches, or for the relaxation lower the mean edge ratio of its star
 // without taking its smallest angle under 30 degrees; keep its triangles turned like the
 // surface, keep the chord deviation and, with a tolerance, the distance bound, and intersect no
