@@ -213,13 +213,24 @@ class Improver {
   // With a tolerance: new triangles may be no farther from the surface than the tolerance or
   // (before the refinement has run) than the worst of the triangles they replace.
   bool keeps_tolerance(const std::vector<Tri>& added, const std::vector<int>& removed) const {
-    if (!(o_.tolerance > 0)) return true;
-    double allowed = kToleranceMargin * o_.tolerance;
-    double worst_new = 0;
-    for (const Tri& t : added) worst_new = std::max(worst_new, estimate_distance(t));
-    if (worst_new <= allowed) return true;
-    for (int t : removed) allowed = std::max(allowed, estimate_distance(m_.triangles[t]));
-    return worst_new <= allowed;
+    return may_replace(worst_distance(added), removed);
+  }
+  // The largest estimated distance of triangles `ts` at the current positions; 0 without a
+  // tolerance (nothing to keep, no evaluations spent).
+  double worst_distance(const std::vector<Tri>& ts) const {
+    double worst = 0;
+    if (o_.tolerance > 0)
+      for (const Tri& t : ts) worst = std::max(worst, estimate_distance(t));
+    return worst;
+  }
+  // Whether triangles whose worst distance is `worst_new` may replace `removed`, read at the
+  // current positions: a move measures its new star at the new place, puts the vertex back, then
+  // asks this.
+  bool may_replace(double worst_new, const std::vector<int>& removed) const {
+    if (!(o_.tolerance > 0) || worst_new <= kToleranceMargin * o_.tolerance) return true;
+    double worst_old = 0;
+    for (int t : removed) worst_old = std::max(worst_old, estimate_distance(m_.triangles[t]));
+    return worst_new <= worst_old;
   }
 
   // Whether the normal n where an edge's midpoint landed belongs to the edge: within about 30
@@ -501,25 +512,12 @@ class Improver {
         faces = faces && faces_surface(m_.triangles[u], floor);
       }
       bool ok = after > before + kMinGain && faces;
+      const double new_dist = ok ? worst_distance(star) : 0;
+      m_.positions[v] = saved;
+      m_.normals[v] = saved_n;
       if (ok) {
-        // The tolerance test reads the old star at the old place.
-        m_.positions[v] = saved;
-        m_.normals[v] = saved_n;
-        std::vector<Tri> moved_star = star;
         const Vec3 target = pr.point;
-        m_.positions[v] = target;
-        m_.normals[v] = ng;
-        double new_dist = 0;
-        if (o_.tolerance > 0)
-          for (const Tri& s : moved_star) new_dist = std::max(new_dist, estimate_distance(s));
-        m_.positions[v] = saved;
-        m_.normals[v] = saved_n;
-        if (o_.tolerance > 0 && new_dist > kToleranceMargin * o_.tolerance) {
-          double old_dist = 0;
-          for (int u : vt_[v]) old_dist = std::max(old_dist, estimate_distance(m_.triangles[u]));
-          ok = new_dist <= old_dist;
-        }
-        if (ok) ok = !intersects(star, vt_[v], v, target);
+        ok = may_replace(new_dist, vt_[v]) && !intersects(star, vt_[v], v, target);
         if (ok) {
           m_.positions[v] = target;
           m_.normals[v] = ng;
@@ -531,10 +529,7 @@ class Improver {
           ++r_.moves;
           return true;
         }
-        continue;
       }
-      m_.positions[v] = saved;
-      m_.normals[v] = saved_n;
     }
     return false;
   }
@@ -625,16 +620,10 @@ class Improver {
       }
     }
     bool ok = after > before + kMinGain && faces;
-    double new_dist = 0;
-    if (ok && o_.tolerance > 0)
-      for (const Tri& s : added) new_dist = std::max(new_dist, estimate_distance(s));
+    const double new_dist = ok ? worst_distance(added) : 0;
     m_.positions[a] = saved;
     m_.normals[a] = saved_n;
-    if (ok && o_.tolerance > 0 && new_dist > kToleranceMargin * o_.tolerance) {
-      double old_dist = 0;
-      for (int w : old) old_dist = std::max(old_dist, estimate_distance(m_.triangles[w]));
-      ok = new_dist <= old_dist;
-    }
+    ok = ok && may_replace(new_dist, old);
     if (ok) ok = !intersects(added, old, a, x);
     if (!ok) return false;
     m_.positions[a] = x;
@@ -931,16 +920,10 @@ class Improver {
           star.push_back(m_.triangles[u]);
           ok = ok && faces_surface(m_.triangles[u], floor);
         }
-        double new_dist = 0;
-        if (ok && o_.tolerance > 0)
-          for (const Tri& t : star) new_dist = std::max(new_dist, estimate_distance(t));
+        const double new_dist = ok ? worst_distance(star) : 0;
         m_.positions[v] = saved;
         m_.normals[v] = saved_n;
-        if (ok && o_.tolerance > 0 && new_dist > kToleranceMargin * o_.tolerance) {
-          double old_dist = 0;
-          for (int u : vt_[v]) old_dist = std::max(old_dist, estimate_distance(m_.triangles[u]));
-          ok = new_dist <= old_dist;
-        }
+        ok = ok && may_replace(new_dist, vt_[v]);
         if (ok) ok = !star_intersects(v, target);
         if (!ok) continue;
         m_.positions[v] = target;
