@@ -1,14 +1,15 @@
 // Local repair of the few badly shaped triangles the fronts leave behind, a relaxation of the
 // stretched ones (most vertices of a graded mesh), and the check that makes --tolerance a
 // distance bound. None is a re-meshing: each starts from the triangles that fail its test
-// (smallest angle under a bound; longest edge over 1.3 times the shortest; a sample farther
+// (smallest angle under a bound; longest edge over 1.15 times the shortest; a sample farther
 // from the surface than the tolerance) and changes only those triangles and their immediate
-// neighbours (the stars of the vertices involved; the relaxation moves vertices along the
-// surface and changes no connectivity), with operations that keep the surface, the topology
-// and the orientation: edge flips, tangential vertex moves projected back onto the surface by
-// Newton, edge collapses and edge splits at surface points. Every operation is tested before it is applied (it must raise
-// the smallest angle it touches, or for the relaxation lower the mean edge ratio of its star
-// without taking its smallest angle under 30 degrees; keep its triangles turned like the
+// neighbours (the stars of the vertices involved; the relaxation flips edges and moves vertices
+// along the surface, and adds or removes none), with operations that keep the surface, the
+// topology and the orientation: edge flips, tangential vertex moves projected back onto the
+// surface by Newton, edge collapses and edge splits at surface points. Every operation is
+// tested before it is applied (it must raise the smallest angle it touches, or for the
+// relaxation lower the mean edge ratio of its star, or for its flips bring the valences nearer
+// 6, without taking its smallest angle under 30 degrees; keep its triangles turned like the
 // surface, keep the chord deviation and, with a tolerance, the distance bound, and intersect no
 // triangle nearby), so the result is never worse than the input on any of these counts.
 // Deterministic: triangles are visited in a fixed order (smallest angle, then index; the
@@ -27,8 +28,9 @@ struct QualityReport {
   std::size_t bad_before = 0;  // triangles under the angle bound before the pass
   std::size_t bad_after = 0;
   std::size_t flips = 0, moves = 0, collapses = 0;
-  // Vertices the relaxation moved (moves kept, over its sweeps).
+  // Vertices the relaxation moved (moves kept, over its sweeps), and edges it flipped.
   std::size_t relaxed = 0;
+  std::size_t relax_flips = 0;
   // Vertices added: splits of edges for the tolerance, inserts in the quad around a cap's
   // longest edge for the angles.
   std::size_t splits = 0, inserts = 0;
