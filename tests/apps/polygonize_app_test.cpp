@@ -70,6 +70,33 @@ TEST(PolygonizeApp, AdaptiveKeepsTheInnerSphereOfAHollowBallAndSaysNothingIsUnco
   EXPECT_GT(stats["sign_changes"].get<int>(), 0);
 }
 
+TEST(PolygonizeApp, AToleranceTheMeshCannotKeepIsAOneLineWarningNamingWhere) {
+  // --min-edge 0.05 keeps the refinement from splitting the unit sphere's triangles down to a
+  // distance of 1e-5: the mesh is written (closed and valid), and the broken promise is said on
+  // one line with the count, the worst distance and a place; a tolerance the mesh keeps says
+  // nothing.
+  test::TempDir dir("polygonize_app_over_tolerance");
+  const auto field = dir.write("sphere.json", R"({"type": "sphere", "radius": 1})");
+  const auto out = dir.path / "out.ply", stats = dir.path / "stats.json";
+  const auto r = test::run_app("polygonize", field.string() + " -o " + out.string() +
+                                                 " --quiet --tolerance 1e-5 --min-edge 0.05 --stats " + stats.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(analyze_topology(read_mesh(out)).watertight());
+  const auto s = read_json(stats);
+  const std::size_t over = s["quality"]["over_tolerance"].get<std::size_t>();
+  EXPECT_GT(over, 0u);
+  EXPECT_NE(r.err.find("polygonize: " + field.string() + ": warning: " + std::to_string(over) +
+                       " triangles lie farther from the surface than the tolerance 1e-05 (up to "),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find(", near ("), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+
+  const auto kept = test::run_app("polygonize", field.string() + " -o " + out.string() + " --quiet --tolerance 1e-2");
+  ASSERT_EQ(kept.exit_code, 0) << kept.err;
+  EXPECT_EQ(kept.err, "");
+}
+
 TEST(PolygonizeApp, AdaptiveRunThatCannotFinishIsAnErrorWithoutOutput) {
   // A run stopped by a bound: a one-line error, no mesh file and no stats file.
   test::TempDir dir("polygonize_app_limit");

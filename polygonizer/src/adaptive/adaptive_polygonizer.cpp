@@ -566,6 +566,13 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["quality.inserts"] = quality.inserts;
   st.extra["quality.crease_vertices"] = quality.crease_vertices;
   st.extra["quality.over_tolerance"] = quality.over_tolerance;
+  if (quality.over_tolerance > 0) {
+    st.extra["quality.over_tolerance_worst"] = quality.over_tolerance_worst;
+    const Vec3& c = quality.over_tolerance_near;
+    st.extra["quality.over_tolerance_near_x"] = c.x();
+    st.extra["quality.over_tolerance_near_y"] = c.y();
+    st.extra["quality.over_tolerance_near_z"] = c.z();
+  }
   st.extra["triangle_count_rule"] = to_string(s.rule);
   st.extra["seed_resolution"] = options.seed_resolution;
   if (options.progress) options.progress(1.0);

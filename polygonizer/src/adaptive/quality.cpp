@@ -134,8 +134,17 @@ class Improver {
     over = refine(merged(over, since_check_));
     since_check_.clear();
     repair();
-    for (int t : merged(over, since_check_))
-      if (alive_[t] && estimate_distance(m_.triangles[t]) > kToleranceMargin * o_.tolerance) ++r_.over_tolerance;
+    for (int t : merged(over, since_check_)) {
+      if (!alive_[t]) continue;
+      const Tri& T = m_.triangles[t];
+      const double d = estimate_distance(T);
+      if (!(d > kToleranceMargin * o_.tolerance)) continue;
+      ++r_.over_tolerance;
+      if (!(d <= r_.over_tolerance_worst)) {
+        r_.over_tolerance_worst = d;
+        r_.over_tolerance_near = (P(T[0]) + P(T[1]) + P(T[2])) / 3;
+      }
+    }
     compact();
     return r_;
   }

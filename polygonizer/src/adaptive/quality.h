@@ -37,8 +37,11 @@ struct QualityReport {
   // Vertices found on a crease (never moved, their edges never flipped).
   std::size_t crease_vertices = 0;
   // Triangles whose sampled distance to the surface still exceeds the tolerance (0 unless the
-  // refinement ran out of rounds or could not split without breaking a check).
+  // refinement ran out of rounds or could not split without breaking a check), the largest such
+  // distance and the centroid of the triangle it was sampled on.
   std::size_t over_tolerance = 0;
+  double over_tolerance_worst = 0;
+  Vec3 over_tolerance_near = Vec3::Zero();
 };
 
 struct QualityOptions {
