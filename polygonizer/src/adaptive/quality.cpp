@@ -452,8 +452,9 @@ class Improver {
 
   // ---- operations. Each returns whether it was applied and pushes the triangles it changed.
   // By default a flip must raise the smallest angle of the pair by kMinGain (the repair); with
-  // `for_ratio` it must lower the pair's summed edge ratio by kRelaxMinGain and keep its
-  // smallest angle or at least kRelaxKeepDegrees (the relaxation).
+  // `for_ratio` (the relaxation) it must bring the four corners' valences nearer 6, or keep them
+  // and lower the pair's summed edge ratio by kRelaxMinGain (see below), and keep the pair's
+  // smallest angle or at least kRelaxKeepDegrees.
   bool try_flip(int t, int k, bool for_ratio = false) {
     const Tri T = m_.triangles[t];
     const int a = T[k], b = T[(k + 1) % 3], c = T[(k + 2) % 3];
