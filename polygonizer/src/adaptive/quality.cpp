@@ -919,9 +919,10 @@ class Improver {
   // kRelaxKeepDegrees), its facing and the tolerance, and intersects nothing. Crease vertices
   // stay. A target that does not lower the star's mean ratio in the tangent plane is not
   // projected at all (no evaluation). Before the moves of each sweep, flips of the stretched
-  // triangles' edges towards valence 6 (try_flip's for_ratio). The repair above aims at the worst triangles; this aims at
-  // the many mildly stretched ones where the fronts' edge lengths change (the mean ratio 1.30 ->
-  // 1.20 on the bunny VIS-800 at factor 3; no vertex is added or removed).
+  // triangles' edges towards valence 6 (try_flip's for_ratio). The repair above aims at the
+  // worst triangles; this aims at the many mildly stretched ones where the fronts' edge lengths
+  // change (the mean ratio 1.30 -> 1.20 on the bunny VIS-800 at factor 3; no vertex is added or
+  // removed).
   void relax() {
     const double keep_cos = std::cos(kRelaxKeepDegrees * std::numbers::pi / 180);
     // Vertices moved in the previous sweep: a later sweep moves only those, the vertices whose
