@@ -14,6 +14,7 @@
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_topology.h>
+#include <cdp/io/field_factory.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -318,6 +319,7 @@ TEST(AdaptiveCarefulRun, ACoarseToleranceOnTheNeedleAndABlobFieldAtFactorOneMesh
   const PolygonizeResult b = polygonize_adaptive(*blobs, f1);
   expect_topology(b.mesh, 2, 0);  // marching cubes at cells 0.048 and 0.036 agree: 2 spheres
   EXPECT_TRUE(b.stats.extra.at("remeshed_carefully").get<bool>());
+  EXPECT_EQ(b.stats.extra.at("careful_max_turn").get<double>(), 1.0);  // the careful run's own turn
   // A surface that meshes the first time never gets the careful run.
   o.tolerance = 1e-3;
   EXPECT_FALSE(polygonize_adaptive(*field, o).stats.extra.at("remeshed_carefully").get<bool>());
@@ -557,6 +559,42 @@ TEST(AdaptiveNeckCut, AShellIsNotACut) {
     EXPECT_EQ(analyze_topology(r.mesh).components, 2u) << "factor " << k;
     EXPECT_FALSE(r.stats.extra.at("remeshed_carefully").get<bool>()) << "factor " << k;
   }
+}
+
+}  // namespace
+}  // namespace cdp
+
+namespace cdp {
+namespace {
+
+// A careful run that fails too is made again with edges that turn the normal by half, then a
+// quarter of a radian (kFinerTurns in adaptive_polygonizer.cpp). Two fields of the topology
+// sweep that ended with an error before: blobs18 at factor 1 (both runs intersected themselves
+// near (-0.016, 0.378, -1.306)) meshes at half a radian, and blobs19 at factor 2 (two components
+// facing each other across a neck near (0.129, -0.581, 0.807)) at a quarter; the references are
+// marching cubes at cells 0.048 and 0.036, which agree (results/topology_sweep/summary.csv).
+TEST(AdaptiveFinerRun, WhatTheCarefulRunCannotMeshIsMeshedWithShorterEdgesWhereItBends) {
+  const std::string dir = std::string(CDP_SOURCE_DIR) + "/results/topology_sweep/fields/";
+  const auto b18 = load_field(dir + "blobs18.json");
+  AdaptiveOptions f1;
+  f1.factor = 1;
+  const PolygonizeResult r18 = polygonize_adaptive(*b18, f1);
+  expect_topology(r18.mesh, 3, 0);
+  EXPECT_TRUE(r18.stats.extra.at("remeshed_carefully").get<bool>());
+  EXPECT_EQ(r18.stats.extra.at("careful_max_turn").get<double>(), 0.5);
+
+  const auto b19 = load_field(dir + "blobs19.json");
+  AdaptiveOptions f2;
+  f2.factor = 2;
+  const PolygonizeResult r19 = polygonize_adaptive(*b19, f2);
+  expect_topology(r19.mesh, 2, 0);
+  EXPECT_EQ(r19.stats.extra.at("careful_max_turn").get<double>(), 0.25);
+
+  // A run that meshes the first time has no careful turn.
+  f1.factor = 3;
+  const PolygonizeResult plain = polygonize_adaptive(*b18, f1);
+  EXPECT_FALSE(plain.stats.extra.at("remeshed_carefully").get<bool>());
+  EXPECT_EQ(plain.stats.extra.at("careful_max_turn").get<double>(), 0.0);
 }
 
 }  // namespace

@@ -168,6 +168,8 @@ class Tracker {
   // The surface's area as the seed grid measures it (0: unknown). Progress is reported against
   // it, and a mesh whose area passes kAreaBound times it has a front running over finished mesh.
   void set_estimated_area(double area) { estimated_area_ = area; }
+  // The area of the triangles made so far (with those adopted from the crease patches).
+  double area() const { return area_; }
 
   std::size_t steps() const { return steps_; }
   // Points looked at by the spatial searches (front and vertex hashes).
