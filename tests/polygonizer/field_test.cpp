@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cdp/core/field.h>
+#include <cdp/core/models/compiled.h>
 #include <cdp/core/models/mpu.h>
 #include <cdp/core/models/vis.h>
 
@@ -92,6 +93,38 @@ TEST(FieldBatches, AnEmptyBatchEvaluatesAndCountsNothing) {
   field->values_gradients(nullptr, nullptr, nullptr, 0);
   field->gradients_hessians(nullptr, nullptr, nullptr, nullptr, 0);
   EXPECT_EQ(field->counts().total(), 0u);
+}
+
+}  // namespace
+}  // namespace cdp
+
+namespace cdp {
+namespace {
+
+std::unique_ptr<Field> expression_field(const std::string& value) {
+  return test::field_from_json(R"({"type": "expression", "value": ")" + value +
+                               R"(", "bounds": [[-2,-2,-2],[2,2,2]]})");
+}
+
+// Field::smooth promises a zero set without creases: claimed by the models whose gradient is
+// continuous on the surface, and by expressions made only of operations smooth everywhere.
+TEST(FieldSmooth, ClaimedOnlyWhereNoCreaseCanHide) {
+  EXPECT_TRUE(test::three_separate_blobs()->smooth());
+  EXPECT_TRUE(Torus(Vec3::Zero(), 1.0, 0.3).smooth());
+  EXPECT_TRUE(Vis(test::torus_points(16, 8), 0.03).smooth());
+  MpuOptions o;
+  o.max_error = 0.002;
+  EXPECT_TRUE(Mpu(test::sphere_points(400), o).smooth());
+  EXPECT_TRUE(test::tanglecube()->smooth());  // whole powers, sums and products
+  EXPECT_TRUE(expression_field("exp(-x^2)*sin(y)+cos(z)-0.5")->smooth());
+  const auto compiled = compiled_models();
+  EXPECT_TRUE(compiled.at("tanglecube")()->smooth());
+  EXPECT_TRUE(compiled.at("double_torus")()->smooth());
+  EXPECT_FALSE(compiled.at("capped_cylinder")()->smooth());
+  // Each of these can make a crease or a cusp where the surface passes.
+  for (const char* v : {"max(abs(x),max(abs(y),abs(z)))-1", "min(x,y)", "sqrt(x^2)-0.5", "x^0.5+y-1",
+                        "x^y-1", "log(x^2+y^2)", "tan(x)-y", "1/x-y", "x^-2-y"})
+    EXPECT_FALSE(expression_field(v)->smooth()) << v;
 }
 
 }  // namespace

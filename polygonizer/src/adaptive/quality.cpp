@@ -106,7 +106,7 @@ using Tri = std::array<int, 3>;
 class Improver {
  public:
   Improver(const Field& field, Mesh& mesh, const QualityOptions& o)
-      : field_(field), m_(mesh), o_(o), vt_(mesh.positions.size()), crease_(mesh.positions.size(), -1),
+      : field_(field), smooth_(field.smooth()), m_(mesh), o_(o), vt_(mesh.positions.size()), crease_(mesh.positions.size(), -1),
         alive_(mesh.triangles.size(), 1), hash_(cell_size(mesh)) {
     for (int t = 0; t < static_cast<int>(m_.triangles.size()); ++t) {
       for (int v : m_.triangles[t]) vt_[v].push_back(t);
@@ -286,6 +286,7 @@ class Improver {
 
   // ---- crease vertices
   bool on_crease(int v) {
+    if (smooth_) return false;  // no crease to find (Field::smooth): no probes
     if (crease_[v] >= 0) return crease_[v];
     const Vec3& x = P(v);
     Vec3 g0;
@@ -1096,6 +1097,7 @@ class Improver {
   }
 
   const Field& field_;
+  const bool smooth_;  // Field::smooth
   Mesh& m_;
   QualityOptions o_;
   std::vector<std::vector<int>> vt_;

@@ -42,10 +42,11 @@ struct CappedCylinder {
   }
 };
 
+// `smooth`: a polynomial or other functor without creases on its zero set (Field::smooth).
 template <class Fn>
-CompiledModelMaker compiled(const std::string& name, const Box& bounds) {
-  return [name, bounds]() -> std::unique_ptr<Field> {
-    return std::make_unique<FunctionField<Fn>>(name, Fn{}, bounds);
+CompiledModelMaker compiled(const std::string& name, const Box& bounds, bool smooth) {
+  return [name, bounds, smooth]() -> std::unique_ptr<Field> {
+    return std::make_unique<FunctionField<Fn>>(name, Fn{}, bounds, smooth);
   };
 }
 
@@ -53,9 +54,9 @@ CompiledModelMaker compiled(const std::string& name, const Box& bounds) {
 
 std::map<std::string, CompiledModelMaker> compiled_models() {
   return {
-      {"capped_cylinder", compiled<CappedCylinder>("capped_cylinder", Box{{-1.5, -1.5, -1.5}, {1.5, 1.5, 1.5}})},
-      {"double_torus", compiled<DoubleTorus>("double_torus", Box{{-0.3, -0.7, -0.3}, {2.3, 0.7, 0.3}})},
-      {"tanglecube", compiled<Tanglecube>("tanglecube", Box{{-3, -3, -3}, {3, 3, 3}})},
+      {"capped_cylinder", compiled<CappedCylinder>("capped_cylinder", Box{{-1.5, -1.5, -1.5}, {1.5, 1.5, 1.5}}, false)},
+      {"double_torus", compiled<DoubleTorus>("double_torus", Box{{-0.3, -0.7, -0.3}, {2.3, 0.7, 0.3}}, true)},
+      {"tanglecube", compiled<Tanglecube>("tanglecube", Box{{-3, -3, -3}, {3, 3, 3}}, true)},
   };
 }
 

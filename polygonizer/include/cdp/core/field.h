@@ -119,6 +119,12 @@ class Field {
   // abs). Cheap (a compiled model counts its branch points once, with one evaluation); a model
   // without them is smooth and has no creases.
   virtual bool has_pieces() const { return false; }
+  // Whether the model promises that its zero set has no creases: its gradient is continuous
+  // wherever the surface passes (the VIS, MPU, blob and analytic models; a sphere's centre, a
+  // torus's core circle lie off the surface). The adaptive method's repair then asks no numeric
+  // crease probes (three evaluations per vertex it touches). False by default: a callable field
+  // or an expression may hide a crease (an if on the coordinates, sqrt(x^2)) that only probes find.
+  virtual bool smooth() const { return false; }
   // The piece with `branch` (from pieces()) at another point: the same smooth function, its
   // branches fixed, wherever p is. Throws InvalidInputError for a branch the model cannot have
   // made. Counted as one gradient_hessian.

@@ -11,6 +11,7 @@ class Sphere : public AutodiffField<Sphere> {
   Sphere(const Vec3& center, double radius);
   std::string type_name() const override { return "sphere"; }
   std::optional<double> lipschitz_bound() const override { return 1.0; }
+  bool smooth() const override { return true; }
   template <class T>
   T evaluate(const T& x, const T& y, const T& z) const {
     using std::sqrt;
@@ -29,6 +30,7 @@ class Ellipsoid : public AutodiffField<Ellipsoid> {
   Ellipsoid(const Vec3& center, const Vec3& radii);
   std::string type_name() const override { return "ellipsoid"; }
   std::optional<double> lipschitz_bound() const override { return 1.0; }
+  bool smooth() const override { return true; }
   template <class T>
   T evaluate(const T& x, const T& y, const T& z) const {
     using std::sqrt;
@@ -47,6 +49,7 @@ class Torus : public AutodiffField<Torus> {
   Torus(const Vec3& center, double major_radius, double minor_radius);
   std::string type_name() const override { return "torus"; }
   std::optional<double> lipschitz_bound() const override { return 1.0; }
+  bool smooth() const override { return true; }
   double major_radius() const { return major_; }
   double minor_radius() const { return minor_; }
   template <class T>

@@ -93,10 +93,14 @@ class AutodiffField : public Field {
 template <class Fn>
 class FunctionField : public AutodiffField<FunctionField<Fn>> {
  public:
-  FunctionField(std::string name, Fn fn, const Box& bounds) : name_(std::move(name)), fn_(std::move(fn)) {
+  // `smooth`: the functor's zero set has no creases (Field::smooth); false unless its author
+  // says so.
+  FunctionField(std::string name, Fn fn, const Box& bounds, bool smooth = false)
+      : name_(std::move(name)), fn_(std::move(fn)), smooth_(smooth) {
     this->set_bounds(bounds);
   }
   std::string type_name() const override { return name_; }
+  bool smooth() const override { return smooth_; }
   template <class T>
   T evaluate(const T& x, const T& y, const T& z) const {
     return fn_(x, y, z);
@@ -105,6 +109,7 @@ class FunctionField : public AutodiffField<FunctionField<Fn>> {
  private:
   std::string name_;
   Fn fn_;
+  bool smooth_;
 };
 
 }  // namespace cdp

@@ -22,6 +22,7 @@ class Blobs : public Field {
   Blobs(BlobKernel kernel, double threshold, std::vector<Blob> blobs);
   std::string type_name() const override { return "blobs"; }
   bool thread_safe() const override { return true; }  // evaluation reads immutable data only
+  bool smooth() const override { return true; }
   std::optional<double> lipschitz_bound() const override { return lipschitz_; }
   // Only blobs whose support reaches the region count (Wyvill kernels vanish beyond R).
   std::optional<double> lipschitz_bound(const Box& region) const override;

@@ -63,6 +63,7 @@ class Vis : public Field {
 
   std::string type_name() const override { return "vis"; }
   bool thread_safe() const override { return true; }  // evaluation reads immutable data only
+  bool smooth() const override { return true; }
   // Minimum distance between two on-surface constraint points (the data points; the offset
   // points are at distance d from their own by construction, so they would only restate d).
   std::optional<double> constraint_spacing() const override { return spacing_; }
