@@ -78,7 +78,7 @@ double positive_or_default(const std::optional<double>& v, const char* what) {
 
 std::shared_ptr<PythonField> callable_field(py::object f, py::object bounds, py::object gradient, py::object hessian,
                                             std::optional<double> lipschitz, std::optional<double> gradient_step,
-                                            std::optional<double> hessian_step) {
+                                            std::optional<double> hessian_step, bool smooth) {
   const auto check_callable = [](const py::object& o, const char* what, bool optional) {
     if (optional && o.is_none()) return;
     if (!PyCallable_Check(o.ptr()))
@@ -91,7 +91,7 @@ std::shared_ptr<PythonField> callable_field(py::object f, py::object bounds, py:
   if (lipschitz) positive_or_default(lipschitz, "lipschitz");
   return std::make_shared<PythonField>(PythonFieldFunctions{f, gradient, hessian}, box, lipschitz,
                                        positive_or_default(gradient_step, "gradient_step"),
-                                       positive_or_default(hessian_step, "hessian_step"));
+                                       positive_or_default(hessian_step, "hessian_step"), smooth);
 }
 
 py::dict counts_dict(const EvaluationCounts& c) {
@@ -132,6 +132,10 @@ void bind_fields(py::module_& m) {
             return b ? py::object(py::float_(*b)) : py::object(py::none());
           },
           "A bound on |F(a) - F(b)| / |a - b| inside the box when the model knows one, else None.")
+      .def_property_readonly("smooth", &Field::smooth,
+                             "Whether the model promises a zero set without creases (VIS, MPU, blobs, analytic models, "
+                             "expressions of sums, products, whole powers, exp, sin and cos; a callable_field made "
+                             "with smooth=True).")
       .def(
           "values",
           [](const Field& f, py::handle points) {
@@ -261,10 +265,12 @@ void bind_fields(py::module_& m) {
 
   m.def("callable_field", &callable_field, py::arg("f"), py::arg("bounds"), py::arg("gradient") = py::none(),
         py::arg("hessian") = py::none(), py::kw_only(), py::arg("lipschitz") = py::none(),
-        py::arg("gradient_step") = py::none(), py::arg("hessian_step") = py::none(),
+        py::arg("gradient_step") = py::none(), py::arg("hessian_step") = py::none(), py::arg("smooth") = false,
         "A field from Python functions called on (N, 3) float64 arrays: f -> (N,), gradient -> (N, 3), hessian -> "
         "(N, 3, 3). Missing derivatives come from central differences (steps 1e-5 and 1e-4 of the box diagonal unless "
-        "given). See python/README.md for how often the algorithms call them.");
+        "given). smooth=True promises that the zero set has no creases (no min, max, abs or branch on the "
+        "coordinates where the surface passes): the adaptive method's repair then skips its crease probes, three "
+        "calls per vertex it touches. See python/README.md for how often the algorithms call them.");
 }
 
 }  // namespace cdp::python

@@ -56,8 +56,8 @@ double spacing(const Vec3& p, int k, double h) { return step_up(p, k, h) + step_
 }  // namespace
 
 PythonField::PythonField(PythonFieldFunctions functions, const Box& bounds, std::optional<double> lipschitz,
-                         double gradient_step, double hessian_step)
-    : functions_(std::move(functions)), lipschitz_(lipschitz) {
+                         double gradient_step, double hessian_step, bool smooth)
+    : functions_(std::move(functions)), lipschitz_(lipschitz), smooth_(smooth) {
   bounds_ = bounds;
   gradient_step_ = gradient_step > 0 ? gradient_step : kGradientStep * bounds.diagonal();
   hessian_step_ = hessian_step > 0 ? hessian_step : kHessianStep * bounds.diagonal();

@@ -29,11 +29,12 @@ class PythonField final : public Field {
   // Steps are absolute lengths; non-positive means the defaults (kGradientStep and kHessianStep
   // times the box diagonal).
   PythonField(PythonFieldFunctions functions, const Box& bounds, std::optional<double> lipschitz, double gradient_step,
-              double hessian_step);
+              double hessian_step, bool smooth = false);
   ~PythonField() override;
 
   std::string type_name() const override { return "python"; }
   std::optional<double> lipschitz_bound() const override { return lipschitz_; }
+  bool smooth() const override { return smooth_; }  // as its caller promised
 
   double gradient_step() const { return gradient_step_; }
   double hessian_step() const { return hessian_step_; }
@@ -71,6 +72,7 @@ class PythonField final : public Field {
   std::optional<double> lipschitz_;
   double gradient_step_;
   double hessian_step_;
+  bool smooth_;
   mutable std::atomic<std::uint64_t> python_calls_{0};
 };
 
