@@ -133,9 +133,9 @@ void bind_fields(py::module_& m) {
           },
           "A bound on |F(a) - F(b)| / |a - b| inside the box when the model knows one, else None.")
       .def_property_readonly("smooth", &Field::smooth,
-                             "Whether the model promises a zero set without creases (VIS, MPU, blobs, analytic models, "
-                             "expressions of sums, products, whole powers, exp, sin and cos; a callable_field made "
-                             "with smooth=True).")
+                             "Whether the model promises a regular zero set, without creases, cusps or nodes (VIS, "
+                             "MPU, blobs, analytic models, the compiled tanglecube and double torus; a callable_field "
+                             "made with smooth=True; never an expression).")
       .def(
           "values",
           [](const Field& f, py::handle points) {
@@ -268,9 +268,9 @@ void bind_fields(py::module_& m) {
         py::arg("gradient_step") = py::none(), py::arg("hessian_step") = py::none(), py::arg("smooth") = false,
         "A field from Python functions called on (N, 3) float64 arrays: f -> (N,), gradient -> (N, 3), hessian -> "
         "(N, 3, 3). Missing derivatives come from central differences (steps 1e-5 and 1e-4 of the box diagonal unless "
-        "given). smooth=True promises that the zero set has no creases (no min, max, abs or branch on the "
-        "coordinates where the surface passes): the adaptive method's repair then skips its crease probes, three "
-        "calls per vertex it touches. See python/README.md for how often the algorithms call them.");
+        "given). smooth=True promises a regular zero set (the gradient continuous and nonzero where the surface "
+        "passes: no min, max, abs or branch on the coordinates there, no node): the adaptive method's repair then "
+        "skips its crease probes, three calls per vertex it touches. See python/README.md for how often the algorithms call them.");
 }
 
 }  // namespace cdp::python

@@ -6,6 +6,7 @@
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_topology.h>
+#include <cdp/core/models/compiled.h>
 
 #include <random>
 
@@ -269,7 +270,7 @@ class Unclaimed : public Field {
 // On a smooth field the crease probes find nothing: skipping them (Field::smooth) gives the same
 // mesh bit for bit with fewer evaluations, at a factor and with a tolerance.
 TEST(AdaptivePolygonizer, ASmoothFieldSkipsTheCreaseProbesAndGetsTheSameMesh) {
-  const auto smooth = test::tanglecube();
+  const auto smooth = compiled_models().at("tanglecube")();
   ASSERT_TRUE(smooth->smooth());
   const Unclaimed unclaimed(*smooth);
   ASSERT_FALSE(unclaimed.smooth());

@@ -348,11 +348,23 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     // doubled surface away and would spend its rounds on the triangles where the sheets cross
     // (blobs31 of the topology sweep at tolerance 3e-2: 45 s on a mesh of 469k triangles and
     // 112k intersecting pairs, area 1.83 times the estimate, that the checks then refused).
-    // Meshes the checks pass measure 0.9-1.01 times the estimate on the topology sweep's fields;
-    // the failed ones, 1.13-1.94.
+    // The grid crosses a patch of normal n (|nx| + |ny| + |nz|) / h^2 times per unit area, 1.5
+    // on average over all orientations (the estimate's divisor): each triangle is counted with
+    // its own weight, so that a cube's faces (weight 1) do not pass for doubled surface. Meshes
+    // the checks pass measure 0.90-1.01 times the estimate on the topology sweep's fields; the
+    // failed ones, 1.13-1.94. Not for the crease-aware meshes, whose intersections are checked
+    // after the repair (it removes some that chords on an acute crease's two faces make).
     constexpr double kOverlapArea = 1.25;
-    if (repair && estimated_area > 0 && tracker->area() > kOverlapArea * estimated_area)
-      check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+    if (repair && !creased && estimated_area > 0 && tracker->area() > kOverlapArea * estimated_area) {
+      double seen = 0;  // the area as the grid sees it
+      for (const auto& t : mesh.triangles) {
+        const Vec3& a = mesh.positions[t[0]];
+        const Vec3 n = (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a);  // twice the area
+        seen += 0.5 * n.cwiseAbs().sum() / 1.5;
+      }
+      if (seen > kOverlapArea * estimated_area)
+        check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+    }
     if (repair) {
       enter("repairing triangles");
       adaptive::QualityOptions qo;
@@ -499,10 +511,14 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   // and at coarse tolerances, which mesh at factor 3) reaches it with edges short enough to
   // close there. The mesh is then finer than asked where the surface bends; Stats says how much
   // (careful_max_turn). The first error stands when the last of them fails too.
+  // In factor mode the turns are shares of the factor's own, 1 / factor (a turn of 0.5 at the
+  // default factor 2 would repeat the careful run): the sizing of twice and four times the factor
+  // where the surface bends most.
   constexpr std::array<double, 2> kFinerTurns{0.5, 0.25};
   const auto retry_finer = [&] {
     if (!careful) return false;
-    for (const double turn : kFinerTurns) {
+    for (const double share : kFinerTurns) {
+      const double turn = s.sizing.mode == SizingMode::Factor ? share / s.sizing.factor : share;
       settings.sizing.max_turn = turn;
       try {
         attempt();

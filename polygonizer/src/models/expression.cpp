@@ -46,10 +46,6 @@ struct BranchLog {
 struct ExpressionProgram {
   std::vector<Instruction> code;
   int branch_points = 0;
-  // Only operations smooth everywhere (Field::smooth): sums, products, negation, whole powers,
-  // exp, sin, cos. sqrt, a fractional or variable power, log, tan and a division are not
-  // claimed smooth (sqrt(x^2) is |x|; a quotient's pole may meet the zero set).
-  bool smooth = true;
 
   template <class T>
   T run(const T& x, const T& y, const T& z) const {
@@ -331,20 +327,8 @@ Expression::Expression(const std::string& formula, const std::map<std::string, d
   }
   detail::Parser parser(formula_, params);
   detail::Parser::emit(parser.parse(), program_->code);
-  for (const auto& in : program_->code) {
+  for (const auto& in : program_->code)
     if (in.op == detail::Op::Min || in.op == detail::Op::Max || in.op == detail::Op::Abs) ++program_->branch_points;
-    using detail::Op;
-    switch (in.op) {
-      case Op::Const: case Op::X: case Op::Y: case Op::Z: case Op::Add: case Op::Sub: case Op::Mul: case Op::Neg:
-      case Op::Exp: case Op::Sin: case Op::Cos:
-        break;
-      case Op::PowConst:
-        if (!(in.constant >= 0 && in.constant == std::floor(in.constant))) program_->smooth = false;
-        break;
-      default:
-        program_->smooth = false;
-    }
-  }
   if (detail::stack_depth(program_->code) > detail::kMaxStack)
     throw InvalidInputError("expression: formula nested too deeply (more than " +
                             std::to_string(detail::kMaxStack) + " pending operands)");
@@ -370,8 +354,6 @@ double Expression::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& he
 }
 
 bool Expression::has_pieces() const { return program_->branch_points > 0; }
-
-bool Expression::smooth() const { return program_->smooth; }
 
 std::vector<FieldPiece> Expression::eval_pieces(const Vec3& p, double radius) const {
   const int n = program_->branch_points;

@@ -119,11 +119,14 @@ class Field {
   // abs). Cheap (a compiled model counts its branch points once, with one evaluation); a model
   // without them is smooth and has no creases.
   virtual bool has_pieces() const { return false; }
-  // Whether the model promises that its zero set has no creases: its gradient is continuous
-  // wherever the surface passes (the VIS, MPU, blob and analytic models; a sphere's centre, a
-  // torus's core circle lie off the surface). The adaptive method's repair then asks no numeric
-  // crease probes (three evaluations per vertex it touches). False by default: a callable field
-  // or an expression may hide a crease (an if on the coordinates, sqrt(x^2)) that only probes find.
+  // Whether the model promises a regular zero set: its gradient continuous and nonzero wherever
+  // the surface passes, so no crease, cusp or singular point (the VIS, MPU, blob and analytic
+  // models, whose fits and kernels are C1 and whose special points, a sphere's centre or a
+  // torus's core circle, lie off the surface; compiled models whose authors say so). The
+  // adaptive method's repair then asks no numeric crease probes (three evaluations per vertex
+  // it touches). False by default: a callable field may hide a crease (an if on the
+  // coordinates), and an expression too (sqrt(x^2) is |x|; a polynomial may have a node on its
+  // zero set, x^2 + y^2 - z^2), which only the probes find.
   virtual bool smooth() const { return false; }
   // The piece with `branch` (from pieces()) at another point: the same smooth function, its
   // branches fixed, wherever p is. Throws InvalidInputError for a branch the model cannot have

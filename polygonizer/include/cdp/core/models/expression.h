@@ -25,7 +25,6 @@ class Expression : public Field {
   bool thread_safe() const override { return true; }  // evaluation reads immutable data only
   const std::string& formula() const { return formula_; }
   bool has_pieces() const override;  // a min, max or abs anywhere in the formula
-  bool smooth() const override;      // only sums, products, whole powers, exp, sin, cos
 
  protected:
   double eval_value(const Vec3& p) const override;
