@@ -208,10 +208,13 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   Mesh& mesh = result.mesh;
   std::optional<adaptive::Tracker> tracker;
   adaptive::SeedingReport seeding;
-  // Crossed grid edges per unit area average 1.5 / h^2 over all orientations (Crofton); with
-  // fewer than kMeasuredCrossings the surface is too small for the grid to measure.
+  // Crossed grid edges per unit area: (|nx| + |ny| + |nz|) / h^2 for a patch of normal n,
+  // kMeanCrossings / h^2 on average over all orientations (Crofton); with fewer than
+  // kMeasuredCrossings the surface is too small for the grid to measure.
+  constexpr double kMeanCrossings = 1.5;
   constexpr std::size_t kMeasuredCrossings = 64;
-  const double estimated_area = grid_crossings >= kMeasuredCrossings ? grid_crossings * grid.h * grid.h / 1.5 : 0.0;
+  const double estimated_area =
+      grid_crossings >= kMeasuredCrossings ? grid_crossings * grid.h * grid.h / kMeanCrossings : 0.0;
 
   // Creases first (CreaseHandling::Follow): the patches they bound are meshed from them, and the
   // seeding below meets that mesh as finished surface, so only components without creases are
@@ -348,9 +351,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     // doubled surface away and would spend its rounds on the triangles where the sheets cross
     // (blobs31 of the topology sweep at tolerance 3e-2: 45 s on a mesh of 469k triangles and
     // 112k intersecting pairs, area 1.83 times the estimate, that the checks then refused).
-    // The grid crosses a patch of normal n (|nx| + |ny| + |nz|) / h^2 times per unit area, 1.5
-    // on average over all orientations (the estimate's divisor): each triangle is counted with
-    // its own weight, so that a cube's faces (weight 1) do not pass for doubled surface. Meshes
+    // Each triangle is counted with its own crossing weight (|nx| + |ny| + |nz|, against the
+    // estimate's mean kMeanCrossings), so that a cube's faces (weight 1) do not pass for doubled
+    // surface. Meshes
     // the checks pass measure 0.90-1.01 times the estimate on the topology sweep's fields; the
     // failed ones, 1.13-1.94. Not for the crease-aware meshes, whose intersections are checked
     // after the repair (it removes some that chords on an acute crease's two faces make).
@@ -360,7 +363,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       for (const auto& t : mesh.triangles) {
         const Vec3& a = mesh.positions[t[0]];
         const Vec3 n = (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a);  // twice the area
-        seen += 0.5 * n.cwiseAbs().sum() / 1.5;
+        seen += 0.5 * n.cwiseAbs().sum() / kMeanCrossings;
       }
       if (seen > kOverlapArea * estimated_area)
         check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
@@ -482,6 +485,13 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   // As the reruns (may_mesh_again), and not for a field whose seeding found no sign change (not
   // even by its search for small components); only the polygonizer's own errors are retried (an
   // exception from a callable field or a cancellation goes on unchanged).
+  // A run made again must pass a test stricter than attempt's own: no two components may face
+  // each other across the solid at all, joined or not (a shell thinner than two edges keeps its
+  // first error).
+  const auto attempt_strictly = [&] {
+    attempt();
+    return adaptive::facing_across_solid(field, mesh, 1).empty();
+  };
   const auto retry_carefully = [&] {
     if (!may_mesh_again || no_crossing) return false;
     settings.anticipate = careful = true;
@@ -493,10 +503,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     for (int run = 0; run < kCarefulRuns; ++run) {
       zone_missed_necks();
       try {
-        attempt();
-        // Stricter than attempt's own test: no two components may face each other across the
-        // solid at all, joined or not (a shell thinner than two edges keeps its first error).
-        return adaptive::facing_across_solid(field, mesh, 1).empty();
+        return attempt_strictly();
       } catch (const NoSurfaceError&) {
         if (necks.missed.empty()) return false;
       } catch (const LimitExceededError&) {
@@ -521,8 +528,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       const double turn = s.sizing.mode == SizingMode::Factor ? share / s.sizing.factor : share;
       settings.sizing.max_turn = turn;
       try {
-        attempt();
-        if (adaptive::facing_across_solid(field, mesh, 1).empty()) return true;
+        if (attempt_strictly()) return true;
       } catch (const NoSurfaceError&) {
       } catch (const LimitExceededError&) {
         // the neighbour searches' bound: shorter edges at the fillet may not crowd it
