@@ -268,10 +268,21 @@ std::vector<ToleranceCase> tolerance_cases() {
   const std::string torus = R"({"type": "torus", "major_radius": 1, "minor_radius": 0.35})";
   const std::string tangle = expression(test::kTanglecube, 3);
   const std::string chmutov = expression("(8*x^4-8*x^2+1)+(8*y^4-8*y^2+1)+(8*z^4-8*z^2+1)", 1.3);
-  return {{"sphere", sphere, 1e-2},    {"sphere", sphere, 1e-3},      {"sphere", sphere, 1e-4},
-          {"torus", torus, 1e-2},      {"torus", torus, 1e-3},        {"torus", torus, 1e-4},
-          {"tanglecube", tangle, 1e-2}, {"tanglecube", tangle, 3e-3}, {"tanglecube", tangle, 1e-3},
-          {"chmutov4", chmutov, 1e-2}, {"chmutov4", chmutov, 3e-3},   {"chmutov4", chmutov, 1e-3}};
+  std::vector<ToleranceCase> cases{
+      {"sphere", sphere, 1e-2},     {"sphere", sphere, 1e-3},     {"sphere", sphere, 1e-4},
+      {"torus", torus, 1e-2},       {"torus", torus, 1e-3},       {"torus", torus, 1e-4},
+      {"tanglecube", tangle, 1e-2}, {"tanglecube", tangle, 3e-3}, {"tanglecube", tangle, 1e-3},
+      {"chmutov4", chmutov, 1e-2},  {"chmutov4", chmutov, 3e-3},  {"chmutov4", chmutov, 1e-3}};
+#if defined(__SANITIZE_ADDRESS__)
+  // Several times slower under the sanitizers (CI runs them within its 45 minutes): the two
+  // coarser tolerances of each surface there, the same code paths; the finest (the torus at
+  // 1e-4 alone took 38 s) are left to the normal build.
+  std::vector<ToleranceCase> coarser;
+  for (std::size_t i = 0; i < cases.size(); ++i)
+    if (i % 3 != 2) coarser.push_back(cases[i]);
+  cases = coarser;
+#endif
+  return cases;
 }
 
 std::string tolerance_name(const testing::TestParamInfo<ToleranceCase>& info) {

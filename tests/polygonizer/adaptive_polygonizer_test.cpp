@@ -186,13 +186,15 @@ TEST(AdaptivePolygonizer, SameInputGivesTheSameMeshBitForBit) {
 
 TEST(AdaptivePolygonizer, SameMeshOnOneThreadOrSeveral) {
   // Factor 6: about 30k triangles, so that the self-intersection check runs in parallel too
-  // (from 8192 triangles), as does the seed grid of this thread-safe field.
+  // (from 8192 triangles), as do the seed grid of this thread-safe field and the relaxation's
+  // targets and projections (blocks of 256 vertices).
   const auto field = test::tanglecube();
   ASSERT_TRUE(field->thread_safe());
   AdaptiveOptions o = coarse(6);
   o.threads = 1;
   const auto a = polygonize_adaptive(*field, o);
   ASSERT_GT(a.mesh.num_triangles(), 8192u);
+  ASSERT_GT(a.stats.extra.at("quality.relaxed").get<double>(), 4 * 256.0);
   for (int threads : {2, 3, 0}) {
     o.threads = threads;
     const auto b = polygonize_adaptive(*field, o);

@@ -14,6 +14,7 @@
 
 #include <map>
 #include <memory>
+#include <vector>
 
 namespace cdp {
 namespace {
@@ -76,12 +77,20 @@ TEST(DataDrivenRollbacks, TheBunnyMpuAtFactorThreeMeshesWithARollback) {
   EXPECT_EQ(t.genus, 0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, DataDrivenMeshes,
-                         ::testing::Values(Case{"bunny_vis800.json", "mc"}, Case{"bunny_vis800.json", "mt"},
-                                           Case{"bunny_vis800.json", "adaptive"}, Case{"horse_mpu.json", "mc"},
-                                           Case{"horse_mpu.json", "mt"}, Case{"horse_mpu.json", "adaptive"},
-                                           Case{"igea_vis4004.json", "mc"}, Case{"igea_vis4004.json", "mt"},
-                                           Case{"igea_vis4004.json", "adaptive"}),
+std::vector<Case> cases() {
+  std::vector<Case> out;
+  for (const char* file : {"bunny_vis800.json", "horse_mpu.json", "igea_vis4004.json"})
+    for (const char* method : {"mc", "mt", "adaptive"}) out.push_back({file, method});
+#if defined(__SANITIZE_ADDRESS__)
+  // Several times slower under the sanitizers (CI runs them within its 45 minutes): the Igea
+  // VIS-4004 runs the bunny VIS-800's code on five times the constraints (126 s of the
+  // sanitizer run for its three cases); it is left to the normal build.
+  std::erase_if(out, [](const Case& c) { return c.file == "igea_vis4004.json"; });
+#endif
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, DataDrivenMeshes, ::testing::ValuesIn(cases()),
                          [](const auto& info) {
                            std::string name = info.param.file.substr(0, info.param.file.find('.')) + "_" + info.param.method;
                            return name;

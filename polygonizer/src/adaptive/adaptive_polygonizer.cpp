@@ -375,6 +375,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       qo.tolerance = s.sizing.mode == SizingMode::Tolerance ? tolerance : 0;
       qo.diagonal = s.diagonal;
       qo.min_edge = s.sizing.min_edge;
+      qo.threads = options.threads;
       quality = adaptive::improve_mesh(field, mesh, qo);
     }
     if (s.curvature_properties) {

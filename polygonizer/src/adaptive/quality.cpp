@@ -1,6 +1,7 @@
 #include "quality.h"
 
 #include "spatial_hash.h"
+#include "../parallel.h"
 
 #include <cdp/core/errors.h>
 #include <cdp/core/newton_projection.h>
@@ -14,6 +15,7 @@
 #include <stdexcept>
 #include <numbers>
 #include <numeric>
+#include <span>
 #include <vector>
 
 namespace cdp::adaptive {
@@ -88,6 +90,9 @@ constexpr double kRelaxMinGain = 1e-3;
 // A move may lower its star's smallest angle only while it stays at or above this (the repair's
 // bound), so the relaxation never undoes the repair.
 constexpr double kRelaxKeepDegrees = 30;
+// The relaxation's vertices per block of its parallel passes: enough to outweigh handing a
+// block to a thread (a target costs about a microsecond, a projection a few field calls).
+constexpr std::size_t kRelaxBlock = 256;
 // hash_box: a triangle's box is stored grown by this share of a hash cell (about a fifth of an
 // edge), so that moving a corner by less than that stores it again nowhere.
 constexpr double kHashSlack = 0.1;
@@ -106,7 +111,8 @@ using Tri = std::array<int, 3>;
 class Improver {
  public:
   Improver(const Field& field, Mesh& mesh, const QualityOptions& o)
-      : field_(field), smooth_(field.smooth()), m_(mesh), o_(o), vt_(mesh.positions.size()), crease_(mesh.positions.size(), -1),
+      : field_(field), smooth_(field.smooth()), m_(mesh), o_(o), workers_(detail::worker_count(o.threads)),
+        vt_(mesh.positions.size()), crease_(mesh.positions.size(), -1),
         alive_(mesh.triangles.size(), 1), hash_(cell_size(mesh)) {
     for (int t = 0; t < static_cast<int>(m_.triangles.size()); ++t) {
       for (int v : m_.triangles[t]) vt_[v].push_back(t);
@@ -433,8 +439,12 @@ class Improver {
       star.push_back(x);
     }
     return hash_.any_in(lo, hi, [&](int u) {
-      if (stamp_[u] == stamp_id_ || !alive_[u]) return false;
+      if (stamp_[u] == stamp_id_) return false;
       stamp_[u] = stamp_id_;
+      // The box u is stored with holds its triangle (hash_box): one apart from the star's
+      // rules it out before its corners are read (most of the triangles found).
+      if ((hashed_lo_[u].array() > hi.array()).any() || (hashed_hi_[u].array() < lo.array()).any() || !alive_[u])
+        return false;
       const Tri& x = m_.triangles[u];
       const std::array<Vec3, 3> pb{P(x[0]), P(x[1]), P(x[2])};
       const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
@@ -897,12 +907,15 @@ class Improver {
   struct StarShape {
     double mean_ratio = 0, max_cos = -1;
   };
-  StarShape star_shape(int v) const {
+  StarShape star_shape(int v) const { return star_shape(v, P(v)); }
+  // ... with v at `at` (read only: the relaxation's targets are judged on several threads).
+  StarShape star_shape(int v, const Vec3& at) const {
+    const auto pos = [&](int w) -> const Vec3& { return w == v ? at : P(w); };
     StarShape s;
     for (int u : vt_[v]) {
       const Tri& t = m_.triangles[u];
-      std::array<double, 3> l{(P(t[1]) - P(t[0])).squaredNorm(), (P(t[2]) - P(t[1])).squaredNorm(),
-                              (P(t[0]) - P(t[2])).squaredNorm()};
+      const Vec3 &a = pos(t[0]), &b = pos(t[1]), &c = pos(t[2]);
+      std::array<double, 3> l{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
       std::sort(l.begin(), l.end());
       const double xy = l[1] * l[2];
       s.mean_ratio += l[0] > 0 ? std::sqrt(l[2] / l[0]) : std::numeric_limits<double>::infinity();
@@ -961,36 +974,54 @@ class Improver {
           mark[v] = star_moved;
         }
       moved.assign(m_.positions.size(), 0);
+      // The marked vertices off creases (on_crease may evaluate and caches: one thread), then
+      // their targets, each judged on its own (read only: on several threads, one slot each).
+      std::vector<int> eligible;
+      for (int v = 0; v < static_cast<int>(mark.size()); ++v)
+        if (mark[v] && vt_[v].size() >= 3 && !on_crease(v)) eligible.push_back(v);
+      std::vector<Vec3> target(eligible.size());
+      std::vector<double> reach(eligible.size(), 0);  // 0: no move
+      detail::parallel_blocks(eligible.size(), kRelaxBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned) {
+        for (std::size_t i = begin; i < end; ++i) {
+          const int v = eligible[i];
+          const Vec3 step = equilateral_step(v);
+          if (!(step.squaredNorm() > 0)) continue;
+          // Judged first in the tangent plane, where it costs no evaluation: Newton moves the
+          // point by far less than the step (the step squared times the curvature), so a move
+          // that gains nothing there gains nothing on the surface.
+          if (!(star_shape(v, P(v) + step).mean_ratio < star_shape(v).mean_ratio * (1 - kRelaxMinGain))) continue;
+          double shortest = std::numeric_limits<double>::infinity();
+          for (int u : vt_[v])
+            for (int w : m_.triangles[u])
+              if (w != v) shortest = std::min(shortest, (P(w) - P(v)).norm());
+          target[i] = P(v) + step;
+          reach[i] = shortest;
+        }
+      });
       std::vector<int> moving;
       std::vector<Vec3> starts;
       std::vector<ProjectionOptions> opts;
-      for (int v = 0; v < static_cast<int>(mark.size()); ++v) {
-        if (!mark[v] || vt_[v].size() < 3 || on_crease(v)) continue;
-        const Vec3 step = equilateral_step(v);
-        if (!(step.squaredNorm() > 0)) continue;
-        // Judged first in the tangent plane, where it costs no evaluation: Newton moves the
-        // point by far less than the step (the step squared times the curvature), so a move
-        // that gains nothing there gains nothing on the surface.
-        {
-          const double before = star_shape(v).mean_ratio;
-          const Vec3 saved = P(v);
-          m_.positions[v] = saved + step;
-          const double tangent = star_shape(v).mean_ratio;
-          m_.positions[v] = saved;
-          if (!(tangent < before * (1 - kRelaxMinGain))) continue;
-        }
-        double shortest = std::numeric_limits<double>::infinity();
-        for (int w : neighbours(v)) shortest = std::min(shortest, (P(w) - P(v)).norm());
+      for (std::size_t i = 0; i < eligible.size(); ++i) {
+        if (!(reach[i] > 0)) continue;
         ProjectionOptions po;
         po.tolerance = 1e-10 * o_.diagonal;
-        po.max_step = shortest;
-        po.max_travel = shortest;
-        moving.push_back(v);
-        starts.push_back(P(v) + step);
+        po.max_step = reach[i];
+        po.max_travel = reach[i];
+        moving.push_back(eligible[i]);
+        starts.push_back(target[i]);
         opts.push_back(po);
       }
       if (moving.empty()) break;
-      const std::vector<ProjectionResult> landed = project_to_surface(field_, starts, opts);
+      // Each projection is independent of the others (the same point in any batch): a
+      // thread-safe field's are shared among threads in blocks.
+      std::vector<ProjectionResult> landed(moving.size());
+      detail::parallel_blocks(moving.size(), kRelaxBlock, field_.thread_safe() ? workers_ : 1u,
+                              [&](std::size_t begin, std::size_t end, unsigned) {
+                                const std::vector<ProjectionResult> part = project_to_surface(
+                                    field_, std::span(starts).subspan(begin, end - begin),
+                                    std::span(opts).subspan(begin, end - begin));
+                                std::copy(part.begin(), part.end(), landed.begin() + static_cast<std::ptrdiff_t>(begin));
+                              });
       bool changed = false;
       for (std::size_t i = 0; i < moving.size(); ++i) {
         if (!landed[i].ok() || !(landed[i].gradient.squaredNorm() > 0)) continue;
@@ -1100,6 +1131,7 @@ class Improver {
   const bool smooth_;  // Field::smooth
   Mesh& m_;
   QualityOptions o_;
+  unsigned workers_;  // threads of the relaxation's parallel passes
   std::vector<std::vector<int>> vt_;
   std::vector<signed char> crease_;
   std::vector<char> alive_;
