@@ -231,10 +231,48 @@ class Improver {
     if (memo) memo->known.push_back({key, d});
     return d;
   }
+  // The estimate of the triangle in slot `slot` (its corners `t`, which an operation may be
+  // trying at new positions), remembered with the corners, their positions and the edges'
+  // midpoint distances, and reused only where those are bitwise the same (the estimate is a
+  // function of the positions alone, so the answers are those computed afresh): the
+  // refinement after the relaxation asks again about every triangle the relaxation measured, a
+  // move's test asks about the star it would replace, and a star's outer edges stay where they
+  // are when its centre moves. On the torus at tolerance 1e-3: 486k evaluations in the whole
+  // run without this memo, 325k with it (the relaxation's 277k -> 195k; the refinement after
+  // it, 77k -> 0).
+  struct EstimateEntry {
+    Tri t{-1, -1, -1};
+    std::array<Vec3, 3> p;
+    std::array<double, 3> mid;  // edges t[0] t[1], t[1] t[2], t[2] t[0]
+    double d = 0;
+  };
+  double estimate_distance(const Tri& t, int slot, MidpointMemo* memo = nullptr) const {
+    const std::array<Vec3, 3> p{P(t[0]), P(t[1]), P(t[2])};
+    if (static_cast<std::size_t>(slot) >= estimates_.size()) estimates_.resize(static_cast<std::size_t>(slot) + 1);
+    EstimateEntry& e = estimates_[static_cast<std::size_t>(slot)];
+    const bool same = e.t[0] == t[0] && e.t[1] == t[1] && e.t[2] == t[2];
+    std::array<bool, 3> kept;
+    for (int i = 0; i < 3; ++i) kept[i] = same && e.p[i] == p[i];
+    if (kept[0] && kept[1] && kept[2]) return e.d;
+    std::array<double, 3> mid;
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3;
+      if (kept[i] && kept[j]) {
+        mid[i] = e.mid[i];
+        if (memo) memo->known.push_back({std::minmax(t[i], t[j]), mid[i]});
+      } else {
+        mid[i] = midpoint_distance(t[i], t[j], memo);
+      }
+    }
+    e = {t, p, mid, estimate_from(p[0], p[1], p[2], mid[0], mid[1], mid[2])};
+    return e.d;
+  }
   double estimate_distance(const Tri& t, MidpointMemo* memo = nullptr) const {
-    const Vec3 &a = P(t[0]), &b = P(t[1]), &c = P(t[2]);
-    const double mab = midpoint_distance(t[0], t[1], memo), mbc = midpoint_distance(t[1], t[2], memo),
-                 mca = midpoint_distance(t[2], t[0], memo);
+    return estimate_from(P(t[0]), P(t[1]), P(t[2]), midpoint_distance(t[0], t[1], memo),
+                         midpoint_distance(t[1], t[2], memo), midpoint_distance(t[2], t[0], memo));
+  }
+  // ... from the midpoints' signed distances.
+  double estimate_from(const Vec3& a, const Vec3& b, const Vec3& c, double mab, double mbc, double mca) const {
     const double centroid = signed_distance((a + b + c) / 3);
     if (!std::isfinite(mab + mbc + mca + centroid)) return std::numeric_limits<double>::infinity();
     // The quadratic through 0 at the corners and these at the midpoints, sampled on a grid of
@@ -265,6 +303,15 @@ class Improver {
     }
     return worst;
   }
+  // ... of v's star at the current positions, remembered by slot (see estimate_distance).
+  double worst_star_distance(int v) const {
+    double worst = 0;
+    if (o_.tolerance > 0) {
+      MidpointMemo memo;
+      for (int u : vt_[v]) worst = std::max(worst, estimate_distance(m_.triangles[u], u, &memo));
+    }
+    return worst;
+  }
   // Whether triangles whose worst distance is `worst_new` may replace `removed`, read at the
   // current positions: a move measures its new star at the new place, puts the vertex back, then
   // asks this.
@@ -272,7 +319,7 @@ class Improver {
     if (!(o_.tolerance > 0) || worst_new <= kToleranceMargin * o_.tolerance) return true;
     double worst_old = 0;
     MidpointMemo memo;
-    for (int t : removed) worst_old = std::max(worst_old, estimate_distance(m_.triangles[t], &memo));
+    for (int t : removed) worst_old = std::max(worst_old, estimate_distance(m_.triangles[t], t, &memo));
     return worst_new <= worst_old;
   }
 
@@ -588,7 +635,7 @@ class Improver {
         faces = faces && faces_surface(m_.triangles[u], floor);
       }
       bool ok = after > before + kMinGain && faces;
-      const double new_dist = ok ? worst_distance(star) : 0;
+      const double new_dist = ok ? worst_star_distance(v) : 0;
       m_.positions[v] = saved;
       m_.normals[v] = saved_n;
       if (ok) {
@@ -1042,7 +1089,7 @@ class Improver {
           star.push_back(m_.triangles[u]);
           ok = ok && faces_surface(m_.triangles[u], floor);
         }
-        const double new_dist = ok ? worst_distance(star) : 0;
+        const double new_dist = ok ? worst_star_distance(v) : 0;
         m_.positions[v] = saved;
         m_.normals[v] = saved_n;
         ok = ok && may_replace(new_dist, vt_[v]);
@@ -1086,7 +1133,7 @@ class Improver {
       for (int t : work) {
         if (!alive_[t]) continue;
         const Tri T = m_.triangles[t];
-        if (!(estimate_distance(T) > bound)) continue;
+        if (!(estimate_distance(T, t) > bound)) continue;
         // Halve the longest edge; after a split the edge is gone, so a neighbour visited later
         // in this round sees the new triangles.
         int k = 0;
@@ -1147,6 +1194,9 @@ class Improver {
     double magnitude;     // largest absolute coordinate
   };
   std::vector<StarTriangle> star_buffer_;
+  // estimate_distance's memo, by triangle slot (see there).
+  mutable std::vector<EstimateEntry> estimates_;
+
   // The box each triangle is stored in the hash with (hash_box).
   std::vector<Vec3> hashed_lo_, hashed_hi_;
   // Triangles changed in the current round, and since the last tolerance check.
