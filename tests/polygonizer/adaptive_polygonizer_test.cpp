@@ -206,6 +206,24 @@ TEST(AdaptivePolygonizer, SameMeshOnOneThreadOrSeveral) {
   EXPECT_THROW(polygonize_adaptive(*field, o), InvalidInputError);
 }
 
+// With a tolerance the refinement measures each round's triangles on all cores first: the same
+// mesh and the same evaluation count on any number of threads.
+TEST(AdaptivePolygonizer, SameToleranceMeshOnOneThreadOrSeveral) {
+  const Torus torus(Vec3::Zero(), 1.0, 0.35);
+  ASSERT_TRUE(torus.thread_safe());
+  AdaptiveOptions o;
+  o.sizing = SizingMode::Tolerance;
+  o.tolerance = 1e-3;
+  o.threads = 1;
+  const auto a = polygonize_adaptive(torus, o);
+  ASSERT_GT(a.stats.extra.at("quality.relaxed").get<double>(), 4 * 256.0);
+  o.threads = 2;
+  const auto b = polygonize_adaptive(torus, o);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+  EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+  EXPECT_EQ(a.stats.field_evaluations.total(), b.stats.field_evaluations.total());
+}
+
 TEST(AdaptivePolygonizer, CurvaturePropertiesAreAttachedOnRequest) {
   Sphere sphere(Vec3::Zero(), 2.0);
   AdaptiveOptions o = coarse(3);

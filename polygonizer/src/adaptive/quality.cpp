@@ -1130,6 +1130,16 @@ class Improver {
     std::vector<int> left;
     for (int round = 0; round < kRefineRounds && !work.empty(); ++round) {
       touched_.clear();
+      // A thread-safe field's estimates are made first, on all cores, each into its triangle's
+      // slot (the same on any number of threads; a triangle a split changes before its turn is
+      // measured again there).
+      if (field_.thread_safe()) {
+        if (estimates_.size() < m_.triangles.size()) estimates_.resize(m_.triangles.size());
+        detail::parallel_blocks(work.size(), kRelaxBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned) {
+          for (std::size_t i = begin; i < end; ++i)
+            if (alive_[work[i]]) estimate_distance(m_.triangles[work[i]], work[i]);
+        });
+      }
       for (int t : work) {
         if (!alive_[t]) continue;
         const Tri T = m_.triangles[t];
