@@ -217,8 +217,7 @@ class Improver {
   // The largest distance between triangle t and the surface, estimated from the edge midpoints
   // and the centroid (see kToleranceMargin).
   // `memo` (optional) keeps the edge midpoints' distances of the triangles it has seen at the
-  // current positions: the triangles of a star share their edges to the centre (on the torus
-  // at tolerance 1e-3, 384k value-and-gradient calls in the whole run without it, 339k with it).
+  // current positions: the triangles of a star share their edges to the centre.
   // `table` (optional, read only): edges measured beforehand at the current positions, by
   // edge_key, sorted.
   struct EdgeTable {
@@ -249,13 +248,12 @@ class Improver {
   }
   // The estimate of the triangle in slot `slot` (its corners `t`, which an operation may be
   // trying at new positions), remembered with the corners, their positions and the edges'
-  // midpoint distances, and reused only where those are bitwise the same (the estimate is a
-  // function of the positions alone, so the answers are those computed afresh): the
-  // refinement after the relaxation asks again about every triangle the relaxation measured, a
-  // move's test asks about the star it would replace, and a star's outer edges stay where they
-  // are when its centre moves. On the torus at tolerance 1e-3: 486k evaluations in the whole
-  // run without this memo, 325k with it (the relaxation's 277k -> 195k; the refinement after
-  // it, 77k -> 0).
+  // midpoint distances, and reused only where those compare equal (the estimate is a function
+  // of the positions alone, so the answers are those computed afresh): the refinement after
+  // the relaxation re-measures only triangles last measured at other positions (a move refused
+  // after its measurement), and a star's outer edges keep their midpoints when its centre
+  // moves. On the torus at tolerance 1e-3: 486k evaluations in the whole run without this
+  // memo, 327k with it (the relaxation's 277k -> 195k; the refinement after it, 77k -> 0).
   struct EstimateEntry {
     Tri t{-1, -1, -1};
     std::array<Vec3, 3> p;
@@ -998,8 +996,8 @@ class Improver {
 
   // Moves the vertices of the triangles whose longest edge exceeds kRelaxRatio times their
   // shortest towards where their triangles would be equilateral (equilateral_step), projected
-  // back onto the surface: in kRelaxSweeps sweeps, each projecting all its vertices in one
-  // batch and then taking them in index order, a move kept only if it lowers the mean edge
+  // back onto the surface: in kRelaxSweeps sweeps, each finding all its targets and projecting
+  // them first (on all cores where the field allows) and then taking them in index order, a move kept only if it lowers the mean edge
   // ratio of v's star by kRelaxMinGain, keeps its smallest angle (or at least
   // kRelaxKeepDegrees), its facing and the tolerance, and intersects nothing. Crease vertices
   // stay. A target that does not lower the star's mean ratio in the tangent plane is not
@@ -1051,7 +1049,8 @@ class Improver {
       for (int v = 0; v < static_cast<int>(mark.size()); ++v)
         if (mark[v] && vt_[v].size() >= 3 && !on_crease(v)) eligible.push_back(v);
       std::vector<Vec3> target(eligible.size());
-      std::vector<double> reach(eligible.size(), 0);  // 0: no move
+      std::vector<double> reach(eligible.size(), 0);
+      std::vector<char> moves(eligible.size(), 0);
       detail::parallel_blocks(eligible.size(), kRelaxBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned) {
         for (std::size_t i = begin; i < end; ++i) {
           const int v = eligible[i];
@@ -1067,13 +1066,14 @@ class Improver {
               if (w != v) shortest = std::min(shortest, (P(w) - P(v)).norm());
           target[i] = P(v) + step;
           reach[i] = shortest;
+          moves[i] = 1;
         }
       });
       std::vector<int> moving;
       std::vector<Vec3> starts;
       std::vector<ProjectionOptions> opts;
       for (std::size_t i = 0; i < eligible.size(); ++i) {
-        if (!(reach[i] > 0)) continue;
+        if (!moves[i]) continue;
         ProjectionOptions po;
         po.tolerance = 1e-10 * o_.diagonal;
         po.max_step = reach[i];
@@ -1084,9 +1084,11 @@ class Improver {
       }
       if (moving.empty()) break;
       // Each projection is independent of the others (the same point in any batch): a
-      // thread-safe field's are shared among threads in blocks.
+      // thread-safe field's are shared among threads in blocks; any other field's go in one
+      // batch (one call per Newton round: a Python function is called once per batch).
       std::vector<ProjectionResult> landed(moving.size());
-      detail::parallel_blocks(moving.size(), kRelaxBlock, field_.thread_safe() ? workers_ : 1u,
+      const bool shared = field_.thread_safe();
+      detail::parallel_blocks(moving.size(), shared ? kRelaxBlock : moving.size(), shared ? workers_ : 1u,
                               [&](std::size_t begin, std::size_t end, unsigned) {
                                 const std::vector<ProjectionResult> part = project_to_surface(
                                     field_, std::span(starts).subspan(begin, end - begin),

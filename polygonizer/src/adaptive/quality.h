@@ -54,9 +54,10 @@ struct QualityOptions {
   double diagonal = 1;
   // Shortest edge the splits may create.
   double min_edge = 0;
-  // Threads of the relaxation's independent passes (its targets and their projections onto a
-  // thread-safe field): 0 all cores (at most 8), 1 the caller's only. The mesh is the same, bit
-  // for bit, on any number.
+  // Threads of the independent passes: the relaxation's targets, and for a thread-safe field
+  // their projections and each refinement round's tolerance estimates. 0 all cores (at most
+  // 8), 1 the caller's only. The mesh and the evaluation counts are the same, bit for bit, on
+  // any number.
   int threads = 0;
 };
 
