@@ -269,13 +269,18 @@ TEST(AdaptivePolygonizer, InvalidOptionsAndEmptyFieldsAreErrors) {
 namespace cdp {
 namespace {
 
-// The same field, not claiming smoothness (Field::smooth false, as a callable's): the repair
-// then probes every vertex it touches for a crease.
-class Unclaimed : public Field {
+// The same field, claiming smoothness and thread safety as told: not smooth (as a callable's),
+// the repair probes every vertex it touches for a crease; not thread-safe (as a Python
+// function), the relaxation projects in one batch and the refinement measures each triangle in
+// its turn.
+class Rewrapped : public Field {
  public:
-  explicit Unclaimed(const Field& f) : f_(f) { set_bounds(f.bounds()); }
-  std::string type_name() const override { return "unclaimed"; }
-  bool thread_safe() const override { return f_.thread_safe(); }
+  Rewrapped(const Field& f, bool smooth, bool thread_safe) : f_(f), smooth_(smooth), thread_safe_(thread_safe) {
+    set_bounds(f.bounds());
+  }
+  std::string type_name() const override { return "rewrapped"; }
+  bool smooth() const override { return smooth_; }
+  bool thread_safe() const override { return thread_safe_; }
   std::optional<double> lipschitz_bound() const override { return f_.lipschitz_bound(); }
 
  protected:
@@ -285,25 +290,7 @@ class Unclaimed : public Field {
 
  private:
   const Field& f_;
-};
-
-// The same field, not claiming to be thread-safe (as a Python function): the relaxation then
-// projects in one batch and the refinement measures each triangle in its turn.
-class Unshared : public Field {
- public:
-  explicit Unshared(const Field& f) : f_(f) { set_bounds(f.bounds()); }
-  std::string type_name() const override { return "unshared"; }
-  bool thread_safe() const override { return false; }
-  bool smooth() const override { return f_.smooth(); }
-  std::optional<double> lipschitz_bound() const override { return f_.lipschitz_bound(); }
-
- protected:
-  double eval_value(const Vec3& p) const override { return f_.value(p); }
-  double eval_value_gradient(const Vec3& p, Vec3& g) const override { return f_.value_gradient(p, g); }
-  double eval_gradient_hessian(const Vec3& p, Vec3& g, Mat3& h) const override { return f_.gradient_hessian(p, g, h); }
-
- private:
-  const Field& f_;
+  bool smooth_, thread_safe_;
 };
 
 // The passes shared among threads give the mesh of the sequential ones, at a factor and with a
@@ -311,7 +298,7 @@ class Unshared : public Field {
 TEST(AdaptivePolygonizer, ThreadSafeAndSequentialPassesGetTheSameMesh) {
   const Torus torus(Vec3::Zero(), 1.0, 0.35);
   ASSERT_TRUE(torus.thread_safe());
-  const Unshared unshared(torus);
+  const Rewrapped unshared(torus, torus.smooth(), false);
   for (const bool tolerance : {false, true}) {
     AdaptiveOptions o;
     o.factor = 4;
@@ -331,7 +318,7 @@ TEST(AdaptivePolygonizer, ThreadSafeAndSequentialPassesGetTheSameMesh) {
 TEST(AdaptivePolygonizer, ASmoothFieldSkipsTheCreaseProbesAndGetsTheSameMesh) {
   const auto smooth = compiled_models().at("tanglecube")();
   ASSERT_TRUE(smooth->smooth());
-  const Unclaimed unclaimed(*smooth);
+  const Rewrapped unclaimed(*smooth, false, smooth->thread_safe());
   ASSERT_FALSE(unclaimed.smooth());
   for (const bool tolerance : {false, true}) {
     AdaptiveOptions o;
