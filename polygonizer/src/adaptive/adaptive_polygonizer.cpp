@@ -353,10 +353,10 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     // 112k intersecting pairs, area 1.83 times the estimate, that the checks then refused).
     // Each triangle is counted with its own crossing weight (|nx| + |ny| + |nz|, against the
     // estimate's mean kMeanCrossings), so that a cube's faces (weight 1) do not pass for doubled
-    // surface. Meshes
-    // the checks pass measure 0.90-1.01 times the estimate on the topology sweep's fields; the
-    // failed ones, 1.13-1.94. Not for the crease-aware meshes, whose intersections are checked
-    // after the repair (it removes some that chords on an acute crease's two faces make).
+    // surface. Meshes the checks pass measure 0.90-1.01 times the estimate on the topology
+    // sweep's fields; the failed ones, 1.13-1.94. Not for the crease-aware meshes, whose
+    // intersections are checked after the repair (it removes some that chords on an acute
+    // crease's two faces make).
     constexpr double kOverlapArea = 1.25;
     if (repair && !creased && estimated_area > 0 && tracker->area() > kOverlapArea * estimated_area) {
       double seen = 0;  // the area as the grid sees it

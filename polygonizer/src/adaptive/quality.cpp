@@ -236,8 +236,9 @@ class Improver {
     const std::pair<int, int> key = std::minmax(x, y);
     if (memo && memo->table) {
       const auto& keys = memo->table->keys;
-      const auto it = std::lower_bound(keys.begin(), keys.end(), edge_key(x, y));
-      if (it != keys.end() && *it == edge_key(x, y)) return memo->table->d[static_cast<std::size_t>(it - keys.begin())];
+      const std::uint64_t k = edge_key(x, y);
+      const auto it = std::lower_bound(keys.begin(), keys.end(), k);
+      if (it != keys.end() && *it == k) return memo->table->d[static_cast<std::size_t>(it - keys.begin())];
     }
     if (memo)
       for (const auto& [k, d] : memo->known)
@@ -260,22 +261,25 @@ class Improver {
     std::array<double, 3> mid;  // edges t[0] t[1], t[1] t[2], t[2] t[0]
     double d = 0;
   };
+  // Which corners of `t`, at the current positions, entry e was made with (none when e is of
+  // other corners).
+  std::array<bool, 3> kept_corners(const EstimateEntry& e, const Tri& t) const {
+    const bool same = e.t == t;
+    return {same && e.p[0] == P(t[0]), same && e.p[1] == P(t[1]), same && e.p[2] == P(t[2])};
+  }
   // Whether slot `slot` remembers the estimate of its triangle at the current positions.
   bool remembered(int slot) const {
     if (static_cast<std::size_t>(slot) >= estimates_.size()) return false;
-    const EstimateEntry& e = estimates_[static_cast<std::size_t>(slot)];
-    const Tri& t = m_.triangles[static_cast<std::size_t>(slot)];
-    return e.t[0] == t[0] && e.t[1] == t[1] && e.t[2] == t[2] && e.p[0] == P(t[0]) && e.p[1] == P(t[1]) &&
-           e.p[2] == P(t[2]);
+    const std::array<bool, 3> kept =
+        kept_corners(estimates_[static_cast<std::size_t>(slot)], m_.triangles[static_cast<std::size_t>(slot)]);
+    return kept[0] && kept[1] && kept[2];
   }
   double estimate_distance(const Tri& t, int slot, MidpointMemo* memo = nullptr) const {
-    const std::array<Vec3, 3> p{P(t[0]), P(t[1]), P(t[2])};
     if (static_cast<std::size_t>(slot) >= estimates_.size()) estimates_.resize(static_cast<std::size_t>(slot) + 1);
     EstimateEntry& e = estimates_[static_cast<std::size_t>(slot)];
-    const bool same = e.t[0] == t[0] && e.t[1] == t[1] && e.t[2] == t[2];
-    std::array<bool, 3> kept;
-    for (int i = 0; i < 3; ++i) kept[i] = same && e.p[i] == p[i];
+    const std::array<bool, 3> kept = kept_corners(e, t);
     if (kept[0] && kept[1] && kept[2]) return e.d;
+    const std::array<Vec3, 3> p{P(t[0]), P(t[1]), P(t[2])};
     std::array<double, 3> mid;
     for (int i = 0; i < 3; ++i) {
       const int j = (i + 1) % 3;
@@ -997,10 +1001,10 @@ class Improver {
   // Moves the vertices of the triangles whose longest edge exceeds kRelaxRatio times their
   // shortest towards where their triangles would be equilateral (equilateral_step), projected
   // back onto the surface: in kRelaxSweeps sweeps, each finding all its targets and projecting
-  // them first (on all cores where the field allows) and then taking them in index order, a move kept only if it lowers the mean edge
-  // ratio of v's star by kRelaxMinGain, keeps its smallest angle (or at least
-  // kRelaxKeepDegrees), its facing and the tolerance, and intersects nothing. Crease vertices
-  // stay. A target that does not lower the star's mean ratio in the tangent plane is not
+  // them first (on all cores where the field allows) and then taking them in index order, a
+  // move kept only if it lowers the mean edge ratio of v's star by kRelaxMinGain, keeps its
+  // smallest angle (or at least kRelaxKeepDegrees), its facing and the tolerance, and
+  // intersects nothing. Crease vertices stay. A target that does not lower the star's mean ratio in the tangent plane is not
   // projected at all (no evaluation). Before the moves of each sweep, flips of the stretched
   // triangles' edges towards valence 6 (try_flip's for_ratio). The repair above aims at the
   // worst triangles; this aims at the many mildly stretched ones where the fronts' edge lengths
@@ -1110,11 +1114,7 @@ class Improver {
         const StarShape after = star_shape(v);
         bool ok = after.mean_ratio < before.mean_ratio * (1 - kRelaxMinGain) &&
                   after.max_cos <= std::max(before.max_cos, keep_cos);
-        std::vector<Tri> star;
-        for (int u : vt_[v]) {
-          star.push_back(m_.triangles[u]);
-          ok = ok && faces_surface(m_.triangles[u], floor);
-        }
+        for (int u : vt_[v]) ok = ok && faces_surface(m_.triangles[u], floor);
         const double new_dist = ok ? worst_star_distance(v) : 0;
         m_.positions[v] = saved;
         m_.normals[v] = saved_n;
@@ -1232,7 +1232,7 @@ class Improver {
   const bool smooth_;  // Field::smooth
   Mesh& m_;
   QualityOptions o_;
-  unsigned workers_;  // threads of the relaxation's parallel passes
+  unsigned workers_;  // threads of the parallel passes (QualityOptions::threads)
   std::vector<std::vector<int>> vt_;
   std::vector<signed char> crease_;
   std::vector<char> alive_;
@@ -1250,7 +1250,6 @@ class Improver {
   std::vector<StarTriangle> star_buffer_;
   // estimate_distance's memo, by triangle slot (see there).
   mutable std::vector<EstimateEntry> estimates_;
-
   // The box each triangle is stored in the hash with (hash_box).
   std::vector<Vec3> hashed_lo_, hashed_hi_;
   // Triangles changed in the current round, and since the last tolerance check.
