@@ -85,6 +85,10 @@ TEST(PolygonizeApp, AToleranceTheMeshCannotKeepIsAOneLineWarningNamingWhere) {
   const auto s = read_json(stats);
   const std::size_t over = s["quality"]["over_tolerance"].get<std::size_t>();
   EXPECT_GT(over, 0u);
+  // Each counted triangle was measured densely and found farther than the tolerance: the worst
+  // distance the line names exceeds it.
+  EXPECT_GE(s["quality"]["measured_densely"].get<std::size_t>(), over);
+  EXPECT_GT(s["quality"]["over_tolerance_worst"].get<double>(), 1e-5);
   EXPECT_NE(r.err.find("polygonize: " + field.string() + ": warning: " + std::to_string(over) +
                        " triangles lie farther from the surface than the tolerance 1e-05 (up to "),
             std::string::npos)

@@ -621,6 +621,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["quality.splits"] = quality.splits;
   st.extra["quality.inserts"] = quality.inserts;
   st.extra["quality.crease_vertices"] = quality.crease_vertices;
+  st.extra["quality.measured_densely"] = quality.measured_densely;
   st.extra["quality.over_tolerance"] = quality.over_tolerance;
   if (quality.over_tolerance > 0) {
     st.extra["quality.over_tolerance_worst"] = quality.over_tolerance_worst;

@@ -36,9 +36,12 @@ struct QualityReport {
   std::size_t splits = 0, inserts = 0;
   // Vertices found on a crease (never moved, their edges never flipped).
   std::size_t crease_vertices = 0;
-  // Triangles whose sampled distance to the surface still exceeds the tolerance (0 unless the
-  // refinement ran out of rounds or could not split without breaking a check), the largest such
-  // distance and the centroid of the triangle it was sampled on.
+  // Triangles left whose estimate (see kToleranceMargin) could not clear them, each then measured
+  // densely (28 points, Newton's path length at each).
+  std::size_t measured_densely = 0;
+  // Of those, the triangles farther than the tolerance there (0 unless the refinement ran out
+  // of rounds or could not split without breaking a check), the largest such distance and the
+  // centroid of the triangle it was measured on.
   std::size_t over_tolerance = 0;
   double over_tolerance_worst = 0;
   Vec3 over_tolerance_near = Vec3::Zero();
