@@ -10,6 +10,7 @@
 #include <cdp/core/models/analytic.h>
 #include <cdp/core/models/expression.h>
 #include <cdp/core/surface_seeds.h>
+#include <cdp/core/triangle_intersection.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/raytrace/field_cost.h>
 
@@ -193,6 +194,24 @@ void BM_AdaptiveBookkeeping(benchmark::State& state) {
   state.SetLabel(shape == 0 ? "torus/adaptive/bookkeeping" : "bunny_vis800/adaptive/bookkeeping");
 }
 BENCHMARK(BM_AdaptiveBookkeeping)->ArgName("shape")->DenseRange(0, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// The final check of every adaptive run (AdaptiveOptions::check_self_intersections): all
+// intersecting pairs of a finished mesh, on one thread. The torus at factor 6.3 (about 10^4
+// triangles, one thread below the check's parallel threshold in a real run) and at 20 (10^5).
+void BM_SelfIntersectionCheck(benchmark::State& state) {
+  const auto field = make_shape(kTorus);
+  AdaptiveOptions o;
+  o.factor = static_cast<double>(state.range(0)) / 10;
+  o.check_self_intersections = false;
+  const Mesh mesh = polygonize_adaptive(*field, o).mesh;
+  std::size_t pairs = 0;
+  for (auto _ : state) pairs += count_self_intersecting_pairs(mesh, 1);
+  if (pairs != 0) state.SkipWithError("the torus mesh intersects itself");
+  state.counters["ns_per_triangle"] = benchmark::Counter(
+      static_cast<double>(mesh.num_triangles()), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.SetLabel("torus/self_intersection_check");
+}
+BENCHMARK(BM_SelfIntersectionCheck)->ArgName("factor_x10")->Arg(63)->Arg(200)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

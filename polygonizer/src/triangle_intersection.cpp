@@ -195,9 +195,9 @@ bool coplanar_triangles_meet(const Tri& a, const Tri& b, int drop) {
   return point_in_triangle_2d(a[0], b, drop) || point_in_triangle_2d(b[0], a, drop);
 }
 
-// The closed segment [p, q] meets the closed (non-degenerate) triangle t.
-bool segment_meets_closed_triangle(const Vec3& p, const Vec3& q, const Tri& t) {
-  const int sp = orient3d(t[0], t[1], t[2], p), sq = orient3d(t[0], t[1], t[2], q);
+// The closed segment [p, q] meets the closed (non-degenerate) triangle t, given the sides sp and
+// sq of p and q of t's plane (orient3d(t[0], t[1], t[2], .)), which callers may have already.
+bool segment_meets_closed_triangle(const Vec3& p, const Vec3& q, const Tri& t, int sp, int sq) {
   if (sp * sq > 0) return false;
   if (sp == 0 && sq == 0) {  // the segment lies in the triangle's plane
     const int drop = projection_axis(t[0], t[1], t[2]);
@@ -213,24 +213,24 @@ bool segment_meets_closed_triangle(const Vec3& p, const Vec3& q, const Tri& t) {
   return !(negative && positive);
 }
 
-// All three vertices of a strictly on one side of the plane of b.
-bool separated_by_plane(const Tri& a, const Tri& b) {
-  const int s0 = orient3d(b[0], b[1], b[2], a[0]), s1 = orient3d(b[0], b[1], b[2], a[1]),
-            s2 = orient3d(b[0], b[1], b[2], a[2]);
-  return (s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0);
-}
-
-// Closed non-degenerate triangles without shared vertices meet.
+// Closed non-degenerate triangles without shared vertices meet. Each corner's side of the other
+// triangle's plane is computed once and shared by the tests below.
 bool triangles_meet(const Tri& a, const Tri& b) {
-  if (separated_by_plane(a, b) || separated_by_plane(b, a)) return false;
-  if (orient3d(b[0], b[1], b[2], a[0]) == 0 && orient3d(b[0], b[1], b[2], a[1]) == 0 &&
-      orient3d(b[0], b[1], b[2], a[2]) == 0)
-    return coplanar_triangles_meet(a, b, projection_axis(a[0], a[1], a[2]));
+  int sa[3], sb[3];  // sides of a's corners of b's plane, and of b's corners of a's plane
+  for (int i = 0; i < 3; ++i) sa[i] = orient3d(b[0], b[1], b[2], a[i]);
+  const auto one_side = [](const int* s) { return (s[0] > 0 && s[1] > 0 && s[2] > 0) || (s[0] < 0 && s[1] < 0 && s[2] < 0); };
+  if (one_side(sa)) return false;
+  for (int i = 0; i < 3; ++i) sb[i] = orient3d(a[0], a[1], a[2], b[i]);
+  if (one_side(sb)) return false;
+  if (sa[0] == 0 && sa[1] == 0 && sa[2] == 0) return coplanar_triangles_meet(a, b, projection_axis(a[0], a[1], a[2]));
   // Different planes: the intersection is a segment of their common line whose end points lie
   // on the triangles' boundaries, so it is empty unless an edge of one meets the other.
-  for (int e = 0; e < 3; ++e)
-    if (segment_meets_closed_triangle(a[e], a[(e + 1) % 3], b) || segment_meets_closed_triangle(b[e], b[(e + 1) % 3], a))
+  for (int e = 0; e < 3; ++e) {
+    const int f = (e + 1) % 3;
+    if (segment_meets_closed_triangle(a[e], a[f], b, sa[e], sa[f]) ||
+        segment_meets_closed_triangle(b[e], b[f], a, sb[e], sb[f]))
       return true;
+  }
   return false;
 }
 
@@ -272,7 +272,11 @@ bool nondegenerate_triangles_intersect(const std::array<Vec3, 3>& a, const std::
   const Vec3& a2 = a[(ia[0] + 2) % 3];
   const Vec3& b1 = b[(ib[0] + 1) % 3];
   const Vec3& b2 = b[(ib[0] + 2) % 3];
-  if (orient3d(v, b1, b2, a1) == 0 && orient3d(v, b1, b2, a2) == 0) {
+  // The sides of a1 and a2 of b's plane (v, b1, b2 is b turned cyclically: the same plane and
+  // orientation). Both strictly on one side: a meets that plane only at v, which does not count.
+  const int s1 = orient3d(v, b1, b2, a1), s2 = orient3d(v, b1, b2, a2);
+  if (s1 * s2 > 0) return false;
+  if (s1 == 0 && s2 == 0) {
     // One plane: near v each triangle is its angle at v, and the intersection is convex, so the
     // triangles meet beyond v when the angles overlap, i.e. when a side of one lies in the other.
     const int drop = projection_axis(v, a1, a2);
@@ -282,7 +286,9 @@ bool nondegenerate_triangles_intersect(const std::array<Vec3, 3>& a, const std::
   // Different planes: the common line passes through v, and each triangle's part of it runs from
   // v to a point of the opposite side, so they meet beyond v when an opposite side meets the
   // other triangle (which it cannot do at v).
-  return segment_meets_closed_triangle(a1, a2, b) || segment_meets_closed_triangle(b1, b2, a);
+  if (segment_meets_closed_triangle(a1, a2, b, s1, s2)) return true;
+  const int t1 = orient3d(v, a1, a2, b1), t2 = orient3d(v, a1, a2, b2);
+  return segment_meets_closed_triangle(b1, b2, a, t1, t2);
 }
 
 namespace {
