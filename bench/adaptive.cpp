@@ -159,6 +159,31 @@ void BM_PaperBunny(benchmark::State& state) {
 }
 BENCHMARK(BM_PaperBunny)->ArgName("method")->DenseRange(0, 2)->UseManualTime()->Unit(benchmark::kMillisecond);
 
+// The paper's algorithm as printed (Variant::Paper: no grading, repair, relaxation or tolerance
+// refinement), with the robustness of the tracker and the seeding and the final
+// self-intersection check: the torus at the factors of BM_Adaptive and the bunny VIS-800 at
+// factor 3. What the robustness costs, apart from the quality additions BM_Adaptive includes.
+void BM_AdaptivePaperVariant(benchmark::State& state) {
+  const int shape = static_cast<int>(state.range(0));  // 0 torus, 1 bunny VIS-800
+  std::unique_ptr<Field> torus;
+  if (shape == 0) torus = make_shape(kTorus);
+  const Field& field = shape == 0 ? *torus : bunny();
+  AdaptiveOptions o;
+  o.factor = static_cast<double>(state.range(1));
+  o.variant = Variant::Paper;
+  run_adaptive(state, field, o);
+  state.SetLabel(std::string(shape == 0 ? "torus" : "bunny_vis800") + "/adaptive_paper/factor" +
+                 std::to_string(state.range(1)));
+}
+BENCHMARK(BM_AdaptivePaperVariant)
+    ->ArgNames({"shape", "factor"})
+    ->Args({0, 2})
+    ->Args({0, 3})
+    ->Args({0, 5})
+    ->Args({1, 3})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+
 // The adaptive polygonizer's own time outside the field (issue 14's "bookkeeping"): the run's
 // time less its evaluation counts priced by measure_field_cost at the mesh's vertices (single
 // calls, the fastest of three passes). The manual time is that remainder, so the dashboard
