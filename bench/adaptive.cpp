@@ -220,6 +220,20 @@ void BM_AdaptiveBookkeeping(benchmark::State& state) {
 }
 BENCHMARK(BM_AdaptiveBookkeeping)->ArgName("shape")->DenseRange(0, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
 
+// Components of very different scales: a torus tube of radius 0.003 beside a sphere of radius
+// 1.2 at factor 1, min_edge 1e-4 (the hashes sized by the tube's edges hold the sphere's
+// triangles; the run took 330 s before coarser levels for wide boxes, 0.43 s after).
+void BM_AdaptiveMixedScales(benchmark::State& state) {
+  const Expression field("min(sqrt((x-2.8)^2+y^2+z^2)-1.2, sqrt((sqrt(x^2+y^2)-1)^2+z^2)-0.003)", {},
+                         Box{Vec3::Constant(-4), Vec3::Constant(4)});
+  AdaptiveOptions o;
+  o.factor = 1;
+  o.min_edge = 1e-4;
+  run_adaptive(state, field, o);
+  state.SetLabel("sphere_and_thin_torus/adaptive/factor1");
+}
+BENCHMARK(BM_AdaptiveMixedScales)->UseManualTime()->Unit(benchmark::kMillisecond);
+
 // The final check of every adaptive run (AdaptiveOptions::check_self_intersections): all
 // intersecting pairs of a finished mesh, on one thread. The torus at factor 6.3 (about 10^4
 // triangles, one thread below the check's parallel threshold in a real run) and at 20 (10^5).
