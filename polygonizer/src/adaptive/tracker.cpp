@@ -468,7 +468,7 @@ void Tracker::run_fronts() {
   }
 }
 
-std::optional<std::pair<int, int>> Tracker::thin_feature_at(int node) const {
+std::optional<std::pair<int, int>> Tracker::thin_feature_at(int node, double radius) const {
   // Only called when a run is about to fail: every vertex of the stuck front against the
   // vertices within min_edge of it. Normals more than 120 degrees apart at surface points that
   // close mean a slab or a gap thinner than min_edge (the gyroid ball at factor 2: the gyroid
@@ -481,9 +481,9 @@ std::optional<std::pair<int, int>> Tracker::thin_feature_at(int node) const {
   do {
     const int u = fs_.nodes[x].vertex;
     const Vec3& pu = mesh_.positions[u];
-    vertex_hash_.for_each_near(pu, s_.sizing.min_edge, [&](int w) {
+    vertex_hash_.for_each_near(pu, radius, [&](int w) {
       const double d = (mesh_.positions[w] - pu).norm();
-      if (d >= s_.sizing.min_edge || mesh_.normals[u].dot(mesh_.normals[w]) > kOppositeCosine) return;
+      if (d >= radius || mesh_.normals[u].dot(mesh_.normals[w]) > kOppositeCosine) return;
       if (d < best_d || (d == best_d && best && std::pair(u, w) < *best)) best_d = d, best = std::pair(u, w);
     });
     x = fs_.nodes[x].next;
@@ -587,11 +587,21 @@ void Tracker::step(int& f) {
       const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
       std::string message = "adaptive: a front of " + std::to_string(fs_.fronts[f].size) + " points near " + format_point(p) +
                             " cannot advance even at a quarter of min_edge";
-      const auto thin = thin_feature_at(node);
-      const auto crease = thin ? acute_crease_between(mesh_.positions[thin->first], mesh_.positions[thin->second])
-                               : std::nullopt;
+      const auto thin = thin_feature_at(node, s_.sizing.min_edge);
+      // The two faces of an acute crease may face each other from farther than min_edge (the
+      // box minus a ball meshed across its creases, whose rim the front reaches with edges of
+      // several min_edge): pairs up to kCreaseSearchEdges min_edge apart are asked too, and
+      // named only when the field has a crease between them.
+      constexpr double kCreaseSearchEdges = 4;
+      auto faces = thin;
+      auto crease = thin ? acute_crease_between(mesh_.positions[thin->first], mesh_.positions[thin->second])
+                         : std::nullopt;
+      if (!crease) {
+        faces = thin_feature_at(node, kCreaseSearchEdges * s_.sizing.min_edge);
+        if (faces) crease = acute_crease_between(mesh_.positions[faces->first], mesh_.positions[faces->second]);
+      }
       if (crease) {
-        const auto& [u, w] = *thin;
+        const auto& [u, w] = *faces;
         message += ": the surface there folds into a crease whose faces meet at " +
                    std::to_string(static_cast<int>(std::lround(crease->degrees))) + " degrees, near " +
                    format_point(crease->point) + " (the points " + format_point(mesh_.positions[u]) + " and " +

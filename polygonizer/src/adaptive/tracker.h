@@ -276,8 +276,9 @@ class Tracker {
   void check_limits();
   bool zip_spike(int node);
   // For the error of a front that cannot advance: the closest pair (a vertex of node's front,
-  // a mesh vertex) within min_edge whose normals face opposite ways, if any.
-  std::optional<std::pair<int, int>> thin_feature_at(int node) const;
+  // a mesh vertex) within `radius` whose normals face opposite ways, if any (within min_edge: a
+  // feature thinner than min_edge).
+  std::optional<std::pair<int, int>> thin_feature_at(int node, double radius) const;
   // For the same error: whether two such points lie on the two faces of a crease of the field
   // (Field::pieces) that passes near them, a wedge rather than a slab; its point and the angle
   // between its faces, seen from inside, in degrees.
