@@ -114,8 +114,9 @@ inline constexpr double kSameSideCosine = 0;
 inline constexpr double kMaxTurnCosine = 0.2588;
 
 // Settings::look_ahead: the edge length may grow by this share of the distance from a front
-// point's target (with edges of about the target, 1.4 times an edge's length an edge, about the
-// grading's kGrowth).
+// point's target (with edges of about the target, 1.4 times an edge's length an edge). The
+// grading's kGrowth binds first where sizes drop: with it at 1.5, 0.25 here gave the same
+// meshes on the bunny VIS-800, the Igea and bunny MPU models and Chmutov's sextic.
 inline constexpr double kLookAheadGradation = 0.4;
 
 // Points in the tracker's error messages (and the crease layout's): "(x, y, z)", six decimals.
