@@ -160,6 +160,13 @@ void BM_PaperBunny(benchmark::State& state) {
 }
 BENCHMARK(BM_PaperBunny)->ArgName("method")->DenseRange(0, 2)->UseManualTime()->Unit(benchmark::kMillisecond);
 
+// Shape 0: the torus (made into `holder`), 1: the bunny VIS-800 (built once).
+const Field& torus_or_bunny(int shape, std::unique_ptr<Field>& holder) {
+  if (shape != 0) return bunny();
+  holder = make_shape(kTorus);
+  return *holder;
+}
+
 // The paper's algorithm as printed (Variant::Paper: no grading, repair, relaxation or tolerance
 // refinement), with the robustness of the tracker and the seeding and the final
 // self-intersection check: the torus at the factors of BM_Adaptive and the bunny VIS-800 at
@@ -167,8 +174,7 @@ BENCHMARK(BM_PaperBunny)->ArgName("method")->DenseRange(0, 2)->UseManualTime()->
 void BM_AdaptivePaperVariant(benchmark::State& state) {
   const int shape = static_cast<int>(state.range(0));  // 0 torus, 1 bunny VIS-800
   std::unique_ptr<Field> torus;
-  if (shape == 0) torus = make_shape(kTorus);
-  const Field& field = shape == 0 ? *torus : bunny();
+  const Field& field = torus_or_bunny(shape, torus);
   AdaptiveOptions o;
   o.factor = static_cast<double>(state.range(1));
   o.variant = Variant::Paper;
@@ -193,8 +199,7 @@ BENCHMARK(BM_AdaptivePaperVariant)
 void BM_AdaptiveBookkeeping(benchmark::State& state) {
   const int shape = static_cast<int>(state.range(0));  // 0 torus, 1 bunny VIS-800
   std::unique_ptr<Field> torus;
-  if (shape == 0) torus = make_shape(kTorus);
-  const Field& field = shape == 0 ? *torus : bunny();
+  const Field& field = torus_or_bunny(shape, torus);
   AdaptiveOptions o;
   o.factor = shape == 0 ? 6.3 : 3;  // about 10^4 triangles on both
   // On one thread: evaluations shared among threads (the seed grid, the relaxation's

@@ -587,19 +587,19 @@ void Tracker::step(int& f) {
       const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
       std::string message = "adaptive: a front of " + std::to_string(fs_.fronts[f].size) + " points near " + format_point(p) +
                             " cannot advance even at a quarter of min_edge";
-      const auto thin = thin_feature_at(node, s_.sizing.min_edge);
-      // The two faces of an acute crease may face each other from farther than min_edge (the
-      // box minus a ball meshed across its creases, whose rim the front reaches with edges of
-      // several min_edge): pairs up to kCreaseSearchEdges min_edge apart are asked too, and
-      // named only when the field has a crease between them.
+      // The closest facing pair within kCreaseSearchEdges min_edge: the two faces of an acute
+      // crease may face each other from farther than min_edge (the box minus a ball meshed
+      // across its creases, whose rim the front reaches with edges of several min_edge), and
+      // are named only when the field has a crease between them; a pair closer than min_edge
+      // that is not a crease is a thin feature.
       constexpr double kCreaseSearchEdges = 4;
-      auto faces = thin;
-      auto crease = thin ? acute_crease_between(mesh_.positions[thin->first], mesh_.positions[thin->second])
-                         : std::nullopt;
-      if (!crease) {
-        faces = thin_feature_at(node, kCreaseSearchEdges * s_.sizing.min_edge);
-        if (faces) crease = acute_crease_between(mesh_.positions[faces->first], mesh_.positions[faces->second]);
-      }
+      const auto faces = thin_feature_at(node, kCreaseSearchEdges * s_.sizing.min_edge);
+      const auto crease = faces ? acute_crease_between(mesh_.positions[faces->first], mesh_.positions[faces->second])
+                                : std::nullopt;
+      const auto thin =
+          faces && (mesh_.positions[faces->first] - mesh_.positions[faces->second]).norm() < s_.sizing.min_edge
+              ? faces
+              : std::nullopt;
       if (crease) {
         const auto& [u, w] = *faces;
         message += ": the surface there folds into a crease whose faces meet at " +
