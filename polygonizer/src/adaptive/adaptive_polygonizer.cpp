@@ -589,6 +589,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["anticipations"] = tracker->anticipations();
   st.extra["forced_closures"] = tracker->forced_closures();
   st.extra["rollbacks"] = tracker->rollbacks();
+  st.extra["rollbacks_failed"] = tracker->failed_rollbacks();
   st.extra["remeshed_with_rollbacks"] = remeshed;
   st.extra["remeshed_carefully"] = careful;
   st.extra["careful_max_turn"] = careful ? settings.sizing.max_turn : 0.0;

@@ -40,6 +40,11 @@ constexpr double kRollbackRadius = 3;
 // Rollbacks at one place (R doubling), and in one run.
 constexpr int kRollbacksPerPlace = 3;
 constexpr std::size_t kRollbacksInAll = 32;
+// Attempts whose hole could not be traced, in one run. Each costs up to kGrowSteps passes over
+// its hole, and a front over finished mesh asks again at nearly every step: on a shell thinner
+// than min_edge (outside the promise) 255 failed attempts took 55 of a 57-second run before the
+// self-intersection check named the place.
+constexpr std::size_t kFailedRollbacksInAll = 16;
 // Vertices whose triangles are added to the hole while tracing its boundary, at most.
 constexpr int kGrowSteps = 256;
 // A hole edge shorter than this share of its ends' target edge length is grown over.
@@ -52,7 +57,7 @@ struct BoundaryEdge {
 }  // namespace
 
 bool Tracker::rollback(int f, int node, bool at_node) {
-  if (!s_.rollback || rollbacks_ >= kRollbacksInAll) return false;
+  if (!s_.rollback || rollbacks_ >= kRollbacksInAll || failed_rollbacks_ >= kFailedRollbacksInAll) return false;
   const std::size_t nv = mesh_.positions.size();
   dead_.resize(nv, 0);
 
@@ -111,58 +116,136 @@ bool Tracker::rollback(int f, int node, bool at_node) {
     return std::pair(lo, hi);
   };
 
-  std::vector<char> removed;
-  std::vector<int> absorbed;
+  // The hole only grows (in_s is only ever set), so the removed triangles, the touched vertices
+  // and the absorbed fronts are kept from one growing step to the next and extended by the
+  // vertices added since: each step costs the hole's size and its fronts' lengths, not the
+  // component's (a rollback that grew 256 times over a large component took most of a run).
+  // Incidence, built once: the component's triangles at each vertex and the front nodes at
+  // each vertex and on each front, in increasing id order.
+  const auto csr = [](std::size_t n, const std::vector<std::pair<int, int>>& pairs) {
+    std::vector<int> start(n + 1, 0), items(pairs.size());
+    for (const auto& [key, item] : pairs) ++start[key + 1];
+    for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (const auto& [key, item] : pairs) items[fill[key]++] = item;  // pairs are in item order
+    return std::array<std::vector<int>, 2>{std::move(start), std::move(items)};
+  };
+  std::vector<std::pair<int, int>> pairs;
+  pairs.reserve(3 * (nt - t0));
+  for (std::size_t t = t0; t < nt; ++t)
+    for (const int v : mesh_.triangles[t]) pairs.emplace_back(v, static_cast<int>(t - t0));
+  const std::array<std::vector<int>, 2> tri_csr = csr(nv, pairs);
+  const std::vector<int>& tri_start = tri_csr[0];
+  const std::vector<int>& tri_items = tri_csr[1];
+  pairs.clear();
+  for (std::size_t n = 0; n < fs_.nodes.size(); ++n)
+    if (fs_.nodes[n].front >= 0) pairs.emplace_back(fs_.nodes[n].vertex, static_cast<int>(n));
+  const std::array<std::vector<int>, 2> vnode_csr = csr(nv, pairs);
+  const std::vector<int>& vnode_start = vnode_csr[0];
+  const std::vector<int>& vnode_items = vnode_csr[1];
+  for (auto& [key, item] : pairs) key = fs_.nodes[item].front;
+  const std::array<std::vector<int>, 2> fnode_csr = csr(fs_.fronts.size(), pairs);
+  const std::vector<int>& fnode_start = fnode_csr[0];
+  const std::vector<int>& fnode_items = fnode_csr[1];
+  pairs = {};
+
+  const auto remains = [&](const std::vector<char>& removed, int a, int b) {  // a triangle with a -> b stays
+    const auto [lo, hi] = owners(a, b);
+    for (auto it = lo; it != hi; ++it)
+      if (!removed[std::get<2>(*it)]) return true;
+    return false;
+  };
+  std::vector<char> removed(nt - t0, 0), touched(nv, 0);
+  // The removed triangles' edges (triangle, corner) whose opposite edge has a triangle that stays:
+  // the hole's side of its boundary, in the order the boundary is traced.
+  std::set<std::pair<int, int>> hole_edges;
+  std::set<int> fronts{f};
+  std::vector<int> front_nodes, new_front_nodes;  // the absorbed fronts' nodes in id order
+  const auto touch = [&](int v) {
+    if (touched[v]) return;
+    touched[v] = 1;
+    // Every front with a point on a touched vertex joins the hole.
+    for (int i = vnode_start[v]; i < vnode_start[v + 1]; ++i) {
+      const int g = fs_.nodes[vnode_items[i]].front;
+      if (fronts.insert(g).second)
+        new_front_nodes.insert(new_front_nodes.end(), fnode_items.begin() + fnode_start[g],
+                               fnode_items.begin() + fnode_start[g + 1]);
+    }
+  };
+  new_front_nodes.assign(fnode_items.begin() + fnode_start[f], fnode_items.begin() + fnode_start[f + 1]);
+  std::vector<int> pending;  // in_s vertices not yet taken into removed and touched
+  for (std::size_t v = 0; v < nv; ++v)
+    if (in_s[v]) pending.push_back(static_cast<int>(v));
+  const auto set_in_s = [&](int v) {
+    in_s[v] = 1;
+    pending.push_back(v);
+  };
+  // The hole edge of removed triangle t at corner k, kept in hole_edges while the opposite edge
+  // has a triangle that stays.
+  const auto update_hole_edge = [&](int t, int k) {
+    const auto& tri = mesh_.triangles[t0 + t];
+    if (remains(removed, tri[(k + 1) % 3], tri[k]))
+      hole_edges.emplace(t, k);
+    else
+      hole_edges.erase({t, k});
+  };
+  std::vector<int> edge_from_node(fs_.nodes.size(), -1);  // set for front_nodes at each step
+  std::vector<int> absorbed, newly_removed;
   std::vector<std::vector<int>> loops;
   bool traced = false;
   for (int grow = 0; grow <= kGrowSteps && !traced; ++grow) {
-    removed.assign(nt - t0, 0);
-    std::vector<char> touched(nv, 0);
-    for (std::size_t t = t0; t < nt; ++t) {
-      const auto& tri = mesh_.triangles[t];
-      if (in_s[tri[0]] || in_s[tri[1]] || in_s[tri[2]]) {
-        removed[t - t0] = 1;
-        for (const int v : tri) touched[v] = 1;
+    newly_removed.clear();
+    for (const int v : pending) {
+      touch(v);
+      for (int i = tri_start[v]; i < tri_start[v + 1]; ++i) {
+        const int t = tri_items[i];
+        if (removed[t]) continue;
+        removed[t] = 1;
+        newly_removed.push_back(t);
+        for (const int w : mesh_.triangles[t0 + t]) touch(w);
       }
     }
-    for (std::size_t v = 0; v < nv; ++v)
-      if (in_s[v]) touched[v] = 1;
-    // Every front with a point on a touched vertex joins the hole (node id order).
-    std::set<int> fronts;
-    for (std::size_t n = 0; n < fs_.nodes.size(); ++n) {
-      const FrontNode& fn = fs_.nodes[n];
-      if (fn.front >= 0 && touched[fn.vertex]) fronts.insert(fn.front);
+    pending.clear();
+    // Only the new triangles' own edges and the removed edges opposite them change status.
+    for (const int t : newly_removed) {
+      const auto& tri = mesh_.triangles[t0 + t];
+      for (int k = 0; k < 3; ++k) {
+        update_hole_edge(t, k);
+        const auto [lo, hi] = owners(tri[(k + 1) % 3], tri[k]);
+        for (auto it = lo; it != hi; ++it) {
+          const int u = std::get<2>(*it);
+          if (!removed[u]) continue;
+          const auto& tu = mesh_.triangles[t0 + u];
+          for (int j = 0; j < 3; ++j)
+            if (tu[j] == tri[(k + 1) % 3] && tu[(j + 1) % 3] == tri[k]) update_hole_edge(u, j);
+        }
+      }
     }
-    fronts.insert(f);
     absorbed.assign(fronts.begin(), fronts.end());
+    for (const int n : front_nodes) edge_from_node[n] = -1;
+    if (!new_front_nodes.empty()) {
+      std::sort(new_front_nodes.begin(), new_front_nodes.end());
+      const std::size_t old_size = front_nodes.size();
+      front_nodes.insert(front_nodes.end(), new_front_nodes.begin(), new_front_nodes.end());
+      std::inplace_merge(front_nodes.begin(), front_nodes.begin() + old_size, front_nodes.end());
+      new_front_nodes.clear();
+    }
 
-    const auto remains = [&](int a, int b) {  // a triangle with edge a -> b stays
-      const auto [lo, hi] = owners(a, b);
-      for (auto it = lo; it != hi; ++it)
-        if (!removed[std::get<2>(*it)]) return true;
-      return false;
-    };
     std::vector<BoundaryEdge> boundary;
-    std::vector<int> edge_from_node(fs_.nodes.size(), -1);
-    for (std::size_t n = 0; n < fs_.nodes.size(); ++n) {
+    for (const int n : front_nodes) {
       const FrontNode& fn = fs_.nodes[n];
-      if (fn.front < 0 || !fronts.count(fn.front)) continue;
       const int a = fn.vertex, b = fs_.nodes[fn.next].vertex;
       // A front edge stays when the triangle owning it (edge b -> a) stays; one with no triangle
       // on either side (a bridge of a split or a merge) goes when one of its ends is in the
       // hole's middle, and stays otherwise.
       const auto [lo, hi] = owners(b, a);
-      if (lo == hi ? in_s[a] || in_s[b] : !remains(b, a)) continue;
+      if (lo == hi ? in_s[a] || in_s[b] : !remains(removed, b, a)) continue;
       edge_from_node[n] = static_cast<int>(boundary.size());
-      boundary.push_back({a, b, static_cast<int>(n), fn.next});
+      boundary.push_back({a, b, n, fn.next});
     }
-    for (std::size_t t = t0; t < nt; ++t) {
-      if (!removed[t - t0]) continue;
-      const auto& tri = mesh_.triangles[t];
-      for (int k = 0; k < 3; ++k) {
-        const int x = tri[k], y = tri[(k + 1) % 3];
-        if (remains(y, x)) boundary.push_back({x, y, -1, -1});
-      }
+    for (const auto& [t, k] : hole_edges) {
+      const auto& tri = mesh_.triangles[t0 + t];
+      boundary.push_back({tri[k], tri[(k + 1) % 3], -1, -1});
     }
     // Out-edges by vertex.
     std::vector<std::pair<int, int>> out;  // (from vertex, edge index)
@@ -220,7 +303,7 @@ bool Tracker::rollback(int f, int node, bool at_node) {
           const double l = (mesh_.positions[a] - mesh_.positions[b]).norm();
           if (l >= kShortEdge * std::min(target_[a], target_[b])) continue;
           for (const int v : {a, b})
-            if (static_cast<std::size_t>(v) >= first_vertex_ && !in_s[v]) in_s[v] = 1, grew = true;
+            if (static_cast<std::size_t>(v) >= first_vertex_ && !in_s[v]) set_in_s(v), grew = true;
         }
       if (!grew) {
         // Remaining triangles cut off from the rest of the component by the hole (an island
@@ -248,7 +331,7 @@ bool Tracker::rollback(int f, int node, bool at_node) {
         for (std::size_t t = 0; t < parent.size(); ++t)
           if (!removed[t] && find(static_cast<int>(t)) != biggest)
             for (const int v : mesh_.triangles[t0 + t])
-              if (!in_s[v]) in_s[v] = 1, grew = true;
+              if (!in_s[v]) set_in_s(v), grew = true;
       }
       if (!grew || grow == kGrowSteps) {
         traced = true;
@@ -256,10 +339,16 @@ bool Tracker::rollback(int f, int node, bool at_node) {
       }
       continue;
     }
-    if (static_cast<std::size_t>(grow_at) < first_vertex_ || in_s[grow_at]) return false;
-    in_s[grow_at] = 1;
+    if (static_cast<std::size_t>(grow_at) < first_vertex_ || in_s[grow_at]) {
+      ++failed_rollbacks_;
+      return false;
+    }
+    set_in_s(grow_at);
   }
-  if (!traced) return false;
+  if (!traced) {
+    ++failed_rollbacks_;
+    return false;
+  }
   // Apply: the absorbed fronts go, then the triangles, then the vertices left without one.
   for (const int g : absorbed) {
     Front& fr = fs_.fronts[g];

@@ -202,6 +202,8 @@ class Tracker {
   double hessian_seconds() const { return hessian_seconds_; }
   // Stuck regions undone and re-meshed (see rollback.cpp).
   std::size_t rollbacks() const { return rollbacks_; }
+  // Rollbacks given up because the hole's boundary could not be traced into fronts.
+  std::size_t failed_rollbacks() const { return failed_rollbacks_; }
   // Bridges refused because they would leave the patches (set_patch_test).
   std::size_t patch_refusals() const { return patch_refusals_; }
   // Drops the vertices rollbacks left without a triangle, renumbering the rest (a no-op when
@@ -359,7 +361,7 @@ class Tracker {
       if ((p - z.center).squaredNorm() < z.radius * z.radius) target = std::min(target, z.edge);
     return target;
   }
-  std::size_t rollbacks_ = 0, first_vertex_ = 0, first_triangle_ = 0;
+  std::size_t rollbacks_ = 0, failed_rollbacks_ = 0, first_vertex_ = 0, first_triangle_ = 0;
   std::uint64_t window_visits_ = 0;  // search_visits() at the start of the current window
   std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0, forced_closures_ = 0, anticipations_ = 0;
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;
