@@ -329,6 +329,23 @@ std::string tolerance_name(const testing::TestParamInfo<ToleranceCase>& info) {
 
 INSTANTIATE_TEST_SUITE_P(Adaptive, ToleranceBound, testing::ValuesIn(tolerance_cases()), tolerance_name);
 
+TEST(AdaptiveTolerance, ANarrowRidgeIsRefinedAcrossItsOtherEdges) {
+  // The bunny VIS-2000 at 1e-3 of ten times its longest factor-1 edge, with the default
+  // min_edge: four triangles near (-0.046, 0.035, -0.015) span a ridge whose normals are 110
+  // degrees apart across an 8 mm edge, up to 1.45 eps from the surface. Splitting the longest
+  // edge there folds; the refinement gave up on them and polygonize warned. It now tries the
+  // other edges, and the bound holds, measured densely by the test.
+  const auto field = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/bunny_vis2000.json");
+  AdaptiveOptions o;
+  o.sizing = SizingMode::Tolerance;
+  o.tolerance = 0.0010351162319589128;
+  const PolygonizeResult r = polygonize_adaptive(*field, o);
+  expect_sound(r.mesh, "bunny vis2000 eps 1.035e-3");
+  EXPECT_EQ(r.stats.extra.at("quality.over_tolerance").get<std::size_t>(), 0u);
+  EXPECT_LE(densely_sampled_distance(*field, r.mesh), o.tolerance);
+  EXPECT_GE(angle_statistics(r.mesh).min_degrees, 20.0);
+}
+
 TEST(AdaptivePaperVariant, SwitchesOffEveryAddition) {
   const auto field = test::tanglecube();
   AdaptiveOptions o;

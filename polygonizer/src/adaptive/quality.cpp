@@ -1216,14 +1216,18 @@ class Improver {
         const Tri T = m_.triangles[t];
         if (!(estimate_distance(T, t) > bound)) continue;
         // Halve the longest edge; after a split the edge is gone, so a neighbour visited later
-        // in this round sees the new triangles.
-        int k = 0;
-        double longest = -1;
-        for (int e = 0; e < 3; ++e) {
-          const double l = (P(T[(e + 1) % 3]) - P(T[e])).norm();
-          if (l > longest) longest = l, k = e;
-        }
-        if (!try_split(t, T[k], T[(k + 1) % 3])) left.push_back(t);
+        // in this round sees the new triangles. When the longest edge cannot be split (its
+        // midpoint's normal or the new triangles would fold: a ridge narrower than the edges, as
+        // on the bunny VIS-2000 where normals 110 degrees apart share a triangle), the next
+        // longest is tried, then the shortest.
+        std::array<double, 3> len{};
+        for (int e = 0; e < 3; ++e) len[e] = (P(T[(e + 1) % 3]) - P(T[e])).norm();
+        std::array<int, 3> order{0, 1, 2};
+        std::stable_sort(order.begin(), order.end(), [&](int x, int y) { return len[x] > len[y]; });
+        bool split = false;
+        for (const int k : order)
+          if ((split = try_split(t, T[k], T[(k + 1) % 3]))) break;
+        if (!split) left.push_back(t);
       }
       std::sort(touched_.begin(), touched_.end());
       touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
