@@ -100,19 +100,28 @@ bool Tracker::rollback(int f, int node, bool at_node) {
     });
   }
 
-  // The component's triangles and their directed edges (a, b, triangle), sorted.
+  // The component's triangles and their directed edges (a, b, triangle), sorted: bucketed by a
+  // (edge_start[a] .. edge_start[a + 1]), then each vertex's few edges sorted, rather than one
+  // sort of them all at each rollback. A vertex's bucket also lists its triangles.
   const std::size_t t0 = first_triangle_, nt = mesh_.triangles.size();
-  std::vector<std::tuple<int, int, int>> edges;
-  edges.reserve(3 * (nt - t0));
-  for (std::size_t t = t0; t < nt; ++t) {
-    const auto& tri = mesh_.triangles[t];
-    for (int k = 0; k < 3; ++k) edges.emplace_back(tri[k], tri[(k + 1) % 3], static_cast<int>(t - t0));
+  std::vector<int> edge_start(nv + 1, 0);
+  for (std::size_t t = t0; t < nt; ++t)
+    for (const int v : mesh_.triangles[t]) ++edge_start[v + 1];
+  for (std::size_t v = 0; v < nv; ++v) edge_start[v + 1] += edge_start[v];
+  std::vector<std::tuple<int, int, int>> edges(3 * (nt - t0));
+  {
+    std::vector<int> fill(edge_start.begin(), edge_start.end() - 1);
+    for (std::size_t t = t0; t < nt; ++t) {
+      const auto& tri = mesh_.triangles[t];
+      for (int k = 0; k < 3; ++k) edges[fill[tri[k]]++] = {tri[k], tri[(k + 1) % 3], static_cast<int>(t - t0)};
+    }
   }
-  std::sort(edges.begin(), edges.end());
+  for (std::size_t v = 0; v < nv; ++v) std::sort(edges.begin() + edge_start[v], edges.begin() + edge_start[v + 1]);
   const auto owners = [&](int a, int b) {
-    const auto lo = std::lower_bound(edges.begin(), edges.end(), std::tuple<int, int, int>(a, b, -1));
+    const auto end = edges.begin() + edge_start[a + 1];
+    const auto lo = std::lower_bound(edges.begin() + edge_start[a], end, std::tuple<int, int, int>(a, b, -1));
     auto hi = lo;
-    while (hi != edges.end() && std::get<0>(*hi) == a && std::get<1>(*hi) == b) ++hi;
+    while (hi != end && std::get<1>(*hi) == b) ++hi;
     return std::pair(lo, hi);
   };
 
@@ -120,8 +129,8 @@ bool Tracker::rollback(int f, int node, bool at_node) {
   // and the absorbed fronts are kept from one growing step to the next and extended by the
   // vertices added since: each step costs the hole's size and its fronts' lengths, not the
   // component's (a rollback that grew 256 times over a large component took most of a run).
-  // Incidence, built once: the component's triangles at each vertex and the front nodes at
-  // each vertex and on each front, in increasing id order.
+  // Incidence, built once: the front nodes at each vertex and on each front, in increasing id
+  // order.
   const auto csr = [](std::size_t n, const std::vector<std::pair<int, int>>& pairs) {
     std::vector<int> start(n + 1, 0), items(pairs.size());
     for (const auto& [key, item] : pairs) ++start[key + 1];
@@ -131,13 +140,6 @@ bool Tracker::rollback(int f, int node, bool at_node) {
     return std::array<std::vector<int>, 2>{std::move(start), std::move(items)};
   };
   std::vector<std::pair<int, int>> pairs;
-  pairs.reserve(3 * (nt - t0));
-  for (std::size_t t = t0; t < nt; ++t)
-    for (const int v : mesh_.triangles[t]) pairs.emplace_back(v, static_cast<int>(t - t0));
-  const std::array<std::vector<int>, 2> tri_csr = csr(nv, pairs);
-  const std::vector<int>& tri_start = tri_csr[0];
-  const std::vector<int>& tri_items = tri_csr[1];
-  pairs.clear();
   for (std::size_t n = 0; n < fs_.nodes.size(); ++n)
     if (fs_.nodes[n].front >= 0) pairs.emplace_back(fs_.nodes[n].vertex, static_cast<int>(n));
   const std::array<std::vector<int>, 2> vnode_csr = csr(nv, pairs);
@@ -197,8 +199,8 @@ bool Tracker::rollback(int f, int node, bool at_node) {
     newly_removed.clear();
     for (const int v : pending) {
       touch(v);
-      for (int i = tri_start[v]; i < tri_start[v + 1]; ++i) {
-        const int t = tri_items[i];
+      for (int i = edge_start[v]; i < edge_start[v + 1]; ++i) {
+        const int t = std::get<2>(edges[i]);
         if (removed[t]) continue;
         removed[t] = 1;
         newly_removed.push_back(t);
