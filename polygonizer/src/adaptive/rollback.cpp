@@ -159,7 +159,7 @@ bool Tracker::rollback(int f, int node, bool at_node) {
   };
   std::vector<char> removed(nt - t0, 0), touched(nv, 0);
   // The removed triangles' edges (triangle, corner) whose opposite edge has a triangle that stays:
-  // the hole's side of its boundary, in the order the boundary is traced.
+  // the hole's side of its boundary, ordered by (triangle, corner) as the full scan listed them.
   std::set<std::pair<int, int>> hole_edges;
   std::set<int> fronts{f};
   std::vector<int> front_nodes, new_front_nodes;  // the absorbed fronts' nodes in id order
