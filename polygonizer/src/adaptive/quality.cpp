@@ -175,6 +175,13 @@ class Improver {
   }
   int tri_count() const { return static_cast<int>(m_.triangles.size()); }
   const Vec3& P(int v) const { return m_.positions[v]; }
+  // A triangle's edge lengths (edge k: T[k]-T[k+1]) and its edges longest first (ties by index).
+  std::pair<std::array<double, 3>, std::array<int, 3>> edges_longest_first(const Tri& T) const {
+    const std::array<double, 3> len{(P(T[1]) - P(T[0])).norm(), (P(T[2]) - P(T[1])).norm(), (P(T[0]) - P(T[2])).norm()};
+    std::array<int, 3> order{0, 1, 2};
+    std::sort(order.begin(), order.end(), [&](int x, int y) { return len[x] != len[y] ? len[x] > len[y] : x < y; });
+    return {len, order};
+  }
   double tri_min_angle(const Tri& t) const { return min_angle(P(t[0]), P(t[1]), P(t[2])); }
   // tri_min_angle(t) < limit, with one arc tangent for most triangles instead of three: the
   // smallest angle is the one facing the shortest edge, and the two differ only by rounding
@@ -906,10 +913,7 @@ class Improver {
   // Rotates a triangle so that the edge (k, k+1) is given as (T[k], T[k+1]).
   bool repair_triangle(int t) {
     const Tri T = m_.triangles[t];
-    const Vec3 &p0 = P(T[0]), &p1 = P(T[1]), &p2 = P(T[2]);
-    const std::array<double, 3> len{(p1 - p0).norm(), (p2 - p1).norm(), (p0 - p2).norm()};  // edge k: T[k]-T[k+1]
-    std::array<int, 3> order{0, 1, 2};
-    std::sort(order.begin(), order.end(), [&](int x, int y) { return len[x] != len[y] ? len[x] > len[y] : x < y; });
+    const auto [len, order] = edges_longest_first(T);
     // A cap (an angle near 180 degrees) opens by flipping its longest edge; other edges may flip
     // too. Flips change nothing but connectivity, so they go first.
     for (int k : order)
@@ -1228,10 +1232,7 @@ class Improver {
         // midpoint's normal or the new triangles would fold: a ridge narrower than the edges, as
         // on the bunny VIS-2000 where normals 110 degrees apart share a triangle), the next
         // longest is tried, then the shortest, on a triangle near the bound (kFallbackShare).
-        std::array<double, 3> len{};
-        for (int e = 0; e < 3; ++e) len[e] = (P(T[(e + 1) % 3]) - P(T[e])).norm();
-        std::array<int, 3> order{0, 1, 2};
-        std::stable_sort(order.begin(), order.end(), [&](int x, int y) { return len[x] > len[y]; });
+        const std::array<int, 3> order = edges_longest_first(T).second;
         bool split = false;
         for (const int k : order)
           if ((k == order[0] || estimate <= kFallbackShare * bound) && (split = try_split(t, T[k], T[(k + 1) % 3]))) break;

@@ -100,21 +100,31 @@ bool Tracker::rollback(int f, int node, bool at_node) {
     });
   }
 
+  // Buckets of items by key (start[key] .. start[key + 1]), in the order the pairs come.
+  const auto csr = [](std::size_t n, const std::vector<std::pair<int, int>>& pairs) {
+    std::vector<int> start(n + 1, 0), items(pairs.size());
+    for (const auto& [key, item] : pairs) ++start[key + 1];
+    for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (const auto& [key, item] : pairs) items[fill[key]++] = item;
+    return std::array<std::vector<int>, 2>{std::move(start), std::move(items)};
+  };
+
   // The component's triangles and their directed edges (a, b, triangle), sorted: bucketed by a
   // (edge_start[a] .. edge_start[a + 1]), then each vertex's few edges sorted, rather than one
   // sort of them all at each rollback. A vertex's bucket also lists its triangles.
   const std::size_t t0 = first_triangle_, nt = mesh_.triangles.size();
-  std::vector<int> edge_start(nv + 1, 0);
+  std::vector<std::pair<int, int>> pairs;  // (corner's vertex, corner 3 t + k)
+  pairs.reserve(3 * (nt - t0));
   for (std::size_t t = t0; t < nt; ++t)
-    for (const int v : mesh_.triangles[t]) ++edge_start[v + 1];
-  for (std::size_t v = 0; v < nv; ++v) edge_start[v + 1] += edge_start[v];
-  std::vector<std::tuple<int, int, int>> edges(3 * (nt - t0));
-  {
-    std::vector<int> fill(edge_start.begin(), edge_start.end() - 1);
-    for (std::size_t t = t0; t < nt; ++t) {
-      const auto& tri = mesh_.triangles[t];
-      for (int k = 0; k < 3; ++k) edges[fill[tri[k]]++] = {tri[k], tri[(k + 1) % 3], static_cast<int>(t - t0)};
-    }
+    for (int k = 0; k < 3; ++k) pairs.emplace_back(mesh_.triangles[t][k], static_cast<int>(3 * (t - t0)) + k);
+  const std::array<std::vector<int>, 2> corner_csr = csr(nv, pairs);
+  const std::vector<int>& edge_start = corner_csr[0];
+  std::vector<std::tuple<int, int, int>> edges(pairs.size());
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    const int t = corner_csr[1][i] / 3, k = corner_csr[1][i] % 3;
+    const auto& tri = mesh_.triangles[t0 + t];
+    edges[i] = {tri[k], tri[(k + 1) % 3], t};
   }
   for (std::size_t v = 0; v < nv; ++v) std::sort(edges.begin() + edge_start[v], edges.begin() + edge_start[v + 1]);
   const auto owners = [&](int a, int b) {
@@ -131,15 +141,7 @@ bool Tracker::rollback(int f, int node, bool at_node) {
   // component's (a rollback that grew 256 times over a large component took most of a run).
   // Incidence, built once: the front nodes at each vertex and on each front, in increasing id
   // order.
-  const auto csr = [](std::size_t n, const std::vector<std::pair<int, int>>& pairs) {
-    std::vector<int> start(n + 1, 0), items(pairs.size());
-    for (const auto& [key, item] : pairs) ++start[key + 1];
-    for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (const auto& [key, item] : pairs) items[fill[key]++] = item;  // pairs are in item order
-    return std::array<std::vector<int>, 2>{std::move(start), std::move(items)};
-  };
-  std::vector<std::pair<int, int>> pairs;
+  pairs.clear();
   for (std::size_t n = 0; n < fs_.nodes.size(); ++n)
     if (fs_.nodes[n].front >= 0) pairs.emplace_back(fs_.nodes[n].vertex, static_cast<int>(n));
   const std::array<std::vector<int>, 2> vnode_csr = csr(nv, pairs);
