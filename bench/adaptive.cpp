@@ -9,6 +9,7 @@
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/models/analytic.h>
 #include <cdp/core/models/expression.h>
+#include <cdp/core/mesh_topology.h>
 #include <cdp/core/surface_seeds.h>
 #include <cdp/core/triangle_intersection.h>
 #include <cdp/io/field_factory.h>
@@ -262,6 +263,27 @@ void BM_SelfIntersectionCheck(benchmark::State& state) {
   state.SetLabel("torus/self_intersection_check");
 }
 BENCHMARK(BM_SelfIntersectionCheck)->ArgName("factor_x10")->Arg(63)->Arg(200)->Unit(benchmark::kMillisecond);
+
+// The other final check of every adaptive run: closed, oriented, manifold, components
+// (analyze_topology), on the same meshes.
+void BM_MeshTopology(benchmark::State& state) {
+  const auto field = make_shape(kTorus);
+  AdaptiveOptions o;
+  o.factor = static_cast<double>(state.range(0)) / 10;
+  o.check_self_intersections = false;
+  const Mesh mesh = polygonize_adaptive(*field, o).mesh;
+  double seconds = 0, checks = 0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    const MeshTopology t = analyze_topology(mesh);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ++checks;
+    if (!t.watertight()) state.SkipWithError("the torus mesh is not watertight");
+  }
+  state.counters["ns_per_triangle"] = 1e9 * seconds / (checks * static_cast<double>(mesh.num_triangles()));
+  state.SetLabel("torus/mesh_topology");
+}
+BENCHMARK(BM_MeshTopology)->ArgName("factor_x10")->Arg(50)->Arg(200)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

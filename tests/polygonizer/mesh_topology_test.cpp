@@ -3,8 +3,14 @@
 
 #include <cdp/core/mesh_topology.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <numbers>
+#include <random>
+#include <set>
+#include <vector>
 
 namespace cdp {
 namespace {
@@ -113,6 +119,129 @@ TEST(MeshTopology, DegenerateAndDuplicateTrianglesAreCounted) {
   const MeshTopology t = analyze_topology(m);
   EXPECT_EQ(t.duplicate_triangles, 1u);
   EXPECT_EQ(t.degenerate_triangles, 1u);
+}
+
+// The counts straight from their definitions in mesh_topology.h (maps of edges and of vertex
+// sets, searches over triangles), slow and independent of analyze_topology's single pass.
+MeshTopology reference_topology(const Mesh& m) {
+  MeshTopology t;
+  const int nf = static_cast<int>(m.triangles.size());
+  t.triangles = m.triangles.size();
+  const auto repeated = [&](int f) {
+    const auto& x = m.triangles[f];
+    return x[0] == x[1] || x[1] == x[2] || x[0] == x[2];
+  };
+  std::set<int> used;
+  std::map<std::array<int, 3>, int> sets;
+  std::map<std::pair<int, int>, std::vector<std::pair<int, bool>>> edges;  // users, lo -> hi
+  for (int f = 0; f < nf; ++f) {
+    const auto& x = m.triangles[f];
+    used.insert(x.begin(), x.end());
+    auto s = x;
+    std::sort(s.begin(), s.end());
+    t.duplicate_triangles += sets[s]++ > 0;
+    if (repeated(f)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const int u = x[k], w = x[(k + 1) % 3];
+      edges[{std::min(u, w), std::max(u, w)}].push_back({f, u < w});
+    }
+  }
+  t.vertices = used.size();
+  t.unreferenced_vertices = m.positions.size() - used.size();
+  std::vector<std::vector<int>> next(nf);  // triangles sharing an edge
+  for (const auto& [e, users] : edges) {
+    ++t.edges;
+    t.boundary_edges += users.size() == 1;
+    t.nonmanifold_edges += users.size() >= 3;
+    t.misoriented_edges += users.size() == 2 && users[0].second == users[1].second;
+    for (const auto& a : users)
+      for (const auto& b : users)
+        if (a.first != b.first) next[a.first].push_back(b.first);
+  }
+  std::vector<char> seen(nf, 0);
+  for (int f = 0; f < nf; ++f) {
+    if (seen[f]) continue;
+    ++t.components;
+    std::vector<int> stack{f};
+    seen[f] = 1;
+    while (!stack.empty()) {
+      const int g = stack.back();
+      stack.pop_back();
+      for (int h : next[g])
+        if (!seen[h]) seen[h] = 1, stack.push_back(h);
+    }
+  }
+  // Fans: the occurrences of v in triangles, joined when their triangles share another vertex
+  // (an edge containing v).
+  for (int v : used) {
+    std::vector<int> at;
+    for (int f = 0; f < nf; ++f)
+      for (int c : m.triangles[f])
+        if (c == v) at.push_back(f);
+    if (at.size() <= 1) continue;
+    std::vector<int> fan(at.size(), -1);
+    int fans = 0;
+    for (std::size_t i = 0; i < at.size(); ++i) {
+      if (fan[i] >= 0) continue;
+      std::vector<std::size_t> stack{i};
+      fan[i] = fans;
+      while (!stack.empty()) {
+        const std::size_t a = stack.back();
+        stack.pop_back();
+        for (std::size_t b = 0; b < at.size(); ++b) {
+          if (fan[b] >= 0) continue;
+          bool shares = false;
+          for (int p : m.triangles[at[a]])
+            for (int q : m.triangles[at[b]]) shares = shares || (p == q && p != v);
+          if (shares) fan[b] = fans, stack.push_back(b);
+        }
+      }
+      ++fans;
+    }
+    t.nonmanifold_vertices += fans > 1;
+  }
+  return t;
+}
+
+// Small random index soups (repeated indices, duplicates, open, flipped and non-manifold
+// pieces) and a grid torus with triangles removed, flipped, repeated and re-indexed.
+TEST(MeshTopology, RandomMeshesMatchTheDefinitions) {
+  std::mt19937 rng(20261125);
+  const auto check = [](const Mesh& m) {
+    const MeshTopology a = analyze_topology(m), b = reference_topology(m);
+    EXPECT_EQ(a.vertices, b.vertices);
+    EXPECT_EQ(a.unreferenced_vertices, b.unreferenced_vertices);
+    EXPECT_EQ(a.edges, b.edges);
+    EXPECT_EQ(a.boundary_edges, b.boundary_edges);
+    EXPECT_EQ(a.nonmanifold_edges, b.nonmanifold_edges);
+    EXPECT_EQ(a.misoriented_edges, b.misoriented_edges);
+    EXPECT_EQ(a.nonmanifold_vertices, b.nonmanifold_vertices);
+    EXPECT_EQ(a.duplicate_triangles, b.duplicate_triangles);
+    EXPECT_EQ(a.components, b.components);
+    return !::testing::Test::HasFailure();
+  };
+  for (int it = 0; it < 2000; ++it) {
+    Mesh m;
+    const int nv = 1 + static_cast<int>(rng() % 10), nf = static_cast<int>(rng() % 20);
+    for (int i = 0; i < nv; ++i) m.positions.emplace_back(rng() % 5, rng() % 5, rng() % 5);
+    for (int f = 0; f < nf; ++f)
+      m.triangles.push_back({static_cast<int>(rng() % nv), static_cast<int>(rng() % nv), static_cast<int>(rng() % nv)});
+    ASSERT_TRUE(check(m)) << "soup " << it;
+  }
+  const Mesh torus = grid_torus(8, 6);
+  for (int it = 0; it < 300; ++it) {
+    Mesh m = torus;
+    for (int k = static_cast<int>(rng() % 6); k > 0; --k) {
+      const std::size_t f = rng() % m.triangles.size();
+      switch (rng() % 4) {
+        case 0: m.triangles.erase(m.triangles.begin() + static_cast<std::ptrdiff_t>(f)); break;
+        case 1: std::swap(m.triangles[f][0], m.triangles[f][1]); break;
+        case 2: m.triangles.push_back(m.triangles[f]); break;
+        default: m.triangles[f][rng() % 3] = static_cast<int>(rng() % m.positions.size()); break;
+      }
+    }
+    ASSERT_TRUE(check(m)) << "torus " << it;
+  }
 }
 
 }  // namespace
