@@ -22,6 +22,7 @@ nlohmann::json vec(const cdp::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
+  cdp::app::keep_freed_memory();
   try {
     CLI::App app{"Projects a point onto the surface of FIELD.json (Newton's method) and prints the curvature\n"
                  "measures there as one JSON object.\n",

@@ -42,6 +42,7 @@ std::string read_text(const fs::path& path) {
 
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
+  cdp::app::keep_freed_memory();
   try {
     CLI::App app{"Measures MESH.ply against the implicit surface of FIELD.json (exact ray casting): depth and\n"
                  "Phong errors, silhouettes, triangle quality, topology, self-intersections, distances.\n"

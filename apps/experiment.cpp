@@ -418,6 +418,7 @@ int summarize(const Experiment& e, const Paths& p) {
 
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
+  cdp::app::keep_freed_memory();
   try {
     CLI::App app{"Runs an experiment's sweep (experiments/README.md): every run polygonized and evaluated as an\n"
                  "independent job, then summary.csv and summary.json. Exit status 2 when some runs failed.\n",

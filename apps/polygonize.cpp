@@ -45,6 +45,7 @@ cdp::PolygonizeResult name_field(const std::string& path, F&& run) {
 
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
+  cdp::app::keep_freed_memory();
   try {
     CLI::App app{"Meshes the implicit surface of FIELD.json with the adaptive polygonizer (the default) or a\n"
                  "baseline, Marching Cubes (mc) or Marching Tetrahedra (mt).\n",

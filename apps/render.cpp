@@ -25,6 +25,7 @@
 
 int main(int argc, char** argv) {
   cdp::app::install_signal_handling();
+  cdp::app::keep_freed_memory();
   try {
     CLI::App app{"A picture of MESH (Embree ray casting): shading, wireframe, colour maps of vertex properties,\n"
                  "principal directions of a field. Prints one JSON line saying what it drew.\n",

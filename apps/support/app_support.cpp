@@ -11,6 +11,7 @@
 #include <cstring>
 #include <ctime>
 
+#include <malloc.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -74,6 +75,14 @@ void install_signal_handling() {
   for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&sa.sa_mask, sig);
   for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
   signal(SIGXFSZ, SIG_IGN);
+}
+
+void keep_freed_memory() {
+  // Never trim the heap's top; blocks up to glibc's largest mmap threshold (32 MiB on 64-bit)
+  // come from the heap, whose freed blocks are reused. Failure only leaves the defaults.
+  constexpr int kTrimThreshold = 1 << 30, kMmapThreshold = 32 << 20;
+  mallopt(M_TRIM_THRESHOLD, kTrimThreshold);
+  mallopt(M_MMAP_THRESHOLD, kMmapThreshold);
 }
 
 void register_child(pid_t pid) {
