@@ -676,8 +676,7 @@ class Improver {
       po.max_travel = shortest;
       const ProjectionResult pr = project_to_surface(field_, x + share * step, po);
       if (!pr.ok()) continue;
-      Vec3 g;
-      field_.value_gradient(pr.point, g);
+      const Vec3& g = pr.gradient;  // at pr.point: no second evaluation of the same point
       if (!(g.squaredNorm() > 0)) continue;
       const Vec3 ng = g.normalized();
       if (!(ng.dot(n) > kMoveNormalCos)) continue;
@@ -751,8 +750,7 @@ class Improver {
       po.max_travel = l;
       const ProjectionResult pr = project_to_surface(field_, 0.5 * (P(a) + P(b)), po);
       if (!pr.ok()) return false;
-      Vec3 g;
-      field_.value_gradient(pr.point, g);
+      const Vec3& g = pr.gradient;  // at pr.point
       if (!(g.squaredNorm() > 0)) return false;
       x = pr.point;
       nx = g.normalized();
@@ -853,8 +851,7 @@ class Improver {
     const Vec3 start = repair ? Vec3(0.25 * (P(a) + P(b) + P(c) + P(d))) : Vec3(0.5 * (P(a) + P(b)));
     const ProjectionResult pr = project_to_surface(field_, start, po);
     if (!pr.ok()) return false;
-    Vec3 g;
-    field_.value_gradient(pr.point, g);
+    const Vec3& g = pr.gradient;  // at pr.point
     if (!(g.squaredNorm() > 0)) return false;
     const Vec3 ng = g.normalized();
     if (!(ng.dot(m_.normals[a]) > 0 && ng.dot(m_.normals[b]) > 0)) return false;
