@@ -241,47 +241,41 @@ void BM_AdaptiveMixedScales(benchmark::State& state) {
 }
 BENCHMARK(BM_AdaptiveMixedScales)->UseManualTime()->Unit(benchmark::kMillisecond);
 
-// The final check of every adaptive run (AdaptiveOptions::check_self_intersections): all
-// intersecting pairs of a finished mesh, on one thread. The torus at factor 6.3 (about 10^4
-// triangles, one thread below the check's parallel threshold in a real run) and at 20 (10^5).
-void BM_SelfIntersectionCheck(benchmark::State& state) {
+// The two final checks of every adaptive run, timed on one finished mesh of the torus at
+// factor state.range(0) / 10: `check` returns whether the mesh passed (it must).
+template <class Check>
+void time_final_check(benchmark::State& state, const char* label, const char* failure, Check check) {
   const auto field = make_shape(kTorus);
   AdaptiveOptions o;
   o.factor = static_cast<double>(state.range(0)) / 10;
   o.check_self_intersections = false;
   const Mesh mesh = polygonize_adaptive(*field, o).mesh;
-  std::size_t pairs = 0;
   double seconds = 0, checks = 0;
+  bool passed = true;
   for (auto _ : state) {
     const auto start = std::chrono::steady_clock::now();
-    pairs += count_self_intersecting_pairs(mesh, 1);
+    passed = check(mesh) && passed;
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++checks;
   }
-  if (pairs != 0) state.SkipWithError("the torus mesh intersects itself");
+  if (!passed) state.SkipWithError(failure);
   state.counters["ns_per_triangle"] = 1e9 * seconds / (checks * static_cast<double>(mesh.num_triangles()));
-  state.SetLabel("torus/self_intersection_check");
+  state.SetLabel(label);
+}
+
+// AdaptiveOptions::check_self_intersections: all intersecting pairs of a finished mesh, on one
+// thread. The torus at factor 6.3 (about 10^4 triangles, one thread below the check's parallel
+// threshold in a real run) and at 20 (10^5).
+void BM_SelfIntersectionCheck(benchmark::State& state) {
+  time_final_check(state, "torus/self_intersection_check", "the torus mesh intersects itself",
+                   [](const Mesh& mesh) { return count_self_intersecting_pairs(mesh, 1) == 0; });
 }
 BENCHMARK(BM_SelfIntersectionCheck)->ArgName("factor_x10")->Arg(63)->Arg(200)->Unit(benchmark::kMillisecond);
 
-// The other final check of every adaptive run: closed, oriented, manifold, components
-// (analyze_topology), on the same meshes.
+// Closed, oriented, manifold, components (analyze_topology), at factors 5 and 20.
 void BM_MeshTopology(benchmark::State& state) {
-  const auto field = make_shape(kTorus);
-  AdaptiveOptions o;
-  o.factor = static_cast<double>(state.range(0)) / 10;
-  o.check_self_intersections = false;
-  const Mesh mesh = polygonize_adaptive(*field, o).mesh;
-  double seconds = 0, checks = 0;
-  for (auto _ : state) {
-    const auto start = std::chrono::steady_clock::now();
-    const MeshTopology t = analyze_topology(mesh);
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    ++checks;
-    if (!t.watertight()) state.SkipWithError("the torus mesh is not watertight");
-  }
-  state.counters["ns_per_triangle"] = 1e9 * seconds / (checks * static_cast<double>(mesh.num_triangles()));
-  state.SetLabel("torus/mesh_topology");
+  time_final_check(state, "torus/mesh_topology", "the torus mesh is not watertight",
+                   [](const Mesh& mesh) { return analyze_topology(mesh).watertight(); });
 }
 BENCHMARK(BM_MeshTopology)->ArgName("factor_x10")->Arg(50)->Arg(200)->Unit(benchmark::kMillisecond);
 
