@@ -8,10 +8,13 @@
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 
+#ifdef __GLIBC__
 #include <malloc.h>
+#endif
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -78,11 +81,17 @@ void install_signal_handling() {
 }
 
 void keep_freed_memory() {
-  // Never trim the heap's top; blocks up to glibc's largest mmap threshold (32 MiB on 64-bit)
-  // come from the heap, whose freed blocks are reused. Failure only leaves the defaults.
+#ifdef __GLIBC__
+  // A user's own settings (glibc's environment variables) win.
+  for (const char* name : {"GLIBC_TUNABLES", "MALLOC_TRIM_THRESHOLD_", "MALLOC_MMAP_THRESHOLD_"})
+    if (std::getenv(name) != nullptr) return;
+  // Blocks up to glibc's largest mmap threshold (32 MiB on 64-bit) come from the heap, whose
+  // freed blocks are reused, and the heap's top is never trimmed. The mmap threshold first: where
+  // it is refused (32-bit glibc caps it at 512 KiB) both stay at their defaults (setting the trim
+  // threshold alone would also freeze the mmap threshold at 128 KiB).
   constexpr int kTrimThreshold = 1 << 30, kMmapThreshold = 32 << 20;
-  mallopt(M_TRIM_THRESHOLD, kTrimThreshold);
-  mallopt(M_MMAP_THRESHOLD, kMmapThreshold);
+  if (mallopt(M_MMAP_THRESHOLD, kMmapThreshold) == 1) mallopt(M_TRIM_THRESHOLD, kTrimThreshold);
+#endif
 }
 
 void register_child(pid_t pid) {

@@ -27,7 +27,8 @@ void install_signal_handling();
 // project's virtual machines a fault costs about 10 us: polygonize on the torus at factor 20 in
 // the paper variant (100k triangles) makes 6,812 page faults instead of 8,967, spends 0.059 s
 // in the kernel instead of 0.078 and takes 0.90 of the time (medians of 10 pairs of runs); its
-// peak grows by 2 MB. Programs only: a library must not change its host's allocator.
+// peak grows by 2 MB. Programs only: a library must not change its host's allocator. Nothing
+// changes where glibc's allocator settings are given in the environment, or without glibc.
 void keep_freed_memory();
 
 // A child process to pass signals on to, between its start and its end. Start children with
