@@ -41,6 +41,12 @@ namespace {
 // goal is every triangle at 20 degrees or more and 99% at 30 or more, and aiming the repair at
 // the higher bound leaves the lower one a margin.
 constexpr double kRepairBelowDegrees = 30;
+// Where the distance bound needs it, the repair's last resort (quality.h) may halve edges down
+// to this share of the default min_edge: an edge between one and two min_edge long on a bend a
+// little tighter than min_edge follows (blobs37 of the topology sweep at 1e-3: radius of
+// curvature 0.0062, edges of 0.009 where 0.0077 keeps the bound, min_edge 0.0063) cannot be
+// split into halves of min_edge.
+constexpr double kLastResortEdgeShare = 0.5;
 // Creases are traced on the seed grid first and, when they cannot be laid out as patch boundaries
 // (a corner whose boundary breaks off: a short crease between crossings of the grid was
 // missed), once more on a grid twice as fine (eight times the values, on a field cheap enough
@@ -375,6 +381,10 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       qo.tolerance = s.sizing.mode == SizingMode::Tolerance ? tolerance : 0;
       qo.diagonal = s.diagonal;
       qo.min_edge = s.sizing.min_edge;
+      // The default min_edge is the sizing's floor, not the caller's: where the distance bound
+      // needs it, the last resort may halve edges down to kLastResortEdgeShare of it. A min_edge
+      // the caller set holds for every split.
+      qo.last_resort_min_edge = options.min_edge > 0 ? s.sizing.min_edge : kLastResortEdgeShare * s.sizing.min_edge;
       qo.threads = options.threads;
       quality = adaptive::improve_mesh(field, mesh, qo);
     }
@@ -621,6 +631,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["quality.collapses"] = quality.collapses;
   st.extra["quality.splits"] = quality.splits;
   st.extra["quality.inserts"] = quality.inserts;
+  st.extra["quality.last_resorts"] = quality.last_resorts;
   st.extra["quality.crease_vertices"] = quality.crease_vertices;
   st.extra["quality.measured_densely"] = quality.measured_densely;
   st.extra["quality.over_tolerance"] = quality.over_tolerance;

@@ -65,6 +65,9 @@ constexpr double kToleranceMargin = 0.9;
 // Rounds of splitting triangles beyond the tolerance; each round halves the longest edge of
 // every offending triangle, and 24 halvings take any edge below min_edge.
 constexpr int kRefineRounds = 24;
+// Rounds of the last resort (see last_resort) on what the refinement left beyond the tolerance.
+// A round ends with the refinement and the angle repair of what it split.
+constexpr int kLastResortRounds = 4;
 // relax: the triangles whose longest edge exceeds this times their shortest have their edges
 // flipped and their vertices moved (an equilateral triangle is 1; the fronts make 1.22 on
 // average where sizes do not change). On the bunny VIS-800 at factor 3 most of the vertices are
@@ -141,20 +144,25 @@ class Improver {
     since_check_.clear();
     repair();
     // What the estimate cannot clear (it keeps kToleranceMargin for its own error) is measured
-    // as the tolerance is defined, densely over the triangle: only a triangle farther than the
-    // tolerance there is reported, with that distance.
-    for (int t : merged(over, since_check_)) {
-      if (!alive_[t]) continue;
-      const Tri& T = m_.triangles[t];
-      const double estimate = estimate_distance(T);
-      if (!(estimate > kToleranceMargin * o_.tolerance)) continue;
-      ++r_.measured_densely;
-      const double d = sampled_distance(T, estimate);
-      if (!(d > o_.tolerance)) continue;
+    // as the tolerance is defined, densely over the triangle; a triangle farther than the
+    // tolerance there gets the last resort (last_resort), and whatever that cannot clear is
+    // reported, with its distance.
+    std::vector<Beyond> beyond = measure_densely(merged(over, since_check_));
+    for (int round = 0; round < kLastResortRounds && !beyond.empty(); ++round) {
+      since_check_.clear();
+      std::vector<int> left;
+      for (const Beyond& b : beyond)
+        if (!last_resort(b)) left.push_back(b.t);
+      if (since_check_.empty()) break;  // nothing could be split: what is left is reported
+      left = merged(left, refine(since_check_));
+      repair();
+      beyond = measure_densely(merged(left, since_check_));
+    }
+    for (const Beyond& b : beyond) {
       ++r_.over_tolerance;
-      if (!(d <= r_.over_tolerance_worst)) {
-        r_.over_tolerance_worst = d;
-        r_.over_tolerance_near = (P(T[0]) + P(T[1]) + P(T[2])) / 3;
+      if (!(b.d <= r_.over_tolerance_worst)) {
+        r_.over_tolerance_worst = b.d;
+        r_.over_tolerance_near = (P(b.T[0]) + P(b.T[1]) + P(b.T[2])) / 3;
       }
     }
     compact();
@@ -330,8 +338,9 @@ class Improver {
   // The largest distance from triangle t to the surface over a barycentric grid of
   // kDenseGrid + 1 points a side (28 points: corners, 5 more on each side, 10 inside), each the
   // length of Newton's path onto the surface (at least the point's true distance); `fallback`
-  // where Newton does not land within the triangle's longest edge.
-  double sampled_distance(const Tri& t, double fallback) const {
+  // where Newton does not land within the triangle's longest edge. `worst_at` (optional): the
+  // projection of the farthest sample.
+  double sampled_distance(const Tri& t, double fallback, ProjectionResult* worst_at = nullptr) const {
     constexpr int kDenseGrid = 6;
     const std::array<Vec3, 3> p{P(t[0]), P(t[1]), P(t[2])};
     ProjectionOptions po;
@@ -344,7 +353,11 @@ class Improver {
         const Vec3 x = a * p[0] + b * p[1] + (1 - a - b) * p[2];
         const ProjectionResult r = project_to_surface(field_, x, po);
         if (!r.ok()) return fallback;
-        worst = std::max(worst, (r.point - x).norm());
+        const double d = (r.point - x).norm();
+        if (d > worst) {
+          worst = d;
+          if (worst_at) *worst_at = r;
+        }
       }
     return worst;
   }
@@ -833,10 +846,11 @@ class Improver {
   // moved onto the surface: a cap whose flip would make a worse pair (the far apex sits near
   // one end of the edge) opens into four triangles around it. A repair insertion must raise
   // the smallest angle and keep the new edges no farther from the surface than the quad's.
-  bool try_split(int t, int a, int b, bool repair = false) {
+  // The halves must be at least `shortest` long (0: min_edge).
+  bool try_split(int t, int a, int b, bool repair = false, double shortest = 0) {
     const int u = across(t, a, b);
     if (u < 0) return false;
-    if ((P(a) - P(b)).norm() < 2 * o_.min_edge) return false;
+    if ((P(a) - P(b)).norm() < 2 * (shortest > 0 ? shortest : o_.min_edge)) return false;
     int c = -1, d = -1;
     for (int w : m_.triangles[t])
       if (w != a && w != b) c = w;
@@ -1174,6 +1188,102 @@ class Improver {
   void touch(int t) {
     touched_.push_back(t);
     since_check_.push_back(t);
+  }
+
+  double last_resort_edge() const { return o_.last_resort_min_edge > 0 ? o_.last_resort_min_edge : o_.min_edge; }
+  // A triangle measured farther from the surface than the tolerance: by how much, and the
+  // surface point its farthest sample's Newton path landed on.
+  struct Beyond {
+    int t;
+    Tri T;
+    double d;
+    ProjectionResult worst;
+  };
+  // The triangles of `work` whose estimate does not clear them, measured densely (each at most
+  // once per call); those beyond the tolerance there.
+  std::vector<Beyond> measure_densely(const std::vector<int>& work) {
+    std::vector<Beyond> out;
+    for (int t : work) {
+      if (!alive_[t]) continue;
+      const Tri& T = m_.triangles[t];
+      const double estimate = estimate_distance(T);
+      if (!(estimate > kToleranceMargin * o_.tolerance)) continue;
+      ++r_.measured_densely;
+      ProjectionResult worst;
+      const double d = sampled_distance(T, estimate, &worst);
+      if (d > o_.tolerance) out.push_back({t, T, d, worst});
+    }
+    return out;
+  }
+  // The last resort for a triangle the refinement left beyond the tolerance (a ridge or fillet
+  // narrower than the edges around it, whose corners' normals are too far apart for a midpoint
+  // split to face like the surface; or edges under twice min_edge on a bend just above what
+  // min_edge can follow): any of its edges halved, down to halves of
+  // QualityOptions::last_resort_min_edge, else a new vertex inside it at the surface point nearest
+  // its farthest sample, which splits it in three. The same checks as every split (the new
+  // triangles face like the surface, intersect nothing); the angles are repaired after. Returns
+  // whether it split.
+  bool last_resort(const Beyond& b) {
+    if (!alive_[b.t] || m_.triangles[b.t] != b.T) return true;  // changed since it was measured
+    const std::array<int, 3> order = edges_longest_first(b.T).second;
+    for (const int k : order)
+      if (try_split(b.t, b.T[k], b.T[(k + 1) % 3], false, last_resort_edge())) {
+        ++r_.last_resorts;
+        return true;
+      }
+    if (try_insert_inside(b.t, b.worst)) {
+      ++r_.last_resorts;
+      return true;
+    }
+    return false;
+  }
+  // Splits triangle t in three at the surface point a projection landed on.
+  bool try_insert_inside(int t, const ProjectionResult& landed) {
+    const Tri T = m_.triangles[t];
+    const Vec3& x = landed.point;
+    const Vec3& g = landed.gradient;  // at x
+    if (!landed.ok() || !(g.squaredNorm() > 0)) return false;
+    const Vec3 ng = g.normalized();
+    for (int v : T)
+      if (!((x - P(v)).norm() >= last_resort_edge())) return false;
+    const int m = static_cast<int>(m_.positions.size());
+    m_.positions.push_back(x);
+    m_.normals.push_back(ng);
+    vt_.emplace_back();
+    crease_.push_back(-1);
+    const std::vector<Tri> added{{T[0], T[1], m}, {T[1], T[2], m}, {T[2], T[0], m}};
+    const double floor = facing_floor({t});
+    bool ok = true;
+    for (const Tri& s : added) ok = ok && faces_surface(s, floor);
+    if (ok) ok = !intersects(added, {t});
+    if (!ok) {
+      m_.positions.pop_back();
+      m_.normals.pop_back();
+      vt_.pop_back();
+      crease_.pop_back();
+      return false;
+    }
+    const int t2 = tri_count(), t3 = t2 + 1;
+    m_.triangles[t] = added[0];
+    m_.triangles.push_back(added[1]);
+    m_.triangles.push_back(added[2]);
+    alive_.push_back(1);
+    alive_.push_back(1);
+    stamp_.push_back(0);
+    stamp_.push_back(0);
+    // T[0]: t, t3 (was t); T[1]: t, t2; T[2]: t2, t3; m: all three.
+    vt_[T[0]].push_back(t3);
+    vt_[T[2]].push_back(t2);
+    vt_[T[2]].push_back(t3);
+    erase_value(vt_[T[2]], t);
+    vt_[T[1]].push_back(t2);
+    vt_[m] = {t, t2, t3};
+    for (int s : {t, t2, t3}) {
+      hash_box(s);
+      touch(s);
+    }
+    ++r_.splits;
+    return true;
   }
 
   // Splits the triangles of `work` beyond the bound, and then those the splits made, for at

@@ -34,10 +34,15 @@ struct QualityReport {
   // Vertices added: splits of edges for the tolerance, inserts in the quad around a cap's
   // longest edge for the angles.
   std::size_t splits = 0, inserts = 0;
+  // Triangles the last resort split (measured beyond the tolerance after the refinement: an
+  // edge halved down to min_edge / 2, or a vertex inside at the surface point nearest the
+  // farthest sample); their vertices are counted in `splits` too.
+  std::size_t last_resorts = 0;
   // Vertices found on a crease (never moved, their edges never flipped).
   std::size_t crease_vertices = 0;
-  // Triangles left whose estimate (see kToleranceMargin) could not clear them, each then measured
-  // densely (28 points, Newton's path length at each).
+  // Dense measurements (28 points, Newton's path length at each) of triangles left whose
+  // estimate (see kToleranceMargin) could not clear them, after the refinement and after each
+  // round of the last resort.
   std::size_t measured_densely = 0;
   // Of those, the triangles farther than the tolerance there (0 unless the refinement ran out
   // of rounds or could not split without breaking a check), the largest such distance and the
@@ -57,6 +62,9 @@ struct QualityOptions {
   double diagonal = 1;
   // Shortest edge the splits may create.
   double min_edge = 0;
+  // Shortest edge the last resort's splits may create (splits of triangles still farther than
+  // the tolerance after the refinement); 0: min_edge.
+  double last_resort_min_edge = 0;
   // Threads of the independent passes: the relaxation's targets, and for a thread-safe field
   // their projections and each refinement round's tolerance estimates. 0 all cores (at most
   // 8), 1 the caller's only. The mesh and the evaluation counts are the same, bit for bit, on
