@@ -219,7 +219,8 @@ int main(int argc, char** argv) {
       if (over != x.end() && over->second.get<std::size_t>() > 0) {
         std::fprintf(stderr,
                      "polygonize: %s: warning: %zu triangles lie farther from the surface than the tolerance %g (up to "
-                     "%g, near (%g, %g, %g)); the refinement could not split them further (edges at min_edge, or splits that would fold)\n",
+                     "%g, near (%g, %g, %g)); the refinement could not split them further (edges too short to halve, "
+                     "or splits that would fold)\n",
                      field_path.c_str(), over->second.get<std::size_t>(), adaptive_options.tolerance,
                      x.at("quality.over_tolerance_worst").get<double>(), x.at("quality.over_tolerance_near_x").get<double>(),
                      x.at("quality.over_tolerance_near_y").get<double>(), x.at("quality.over_tolerance_near_z").get<double>());

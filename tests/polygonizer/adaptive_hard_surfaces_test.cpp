@@ -582,15 +582,18 @@ namespace {
 
 // A careful run that fails too is made again with edges that turn the normal by half, then a
 // quarter of a radian (kFinerTurns in adaptive_polygonizer.cpp). Two fields of the topology
-// sweep that ended with an error before: blobs18 at factor 1 (both runs intersected themselves
-// near (-0.016, 0.378, -1.306)) meshes at half a radian, and blobs19 at factor 2 (two components
-// facing each other across a neck near (0.129, -0.581, 0.807)) at a quarter; the references are
-// marching cubes at cells 0.048 and 0.036, which agree (results/topology_sweep/summary.csv).
+// sweep that ended with an error before: blobs18 (at factor 1 both runs intersected themselves
+// near (-0.016, 0.378, -1.306); since the side points of expand_point.cpp that run meshes the
+// first time, and at tolerance 5e-2 the careful run fails) meshes at half a radian, and blobs19
+// at factor 2 (two components facing each other across a neck near (0.129, -0.581, 0.807)) at
+// a quarter; the references are marching cubes at cells 0.048 and 0.036, which agree
+// (results/topology_sweep/summary.csv).
 TEST(AdaptiveFinerRun, WhatTheCarefulRunCannotMeshIsMeshedWithShorterEdgesWhereItBends) {
   const std::string dir = std::string(CDP_SOURCE_DIR) + "/results/topology_sweep/fields/";
   const auto b18 = load_field(dir + "blobs18.json");
   AdaptiveOptions f1;
-  f1.factor = 1;
+  f1.sizing = SizingMode::Tolerance;
+  f1.tolerance = 5e-2;
   const PolygonizeResult r18 = polygonize_adaptive(*b18, f1);
   expect_topology(r18.mesh, 3, 0);
   EXPECT_TRUE(r18.stats.extra.at("remeshed_carefully").get<bool>());
@@ -604,8 +607,9 @@ TEST(AdaptiveFinerRun, WhatTheCarefulRunCannotMeshIsMeshedWithShorterEdgesWhereI
   EXPECT_EQ(r19.stats.extra.at("careful_max_turn").get<double>(), 0.25);
 
   // A run that meshes the first time has no careful turn.
-  f1.factor = 3;
-  const PolygonizeResult plain = polygonize_adaptive(*b18, f1);
+  AdaptiveOptions f3;
+  f3.factor = 3;
+  const PolygonizeResult plain = polygonize_adaptive(*b18, f3);
   EXPECT_FALSE(plain.stats.extra.at("remeshed_carefully").get<bool>());
   EXPECT_EQ(plain.stats.extra.at("careful_max_turn").get<double>(), 0.0);
 }

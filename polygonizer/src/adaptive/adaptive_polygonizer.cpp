@@ -79,6 +79,7 @@ adaptive::Settings resolve(const Field& field, const AdaptiveOptions& o) {
   s.sizing.tolerance = positive_or_default(o.tolerance, 1e-3 * diag);
   if (o.variant == Variant::Improved) s.sizing.tolerance *= kToleranceSizingShare;
   s.grading = o.variant == Variant::Improved;
+  s.side_points = o.variant == Variant::Improved && !field.has_pieces();
   // The default min_edge matches the default tolerance (1e-3 of the diagonal); a smaller
   // tolerance asks for edges shorter as its square root (the sagitta grows as the edge
   // squared), and Variant::Improved lowers the default with it so that the clamp does not
@@ -597,6 +598,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   st.extra["search_visits"] = tracker->search_visits();
   st.extra["deferrals"] = tracker->deferrals();
   st.extra["anticipations"] = tracker->anticipations();
+  st.extra["side_points"] = tracker->side_points();
   st.extra["forced_closures"] = tracker->forced_closures();
   st.extra["rollbacks"] = tracker->rollbacks();
   st.extra["rollbacks_failed"] = tracker->failed_rollbacks();

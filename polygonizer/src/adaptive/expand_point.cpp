@@ -24,6 +24,14 @@ constexpr double kGrowth = 1.25;
 // See expand: a new point may ask for edges down to this share of the length it was placed at
 // before it is placed again closer (the grading's kGrowth the other way, with a margin).
 constexpr double kAnticipate = 0.5;
+// Settings::side_points: an expansion whose first or last new front edge (from the front point
+// next to the expanded one to the nearest new point) would be longer than this many times the
+// length the points were placed at gets points along it (add_side_points). Grading keeps
+// neighbouring edges within about 1.5 times each other where sizes change smoothly; beyond 2 a
+// front point's target dropped abruptly (a fillet or bump narrower than the edges before it).
+constexpr double kSideEdgeRatio = 2;
+// At most this many such points on either side (a front edge up to five lengths long).
+constexpr int kMaxSidePoints = 4;
 // Closing an angle joins prev and next by an edge; when their normals are more than 100 degrees
 // apart the two lie around a bend tighter than the edges (a thin neck of the tanglecube at
 // factor 1 got a triangle whose corners' normals were 155 degrees apart, folded over its
@@ -58,6 +66,48 @@ void Tracker::close_angle(int node) {
   link(n.prev, n.next);
   refresh(n.prev);
   refresh(n.next);
+}
+
+void Tracker::add_side_points(int v, int vb, int va, double d, std::vector<Placed>& placed) {
+  // Where the front reaches a fillet or a bump narrower than its edges, a front point there asks
+  // for edges far shorter than its front edges: it is expanded with short ones, and the
+  // triangle between its long front edge and its first new point is a sliver whose long edge
+  // is the next front edge. Each expansion next to it repeats that, a fan of slivers hinged on
+  // one vertex across the fillet, which no split of the repair can mend without folding (blobs39
+  // of the topology sweep at 1e-2: 7 triangles up to 10 eps from the surface, smallest angle
+  // 7.7 degrees; a fresh blob field at 1e-2, 13 up to 47 eps). Points along that edge, in
+  // steps of at most d, break it into edges of the new points' length instead.
+  // Each is placed from v like the fan's own points: in v's tangent plane toward its place on
+  // the chord, then onto the surface.
+  const Vec3& p = mesh_.positions[v];
+  const Vec3& N = mesh_.normals[v];
+  const auto between = [&](const Vec3& from, const Vec3& to, std::vector<Placed>& out) {
+    const double length = (to - from).norm();
+    if (!(length > kSideEdgeRatio * d)) return true;
+    const int count = std::min(kMaxSidePoints, static_cast<int>(std::ceil(length / d)) - 1);
+    for (int j = 1; j <= count; ++j) {
+      const Vec3 at = from + (to - from) * (static_cast<double>(j) / (count + 1));
+      Vec3 dir = at - p;
+      dir -= N * N.dot(dir);
+      const double reach = dir.norm();
+      if (!(reach > 0)) return false;
+      dir /= reach;  // place_points walks unit directions
+      std::vector<Placed> got = place_points(v, std::span(&dir, 1), reach);
+      if (got.empty()) return false;
+      out.push_back(std::move(got.front()));
+    }
+    return true;
+  };
+  std::vector<Placed> before, after;
+  if (!between(mesh_.positions[vb], placed.front().point, before)) return;
+  if (!between(placed.back().point, mesh_.positions[va], after)) return;
+  if (before.empty() && after.empty()) return;
+  std::vector<Placed> all = std::move(before);
+  all.insert(all.end(), placed.begin(), placed.end());
+  all.insert(all.end(), after.begin(), after.end());
+  if (folds_across(vb, all, va)) return;
+  side_points_ += all.size() - placed.size();
+  placed = std::move(all);
 }
 
 Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
@@ -118,12 +168,15 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     return std::vector<Placed>{};
   };
   std::vector<Placed> placed, complete;
+  double placed_at = 0, complete_at = 0;  // the lengths they were placed at
   for (double d = delta; d >= 0.24 * s_.sizing.min_edge; d *= 0.5) {
     placed = place_at(d);
+    placed_at = d;
     if (placed.empty()) {
       // A placement again at half the length that fails keeps the one it was to replace.
       if (!complete.empty()) {
         placed = std::move(complete);
+        placed_at = complete_at;
         break;
       }
       continue;
@@ -139,8 +192,10 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     if (!too_long) break;
     ++anticipations_;
     complete = placed;
+    complete_at = d;
   }
   if (placed.empty()) return {false, -1};
+  if (s_.side_points) add_side_points(n.vertex, vb, va, placed_at, placed);
 
   // A new point landing close to a front point the collision test did not see (beyond
   // collision_factor * delta of the candidate) would make a sliver or an overlap: bridge to

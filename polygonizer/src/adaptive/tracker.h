@@ -46,8 +46,11 @@ struct Settings {
   std::size_t max_triangles = 0;
   std::size_t max_steps = 0;
   bool curvature_properties = false;
-  // Variant::Improved's additions inside the tracker (Variant::Paper turns them off).
+  // Variant::Improved's additions inside the tracker (Variant::Paper turns them off): the
+  // grading of new points' targets, and points along an expansion's first and last new front
+  // edges where those would be far longer than the new ones (add_side_points).
   bool grading = true;
+  bool side_points = true;
   double diagonal = 1;
   // Whether regions where the tracker goes wrong are undone and meshed again (rollback.cpp).
   // polygonize_adaptive turns it on only to mesh a surface again after a StalledFrontError, and
@@ -192,6 +195,7 @@ class Tracker {
   std::pair<double, Vec3> tightest_bend() const { return tightest_; }
   // Placements made again at half the length because the new point asked for far shorter edges.
   std::size_t anticipations() const { return anticipations_; }
+  std::size_t side_points() const { return side_points_; }  // added by add_side_points
   // The vertices placed within kCriticalReach edges of a critical point of F (missed_necks.h).
   const std::vector<CriticalStart>& critical_starts() const { return critical_starts_; }
   // Small stuck fronts closed ear by ear without the expansion's tests.
@@ -335,6 +339,10 @@ class Tracker {
   ExpandOutcome expand(int node, double delta);
   void close_angle(int node);
   bool folds_across(int vb, const std::vector<Placed>& placed, int va) const;
+  // Adds to `placed` (the new points of expanding vertex v between its front neighbours vb
+  // and va, placed at length d) points along its first and last new front edges where those
+  // are longer than kSideEdgeRatio times d.
+  void add_side_points(int v, int vb, int va, double d, std::vector<Placed>& placed);
 
   // --- split_front.cpp, merge_fronts.cpp
   void split_front(int p, int q);
@@ -369,6 +377,7 @@ class Tracker {
   std::size_t rollbacks_ = 0, failed_rollbacks_ = 0, first_vertex_ = 0, first_triangle_ = 0;
   std::uint64_t window_visits_ = 0;  // search_visits() at the start of the current window
   std::size_t steps_ = 0, splits_ = 0, merges_ = 0, deferrals_ = 0, forced_closures_ = 0, anticipations_ = 0;
+  std::size_t side_points_ = 0;
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;
   mutable double curvature_seconds_ = 0, hessian_seconds_ = 0;
   mutable std::size_t crease_points_ = 0, over_mesh_ = 0;
