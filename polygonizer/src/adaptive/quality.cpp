@@ -145,10 +145,13 @@ class Improver {
     repair();
     // What the estimate cannot clear (it keeps kToleranceMargin for its own error) is measured
     // as the tolerance is defined, densely over the triangle; a triangle farther than the
-    // tolerance there gets the last resort (last_resort), and whatever that cannot clear is
-    // reported, with its distance.
+    // tolerance there gets the last resort (last_resort) on a smooth field, and whatever that
+    // cannot clear is reported, with its distance. Not on a field with creases: a triangle
+    // across a crease meshed as smooth stays beyond the tolerance however it is split (the
+    // capped cylinder with its creases ignored at 1e-3: 3.6 times the time and 19% more
+    // triangles, with the same triangles reported).
     std::vector<Beyond> beyond = measure_densely(merged(over, since_check_));
-    for (int round = 0; round < kLastResortRounds && !beyond.empty(); ++round) {
+    for (int round = 0; round < kLastResortRounds && smooth_ && !beyond.empty(); ++round) {
       since_check_.clear();
       std::vector<int> left;
       for (const Beyond& b : beyond)
@@ -841,6 +844,19 @@ class Improver {
     return true;
   }
 
+  // A new vertex, not yet in any triangle (a split tries it, then keeps or drops it).
+  void add_vertex(const Vec3& x, const Vec3& normal) {
+    m_.positions.push_back(x);
+    m_.normals.push_back(normal);
+    vt_.emplace_back();
+    crease_.push_back(-1);
+  }
+  void drop_last_vertex() {
+    m_.positions.pop_back();
+    m_.normals.pop_back();
+    vt_.pop_back();
+    crease_.pop_back();
+  }
   // Splits edge (a, b) at its midpoint moved onto the surface (the tolerance's refinement), or
   // with `repair`, inserts a vertex at the centre of the quad of the two triangles on the edge,
   // moved onto the surface: a cap whose flip would make a worse pair (the far apex sits near
@@ -871,10 +887,7 @@ class Improver {
     if (!(ng.dot(m_.normals[a]) > 0 && ng.dot(m_.normals[b]) > 0)) return false;
     // t = (a, b, c) in its own rotation, u = (b, a, d).
     const int m = static_cast<int>(m_.positions.size());
-    m_.positions.push_back(pr.point);
-    m_.normals.push_back(ng);
-    vt_.emplace_back();
-    crease_.push_back(-1);
+    add_vertex(pr.point, ng);
     const std::vector<Tri> added{{a, m, c}, {m, b, c}, {b, m, d}, {m, a, d}};
     bool ok = true;
     const double floor = facing_floor({t, u});
@@ -890,10 +903,7 @@ class Improver {
     }
     if (ok) ok = !intersects(added, {t, u});
     if (!ok) {
-      m_.positions.pop_back();
-      m_.normals.pop_back();
-      vt_.pop_back();
-      crease_.pop_back();
+      drop_last_vertex();
       return false;
     }
     const int t2 = tri_count(), u2 = t2 + 1;
@@ -1247,20 +1257,14 @@ class Improver {
     for (int v : T)
       if (!((x - P(v)).norm() >= last_resort_edge())) return false;
     const int m = static_cast<int>(m_.positions.size());
-    m_.positions.push_back(x);
-    m_.normals.push_back(ng);
-    vt_.emplace_back();
-    crease_.push_back(-1);
+    add_vertex(x, ng);
     const std::vector<Tri> added{{T[0], T[1], m}, {T[1], T[2], m}, {T[2], T[0], m}};
     const double floor = facing_floor({t});
     bool ok = true;
     for (const Tri& s : added) ok = ok && faces_surface(s, floor);
     if (ok) ok = !intersects(added, {t});
     if (!ok) {
-      m_.positions.pop_back();
-      m_.normals.pop_back();
-      vt_.pop_back();
-      crease_.pop_back();
+      drop_last_vertex();
       return false;
     }
     const int t2 = tri_count(), t3 = t2 + 1;
