@@ -106,7 +106,6 @@ void Tracker::add_side_points(int v, int vb, int va, double d, std::vector<Place
   all.insert(all.end(), placed.begin(), placed.end());
   all.insert(all.end(), after.begin(), after.end());
   if (folds_across(vb, all, va)) return;
-  side_points_ += all.size() - placed.size();
   placed = std::move(all);
 }
 
@@ -195,6 +194,9 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     complete_at = d;
   }
   if (placed.empty()) return {false, -1};
+  // The fan's own first and last points, before any side points join them.
+  const Vec3 fan_first = placed.front().point, fan_last = placed.back().point;
+  const std::size_t fan_size = placed.size();
   if (s_.side_points) add_side_points(n.vertex, vb, va, placed_at, placed);
 
   // A new point landing close to a front point the collision test did not see (beyond
@@ -221,9 +223,15 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   // those triangles all end at the neighbour). A random blob field at factor 1 folded over so.
   // The point waits instead; the neighbour's own expansion usually closes the gap first.
   if (!in_sector(n.next, placed.front().point, 0) || !in_sector(n.prev, placed.back().point, 0)) return {false, -1};
-  // The new front edges must not cross the front either.
+  // The new front edges must not cross the front either. With side points, the chords they
+  // stand in for too (next -> the fan's first point, its last -> prev): the side points lie
+  // along them, and only the first piece of each chain is a segment tested here.
   for (const auto& [from, to] : {std::pair{vb, placed.front().point}, std::pair{va, placed.back().point}})
     if (const int r = crossed_front_edge(from, -1, to, n.vertex); r >= 0) return {false, bridge_around(node, r)};
+  if (placed.size() != fan_size)
+    for (const auto& [from, to] : {std::pair{vb, fan_first}, std::pair{va, fan_last}})
+      if (const int r = crossed_front_edge(from, -1, to, n.vertex); r >= 0) return {false, bridge_around(node, r)};
+  side_points_ += placed.size() - fan_size;
 
   // Triangles (p, next, x1), (p, x1, x2), ..., (p, x_{n-1}, prev): counter-clockwise from
   // outside; the new points run from prev's side to next's side on the front.

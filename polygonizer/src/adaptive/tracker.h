@@ -195,7 +195,7 @@ class Tracker {
   std::pair<double, Vec3> tightest_bend() const { return tightest_; }
   // Placements made again at half the length because the new point asked for far shorter edges.
   std::size_t anticipations() const { return anticipations_; }
-  std::size_t side_points() const { return side_points_; }  // added by add_side_points
+  std::size_t side_points() const { return side_points_; }  // add_side_points' points in expansions made
   // The vertices placed within kCriticalReach edges of a critical point of F (missed_necks.h).
   const std::vector<CriticalStart>& critical_starts() const { return critical_starts_; }
   // Small stuck fronts closed ear by ear without the expansion's tests.
