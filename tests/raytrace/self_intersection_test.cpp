@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <map>
+#include <optional>
 #include <random>
 
 #include "common/intersection_helpers.h"
@@ -395,6 +396,41 @@ TEST(SelfIntersection, AgreesWithAFloatingPointTestInGeneralPosition) {
     hits += reference;
   }
   EXPECT_GT(hits, 1000u);
+}
+
+// The same for triangles with one shared vertex v in general position: their planes meet in a
+// line through v, and each triangle holds the part of that line on one side of v, or none (its
+// angle at v holds the line's direction d or -d, or neither); they meet beyond v when both
+// hold the same side.
+TEST(SelfIntersection, SharedVertexAgreesWithAFloatingPointTestInGeneralPosition) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> x(-1.0, 1.0);
+  // Which side of the line through v along d the angle (v; e1, e2) holds: +1 for d, -1 for -d,
+  // 0 for neither; nothing when d is too close to a side of the angle to tell in floating point.
+  const auto side = [](const Vec3& e1, const Vec3& e2, const Vec3& d) -> std::optional<int> {
+    const Vec3 n = e1.cross(e2).normalized();
+    const double s1 = n.dot(e1.normalized().cross(d)), s2 = n.dot(d.cross(e2.normalized()));
+    if (std::abs(s1) < 1e-6 || std::abs(s2) < 1e-6) return std::nullopt;
+    if (s1 > 0 && s2 > 0) return 1;
+    if (s1 < 0 && s2 < 0) return -1;
+    return 0;
+  };
+  std::size_t hits = 0, misses = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const Vec3 v(x(rng), x(rng), x(rng));
+    const std::array<Vec3, 3> a{v, Vec3(x(rng), x(rng), x(rng)), Vec3(x(rng), x(rng), x(rng))};
+    const std::array<Vec3, 3> b{v, Vec3(x(rng), x(rng), x(rng)), Vec3(x(rng), x(rng), x(rng))};
+    const Vec3 d = (a[1] - v).cross(a[2] - v).normalized().cross((b[1] - v).cross(b[2] - v).normalized());
+    if (d.norm() < 1e-3) continue;  // nearly one plane
+    const auto sa = side(a[1] - v, a[2] - v, d.normalized()), sb = side(b[1] - v, b[2] - v, d.normalized());
+    if (!sa || !sb) continue;
+    const bool reference = *sa != 0 && *sa == *sb;
+    ASSERT_EQ(triangles_intersect(a, b), reference) << "trial " << trial;
+    ASSERT_EQ(triangles_intersect(b, a), reference) << "trial " << trial;
+    ++(reference ? hits : misses);
+  }
+  EXPECT_GT(hits, 2000u);
+  EXPECT_GT(misses, 2000u);
 }
 
 TEST(OverlappingBoxPairs, MatchBruteForceIncludingTouchingAndEmptyBoxes) {
