@@ -19,6 +19,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -155,14 +156,19 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
   return t.components;
 }
 
+// A triangle's smallest angle is the one opposite its shortest edge: one atan2 per triangle.
 double min_angle_degrees(const Mesh& mesh) {
   double best = 180;
-  for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& p = mesh.positions[t[k]];
-      const Vec3 u = mesh.positions[t[(k + 1) % 3]] - p, v = mesh.positions[t[(k + 2) % 3]] - p;
-      best = std::min(best, std::atan2(u.cross(v).norm(), u.dot(v)) * 180 / std::numbers::pi);
-    }
+  for (const auto& t : mesh.triangles) {
+    int k = 0;  // the corner opposite the shortest edge
+    double shortest = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < 3; ++c)
+      if (const double l = (mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[(c + 2) % 3]]).squaredNorm(); l < shortest)
+        shortest = l, k = c;
+    const Vec3& p = mesh.positions[t[k]];
+    const Vec3 u = mesh.positions[t[(k + 1) % 3]] - p, v = mesh.positions[t[(k + 2) % 3]] - p;
+    best = std::min(best, std::atan2(u.cross(v).norm(), u.dot(v)) * 180 / std::numbers::pi);
+  }
   return best;
 }
 

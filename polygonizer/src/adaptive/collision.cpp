@@ -42,10 +42,18 @@ double segment_distance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Ve
 
 }  // namespace
 
-int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_vertex) const {
+std::pair<Vec3, Vec3> Tracker::front_edge_search_box(const Vec3& u, const Vec3& w) const {
+  // Front edges near the segment are found from their start nodes, which lie within half the
+  // segment plus the longest front edge of its midpoint.
+  const Vec3 mid = 0.5 * (u + w);
+  const double radius = 0.5 * (w - u).norm() + longest_front_edge();
+  return {mid.array() - radius, mid.array() + radius};
+}
+
+int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_vertex,
+                                const SpatialHash::Gathered* near) const {
   // In the tangent plane at frame_vertex: does segment u-w cross a front edge that shares no
-  // end point with it? Front edges near the segment are found from their start nodes, which
-  // lie within half the segment plus the longest front edge of its midpoint.
+  // end point with it? (front_edge_search_box says where the candidates are.)
   const Vec3& N = mesh_.normals[frame_vertex];
   Vec3 e0 = N.unitOrthogonal();
   const Vec3 e1 = N.cross(e0);
@@ -56,13 +64,12 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
     const Eigen::Vector2d ab = b - a, ac = c - a;
     return ab.x() * ac.y() - ab.y() * ac.x();
   };
-  const Vec3 mid = 0.5 * (u_point + w_point);
-  const double radius = 0.5 * (w_point - u_point).norm() + longest_front_edge();
+  const auto [lo, hi] = front_edge_search_box(u_point, w_point);
   // The first front edge, in the hash's order, that passes every test. The tests are cheapest
   // first (most candidates do not cross the segment in the plane), which changes no answer:
   // they are a conjunction.
   int hit = -1;
-  front_hash_.any_in(mid.array() - radius, mid.array() + radius, [&](int r) {
+  const auto crosses = [&](int r) {
     const int vr = fs_.nodes[r].vertex, vs = fs_.nodes[fs_.nodes[r].next].vertex;
     if (vr == vu || vr == vw || vs == vu || vs == vw) return false;
     const Vec3& ar = mesh_.positions[vr];
@@ -79,7 +86,9 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
     if (segment_distance(u_point, w_point, ar, bs) > reach) return false;
     hit = r;
     return true;
-  });
+  };
+  if (near) front_hash_.any_in(*near, lo, hi, crosses);
+  else front_hash_.any_in(lo, hi, crosses);
   return hit;
 }
 

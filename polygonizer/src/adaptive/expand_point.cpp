@@ -6,6 +6,7 @@
 #include "triangle_count.h"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 
 namespace cdp::adaptive {
@@ -199,13 +200,33 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   const std::size_t fan_size = placed.size();
   if (s_.side_points) add_side_points(n.vertex, vb, va, placed_at, placed);
 
+  // The front cells around the checks below, looked up once: they ask the front hash about
+  // boxes close together (each new point, and each new edge with the longest front edge
+  // around it), and nothing changes the front before they are done.
+  {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    const auto cover = [&](const std::pair<Vec3, Vec3>& box) {
+      lo = lo.cwiseMin(box.first);
+      hi = hi.cwiseMax(box.second);
+    };
+    const double near_point = 0.5 * delta;
+    for (const Placed& x : placed) {
+      cover({x.point.array() - near_point, x.point.array() + near_point});
+      cover(front_edge_search_box(p, x.point));
+    }
+    cover(front_edge_search_box(mesh_.positions[vb], placed.front().point));
+    cover(front_edge_search_box(mesh_.positions[va], placed.back().point));
+    cover(front_edge_search_box(mesh_.positions[vb], fan_first));
+    cover(front_edge_search_box(mesh_.positions[va], fan_last));
+    front_hash_.gather(lo, hi, near_front_);
+  }
   // A new point landing close to a front point the collision test did not see (beyond
   // collision_factor * delta of the candidate) would make a sliver or an overlap: bridge to
   // that front point instead.
   for (const Placed& x : placed) {
     int hit = -1;
     double hit_d = 0.5 * delta;
-    front_hash_.for_each_near(x.point, hit_d, [&](int q) {
+    front_hash_.for_each_near(near_front_, x.point, hit_d, [&](int q) {
       const int vq = fs_.nodes[q].vertex;
       if (vq == n.vertex || vq == va || vq == vb) return;
       if (!same_side(N, vq)) return;
@@ -213,7 +234,7 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
       if (d < hit_d || (d == hit_d && q < hit)) hit = q, hit_d = d;
     });
     if (hit >= 0) return {false, find_bridge(node, 1.05 * (mesh_.positions[fs_.nodes[hit].vertex] - p).norm())};
-    if (const int r = crossed_front_edge(n.vertex, -1, x.point, n.vertex); r >= 0)
+    if (const int r = crossed_front_edge(n.vertex, -1, x.point, n.vertex, &near_front_); r >= 0)
       return {false, bridge_around(node, r)};
   }
   // The new front edges next -> x1 and x_last -> prev must leave next and prev into their own
@@ -227,10 +248,12 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   // stand in for too (next -> the fan's first point, its last -> prev): the side points lie
   // along them, and only the first piece of each chain is a segment tested here.
   for (const auto& [from, to] : {std::pair{vb, placed.front().point}, std::pair{va, placed.back().point}})
-    if (const int r = crossed_front_edge(from, -1, to, n.vertex); r >= 0) return {false, bridge_around(node, r)};
+    if (const int r = crossed_front_edge(from, -1, to, n.vertex, &near_front_); r >= 0)
+      return {false, bridge_around(node, r)};
   if (placed.size() != fan_size)
     for (const auto& [from, to] : {std::pair{vb, fan_first}, std::pair{va, fan_last}})
-      if (const int r = crossed_front_edge(from, -1, to, n.vertex); r >= 0) return {false, bridge_around(node, r)};
+      if (const int r = crossed_front_edge(from, -1, to, n.vertex, &near_front_); r >= 0)
+        return {false, bridge_around(node, r)};
   side_points_ += placed.size() - fan_size;
 
   // Triangles (p, next, x1), (p, x1, x2), ..., (p, x_{n-1}, prev): counter-clockwise from

@@ -88,9 +88,18 @@ class MeshCoverage {
   // A triangle meets the segment a-b.
   bool crosses(const Vec3& a, const Vec3& b) const {
     const auto& P = mesh_.positions;
-    return any_in(a.cwiseMin(b), a.cwiseMax(b), [&](int f) {
+    const Vec3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
+    return any_in(lo, hi, [&](int f) {
       const auto& t = mesh_.triangles[f];
-      return segment_meets_triangle(a, b, P[t[0]], P[t[1]], P[t[2]]);
+      const Vec3 &p = P[t[0]], &q = P[t[1]], &r = P[t[2]];
+      // Most triangles of the cells lie beside the segment's box (a grid edge is as long as a
+      // few triangles): corners all beyond one face of the box settle it with comparisons,
+      // exactly (the triangle's points lie between its corners).
+      for (int axis = 0; axis < 3; ++axis)
+        if ((p[axis] < lo[axis] && q[axis] < lo[axis] && r[axis] < lo[axis]) ||
+            (p[axis] > hi[axis] && q[axis] > hi[axis] && r[axis] > hi[axis]))
+          return false;
+      return segment_meets_triangle(a, b, p, q, r);
     });
   }
 
@@ -300,13 +309,21 @@ class Seeder {
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
         for (int i = 0; i < n[0]; ++i) crossed[cell_id(i, j, k)] = !one_sign(corners_of(i, j, k));
-    const auto next_to_crossed = [&](int i, int j, int k) {
-      for (int c = std::max(k - 1, 0); c <= std::min(k + 1, n[2] - 1); ++c)
-        for (int b = std::max(j - 1, 0); b <= std::min(j + 1, n[1] - 1); ++b)
-          for (int a = std::max(i - 1, 0); a <= std::min(i + 1, n[0] - 1); ++a)
-            if (crossed[cell_id(a, b, c)]) return true;
-      return false;
-    };
+    // Cells crossed or next to one (26-neighbourhood): the crossed cells dilated by one along
+    // each axis in turn, which is the same set as looking at the 26 neighbours of each cell.
+    std::vector<char> near = crossed;
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::vector<char> from = near;
+      const std::array<int, 3> d{axis == 0, axis == 1, axis == 2};
+      for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+          for (int i = 0; i < n[0]; ++i) {
+            const int at = std::array<int, 3>{i, j, k}[axis];
+            char& x = near[cell_id(i, j, k)];
+            if (at > 0) x |= from[cell_id(i - d[0], j - d[1], k - d[2])];
+            if (at + 1 < n[axis]) x |= from[cell_id(i + d[0], j + d[1], k + d[2])];
+          }
+    }
     std::vector<Candidate> candidates;
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
@@ -315,7 +332,7 @@ class Seeder {
           // component that near another is found where it crosses a grid edge, not here (the
           // band around the surface would otherwise be refined everywhere, at several times the
           // cost of the polygonization on cheap fields).
-          if (crossed[cell_id(i, j, k)] || next_to_crossed(i, j, k)) continue;
+          if (near[cell_id(i, j, k)]) continue;
           Candidate c{{grid_.point(i, j, k), grid_.point(i + 1, j + 1, k + 1)}, corners_of(i, j, k)};
           if (proved_empty_by_corners(c.box, c.corners)) continue;
           candidates.push_back(c);

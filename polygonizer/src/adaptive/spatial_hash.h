@@ -63,6 +63,61 @@ class SpatialHash {
     });
   }
 
+  // The occupied cells overlapping a box, in the order any_in visits them, taken once so that
+  // several queries inside that box (the checks of one expansion) do not each look up every
+  // cell. Holds indices of cells: valid until the next insert.
+  struct Gathered {
+    std::int64_t lo[3] = {0, 0, 0}, hi[3] = {-1, -1, -1};  // the box's cells; empty: nothing gathered
+    struct Run {
+      std::int64_t i, j, k;
+      int cell;
+    };
+    std::vector<Run> runs;
+  };
+
+  // Gathers the cells overlapping [lo, hi] (none where any_in would not visit them in the order
+  // of its cell-by-cell loop: a box over more cells than are occupied, or a coarser level).
+  void gather(const Vec3& lo, const Vec3& hi, Gathered& g) const {
+    g.runs.clear();
+    g.hi[0] = g.lo[0] - 1;
+    const Cell a = cell_of(lo), b = cell_of(hi);
+    if (coarser_ || spanned(a, b) > static_cast<double>(ids_.size())) return;
+    g.lo[0] = a.i, g.lo[1] = a.j, g.lo[2] = a.k;
+    g.hi[0] = b.i, g.hi[1] = b.j, g.hi[2] = b.k;
+    for (std::int64_t k = a.k; k <= b.k; ++k)
+      for (std::int64_t j = a.j; j <= b.j; ++j)
+        for (std::int64_t i = a.i; i <= b.i; ++i)
+          if (const int c = find(key({i, j, k})); c >= 0 && !ids_[static_cast<std::size_t>(c)].empty())
+            g.runs.push_back({i, j, k, c});
+  }
+
+  // any_in(lo, hi, pred) with the same answer, the same order of calls to pred and the same
+  // visits, from the cells g gathered when the box lies within g's (else by any_in itself).
+  template <class Pred>
+  bool any_in(const Gathered& g, const Vec3& lo, const Vec3& hi, Pred&& pred) const {
+    const Cell a = cell_of(lo), b = cell_of(hi);
+    if (a.i < g.lo[0] || a.j < g.lo[1] || a.k < g.lo[2] || b.i > g.hi[0] || b.j > g.hi[1] || b.k > g.hi[2] ||
+        spanned(a, b) > static_cast<double>(ids_.size()))
+      return any_in(lo, hi, pred);
+    // g's cells in any_in's order; those of the smaller box keep that order among themselves.
+    for (const auto& r : g.runs) {
+      if (r.i < a.i || r.i > b.i || r.j < a.j || r.j > b.j || r.k < a.k || r.k > b.k) continue;
+      const std::vector<int>& ids = ids_[static_cast<std::size_t>(r.cell)];
+      visits_ += ids.size();
+      for (int id : ids)
+        if (pred(id)) return true;
+    }
+    return false;
+  }
+
+  template <class Fn>
+  void for_each_near(const Gathered& g, const Vec3& p, double r, Fn&& fn) const {
+    any_in(g, p.array() - r, p.array() + r, [&](int id) {
+      fn(id);
+      return false;
+    });
+  }
+
   // Whether pred(id) holds for an id stored in a cell overlapping the box [lo, hi]; stops at the
   // first (an id stored in several cells may be asked more than once). The coarser levels of
   // large boxes (insert_box) are asked after this one's cells.
@@ -79,9 +134,7 @@ class SpatialHash {
         if (pred(id)) return true;
       return false;
     };
-    const double spanned = (static_cast<double>(b.i - a.i) + 1) * (static_cast<double>(b.j - a.j) + 1) *
-                           (static_cast<double>(b.k - a.k) + 1);
-    if (spanned > static_cast<double>(ids_.size())) {
+    if (spanned(a, b) > static_cast<double>(ids_.size())) {
       // A cell's key holds its coordinates modulo 2^21 (key): it is in the box when some cell
       // of the box has the same residues, as the scan below would find it.
       const auto meets = [](std::uint64_t residue, std::int64_t from, std::int64_t to) {
@@ -111,6 +164,11 @@ class SpatialHash {
   struct Cell {
     std::int64_t i, j, k;
   };
+  // The number of cells from a to b (as a double: a huge box overflows no integer).
+  static double spanned(const Cell& a, const Cell& b) {
+    return (static_cast<double>(b.i - a.i) + 1) * (static_cast<double>(b.j - a.j) + 1) *
+           (static_cast<double>(b.k - a.k) + 1);
+  }
   Cell cell_of(const Vec3& p) const {
     return {static_cast<std::int64_t>(std::floor(p.x() * inv_h_)), static_cast<std::int64_t>(std::floor(p.y() * inv_h_)),
             static_cast<std::int64_t>(std::floor(p.z() * inv_h_))};

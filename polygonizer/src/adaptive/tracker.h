@@ -324,7 +324,11 @@ class Tracker {
   int find_closing_obstacle(int node) const;
   // The start node of a front edge that the segment from vertex vu to point w (vertex vw, or -1
   // for a point not yet in the mesh) crosses, seen in the tangent plane of frame_vertex; or -1.
-  int crossed_front_edge(int vu, int vw, const Vec3& w, int frame_vertex) const;
+  // With `near`, the front nodes come from the cells it gathered (the same answer).
+  int crossed_front_edge(int vu, int vw, const Vec3& w, int frame_vertex,
+                         const SpatialHash::Gathered* near = nullptr) const;
+  // The box crossed_front_edge searches for the segment u-w.
+  std::pair<Vec3, Vec3> front_edge_search_box(const Vec3& u, const Vec3& w) const;
   // What to do when a new edge of node's expansion would cross the front edge starting at r:
   // the best bridge from node to a point at least as near as the far end of that edge, or -1.
   int bridge_around(int node, int r) const;
@@ -383,6 +387,7 @@ class Tracker {
   mutable std::size_t crease_points_ = 0, over_mesh_ = 0;
   mutable PlacementBuffers placement_;
   mutable DerivativeBuffers derivatives_;
+  mutable SpatialHash::Gathered near_front_;  // expand's checks: the front cells around the expansion
   ProgressCallback progress_;
   PatchTest patch_test_;
   PointTest point_test_;
