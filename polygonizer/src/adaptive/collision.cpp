@@ -42,11 +42,11 @@ double segment_distance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Ve
 
 }  // namespace
 
-std::pair<Vec3, Vec3> Tracker::front_edge_search_box(const Vec3& u, const Vec3& w) const {
+std::pair<Vec3, Vec3> Tracker::front_edge_search_box(const Vec3& u, const Vec3& w, double longest) const {
   // Front edges near the segment are found from their start nodes, which lie within half the
   // segment plus the longest front edge of its midpoint.
   const Vec3 mid = 0.5 * (u + w);
-  const double radius = 0.5 * (w - u).norm() + longest_front_edge();
+  const double radius = 0.5 * (w - u).norm() + longest;
   return {mid.array() - radius, mid.array() + radius};
 }
 
@@ -64,7 +64,7 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
     const Eigen::Vector2d ab = b - a, ac = c - a;
     return ab.x() * ac.y() - ab.y() * ac.x();
   };
-  const auto [lo, hi] = front_edge_search_box(u_point, w_point);
+  const auto [lo, hi] = front_edge_search_box(u_point, w_point, longest_front_edge());
   // The first front edge, in the hash's order, that passes every test. The tests are cheapest
   // first (most candidates do not cross the segment in the plane), which changes no answer:
   // they are a conjunction.

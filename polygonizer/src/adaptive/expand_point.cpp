@@ -209,15 +209,15 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
       lo = lo.cwiseMin(box.first);
       hi = hi.cwiseMax(box.second);
     };
-    const double near_point = 0.5 * delta;
+    const double near_point = 0.5 * delta, longest = longest_front_edge();
     for (const Placed& x : placed) {
       cover({x.point.array() - near_point, x.point.array() + near_point});
-      cover(front_edge_search_box(p, x.point));
+      cover(front_edge_search_box(p, x.point, longest));
     }
-    cover(front_edge_search_box(mesh_.positions[vb], placed.front().point));
-    cover(front_edge_search_box(mesh_.positions[va], placed.back().point));
-    cover(front_edge_search_box(mesh_.positions[vb], fan_first));
-    cover(front_edge_search_box(mesh_.positions[va], fan_last));
+    cover(front_edge_search_box(mesh_.positions[vb], placed.front().point, longest));
+    cover(front_edge_search_box(mesh_.positions[va], placed.back().point, longest));
+    cover(front_edge_search_box(mesh_.positions[vb], fan_first, longest));
+    cover(front_edge_search_box(mesh_.positions[va], fan_last, longest));
     front_hash_.gather(lo, hi, near_front_);
   }
   // A new point landing close to a front point the collision test did not see (beyond

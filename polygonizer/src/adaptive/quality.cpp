@@ -506,11 +506,21 @@ class Improver {
         const std::array<Vec3, 3> pb{pos(x[0]), pos(x[1]), pos(x[2])};
         const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
         if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
-        return triangles_intersect(pa, pb);
+        return exact_intersect(pa, pb);
       });
       if (hit) return true;
     }
     return false;
+  }
+
+  // triangles_intersect(a, b) for an `a` known to be non-degenerate: b's own tests (finite
+  // corners, degenerate) and then the exact test, without a's degeneracy test again (an exact
+  // orientation test per axis, most of triangles_intersect's cost on the pairs the repair meets).
+  // Corners of a that are not finite go through triangles_intersect, which throws.
+  static bool exact_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
+    const auto finite = [](const std::array<Vec3, 3>& t) { return t[0].allFinite() && t[1].allFinite() && t[2].allFinite(); };
+    if (!finite(a) || !finite(b)) return triangles_intersect(a, b);
+    return !triangle_is_degenerate(b[0], b[1], b[2]) && nondegenerate_triangles_intersect(a, b);
   }
 
   // A floating-point filter before the exact test, which most pairs of neighbouring triangles
@@ -574,11 +584,24 @@ class Improver {
       if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
       const Vec3 nb = (pb[1] - pb[0]).cross(pb[2] - pb[0]);
       const double mb = std::max(blo.cwiseAbs().maxCoeff(), bhi.cwiseAbs().maxCoeff());
-      for (const StarTriangle& a : star) {
+      // Whether pb may take part in the exact test (triangles_intersect's own tests of it), asked
+      // once for all the star's triangles and only when one gets that far: -1 not yet known.
+      int testable = -1;
+      for (StarTriangle& a : star) {
         if ((blo.array() > a.hi.array()).any() || (bhi.array() < a.lo.array()).any()) continue;
         const double bound = plane_bound(std::max(mb, a.magnitude), (a.hi.cwiseMax(bhi) - a.lo.cwiseMin(blo)).norm());
         if (apart_by_plane(a.p, a.normal, pb, bound) || apart_by_plane(pb, nb, a.p, bound)) continue;
-        if (triangles_intersect(a.p, pb)) return true;
+        if (a.finite < 0) a.finite = a.p[0].allFinite() && a.p[1].allFinite() && a.p[2].allFinite();
+        if (!a.finite) {
+          if (triangles_intersect(a.p, pb)) return true;  // throws: a corner is not finite
+          continue;
+        }
+        if (testable < 0)
+          testable = pb[0].allFinite() && pb[1].allFinite() && pb[2].allFinite()
+                         ? !triangle_is_degenerate(pb[0], pb[1], pb[2])
+                         : 2;  // not finite: triangles_intersect throws
+        if (testable == 2 && triangles_intersect(a.p, pb)) return true;
+        if (testable == 1 && nondegenerate_triangles_intersect(a.p, pb)) return true;
       }
       return false;
     });
@@ -1397,6 +1420,9 @@ class Improver {
     std::array<Vec3, 3> p;
     Vec3 lo, hi, normal;  // box; unnormalized normal (apart_by_plane)
     double magnitude;     // largest absolute coordinate
+    // Every corner finite (else triangles_intersect throws on it): -1 not yet known, asked only
+    // when the triangle first reaches the exact test.
+    int finite = -1;
   };
   std::vector<StarTriangle> star_buffer_;
   // estimate_distance's memo, by triangle slot (see there).

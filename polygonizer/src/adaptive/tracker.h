@@ -327,8 +327,8 @@ class Tracker {
   // With `near`, the front nodes come from the cells it gathered (the same answer).
   int crossed_front_edge(int vu, int vw, const Vec3& w, int frame_vertex,
                          const SpatialHash::Gathered* near = nullptr) const;
-  // The box crossed_front_edge searches for the segment u-w.
-  std::pair<Vec3, Vec3> front_edge_search_box(const Vec3& u, const Vec3& w) const;
+  // The box crossed_front_edge searches for the segment u-w, given longest_front_edge().
+  std::pair<Vec3, Vec3> front_edge_search_box(const Vec3& u, const Vec3& w, double longest) const;
   // What to do when a new edge of node's expansion would cross the front edge starting at r:
   // the best bridge from node to a point at least as near as the far end of that edge, or -1.
   int bridge_around(int node, int r) const;
