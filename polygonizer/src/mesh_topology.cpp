@@ -54,10 +54,50 @@ MeshTopology analyze_topology(const Mesh& mesh) {
   };
   std::vector<Around> around;
   std::vector<std::array<int, 3>> led;  // the sorted triangles whose smallest index is v
+  // The common case first: v's triangles (v, a_i, b_i), counter-clockwise, none with a repeated
+  // index, close one fan around v with consistent orientations: going from each triangle i to a
+  // triangle whose a is b_i (its neighbour across the edge (v, b_i)) runs through all k >= 3 of
+  // them and back. That cycle makes the map a bijection, so the a_i are distinct and the b_i are
+  // the same values (a repeated a leaves a triangle no step reaches); each edge (v, w) then has
+  // two users traversing it both ways, no two of v's triangles have the same vertices (that
+  // takes a cycle of two), and v is manifold. Only the edges with w > v are counted and their
+  // two triangles joined, as below. O(k^2) for k up to kFanAtOnce; larger or other stars go the
+  // general way (sorted lists).
+  constexpr int kFanAtOnce = 16;
+  std::array<int, kFanAtOnce> fan_a, fan_b, fan_face, fan_next;
+  const auto closed_fan = [&](int v, int begin, int end) {
+    const int k = end - begin;
+    if (k < 3 || k > kFanAtOnce) return false;
+    for (int i = 0; i < k; ++i) {
+      const int f = incident[begin + i];
+      if (repeated[static_cast<std::size_t>(f)]) return false;
+      const auto& tri = mesh.triangles[static_cast<std::size_t>(f)];
+      const int at = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+      fan_a[i] = tri[(at + 1) % 3];
+      fan_b[i] = tri[(at + 2) % 3];
+      fan_face[i] = f;
+    }
+    for (int i = 0; i < k; ++i) {
+      fan_next[i] = -1;
+      for (int j = 0; j < k && fan_next[i] < 0; ++j)
+        if (fan_a[j] == fan_b[i]) fan_next[i] = j;
+      if (fan_next[i] < 0) return false;
+    }
+    int steps = 0;
+    for (int i = fan_next[0]; i != 0 && steps <= k; i = fan_next[i]) ++steps;
+    if (steps != k - 1) return false;
+    for (int i = 0; i < k; ++i)
+      if (fan_b[i] > v) {
+        ++t.edges;
+        faces.unite(fan_face[i], fan_face[fan_next[i]]);
+      }
+    return true;
+  };
   for (std::size_t v = 0; v < nv; ++v) {
     const int begin = offsets[v], end = offsets[v + 1];
     if (end == begin) continue;
     ++t.vertices;
+    if (closed_fan(static_cast<int>(v), begin, end)) continue;
     around.clear();
     led.clear();
     for (int i = begin; i < end; ++i) {

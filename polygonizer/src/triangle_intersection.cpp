@@ -134,6 +134,35 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   return sign(sum);
 }
 
+// orient3d(v, p, q, x) for several x against one plane (v, p, q): the cross product of p - v and
+// q - v, its products kept for the error bound, is computed once. The determinant, expanded along
+// x's row, is -(x - v) . ((p - v) x (q - v)): the same sum of three terms, each a difference
+// times a difference of products of differences, as orient3d's expansion along a column, so the
+// same bound holds for it (the bound does not depend on which entries play which part); an
+// uncertain sign is settled by orient3d itself, exactly.
+class PlaneSides {
+ public:
+  PlaneSides(const Vec3& v, const Vec3& p, const Vec3& q) : v_(v), p_(p), q_(q) {
+    const double px = p.x() - v.x(), py = p.y() - v.y(), pz = p.z() - v.z();
+    const double qx = q.x() - v.x(), qy = q.y() - v.y(), qz = q.z() - v.z();
+    const double pyqz = py * qz, pzqy = pz * qy, pzqx = pz * qx, pxqz = px * qz, pxqy = px * qy, pyqx = py * qx;
+    n_ = {pyqz - pzqy, pzqx - pxqz, pxqy - pyqx};
+    abs_ = {std::abs(pyqz) + std::abs(pzqy), std::abs(pzqx) + std::abs(pxqz), std::abs(pxqy) + std::abs(pyqx)};
+  }
+  int side(const Vec3& x) const {
+    const double dx = x.x() - v_.x(), dy = x.y() - v_.y(), dz = x.z() - v_.z();
+    const double det = dx * n_[0] + dy * n_[1] + dz * n_[2];
+    const double bound = kOrient3dBound * (std::abs(dx) * abs_[0] + std::abs(dy) * abs_[1] + std::abs(dz) * abs_[2]);
+    if (det > bound) return -1;
+    if (-det > bound) return 1;
+    return orient3d(v_, p_, q_, x);
+  }
+
+ private:
+  const Vec3 &v_, &p_, &q_;
+  std::array<double, 3> n_, abs_;
+};
+
 // The orientation of a, b, c projected onto the two axes other than `drop` (the axes (drop+1)%3
 // and (drop+2)%3, in that order): positive counter-clockwise, zero collinear.
 int orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int drop) {
@@ -274,7 +303,8 @@ bool nondegenerate_triangles_intersect(const std::array<Vec3, 3>& a, const std::
   const Vec3& b2 = b[(ib[0] + 2) % 3];
   // The sides of a1 and a2 of b's plane (v, b1, b2 is b turned cyclically: the same plane and
   // orientation). Both strictly on one side: a meets that plane only at v, which does not count.
-  const int s1 = orient3d(v, b1, b2, a1), s2 = orient3d(v, b1, b2, a2);
+  const PlaneSides b_plane(v, b1, b2);
+  const int s1 = b_plane.side(a1), s2 = b_plane.side(a2);
   if (s1 * s2 > 0) return false;
   if (s1 == 0 && s2 == 0) {
     // One plane: near v each triangle is its angle at v, and the intersection is convex, so the
@@ -287,7 +317,8 @@ bool nondegenerate_triangles_intersect(const std::array<Vec3, 3>& a, const std::
   // v to a point of the opposite side, so they meet beyond v when an opposite side meets the
   // other triangle (which it cannot do at v). Likewise b's far corners strictly on one side of
   // a's plane leave b meeting that plane only at v.
-  const int t1 = orient3d(v, a1, a2, b1), t2 = orient3d(v, a1, a2, b2);
+  const PlaneSides a_plane(v, a1, a2);
+  const int t1 = a_plane.side(b1), t2 = a_plane.side(b2);
   if (t1 * t2 > 0) return false;
   return segment_meets_closed_triangle(a1, a2, b, s1, s2) || segment_meets_closed_triangle(b1, b2, a, t1, t2);
 }
