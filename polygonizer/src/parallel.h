@@ -10,16 +10,32 @@
 #include <cstddef>
 #include <exception>
 #include <mutex>
+#if defined(__linux__)
+#include <sched.h>
+#endif
 #include <thread>
 #include <vector>
 
 namespace cdp::detail {
 
-// Threads for the core's parallel passes: `requested` when positive, else the machine's
-// hardware threads; at most kMaxThreads (the passes are memory-bound beyond that), at least one.
+// The processors this process may run on: its CPU affinity where the system tells it (a process
+// pinned to one core, or a container given a few, would otherwise start a thread per core of the
+// machine and switch between them on its own), else the machine's hardware threads.
+inline unsigned available_processors() {
+#if defined(__linux__)
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0)
+    if (const int n = CPU_COUNT(&set); n > 0) return static_cast<unsigned>(n);
+#endif
+  return std::thread::hardware_concurrency();
+}
+
+// Threads for the core's parallel passes: `requested` when positive, else the processors
+// available; at most kMaxThreads (the passes are memory-bound beyond that), at least one.
 inline constexpr unsigned kMaxThreads = 8;
 inline unsigned worker_count(int requested = 0) {
-  const unsigned hw = std::thread::hardware_concurrency();
+  const unsigned hw = available_processors();
   const unsigned n = requested > 0 ? static_cast<unsigned>(requested) : hw;
   return std::clamp(n, 1u, kMaxThreads);
 }

@@ -86,13 +86,13 @@ struct AdaptiveOptions {
   // checks that every component was meshed. Components smaller than about one cell can be
   // missed; raise this to catch them.
   int seed_resolution = 32;
-  // Checks the finished mesh for intersecting triangles (self_intersecting_pairs: about 0.6 us
-  // per triangle on two cores) and throws NoSurfaceError naming the place when two intersect. On by default: a
-  // mesh that is wrong without saying so is worse than a slower run.
+  // Checks the finished mesh for intersecting triangles (self_intersecting_pairs: about 0.7 us
+  // per triangle on one core) and throws NoSurfaceError naming the place when two intersect. On
+  // by default: a mesh that is wrong without saying so is worse than a slower run.
   bool check_self_intersections = true;
-  // Threads of the data-parallel passes (the seed grid of a thread-safe field, the
-  // self-intersection check): 0 all cores (at most 8), 1 the caller's only. The tracker itself
-  // runs on the caller's thread. The mesh is the same, bit for bit, on any number.
+  // Threads of the data-parallel passes (the seed grid of a thread-safe field, the final checks):
+  // 0 all cores this process may run on (its CPU affinity; at most 8), 1 the caller's only. The
+  // tracker itself runs on the caller's thread. The mesh is the same, bit for bit, on any number.
   int threads = 0;
   // Adds vertex_scalars "mac" (maximum absolute curvature) and "shape_index" to the mesh.
   bool curvature_properties = false;
