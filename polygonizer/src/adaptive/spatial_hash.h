@@ -164,14 +164,19 @@ class SpatialHash {
   struct Cell {
     std::int64_t i, j, k;
   };
+  // std::floor as an integer, without its library call (the build targets no SSE4.1 rounding
+  // instruction): the conversion truncates toward zero, one less below zero unless exact.
+  static std::int64_t floor_int(double x) {
+    const auto i = static_cast<std::int64_t>(x);
+    return i - (x < static_cast<double>(i));
+  }
   // The number of cells from a to b (as a double: a huge box overflows no integer).
   static double spanned(const Cell& a, const Cell& b) {
     return (static_cast<double>(b.i - a.i) + 1) * (static_cast<double>(b.j - a.j) + 1) *
            (static_cast<double>(b.k - a.k) + 1);
   }
   Cell cell_of(const Vec3& p) const {
-    return {static_cast<std::int64_t>(std::floor(p.x() * inv_h_)), static_cast<std::int64_t>(std::floor(p.y() * inv_h_)),
-            static_cast<std::int64_t>(std::floor(p.z() * inv_h_))};
+    return {floor_int(p.x() * inv_h_), floor_int(p.y() * inv_h_), floor_int(p.z() * inv_h_)};
   }
   static constexpr std::uint64_t kAxisMask = 0x1fffffULL;
   static std::uint64_t key(const Cell& c) {
