@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
                                    ->transform(cdp::app::integer_in(2, kIntMax));
     app.add_option("--threads", threads,
                    "threads of the seed grid (thread-safe fields) and of the adaptive method's final check "
-                   "(0: all cores, at most 8); the mesh is the same on any number")
+                   "(0: all cores this process may use, at most 8); the mesh is the same on any number")
         ->capture_default_str()
         ->type_name("N")
         ->transform(cdp::app::integer_in(0, kIntMax));
