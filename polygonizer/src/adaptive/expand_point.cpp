@@ -6,8 +6,8 @@
 #include "triangle_count.h"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 
 namespace cdp::adaptive {
 

@@ -518,10 +518,10 @@ class Improver {
   // orientation test per axis, most of triangles_intersect's cost on the pairs the repair meets).
   // Corners of a that are not finite go through triangles_intersect, which throws.
   static bool exact_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
-    const auto finite = [](const std::array<Vec3, 3>& t) { return t[0].allFinite() && t[1].allFinite() && t[2].allFinite(); };
-    if (!finite(a) || !finite(b)) return triangles_intersect(a, b);
+    if (!all_finite(a) || !all_finite(b)) return triangles_intersect(a, b);
     return !triangle_is_degenerate(b[0], b[1], b[2]) && nondegenerate_triangles_intersect(a, b);
   }
+  static bool all_finite(const std::array<Vec3, 3>& t) { return t[0].allFinite() && t[1].allFinite() && t[2].allFinite(); }
 
   // A floating-point filter before the exact test, which most pairs of neighbouring triangles
   // would otherwise reach (their shared corners put them on each other's planes): true when the
@@ -584,24 +584,25 @@ class Improver {
       if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
       const Vec3 nb = (pb[1] - pb[0]).cross(pb[2] - pb[0]);
       const double mb = std::max(blo.cwiseAbs().maxCoeff(), bhi.cwiseAbs().maxCoeff());
-      // Whether pb may take part in the exact test (triangles_intersect's own tests of it), asked
-      // once for all the star's triangles and only when one gets that far: -1 not yet known.
-      int testable = -1;
+      // triangles_intersect(a.p, pb) below without its repeated tests: the star's triangles are
+      // not degenerate (checked above), and whether pb is is asked once for all of them, when
+      // the first gets to the exact test. Corners that are not finite go through
+      // triangles_intersect, which throws.
+      enum class Found { Unknown, Testable, Degenerate, NotFinite } found = Found::Unknown;
       for (StarTriangle& a : star) {
         if ((blo.array() > a.hi.array()).any() || (bhi.array() < a.lo.array()).any()) continue;
         const double bound = plane_bound(std::max(mb, a.magnitude), (a.hi.cwiseMax(bhi) - a.lo.cwiseMin(blo)).norm());
         if (apart_by_plane(a.p, a.normal, pb, bound) || apart_by_plane(pb, nb, a.p, bound)) continue;
-        if (a.finite < 0) a.finite = a.p[0].allFinite() && a.p[1].allFinite() && a.p[2].allFinite();
-        if (!a.finite) {
-          if (triangles_intersect(a.p, pb)) return true;  // throws: a corner is not finite
+        if (a.finite < 0) a.finite = all_finite(a.p);
+        if (found == Found::Unknown)
+          found = !all_finite(pb) ? Found::NotFinite
+                  : triangle_is_degenerate(pb[0], pb[1], pb[2]) ? Found::Degenerate
+                                                                : Found::Testable;
+        if (!a.finite || found == Found::NotFinite) {
+          if (triangles_intersect(a.p, pb)) return true;
           continue;
         }
-        if (testable < 0)
-          testable = pb[0].allFinite() && pb[1].allFinite() && pb[2].allFinite()
-                         ? !triangle_is_degenerate(pb[0], pb[1], pb[2])
-                         : 2;  // not finite: triangles_intersect throws
-        if (testable == 2 && triangles_intersect(a.p, pb)) return true;
-        if (testable == 1 && nondegenerate_triangles_intersect(a.p, pb)) return true;
+        if (found == Found::Testable && nondegenerate_triangles_intersect(a.p, pb)) return true;
       }
       return false;
     });
@@ -1420,8 +1421,8 @@ class Improver {
     std::array<Vec3, 3> p;
     Vec3 lo, hi, normal;  // box; unnormalized normal (apart_by_plane)
     double magnitude;     // largest absolute coordinate
-    // Every corner finite (else triangles_intersect throws on it): -1 not yet known, asked only
-    // when the triangle first reaches the exact test.
+    // Every corner finite (else triangles_intersect throws on it): 1 or 0, -1 not yet known
+    // (asked only when the triangle first reaches the exact test).
     int finite = -1;
   };
   std::vector<StarTriangle> star_buffer_;
