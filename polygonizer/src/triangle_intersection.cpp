@@ -397,8 +397,9 @@ std::uint64_t cell_hash(int x, int y, int z) {
 // (counting sort by bucket, so each bucket lists its triangles in increasing order). Of the pairs
 // f < g of a bucket, one is tested only when the boxes overlap and the bucket is that of the
 // cell of the lower corner of their intersection: that cell holds both triangles, so each
-// overlapping pair is tested exactly once, even when distinct cells share a bucket. Large triangles are tested against all others (two large ones
-// from the lower index): at most about (16 + sqrt n) n box comparisons.
+// overlapping pair is tested exactly once, even when distinct cells share a bucket. Large
+// triangles are tested against all others (two large ones from the lower index): at most about
+// (16 + sqrt n) n box comparisons.
 void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollector& out, int threads) {
   std::vector<int> live;
   for (std::size_t f = 0; f < boxes.size(); ++f)
@@ -469,9 +470,9 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   // Blocks of 8 x 8 x 8 cells hashed to runs of 512 consecutive buckets: neighbouring cells
   // share cache lines, and distinct blocks collide only at random. With fewer buckets than 512
   // the mask keeps only part of a cell's place in its block.
-  const std::size_t kBlockMask = std::min<std::size_t>(511, buckets - 1);
+  const std::size_t block_mask = std::min<std::size_t>(511, buckets - 1);
   const auto local_bits = [&](int x, int y, int z) {
-    return static_cast<std::size_t>((x & 7) | (y & 7) << 3 | (z & 7) << 6) & kBlockMask;
+    return static_cast<std::size_t>((x & 7) | (y & 7) << 3 | (z & 7) << 6) & block_mask;
   };
   const auto bucket_of = [&](int x, int y, int z) {
     return static_cast<std::size_t>((cell_hash(x >> 3, y >> 3, z >> 3) << 9 | local_bits(x, y, z)) & (buckets - 1));
@@ -535,7 +536,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
           // along each axis, so c is its only cell with that place, and the only one that can
           // have put it in a bucket with these low bits.
           const int x = std::max(p.lo[0], q.lo[0]), y = std::max(p.lo[1], q.lo[1]), z = std::max(p.lo[2], q.lo[2]);
-          if (local_bits(x, y, z) != (b & kBlockMask)) continue;
+          if (local_bits(x, y, z) != (b & block_mask)) continue;
           if (nondegenerate_triangles_intersect(corners(mesh, p.id), corners(mesh, q.id))) mine.add(p.id, q.id);
         }
       }

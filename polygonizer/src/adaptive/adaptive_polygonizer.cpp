@@ -144,9 +144,10 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
   // variant's torus at factor 5: about 8.5M instructions against the intersections' 31.5M).
   // Both are pure functions of the mesh, and their failures are reported in the order below
   // either way.
+  const bool side_by_side = check_intersections && detail::worker_count(threads) > 1;
   MeshTopology t;
   std::vector<std::pair<int, int>> pairs;
-  if (check_intersections && detail::worker_count(threads) > 1) {
+  if (side_by_side) {
     std::exception_ptr error;
     std::thread topology([&] {
       try {
@@ -179,7 +180,7 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
     fail("with " + std::to_string(t.components) + " components from " + std::to_string(seeds) + " seeds",
          mesh.positions.front());
   if (check_intersections) {
-    if (detail::worker_count(threads) <= 1) pairs = self_intersecting_pairs(mesh, 1, threads);
+    if (!side_by_side) pairs = self_intersecting_pairs(mesh, 1, threads);
     if (!pairs.empty())
       fail("intersecting itself (" + std::to_string(count_self_intersecting_pairs(mesh, threads)) + " pairs of triangles)",
            mesh.positions[mesh.triangles[pairs.front().first][0]]);

@@ -584,25 +584,11 @@ class Improver {
       if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
       const Vec3 nb = (pb[1] - pb[0]).cross(pb[2] - pb[0]);
       const double mb = std::max(blo.cwiseAbs().maxCoeff(), bhi.cwiseAbs().maxCoeff());
-      // triangles_intersect(a.p, pb) below without its repeated tests: the star's triangles are
-      // not degenerate (checked above), and whether pb is is asked once for all of them, when
-      // the first gets to the exact test. Corners that are not finite go through
-      // triangles_intersect, which throws.
-      enum class Found { Unknown, Testable, Degenerate, NotFinite } found = Found::Unknown;
-      for (StarTriangle& a : star) {
+      for (const StarTriangle& a : star) {
         if ((blo.array() > a.hi.array()).any() || (bhi.array() < a.lo.array()).any()) continue;
         const double bound = plane_bound(std::max(mb, a.magnitude), (a.hi.cwiseMax(bhi) - a.lo.cwiseMin(blo)).norm());
         if (apart_by_plane(a.p, a.normal, pb, bound) || apart_by_plane(pb, nb, a.p, bound)) continue;
-        if (a.finite < 0) a.finite = all_finite(a.p);
-        if (found == Found::Unknown)
-          found = !all_finite(pb) ? Found::NotFinite
-                  : triangle_is_degenerate(pb[0], pb[1], pb[2]) ? Found::Degenerate
-                                                                : Found::Testable;
-        if (!a.finite || found == Found::NotFinite) {
-          if (triangles_intersect(a.p, pb)) return true;
-          continue;
-        }
-        if (found == Found::Testable && nondegenerate_triangles_intersect(a.p, pb)) return true;
+        if (exact_intersect(a.p, pb)) return true;  // the star's triangles are not degenerate (above)
       }
       return false;
     });
@@ -1421,9 +1407,6 @@ class Improver {
     std::array<Vec3, 3> p;
     Vec3 lo, hi, normal;  // box; unnormalized normal (apart_by_plane)
     double magnitude;     // largest absolute coordinate
-    // Every corner finite (else triangles_intersect throws on it): 1 or 0, -1 not yet known
-    // (asked only when the triangle first reaches the exact test).
-    int finite = -1;
   };
   std::vector<StarTriangle> star_buffer_;
   // estimate_distance's memo, by triangle slot (see there).
