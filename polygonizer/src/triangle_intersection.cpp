@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <numbers>
 #include <string>
 
 namespace cdp {
@@ -372,6 +373,122 @@ class PairCollector {
   std::vector<std::pair<int, int>> smallest_;
 };
 
+// ---- Stars that cannot intersect themselves.
+//
+// On a closed mesh of even triangles almost every pair that the broad phase passes shares a
+// vertex or an edge (a triangle's boxes overlap those of its 3 neighbours across edges and of
+// about 9 more around its corners), and on a smooth surface almost every vertex's star is a flat
+// fan, whose triangles meet only where they share a vertex or an edge. flat_stars proves that
+// per vertex, once, so that the check skips those pairs instead of testing them.
+//
+// The proof. Let v's triangles close one fan (v, a_0, a_1), (v, a_1, a_2), ..., (v, a_{k-1}, a_0),
+// and let n be a direction along which each triangle, projected, turns counter-clockwise from
+// a_i to a_{i+1} by an angle in (0, pi), the turns adding up to one full turn. Then every
+// direction from v's image lies in exactly one triangle's open angle, or on the common side of
+// two consecutive ones: the projection is one-to-one on the star, so two of its triangles have no
+// common point besides their shared vertex or edge, and triangles_intersect says no for them.
+// Its answer is exact, so skipping the test changes no result.
+//
+// Certainty in double. n is any computed vector, normalized (the proof holds for every n). Each
+// triangle must turn by a clear margin: det = ((a_i - v) x (a_{i+1} - v)) . n at least
+// kTurnMargin |a_i - v| |a_{i+1} - v|, where the rounding error of det is below 1e-15 times that
+// product (orient3d's bound of 7 eps times its permanent, at most 2 sqrt 3 times the product).
+// Sides between 1e-50 and 1e50 long keep every product away from underflow and overflow. The
+// projected sides are then no shorter than kTurnMargin times the sides, so each turn is known to
+// within about 1e-9 radians (plus turn_angle's approximation), and since the true sum is a whole
+// number of full turns, a computed sum below 3 pi proves it is one. Anything else (a fan that
+// does not close, a star folded over itself, a degenerate triangle, a pinched vertex) is not
+// certified, and its pairs are tested.
+constexpr double kTurnMargin = 1e-6;
+constexpr std::size_t kMaxStar = 64;  // larger stars are tested pair by pair
+
+// The angle of the vector (x, y), y > 0, in (0, pi), within 0.0016 radians: the arctangent of the
+// ratio at most 1 by Rajan, Wang, Inkol and Joyal's polynomial (Efficient approximations for the
+// arctangent function, 2006; largest error 0.0015). A star's sum of at most kMaxStar of them is
+// then within 0.11 of the true sum, far inside the pi that separates one full turn from two, and
+// costs a tenth of std::atan2's.
+double turn_angle(double y, double x) {
+  constexpr double kPi = std::numbers::pi;
+  const auto atan_unit = [](double z) { return kPi / 4 * z - z * (std::abs(z) - 1.0) * (0.2447 + 0.0663 * std::abs(z)); };
+  if (std::abs(x) <= y) return kPi / 2 - atan_unit(x / y);
+  return x > 0.0 ? atan_unit(y / x) : kPi + atan_unit(y / x);
+}
+
+std::vector<unsigned char> flat_stars(const Mesh& mesh, unsigned workers) {
+  const std::size_t nv = mesh.positions.size(), nt = mesh.triangles.size();
+  // Each vertex's triangles (counting sort).
+  std::vector<std::uint32_t> first(nv + 1, 0);
+  for (const auto& t : mesh.triangles)
+    for (const int i : t) ++first[static_cast<std::size_t>(i) + 1];
+  for (std::size_t i = 0; i < nv; ++i) first[i + 1] += first[i];
+  std::vector<std::uint32_t> star(first[nv]);
+  {
+    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+    for (std::size_t f = 0; f < nt; ++f)
+      for (const int i : mesh.triangles[f]) star[fill[static_cast<std::size_t>(i)]++] = static_cast<std::uint32_t>(f);
+  }
+  std::vector<unsigned char> flat(nv, 0);
+  const auto certify = [&](std::size_t v) {
+    const std::size_t k = first[v + 1] - first[v];
+    if (k < 3 || k > kMaxStar) return false;
+    int b[kMaxStar], c[kMaxStar];  // each triangle's corners after v, counter-clockwise
+    for (std::size_t j = 0; j < k; ++j) {
+      const auto& t = mesh.triangles[star[first[v] + j]];
+      const int at = t[0] == static_cast<int>(v) ? 0 : t[1] == static_cast<int>(v) ? 1 : 2;
+      b[j] = t[(at + 1) % 3];
+      c[j] = t[(at + 2) % 3];
+      if (b[j] == static_cast<int>(v) || c[j] == static_cast<int>(v) || b[j] == c[j]) return false;
+    }
+    // One fan: the corners b are distinct, and going from each triangle to the one whose b is its
+    // c comes back to the first after exactly k steps. side[i] = a_i - v in the fan's order.
+    for (std::size_t i = 0; i < k; ++i)
+      for (std::size_t j = i + 1; j < k; ++j)
+        if (b[i] == b[j]) return false;
+    const Vec3& p = mesh.positions[v];
+    Vec3 side[kMaxStar + 1];
+    std::size_t at = 0;
+    for (std::size_t step = 0; step < k; ++step) {
+      side[step] = mesh.positions[static_cast<std::size_t>(b[at])] - p;
+      std::size_t next = k;
+      for (std::size_t j = 0; j < k; ++j)
+        if (b[j] == c[at]) next = j;
+      if (next == k || (next == 0) != (step + 1 == k)) return false;
+      at = next;
+    }
+    side[k] = side[0];
+    double length2[kMaxStar + 1];
+    for (std::size_t i = 0; i < k; ++i) {
+      length2[i] = side[i].squaredNorm();
+      if (!(length2[i] >= 1e-100 && length2[i] <= 1e100)) return false;
+    }
+    length2[k] = length2[0];
+    Vec3 turn[kMaxStar];
+    Vec3 n = Vec3::Zero();
+    for (std::size_t i = 0; i < k; ++i) {
+      turn[i] = side[i].cross(side[i + 1]);
+      n += turn[i];
+    }
+    const double n2 = n.squaredNorm();
+    if (!(n2 > 0.0) || !std::isfinite(n2)) return false;
+    n /= std::sqrt(n2);
+    double height[kMaxStar + 1];
+    for (std::size_t i = 0; i < k; ++i) height[i] = side[i].dot(n);
+    height[k] = height[0];
+    double total = 0.0;
+    for (std::size_t i = 0; i < k; ++i) {
+      const double det = turn[i].dot(n);
+      if (!(det > 0.0) || det * det < kTurnMargin * kTurnMargin * length2[i] * length2[i + 1]) return false;
+      total += turn_angle(det, side[i].dot(side[i + 1]) - height[i] * height[i + 1]);
+    }
+    return total < 3.0 * std::numbers::pi;
+  };
+  constexpr std::size_t kBlock = 4096;
+  detail::parallel_blocks(nv, kBlock, nv >= 2 * kBlock ? workers : 1, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t v = begin; v < end; ++v) flat[v] = certify(v) ? 1 : 0;
+  });
+  return flat;
+}
+
 // A triangle whose box spans more than this many cells along an axis is "large": it is tested
 // against every triangle instead of being put in the grid (at most kMaxSpan^3 cells each).
 constexpr int kMaxSpan = 4;
@@ -388,7 +505,8 @@ std::uint64_t cell_hash(int x, int y, int z) {
   return k;
 }
 
-// Every intersecting pair of the triangles with non-empty boxes, each pair tested once.
+// Every intersecting pair of the triangles with non-empty boxes, each pair decided once (tested,
+// or known apart because the triangles share a vertex with a flat star: flat_stars).
 //
 // Cells are cubes of side h, at least the median longest edge; a triangle whose box spans more
 // than kMaxSpan cells along an axis is large, and h grows (to a third of the extent of the
@@ -506,10 +624,18 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   const unsigned workers = n >= kParallelTriangles ? detail::worker_count(threads) : 1;
   const std::size_t block = std::max(kMinBlock, buckets / (kBlocksPerWorker * workers));
   std::vector<PairCollector> found(workers, PairCollector(out.max_pairs()));
+  // Pairs that share a vertex with a flat star do not intersect (see flat_stars): skipped.
+  const std::vector<unsigned char> flat = flat_stars(mesh, workers);
   struct Member {
     Box box;
     int lo[3];
     int id;
+    int flat[3];  // the triangle's vertices whose stars are flat, -1 for the others
+  };
+  const auto shares_flat_star = [](const Member& p, const Member& q) {
+    for (const int v : p.flat)
+      if (v >= 0 && (v == q.flat[0] || v == q.flat[1] || v == q.flat[2])) return true;
+    return false;
   };
   std::vector<std::vector<Member>> lists(workers);
   detail::parallel_blocks(buckets, block, workers, [&](std::size_t begin, std::size_t end, unsigned worker) {
@@ -523,7 +649,10 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
         const int f = members[e];
         if (!list.empty() && list.back().id == f) continue;
         const CellRange& r = ranges[static_cast<std::size_t>(f)];
-        list.push_back({boxes[static_cast<std::size_t>(f)], {r.lo[0], r.lo[1], r.lo[2]}, f});
+        const auto& t = mesh.triangles[static_cast<std::size_t>(f)];
+        const auto flat_or_none = [&](int v) { return flat[static_cast<std::size_t>(v)] ? v : -1; };
+        list.push_back({boxes[static_cast<std::size_t>(f)], {r.lo[0], r.lo[1], r.lo[2]}, f,
+                        {flat_or_none(t[0]), flat_or_none(t[1]), flat_or_none(t[2])}});
       }
       for (std::size_t i = 0; i + 1 < list.size(); ++i) {
         const Member& p = list[i];
@@ -536,7 +665,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
           // along each axis, so c is its only cell with that place, and the only one that can
           // have put it in a bucket with these low bits.
           const int x = std::max(p.lo[0], q.lo[0]), y = std::max(p.lo[1], q.lo[1]), z = std::max(p.lo[2], q.lo[2]);
-          if (local_bits(x, y, z) != (b & block_mask)) continue;
+          if (local_bits(x, y, z) != (b & block_mask) || shares_flat_star(p, q)) continue;
           if (nondegenerate_triangles_intersect(corners(mesh, p.id), corners(mesh, q.id))) mine.add(p.id, q.id);
         }
       }

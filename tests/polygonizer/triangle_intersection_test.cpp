@@ -1,9 +1,11 @@
 // Checks <cdp/core/triangle_intersection.h>: the hash-grid broad phase with the exact test gives
 // the same pairs as raytrace's find_self_intersections (Embree broad phase) and as brute force on
 // random soups of triangles of very different sizes, on overlapping spheres and on meshes with
-// huge triangles; degenerate and duplicate triangles follow the documented rules; the first
-// max_pairs pairs and the count agree; invalid meshes throw. (The exact test's own rules are
-// checked case by case in tests/raytrace/self_intersection_test.cpp.)
+// huge triangles; pairs around a vertex whose star is proved flat are skipped only when they
+// cannot intersect (perturbed and folded spheres, a star wound twice, two fans pinched at a
+// vertex); degenerate and duplicate triangles follow the documented rules; the first max_pairs
+// pairs and the count agree; invalid meshes throw. (The exact test's own rules are checked case
+// by case in tests/raytrace/self_intersection_test.cpp.)
 #include <cdp/core/triangle_intersection.h>
 
 #include <cdp/core/errors.h>
@@ -12,8 +14,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <random>
 
 #include "common/intersection_helpers.h"
@@ -225,6 +229,73 @@ TEST(TriangleIntersection, SharedVerticesAndEdgesFollowTheRules) {
   fan.positions = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0, 0, 0), Vec3(-1, 0, 1), Vec3(0, -1, 1)};
   fan.triangles = {{0, 1, 2}, {3, 4, 5}};
   EXPECT_TRUE(self_intersecting_pairs(fan).empty());
+}
+
+// The check skips pairs that share a vertex whose star it has proved flat (a fan that projects
+// one-to-one); every other pair is tested. On spheres whose vertices are moved by up to a fraction
+// of an edge (small moves keep the stars flat, large ones fold some, and vertices pushed past
+// their neighbours fold their stars over), the pairs are those of brute force.
+TEST(TriangleIntersection, PerturbedSpheresMatchBruteForce) {
+  std::size_t folded = 0;
+  for (const double move : {0.02, 0.3, 1.0})
+    for (const bool push : {false, true}) {
+      Mesh m = icosphere(2);  // edges about 0.3 long
+      std::mt19937_64 rng(static_cast<std::uint64_t>(move * 1000) + push);
+      std::uniform_real_distribution<double> sym(-1.0, 1.0);
+      for (Vec3& p : m.positions) p += 0.3 * move * Vec3(sym(rng), sym(rng), sym(rng));
+      if (push)  // past its neighbours, along the sphere: the star folds over itself
+        for (std::size_t v = 0; v < m.positions.size(); v += 17)
+          m.positions[v] = (m.positions[v] + 0.45 * m.positions[v].cross(Vec3(0.6, 0.8, 0.0)).normalized()).normalized();
+      const Pairs expected = brute_force_pairs(m);
+      if (move == 0.02 && !push) {
+        EXPECT_TRUE(expected.empty());
+      }
+      folded += expected.empty() ? 0 : 1;
+      EXPECT_EQ(self_intersecting_pairs(m, kAll), expected) << "move " << move << (push ? " pushed" : "");
+    }
+  EXPECT_GE(folded, 4u);
+}
+
+// A star that winds twice around its vertex, rising as it goes: each triangle turns the same way
+// and its triangles cover each direction twice, so it is not flat. Its last triangle comes back
+// down through the first turn and meets (v, a_5, a_6) along a segment from v; the pair shares v
+// and must still be tested.
+TEST(TriangleIntersection, AStarWoundTwiceIsTested) {
+  Mesh m;
+  m.positions.push_back(Vec3::Zero());
+  constexpr int kSides = 12;
+  for (int i = 0; i < kSides; ++i) {
+    const double angle = i * std::numbers::pi / 3.0;
+    m.positions.push_back(Vec3(std::cos(angle), std::sin(angle), 0.1 * i));
+  }
+  for (int i = 0; i < kSides; ++i) m.triangles.push_back({0, 1 + i, 1 + (i + 1) % kSides});
+  const Pairs expected = brute_force_pairs(m);
+  EXPECT_NE(std::find(expected.begin(), expected.end(), std::pair<int, int>{5, 11}), expected.end());
+  EXPECT_EQ(self_intersecting_pairs(m, kAll), expected);
+  // Wound once, the same kind of star is flat and has no intersecting pair.
+  Mesh once;
+  once.positions.push_back(Vec3::Zero());
+  for (int i = 0; i < 6; ++i) {
+    const double angle = i * std::numbers::pi / 3.0;
+    once.positions.push_back(Vec3(std::cos(angle), std::sin(angle), 0.1 * i));
+  }
+  for (int i = 0; i < 6; ++i) once.triangles.push_back({0, 1 + i, 1 + (i + 1) % 6});
+  EXPECT_TRUE(self_intersecting_pairs(once, kAll).empty());
+  EXPECT_TRUE(brute_force_pairs(once).empty());
+  // Two flat fans pinched at one vertex, the second turned by 30 degrees in the same plane: each
+  // closes on its own, the vertex's star is not one fan, and the fans overlap.
+  Mesh pinched;
+  pinched.positions.push_back(Vec3::Zero());
+  for (const double turn : {0.0, 0.5})
+    for (int i = 0; i < 6; ++i) {
+      const double angle = (i + turn) * std::numbers::pi / 3.0;
+      pinched.positions.push_back(Vec3(std::cos(angle), std::sin(angle), 0.0));
+    }
+  for (const int fan : {1, 7})
+    for (int i = 0; i < 6; ++i) pinched.triangles.push_back({0, fan + i, fan + (i + 1) % 6});
+  const Pairs overlaps = brute_force_pairs(pinched);
+  EXPECT_GE(overlaps.size(), 12u);
+  EXPECT_EQ(self_intersecting_pairs(pinched, kAll), overlaps);
 }
 
 TEST(TriangleIntersection, EmptyAndTinyMeshes) {

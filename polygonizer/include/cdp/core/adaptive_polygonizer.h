@@ -86,7 +86,7 @@ struct AdaptiveOptions {
   // checks that every component was meshed. Components smaller than about one cell can be
   // missed; raise this to catch them.
   int seed_resolution = 32;
-  // Checks the finished mesh for intersecting triangles (self_intersecting_pairs: about 0.7 us
+  // Checks the finished mesh for intersecting triangles (self_intersecting_pairs: about 0.5 us
   // per triangle on one core) and throws NoSurfaceError naming the place when two intersect. On
   // by default: a mesh that is wrong without saying so is worse than a slower run.
   bool check_self_intersections = true;

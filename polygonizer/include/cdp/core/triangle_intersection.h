@@ -33,7 +33,9 @@ bool triangles_intersect(const Mesh& mesh, int f, int g);
 // Every intersecting pair (f, g), f < g, of distinct triangles (see triangles_intersect), found
 // by a hash grid over the triangles' bounding boxes (cells about the median longest edge; the
 // few triangles much larger than a cell are tested against all): the first max_pairs of them in
-// lexicographic order. Every pair whose boxes overlap is tested exactly once. Meshes of 8192
+// lexicographic order. Every pair whose boxes overlap is decided exactly once: by the exact test,
+// or, for a pair sharing a vertex whose star is proved to be a flat fan (one that projects
+// one-to-one onto a plane), without it, since such a pair cannot intersect. Meshes of 8192
 // triangles or more are searched on `threads` threads (0: all cores, at most 8); the result is
 // the same on any number. Deterministic, no output; memory linear in the number of triangles (plus max_pairs), time
 // linear for triangles of similar sizes. Throws InvalidInputError on out-of-range indices or
