@@ -688,7 +688,14 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
 }  // namespace
 
 bool triangle_is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
-  return projection_axis(a, b, c) < 0;
+  // projection_axis(a, b, c) < 0 (every axis's projection collinear) without its sort: the
+  // projection along the normal's largest component first, which settles almost every triangle
+  // with one filtered orient2d (the repair asks this of every triangle of a star it tries).
+  const Vec3 n = (b - a).cross(c - a).cwiseAbs();
+  const int first = n[0] >= n[1] ? (n[0] >= n[2] ? 0 : 2) : (n[1] >= n[2] ? 1 : 2);
+  for (int k = 0; k < 3; ++k)
+    if (orient2d(a, b, c, (first + k) % 3) != 0) return false;
+  return true;
 }
 
 bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {

@@ -557,18 +557,19 @@ class Improver {
     std::vector<StarTriangle>& star = star_buffer_;
     star.clear();
     Vec3 lo = moved, hi = moved;
+    double magnitude = 0;
     ++stamp_id_;
     for (int u : vt_[v]) {
       stamp_[u] = stamp_id_;
       const Tri& t = m_.triangles[u];
-      StarTriangle x{{pos(t[0]), pos(t[1]), pos(t[2])}, {}, {}, {}, 0};
+      StarTriangle x{{pos(t[0]), pos(t[1]), pos(t[2])}, {}, {}, {}};
       if (triangle_is_degenerate(x.p[0], x.p[1], x.p[2])) return true;
       x.lo = x.p[0].cwiseMin(x.p[1]).cwiseMin(x.p[2]);
       x.hi = x.p[0].cwiseMax(x.p[1]).cwiseMax(x.p[2]);
       x.normal = (x.p[1] - x.p[0]).cross(x.p[2] - x.p[0]);
-      x.magnitude = std::max(x.lo.cwiseAbs().maxCoeff(), x.hi.cwiseAbs().maxCoeff());
       lo = lo.cwiseMin(x.lo);
       hi = hi.cwiseMax(x.hi);
+      magnitude = std::max({magnitude, x.lo.cwiseAbs().maxCoeff(), x.hi.cwiseAbs().maxCoeff()});
       star.push_back(x);
     }
     return hash_.any_in(lo, hi, [&](int u) {
@@ -583,10 +584,13 @@ class Improver {
       const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
       if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
       const Vec3 nb = (pb[1] - pb[0]).cross(pb[2] - pb[0]);
-      const double mb = std::max(blo.cwiseAbs().maxCoeff(), bhi.cwiseAbs().maxCoeff());
+      // One rounding bound for u against every star triangle, from the whole star's box and
+      // magnitude: at least each pair's own (plane_bound grows with both), so as safe, and the
+      // exact test decides whatever it leaves unsure.
+      const double bound = plane_bound(std::max(std::max(blo.cwiseAbs().maxCoeff(), bhi.cwiseAbs().maxCoeff()), magnitude),
+                                       (hi.cwiseMax(bhi) - lo.cwiseMin(blo)).norm());
       for (const StarTriangle& a : star) {
         if ((blo.array() > a.hi.array()).any() || (bhi.array() < a.lo.array()).any()) continue;
-        const double bound = plane_bound(std::max(mb, a.magnitude), (a.hi.cwiseMax(bhi) - a.lo.cwiseMin(blo)).norm());
         if (apart_by_plane(a.p, a.normal, pb, bound) || apart_by_plane(pb, nb, a.p, bound)) continue;
         if (exact_intersect(a.p, pb)) return true;  // the star's triangles are not degenerate (above)
       }
@@ -1406,7 +1410,6 @@ class Improver {
   struct StarTriangle {
     std::array<Vec3, 3> p;
     Vec3 lo, hi, normal;  // box; unnormalized normal (apart_by_plane)
-    double magnitude;     // largest absolute coordinate
   };
   std::vector<StarTriangle> star_buffer_;
   // estimate_distance's memo, by triangle slot (see there).
