@@ -71,7 +71,12 @@ struct AdaptiveOptions {
   // sagitta of a chord at each point's smallest radius, which the mesh can exceed 2-4 times.
   double tolerance = 0;
   // Edge-length clamps. Non-positive: min_edge = 2e-3 and max_edge = 0.1 of the field's
-  // bounding-box diagonal.
+  // bounding-box diagonal. With the default min_edge (and the default max_triangles and
+  // max_steps, Variant::Improved), a surface that fails because it bends with a radius of
+  // curvature below min_edge is meshed once more with min_edge a quarter of that radius (not
+  // below 2e-4 of the diagonal, where a crease or singular point is more likely than a bend);
+  // stats "min_edge_lowered" says so, and when that run fails too the first error stands, with
+  // the second's appended.
   double min_edge = 0;
   double max_edge = 0;
   // Hartmann's rule reproduces the paper's edge ratios (see README); the printed formula gives
