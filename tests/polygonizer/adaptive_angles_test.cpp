@@ -373,7 +373,24 @@ TEST(AdaptiveTolerance, ANarrowRidgeIsRefinedAcrossItsOtherEdges) {
   const PolygonizeResult r = polygonize_adaptive(*field, o);
   expect_sound(r.mesh, "bunny vis2000 eps 1.035e-3");
   EXPECT_EQ(r.stats.extra.at("quality.over_tolerance").get<std::size_t>(), 0u);
-  EXPECT_LE(densely_sampled_distance(*field, r.mesh), o.tolerance);
+#if defined(__SANITIZE_ADDRESS__)
+  // Every triangle measured densely, 2000 centres a value: more than the ten minutes ctest
+  // allows under the sanitizers (release: 5 s). There, the ridge's neighbourhood only.
+  const Vec3 ridge(-0.046, 0.035, -0.015);
+  constexpr double kAround = 0.02;
+#endif
+  double worst = 0;
+  std::size_t measured = 0;
+  for (const auto& t : r.mesh.triangles) {
+#if defined(__SANITIZE_ADDRESS__)
+    if (((r.mesh.positions[t[0]] + r.mesh.positions[t[1]] + r.mesh.positions[t[2]]) / 3 - ridge).norm() > kAround)
+      continue;
+#endif
+    worst = std::max(worst, densely_sampled_distance(*field, r.mesh, t));
+    ++measured;
+  }
+  EXPECT_GT(measured, 0u);
+  EXPECT_LE(worst, o.tolerance);
   EXPECT_GE(angle_statistics(r.mesh).min_degrees, 20.0);
 }
 
