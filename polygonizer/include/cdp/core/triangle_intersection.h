@@ -31,7 +31,7 @@ bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>
 bool triangles_intersect(const Mesh& mesh, int f, int g);
 
 // Every intersecting pair (f, g), f < g, of distinct triangles (see triangles_intersect), found
-// by a hash grid over the triangles' bounding boxes (cells about the median longest edge; the
+// by a hash grid over the triangles' bounding boxes (cells about twice the median longest edge; the
 // few triangles much larger than a cell are tested against all): the first max_pairs of them in
 // lexicographic order. Every pair whose boxes overlap is decided exactly once: by the exact test,
 // or, for a pair sharing a vertex whose star is proved to be a flat fan (one that projects
