@@ -7,6 +7,7 @@
 #include <cdp/core/triangle_intersection.h>
 
 #include "parallel.h"
+#include "vertex_triangles.h"
 
 #include <cdp/core/errors.h>
 
@@ -184,12 +185,13 @@ using Tri = std::array<Vec3, 3>;
 // The axis to drop so that the projection of the (non-degenerate) triangle is non-degenerate,
 // preferring the largest component of its normal; -1 for a degenerate triangle. All incidences
 // between points of the triangle's plane survive this projection (it is an affine bijection).
+// The largest component first settles almost every triangle with one filtered orient2d; the
+// other two follow in any order (any non-degenerate projection serves).
 int projection_axis(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 n = (b - a).cross(c - a).cwiseAbs();
-  int order[3] = {0, 1, 2};
-  std::sort(order, order + 3, [&](int p, int q) { return n[p] > n[q]; });
-  for (int k : order)
-    if (orient2d(a, b, c, k) != 0) return k;
+  const int first = n[0] >= n[1] ? (n[0] >= n[2] ? 0 : 2) : (n[1] >= n[2] ? 1 : 2);
+  for (int k = 0; k < 3; ++k)
+    if (orient2d(a, b, c, (first + k) % 3) != 0) return (first + k) % 3;
   return -1;
 }
 
@@ -415,25 +417,16 @@ double turn_angle(double y, double x) {
 }
 
 std::vector<unsigned char> flat_stars(const Mesh& mesh, unsigned workers) {
-  const std::size_t nv = mesh.positions.size(), nt = mesh.triangles.size();
-  // Each vertex's triangles (counting sort).
-  std::vector<std::uint32_t> first(nv + 1, 0);
-  for (const auto& t : mesh.triangles)
-    for (const int i : t) ++first[static_cast<std::size_t>(i) + 1];
-  for (std::size_t i = 0; i < nv; ++i) first[i + 1] += first[i];
-  std::vector<std::uint32_t> star(first[nv]);
-  {
-    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-    for (std::size_t f = 0; f < nt; ++f)
-      for (const int i : mesh.triangles[f]) star[fill[static_cast<std::size_t>(i)]++] = static_cast<std::uint32_t>(f);
-  }
+  const std::size_t nv = mesh.positions.size();
+  const VertexTriangles stars(mesh);
   std::vector<unsigned char> flat(nv, 0);
   const auto certify = [&](std::size_t v) {
-    const std::size_t k = first[v + 1] - first[v];
+    const auto begin = static_cast<std::size_t>(stars.offsets[v]);
+    const std::size_t k = static_cast<std::size_t>(stars.offsets[v + 1]) - begin;
     if (k < 3 || k > kMaxStar) return false;
     int b[kMaxStar], c[kMaxStar];  // each triangle's corners after v, counter-clockwise
     for (std::size_t j = 0; j < k; ++j) {
-      const auto& t = mesh.triangles[star[first[v] + j]];
+      const auto& t = mesh.triangles[static_cast<std::size_t>(stars.incident[begin + j])];
       const int at = t[0] == static_cast<int>(v) ? 0 : t[1] == static_cast<int>(v) ? 1 : 2;
       b[j] = t[(at + 1) % 3];
       c[j] = t[(at + 2) % 3];
@@ -694,14 +687,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
 }  // namespace
 
 bool triangle_is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
-  // projection_axis(a, b, c) < 0 (every axis's projection collinear) without its sort: the
-  // projection along the normal's largest component first, which settles almost every triangle
-  // with one filtered orient2d (the repair asks this of every triangle of a star it tries).
-  const Vec3 n = (b - a).cross(c - a).cwiseAbs();
-  const int first = n[0] >= n[1] ? (n[0] >= n[2] ? 0 : 2) : (n[1] >= n[2] ? 1 : 2);
-  for (int k = 0; k < 3; ++k)
-    if (orient2d(a, b, c, (first + k) % 3) != 0) return false;
-  return true;
+  return projection_axis(a, b, c) < 0;
 }
 
 bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {

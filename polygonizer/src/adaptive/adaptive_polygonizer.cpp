@@ -711,9 +711,9 @@ std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions
 
 // The same error, with what the retry below did.
 template <class Error>
-[[noreturn]] void rethrow_with(const Error& first, double min_edge, const std::exception& second) {
+[[noreturn]] void rethrow_with(const Error& first, double min_edge, const std::string& second) {
   std::ostringstream m;
-  m << first.what() << " (meshed again with min_edge " << min_edge << ", which failed too: " << second.what() << ")";
+  m << first.what() << " (meshed again with min_edge " << min_edge << ", which failed too: " << second << ")";
   throw Error(m.str());
 }
 
@@ -737,6 +737,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   }
   AdaptiveOptions again = options;
   again.min_edge = *lowered;
+  std::string second;
   try {
     std::pair<double, Vec3> ignored;
     PolygonizeResult result = mesh_once(field, again, ignored);
@@ -744,11 +745,13 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     result.stats.field_evaluations = field.counts() - before;
     result.stats.extra["min_edge_lowered"] = true;
     return result;
-  } catch (const std::exception& second) {
-    if (!dynamic_cast<const NoSurfaceError*>(&second) && !dynamic_cast<const LimitExceededError*>(&second)) throw;
-    if (no_surface) rethrow_with(*no_surface, *lowered, second);
-    rethrow_with(*limit, *lowered, second);
+  } catch (const NoSurfaceError& e) {
+    second = e.what();
+  } catch (const LimitExceededError& e) {
+    second = e.what();
   }
+  if (no_surface) rethrow_with(*no_surface, *lowered, second);
+  rethrow_with(*limit, *lowered, second);
 }
 
 }  // namespace cdp

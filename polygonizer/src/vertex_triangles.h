@@ -1,0 +1,30 @@
+// The triangles around each vertex, as one table (counting sort): vertex v's are
+// incident[offsets[v]] .. incident[offsets[v + 1] - 1], in increasing order, a triangle with a
+// repeated index once per occurrence, consecutively. Shared by the topology analysis and the
+// self-intersection check's flat stars. Indices must be valid (callers check them first).
+#pragma once
+
+#include <cdp/core/mesh.h>
+
+#include <cstddef>
+#include <numeric>
+#include <vector>
+
+namespace cdp {
+
+struct VertexTriangles {
+  std::vector<int> offsets;  // num_vertices + 1
+  std::vector<int> incident;
+
+  explicit VertexTriangles(const Mesh& mesh) : offsets(mesh.positions.size() + 1, 0) {
+    for (const auto& t : mesh.triangles)
+      for (const int i : t) ++offsets[static_cast<std::size_t>(i) + 1];
+    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+    incident.resize(static_cast<std::size_t>(offsets.back()));
+    std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+      for (const int i : mesh.triangles[f]) incident[static_cast<std::size_t>(fill[static_cast<std::size_t>(i)]++)] = static_cast<int>(f);
+  }
+};
+
+}  // namespace cdp
