@@ -482,6 +482,67 @@ TEST(AdaptiveTolerance, SidePointsKeepSliversFromHingingOnAFillet) {
   EXPECT_LE(worst, o.tolerance);
 }
 
+TEST(AdaptiveAngles, AMeshMissingTheBoundsIsMadeAgainWithTheLookAhead) {
+  // Fronts that reach a fillet with edges several times what it asks for hinge fans of slivers
+  // on it across the fillet, which the repair cannot split without folding. Without the
+  // look-ahead: blobs26 of the topology sweep at factor 1, 2.4 degrees; blobs27 and blobs39 at
+  // tolerance 5e-2, 4.9 and 2.2 degrees with 6 and 12 triangles beyond the tolerance. Each is
+  // made again with it (polygonize_adaptive) and meets every bound; the components and the
+  // genus are the topology sweep's references (marching cubes on a fine grid).
+  struct Case {
+    const char* field;
+    SizingMode sizing;
+    double value;
+    std::size_t components;
+    int genus;
+  };
+  for (const Case& c : {Case{"blobs26", SizingMode::Factor, 1, 3, 3}, Case{"blobs27", SizingMode::Tolerance, 5e-2, 7, 2},
+                        Case{"blobs39", SizingMode::Tolerance, 5e-2, 5, 4}}) {
+    const auto field =
+        load_field(std::string(CDP_SOURCE_DIR) + "/results/topology_sweep/fields/" + c.field + ".json");
+    AdaptiveOptions o;
+    o.sizing = c.sizing;
+    (c.sizing == SizingMode::Factor ? o.factor : o.tolerance) = c.value;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    const std::string what = std::string(c.field) + (c.sizing == SizingMode::Factor ? " factor " : " eps ") +
+                             std::to_string(c.value);
+    expect_sound(r.mesh, what);
+    expect_on_surface(*field, r.mesh, what);
+    const MeshTopology t = analyze_topology(r.mesh);
+    EXPECT_EQ(t.components, c.components) << what;
+    EXPECT_EQ(t.genus, c.genus) << what;
+    EXPECT_TRUE(r.stats.extra.at("quality_rerun").get<bool>()) << what;
+    EXPECT_TRUE(r.stats.extra.at("quality_rerun_kept").get<bool>()) << what;
+    EXPECT_TRUE(r.stats.extra.at("look_ahead").get<bool>()) << what;
+    const AngleStatistics a = expect_smooth_angles(r.mesh, what);
+    EXPECT_LE(a.mean_edge_ratio, kMeanEdgeRatio) << what;
+    EXPECT_EQ(r.stats.extra.at("quality.over_tolerance").get<std::size_t>(), 0u) << what;
+  }
+}
+
+TEST(AdaptiveAngles, OnlyAnImprovedMeshMissingTheBoundsIsMadeAgain) {
+  // Within the bounds: made once, as before.
+  {
+    const auto field = test::field_from_json(R"({"type": "torus", "major_radius": 1, "minor_radius": 0.35})");
+    AdaptiveOptions o;
+    o.factor = 3;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    EXPECT_FALSE(r.stats.extra.at("quality_rerun").get<bool>());
+    EXPECT_FALSE(r.stats.extra.at("look_ahead").get<bool>());
+  }
+  // A run whose triangles the caller bounded is never made again (nor is paper mode's:
+  // AdaptivePaperVariant.SwitchesOffEveryAddition).
+  const auto field = load_field(std::string(CDP_SOURCE_DIR) + "/results/topology_sweep/fields/blobs39.json");
+  AdaptiveOptions o;
+  o.sizing = SizingMode::Tolerance;
+  o.tolerance = 5e-2;
+  o.max_triangles = 1000000;
+  const PolygonizeResult bounded = polygonize_adaptive(*field, o);
+  EXPECT_LT(angle_statistics(bounded.mesh).min_degrees, 20.0);
+  EXPECT_FALSE(bounded.stats.extra.at("quality_rerun").get<bool>());
+  EXPECT_FALSE(bounded.stats.extra.at("look_ahead").get<bool>());
+}
+
 TEST(AdaptivePaperVariant, SwitchesOffEveryAddition) {
   const auto field = test::tanglecube();
   AdaptiveOptions o;
@@ -498,6 +559,11 @@ TEST(AdaptivePaperVariant, SwitchesOffEveryAddition) {
                         "quality.collapses", "quality.splits", "quality.last_resorts", "side_points"})
     EXPECT_EQ(x.at(k).get<std::size_t>(), 0u) << k;
   expect_sound(p.mesh, "paper tanglecube");
+  // Its slivers (issue 18's bounds are the improved variant's) do not make it mesh again with
+  // the look-ahead.
+  EXPECT_LT(angle_statistics(p.mesh).min_degrees, 20.0);
+  EXPECT_FALSE(x.at("quality_rerun").get<bool>());
+  EXPECT_FALSE(x.at("look_ahead").get<bool>());
 
   // The default variant on the same surface has each addition on, and they act.
   o.variant = Variant::Improved;

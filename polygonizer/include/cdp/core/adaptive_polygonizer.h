@@ -41,7 +41,11 @@ enum class Variant {
   // smallest angle is under 30 degrees (edge flips, tangential vertex moves back onto the surface,
   // collapses of needles' short edges; src/adaptive/quality.h), and with SizingMode::Tolerance a
   // sizing margin plus splits of triangles sampled beyond the tolerance, so that it bounds the
-  // distance between mesh and surface.
+  // distance between mesh and surface. A smooth surface's mesh that still misses issue 18's
+  // bounds (a triangle under 20 degrees, more than 1% under 30, a mean longest/shortest edge
+  // over 1.25, a triangle beyond the tolerance) is made once more with the fronts looking
+  // ahead at the targets of front points nearby, and the mesh that misses fewer is kept (stats
+  // "quality_rerun", "quality_rerun_kept", "look_ahead"; not when max_triangles or max_steps is set).
   Improved,
   // The algorithm as printed (Figure 6 with Hartmann's triangle count, see triangle_count),
   // none of the additions above: what the paper's method alone gives.
@@ -121,7 +125,8 @@ struct AdaptiveOptions {
 // LimitExceededError when a bound is hit, InvalidInputError for invalid options.
 // stats.extra holds "seeds" (seeds meshed from), "steps", "min_angle_degrees", "edge_length"
 // ({"min", "max"} after clamping), "triangle_count_rule", "sizing", "variant", the additions in
-// force ("grading", "quality_repair", "tolerance_refinement": 0 or 1) and the repair's counts
+// force ("grading", "quality_repair", "tolerance_refinement", "look_ahead": 0 or 1), the re-runs
+// ("min_edge_lowered", "quality_rerun", "quality_rerun_kept") and the repair's counts
 // ("quality.flips", "quality.moves", "quality.collapses", "quality.splits", ...).
 PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& options = {});
 
