@@ -119,8 +119,9 @@ int main(int argc, char** argv) {
     std::string variant = "improved";
     adaptive_group
         ->add_option("--variant", variant,
-                     "improved (the paper plus grading, local repair of triangles under 30 degrees and a "
-                     "--tolerance that bounds the distance) or paper (the algorithm as printed)")
+                     "improved (the paper plus grading, local repair of triangles under 30 degrees, a "
+                     "--tolerance that bounds the distance, and a second run looking ahead where a mesh misses the "
+                     "angle, edge-ratio or distance bounds) or paper (the algorithm as printed)")
         ->capture_default_str()
         ->type_name("NAME")
         ->check(CLI::IsMember({"improved", "paper"}));
