@@ -188,20 +188,37 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
   return t.components;
 }
 
-// A triangle's smallest angle is the one opposite its shortest edge: one atan2 per triangle.
+// A triangle's smallest angle is the one opposite its shortest edge: at that corner, the sine
+// and cosine of the angle times the product of its sides (|u x v|, u . v), and the squared
+// lengths of the shortest and the longest edge.
+struct SmallestCorner {
+  double sine, cosine, shortest2, longest2;
+};
+
+SmallestCorner smallest_corner(const Mesh& mesh, const std::array<int, 3>& t) {
+  std::array<double, 3> l2;  // l2[c]: squared length of the edge opposite corner c
+  for (int c = 0; c < 3; ++c) l2[c] = (mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[(c + 2) % 3]]).squaredNorm();
+  const int k = static_cast<int>(std::min_element(l2.begin(), l2.end()) - l2.begin());
+  const Vec3& p = mesh.positions[t[k]];
+  const Vec3 u = mesh.positions[t[(k + 1) % 3]] - p, v = mesh.positions[t[(k + 2) % 3]] - p;
+  return {u.cross(v).norm(), u.dot(v), l2[k], *std::max_element(l2.begin(), l2.end())};
+}
+
+// One atan2 per triangle.
 double min_angle_degrees(const Mesh& mesh) {
   double best = 180;
   for (const auto& t : mesh.triangles) {
-    int k = 0;  // the corner opposite the shortest edge
-    double shortest = std::numeric_limits<double>::infinity();
-    for (int c = 0; c < 3; ++c)
-      if (const double l = (mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[(c + 2) % 3]]).squaredNorm(); l < shortest)
-        shortest = l, k = c;
-    const Vec3& p = mesh.positions[t[k]];
-    const Vec3 u = mesh.positions[t[(k + 1) % 3]] - p, v = mesh.positions[t[(k + 2) % 3]] - p;
-    best = std::min(best, std::atan2(u.cross(v).norm(), u.dot(v)) * 180 / std::numbers::pi);
+    const SmallestCorner c = smallest_corner(mesh, t);
+    best = std::min(best, std::atan2(c.sine, c.cosine) * 180 / std::numbers::pi);
   }
   return best;
+}
+
+// Whether a run may be made again after it failed or missed a bound: not after a run stopped
+// by the caller's own bounds (max_triangles, max_steps: a run made again with shorter edges would
+// pass them sooner), nor in paper mode (the algorithm as printed, whatever it gives).
+bool remeshing_allowed(const AdaptiveOptions& o) {
+  return o.variant == Variant::Improved && o.max_triangles == 0 && o.max_steps == 0;
 }
 
 // The surface meshed once with the options as given (polygonize_adaptive may call it more than
@@ -519,9 +536,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
   // kNeckRuns runs; the careful run follows when they fail, with the balls found so far.
   constexpr int kNeckRuns = 3;
   std::size_t neck_reruns = 0;
-  // Not after a run stopped by the caller's own bounds (max_triangles, max_steps: a run made
-  // again with shorter edges would pass them sooner), nor in paper mode.
-  const bool may_mesh_again = options.variant == Variant::Improved && options.max_triangles == 0 && options.max_steps == 0;
+  const bool may_mesh_again = remeshing_allowed(options);
   const auto rerun_around_necks = [&] {
     if (!may_mesh_again) return false;
     for (int run = 0; run < kNeckRuns && !necks.missed.empty(); ++run) {
@@ -709,7 +724,7 @@ constexpr double kBendEdgeShare = 0.25;
 constexpr double kLowestMinEdge = 2e-4;
 
 std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions& o, const std::pair<double, Vec3>& bend) {
-  if (o.variant != Variant::Improved || o.min_edge > 0 || o.max_triangles > 0 || o.max_steps > 0) return std::nullopt;
+  if (!remeshing_allowed(o) || o.min_edge > 0) return std::nullopt;
   const adaptive::Settings s = resolve(field, o);
   const double lowered = kBendEdgeShare * bend.first;
   if (!(bend.first < s.sizing.min_edge) || !(lowered >= kLowestMinEdge * s.diagonal)) return std::nullopt;
@@ -743,20 +758,15 @@ int missed_bounds(const Mesh& mesh, std::size_t over_tolerance) {
   std::size_t under30 = 0, counted = 0;
   double ratio_sum = 0;
   for (const auto& t : mesh.triangles) {
-    std::array<double, 3> l2;  // l2[c]: squared length of the edge opposite corner c
-    for (int c = 0; c < 3; ++c) l2[c] = (mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[(c + 2) % 3]]).squaredNorm();
-    const int k = static_cast<int>(std::min_element(l2.begin(), l2.end()) - l2.begin());
-    const Vec3& p = mesh.positions[t[k]];
-    const Vec3 u = mesh.positions[t[(k + 1) % 3]] - p, v = mesh.positions[t[(k + 2) % 3]] - p;
-    const double sine = u.cross(v).norm(), cosine = u.dot(v);
-    if (!(sine > 0)) {  // zero area: no angles (angle_statistics counts it apart); a sliver all the same
+    const SmallestCorner c = smallest_corner(mesh, t);
+    if (!(c.sine > 0)) {  // zero area: no angles (angle_statistics counts it apart); a sliver all the same
       under20 = true;
       continue;
     }
     ++counted;
-    if (sine < tan30 * cosine) ++under30;
-    if (sine < tan20 * cosine) under20 = true;
-    ratio_sum += std::sqrt(*std::max_element(l2.begin(), l2.end()) / l2[k]);
+    if (c.sine < tan30 * c.cosine) ++under30;
+    if (c.sine < tan20 * c.cosine) under20 = true;
+    ratio_sum += std::sqrt(c.longest2 / c.shortest2);
   }
   const double share_under_30 = counted ? static_cast<double>(under30) / counted : 0;
   const double mean_ratio = counted ? ratio_sum / counted : 0;
@@ -778,17 +788,13 @@ int missed_bounds(const Mesh& mesh, std::size_t over_tolerance) {
 // bounds on 5 that met them (the horse MPU model at 1e-3: 18.4 degrees; blobs40 at factor 1:
 // 2.3), so the first run stays the one without it, and surfaces that meet the bounds come out
 // as before, bit for bit, at the cost of one run.
-// Only in Variant::Improved (the bounds are its promise) and where the caller bounded neither
-// triangles nor steps.
+// Only where remeshing_allowed (the bounds are Variant::Improved's promise).
 bool may_rerun_for_quality(const AdaptiveOptions& o, const PolygonizeResult& r) {
-  if (o.variant != Variant::Improved || o.max_triangles > 0 || o.max_steps > 0) return false;
-  const auto followed = r.stats.extra.find("creases.followed");
-  return followed == r.stats.extra.end() || !followed->second.get<bool>();
+  return remeshing_allowed(o) && !r.stats.extra.at("creases.followed").get<bool>();
 }
 
 std::size_t over_tolerance(const PolygonizeResult& r) {
-  const auto it = r.stats.extra.find("quality.over_tolerance");
-  return it == r.stats.extra.end() ? 0 : it->second.get<std::size_t>();
+  return r.stats.extra.at("quality.over_tolerance").get<std::size_t>();
 }
 
 // polygonize_adaptive without the re-run for issue 18's bounds: the first mesh, or the one made
