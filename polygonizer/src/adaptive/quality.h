@@ -14,7 +14,7 @@
 // triangle nearby), so the result is never worse than the input on any of these counts.
 // Deterministic: triangles are visited in a fixed order (smallest angle, then index; the
 // relaxation's vertices by index), and every loop is bounded (kQualityRounds rounds over a
-// shrinking work list, kRelaxSweeps sweeps).
+// shrinking work list, kRelaxSweeps sweeps and at most kRelaxSearchSweeps more).
 #pragma once
 
 #include <cdp/core/field.h>
@@ -31,6 +31,9 @@ struct QualityReport {
   // Vertices the relaxation moved (moves kept, over its sweeps), and edges it flipped.
   std::size_t relaxed = 0;
   std::size_t relax_flips = 0;
+  // Of `relaxed`, the moves of the search sweeps (QualityOptions::aim_mean_edge_ratio), and
+  // how many such sweeps ran.
+  std::size_t relax_searched = 0, relax_search_sweeps = 0;
   // Vertices added: splits of edges for the tolerance, inserts in the quad around a cap's
   // longest edge for the angles.
   std::size_t splits = 0, inserts = 0;
@@ -65,6 +68,10 @@ struct QualityOptions {
   // Shortest edge the last resort's splits may create (splits of triangles still farther than
   // the tolerance after the refinement); 0: min_edge.
   double last_resort_min_edge = 0;
+  // Positive: when the relaxation's sweeps leave the mesh's mean longest/shortest edge ratio
+  // over this, it sweeps again with each move searched in the tangent plane (see relax), until
+  // the mean is at or under it or a bounded number of sweeps has run. 0: no search.
+  double aim_mean_edge_ratio = 0;
   // Threads of the independent passes: the relaxation's targets, and for a thread-safe field
   // their projections and each refinement round's tolerance estimates. 0 all cores (at most
   // 8), 1 the caller's only. The mesh and the evaluation counts are the same, bit for bit, on
