@@ -169,6 +169,60 @@ TEST(AdaptiveAngles, CreasedSurfacesNoAngleUnder5Degrees) {
     }
 }
 
+// The triangles of `mesh` none of whose corners is within `reach` times the triangle's longest
+// edge of a crease (Field::pieces finds the pieces within a radius: more than one there is a
+// crease within it): "away from the creases", where issue 18 asks a creased surface for the
+// smooth surfaces' bounds.
+Mesh away_from_creases(const Field& field, const Mesh& mesh, double reach) {
+  Mesh away;
+  away.positions = mesh.positions;
+  for (const auto& t : mesh.triangles) {
+    double longest = 0;
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, (mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]).norm());
+    bool near = false;
+    for (int k = 0; k < 3 && !near; ++k) near = field.pieces(mesh.positions[t[k]], reach * longest).size() > 1;
+    if (!near) away.triangles.push_back(t);
+  }
+  return away;
+}
+
+TEST(AdaptiveAngles, CreasedSurfacesAwayFromTheCreases) {
+  // Meshed along their creases: away from them (no corner within one longest edge of a crease)
+  // no triangle under 20 degrees and at most 1% under 30 (the cube, the shell and the box less a
+  // ball at these sizes have no triangle that far from a crease). The mean edge ratio there is printed,
+  // not bounded: it is over 1.25 on the union of two spheres at 1e-3 (1.260) and the box less a
+  // ball at 1e-3 (1.285), where the tolerance's splits stretch a band of the spheres' triangles.
+  const std::vector<std::pair<std::string, std::string>> creased = {
+      {"capped_cylinder", expression("max(sqrt(x^2+y^2)-1,abs(z)-1)", 1.5)},
+      {"two_spheres", expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)", 2)},
+      {"gyroid_ball",
+       expression("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)", 2.2)},
+  };
+  for (const auto& [name, json] : creased)
+    for (int run = 0; run < 2; ++run) {
+      const auto field = test::field_from_json(json);
+      AdaptiveOptions o;
+      if (run == 0) {
+        o.factor = 3;
+      } else {
+        o.sizing = SizingMode::Tolerance;
+        o.tolerance = 1e-2;
+      }
+      const PolygonizeResult r = polygonize_adaptive(*field, o);
+      const std::string what = name + (run == 0 ? " factor 3" : " eps 1e-2");
+      expect_sound(r.mesh, what);
+      EXPECT_TRUE(r.stats.extra.at("creases.followed").get<bool>()) << what;
+      const Mesh away = away_from_creases(*field, r.mesh, 1);
+      EXPECT_GT(away.num_triangles(), 0u) << what;
+      const AngleStatistics a = angle_statistics(away);
+      std::cout << "angles away from the creases, " << what << ": " << a.triangles << " of "
+                << r.mesh.num_triangles() << " triangles, min " << a.min_degrees << ", under 30 " << a.share_under_30
+                << ", mean edge ratio " << a.mean_edge_ratio << "\n";
+      EXPECT_GE(a.min_degrees, 20.0) << what;
+      EXPECT_LE(a.share_under_30, 0.01) << what;
+    }
+}
+
 TEST(AdaptiveAngles, BunnyVis800WorstTriangle) {
   // The issue's case is factor 3: 2.2 degrees before, from fronts of 4-5 mm edges meeting
   // fronts of 0.5-0.9 mm edges. Factor 1 has triangles folded against the surface normals on
@@ -548,18 +602,34 @@ TEST(AdaptiveAngles, ARelaxationLeftOverTheMeanEdgeRatioSearchesItsMoves) {
     EXPECT_LE(a.mean_edge_ratio, kMeanEdgeRatio) << what;
     EXPECT_EQ(x.at("quality.over_tolerance").get<std::size_t>(), 0u) << what;
   }
-  // Not on a field with creases (min, max, abs), whose crease vertices stay where they are: the
-  // union of two spheres at 2e-3 keeps its mean of 1.28 (the search had taken it to 1.246, but
-  // the same field meshed across its crease at 5e-4 from 19.7 to 13.6 degrees).
+  // A field with creases (min, max, abs) meshed along them searches too (the union of two
+  // spheres at 2e-3: 1.284 -> 1.253 in these bounds; its crease vertices stay, so the whole
+  // mesh's mean is not the bound there); meshed across them as if smooth it does not (1.347
+  // stays: the triangles across the crease stay stretched, and at 5e-4 the search had taken its
+  // smallest angle from 19.7 to 13.6 degrees).
   const auto spheres =
       test::field_from_json(expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)", 2));
-  AdaptiveOptions o;
-  o.sizing = SizingMode::Tolerance;
-  o.tolerance = 2e-3;
-  const PolygonizeResult r = polygonize_adaptive(*spheres, o);
-  expect_sound(r.mesh, "two spheres eps 2e-3");
-  EXPECT_GT(angle_statistics(r.mesh).mean_edge_ratio, kMeanEdgeRatio);
-  EXPECT_EQ(r.stats.extra.at("quality.relax_search_sweeps").get<std::size_t>(), 0u);
+  for (CreaseHandling h : {CreaseHandling::Follow, CreaseHandling::Ignore}) {
+    AdaptiveOptions o;
+    o.sizing = SizingMode::Tolerance;
+    o.tolerance = 2e-3;
+    o.creases = h;
+    const PolygonizeResult r = polygonize_adaptive(*spheres, o);
+    const bool follow = h == CreaseHandling::Follow;
+    const std::string what = std::string("two spheres eps 2e-3, creases ") + (follow ? "followed" : "ignored");
+    expect_sound(r.mesh, what);
+    EXPECT_EQ(r.stats.extra.at("creases.followed").get<bool>(), follow) << what;
+    const AngleStatistics a = angle_statistics(r.mesh);
+    std::cout << "angles " << what << ": min " << a.min_degrees << ", mean edge ratio " << a.mean_edge_ratio << "\n";
+    if (follow) {
+      EXPECT_GE(r.stats.extra.at("quality.relax_search_sweeps").get<std::size_t>(), 1u) << what;
+      EXPECT_GT(r.stats.extra.at("quality.relax_searched").get<std::size_t>(), 0u) << what;
+      EXPECT_GE(a.min_degrees, 20.0) << what;
+    } else {
+      EXPECT_EQ(r.stats.extra.at("quality.relax_search_sweeps").get<std::size_t>(), 0u) << what;
+      EXPECT_GT(a.mean_edge_ratio, kMeanEdgeRatio) << what;
+    }
+  }
 }
 
 TEST(AdaptiveAngles, OnlyAnImprovedMeshMissingTheBoundsIsMadeAgain) {
@@ -670,3 +740,4 @@ TEST(AngleStatistics, CountsAndCumulativeHistogram) {
 
 }  // namespace
 }  // namespace cdp
+

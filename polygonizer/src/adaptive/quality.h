@@ -70,7 +70,9 @@ struct QualityOptions {
   double last_resort_min_edge = 0;
   // Positive: when the relaxation's sweeps leave the mesh's mean longest/shortest edge ratio
   // over this, it sweeps again with each move searched in the tangent plane (see relax), until
-  // the mean is at or under it or a bounded number of sweeps has run. 0: no search.
+  // the mean is at or under it or a bounded number of sweeps has run. 0: no search. Not for a
+  // mesh laid across creases as if smooth: its triangles across a crease stay stretched, and
+  // the moves beside them may leave worse angles to the repair that follows.
   double aim_mean_edge_ratio = 0;
   // Threads of the independent passes: the relaxation's targets, and for a thread-safe field
   // their projections and each refinement round's tolerance estimates. 0 all cores (at most
