@@ -195,8 +195,12 @@ TEST(AdaptiveAngles, CreasedSurfacesAwayFromTheCreases) {
   const std::vector<std::pair<std::string, std::string>> creased = {
       {"capped_cylinder", expression("max(sqrt(x^2+y^2)-1,abs(z)-1)", 1.5)},
       {"two_spheres", expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)", 2)},
+#if !defined(__SANITIZE_ADDRESS__)
+      // Several times slower under the sanitizers (CI runs them within its 45 minutes): left to
+      // the normal build.
       {"gyroid_ball",
        expression("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)", 2.2)},
+#endif
   };
   for (const auto& [name, json] : creased)
     for (int run = 0; run < 2; ++run) {
@@ -583,7 +587,14 @@ TEST(AdaptiveAngles, ARelaxationLeftOverTheMeanEdgeRatioSearchesItsMoves) {
     const char* field;
     double tolerance;
   };
-  for (const Case& c : {Case{"bunny_vis800", 1e-2}, Case{"igea_mpu", 1e-2}}) {
+  std::vector<Case> cases = {{"bunny_vis800", 1e-2}, {"igea_mpu", 1e-2}};
+#if defined(__SANITIZE_ADDRESS__)
+  // Several times slower under the sanitizers (CI runs them within its 45 minutes): the bunny
+  // there, the same code path; the Igea MPU model (over a minute there) is left to the normal
+  // build.
+  cases.pop_back();
+#endif
+  for (const Case& c : cases) {
     const auto field = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/" + c.field + ".json");
     AdaptiveOptions o;
     o.sizing = SizingMode::Tolerance;
@@ -603,20 +614,19 @@ TEST(AdaptiveAngles, ARelaxationLeftOverTheMeanEdgeRatioSearchesItsMoves) {
     EXPECT_EQ(x.at("quality.over_tolerance").get<std::size_t>(), 0u) << what;
   }
   // A field with creases (min, max, abs) meshed along them searches too (the union of two
-  // spheres at 2e-3: 1.284 -> 1.253 in these bounds; its crease vertices stay, so the whole
-  // mesh's mean is not the bound there); meshed across them as if smooth it does not (1.347
-  // stays: the triangles across the crease stay stretched, and at 5e-4 the search had taken its
+  // spheres at 1e-2: 1.258 -> 1.237); meshed across them as if smooth it does not (1.342 stays:
+  // the triangles across the crease stay stretched, and at 5e-4 the search had taken its
   // smallest angle from 19.7 to 13.6 degrees).
   const auto spheres =
       test::field_from_json(expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)", 2));
   for (CreaseHandling h : {CreaseHandling::Follow, CreaseHandling::Ignore}) {
     AdaptiveOptions o;
     o.sizing = SizingMode::Tolerance;
-    o.tolerance = 2e-3;
+    o.tolerance = 1e-2;
     o.creases = h;
     const PolygonizeResult r = polygonize_adaptive(*spheres, o);
     const bool follow = h == CreaseHandling::Follow;
-    const std::string what = std::string("two spheres eps 2e-3, creases ") + (follow ? "followed" : "ignored");
+    const std::string what = std::string("two spheres eps 1e-2, creases ") + (follow ? "followed" : "ignored");
     expect_sound(r.mesh, what);
     EXPECT_EQ(r.stats.extra.at("creases.followed").get<bool>(), follow) << what;
     const AngleStatistics a = angle_statistics(r.mesh);
