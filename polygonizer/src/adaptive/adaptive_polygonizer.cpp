@@ -703,6 +703,8 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
   st.extra["quality.moves"] = quality.moves;
   st.extra["quality.relaxed"] = quality.relaxed;
   st.extra["quality.relax_flips"] = quality.relax_flips;
+  st.extra["quality.refine_measured"] = quality.refine_measured;
+  st.extra["quality.refine_cleared"] = quality.refine_cleared;
   st.extra["quality.relax_searched"] = quality.relax_searched;
   st.extra["quality.relax_search_sweeps"] = quality.relax_search_sweeps;
   st.extra["quality.collapses"] = quality.collapses;

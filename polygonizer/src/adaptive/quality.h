@@ -47,6 +47,9 @@ struct QualityReport {
   // estimate (see kToleranceMargin) could not clear them, after the refinement and after each
   // round of the last resort.
   std::size_t measured_densely = 0;
+  // Triangles the refinement measured densely because their estimate was within the estimate's
+  // margin below the tolerance, and of those the ones it left unsplit (kDenseClearShare).
+  std::size_t refine_measured = 0, refine_cleared = 0;
   // Of those, the triangles farther than the tolerance there (0 unless the refinement ran out
   // of rounds or could not split without breaking a check), the largest such distance and the
   // centroid of the triangle it was measured on.
