@@ -456,12 +456,15 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
       // the caller set holds for every split.
       qo.last_resort_min_edge = options.min_edge > 0 ? s.sizing.min_edge : kLastResortEdgeShare * s.sizing.min_edge;
       qo.threads = options.threads;
-      // Not where a field with branch points (min, max, abs) is meshed without following its
-      // creases (CreaseHandling::Ignore, or a crease layout that failed): the triangles across
-      // a crease stay stretched, so the mean is no aim. Meshed so, the creased shapes of
+      // Neither the search nor the dense measurement before a split where a field with branch
+      // points (min, max, abs) is meshed without following its creases (CreaseHandling::Ignore,
+      // or a crease layout that failed; see QualityOptions): the triangles across a crease stay
+      // stretched, so the mean is no aim. Meshed so, the creased shapes of
       // results/creases came out as often further from it as nearer, and the two spheres at
       // 5e-4 fell from 19.7 to 13.6 degrees; meshed along their creases they all came nearer.
-      qo.aim_mean_edge_ratio = field.has_pieces() && !creased ? 0 : kBoundMeanEdgeRatio;
+      const bool across_creases = field.has_pieces() && !creased;
+      qo.aim_mean_edge_ratio = across_creases ? 0 : kBoundMeanEdgeRatio;
+      qo.measure_near_bound = !across_creases;
       quality = adaptive::improve_mesh(field, mesh, qo);
     }
     if (s.curvature_properties) {

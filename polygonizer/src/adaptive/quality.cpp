@@ -1433,7 +1433,7 @@ class Improver {
         const Tri T = m_.triangles[t];
         const double estimate = estimate_distance(T, t);
         if (!(estimate > bound)) continue;
-        if (estimate <= o_.tolerance) {
+        if (o_.measure_near_bound && estimate <= o_.tolerance) {
           ++r_.refine_measured;
           if (sampled_distance(T, estimate) <= kDenseClearShare * o_.tolerance) {
             ++r_.refine_cleared;
