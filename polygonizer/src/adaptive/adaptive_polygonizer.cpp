@@ -462,7 +462,12 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
       // stretched, so the mean is no aim. Meshed so, the creased shapes of
       // results/creases came out as often further from it as nearer, and the two spheres at
       // 5e-4 fell from 19.7 to 13.6 degrees; meshed along their creases they all came nearer.
-      const bool across_creases = field.has_pieces() && !creased;
+      // A field with branch points whose crease tracing ran and found no crease (the hollow
+      // sphere: its two sheets meet nowhere) is a smooth surface; one meshed without its layout
+      // may have creases the mesh crosses.
+      const bool no_crease = options.creases == CreaseHandling::Follow && options.variant == Variant::Improved &&
+                             crease_fallback.empty() && traced.curves.empty();
+      const bool across_creases = field.has_pieces() && !creased && !no_crease;
       qo.aim_mean_edge_ratio = across_creases ? 0 : kBoundMeanEdgeRatio;
       qo.measure_near_bound = !across_creases;
       quality = adaptive::improve_mesh(field, mesh, qo);
