@@ -465,8 +465,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
       // A field with branch points whose crease tracing ran and found no crease (the hollow
       // sphere: its two sheets meet nowhere) is a smooth surface; one meshed without its layout
       // may have creases the mesh crosses.
-      const bool no_crease = options.creases == CreaseHandling::Follow && options.variant == Variant::Improved &&
-                             crease_fallback.empty() && traced.curves.empty();
+      const bool no_crease = options.creases == CreaseHandling::Follow && crease_fallback.empty() && traced.curves.empty();
       const bool across_creases = field.has_pieces() && !creased && !no_crease;
       qo.aim_mean_edge_ratio = across_creases ? 0 : kBoundMeanEdgeRatio;
       qo.measure_near_bound = !across_creases;
@@ -770,7 +769,6 @@ template <class Error>
 // kBoundMinDegrees, more than kBoundShareUnder30 of the triangles with one under 30 degrees, a
 // mean longest/shortest edge over kBoundMeanEdgeRatio, triangles farther from the surface than
 // the tolerance (`over_tolerance`, the repair's dense measurement).
-
 // Without an arctangent: a triangle's smallest angle is the one opposite its shortest edge, and
 // it is under a bound b when its corner's cross and dot products (|u x v|, u . v) satisfy
 // |u x v| < tan(b) u . v (angle_statistics' atan2 for each corner cost 1.7% of a torus run at
