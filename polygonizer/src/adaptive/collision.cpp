@@ -204,4 +204,27 @@ int Tracker::find_closing_obstacle(int node) const {
   return best;
 }
 
+bool Tracker::ear_is_clear(int node) const {
+  // find_closing_obstacle's test on the front's own points: in a small stuck front the points
+  // in the ear are the front itself, folded flat (a sliver loop along a crease).
+  const FrontNode& n = fs_.nodes[node];
+  const int va = fs_.nodes[n.prev].vertex, vb = fs_.nodes[n.next].vertex;
+  const Vec3& p = mesh_.positions[n.vertex];
+  const Vec3& N = mesh_.normals[n.vertex];
+  const Vec3& a = mesh_.positions[va];
+  const Vec3& b = mesh_.positions[vb];
+  const double radius = std::max((a - p).norm(), (b - p).norm());
+  const Vec3 inward = N.cross(b - a);
+  const double side_p = inward.dot(p - a);
+  for (int q = fs_.nodes[n.next].next; q != n.prev; q = fs_.nodes[q].next) {
+    const int vq = fs_.nodes[q].vertex;
+    if (vq == n.vertex || vq == va || vq == vb) continue;
+    const Vec3& x = mesh_.positions[vq];
+    if ((x - p).norm() >= radius || !same_side(N, vq)) continue;
+    if (inward.dot(x - a) * side_p < -0.05 * side_p * side_p) continue;
+    if (in_sector(node, x, 0)) return false;
+  }
+  return true;
+}
+
 }  // namespace cdp::adaptive

@@ -569,10 +569,18 @@ void Tracker::step(int& f) {
   if (rounds >= 2 && size <= kSmallFront) {
     // A small hole that no expansion fits into is closed like the paper's last three points:
     // the ear of smallest front angle first (it is below pi, since the angles of a small
-    // front sum to about (size - 2) pi).
-    int best = node;
-    for (int x = fs_.nodes[node].next; x != node; x = fs_.nodes[x].next)
-      if (fs_.nodes[x].angle < fs_.nodes[best].angle) best = x;
+    // front sum to about (size - 2) pi), among the ears that hold no other point of the
+    // front. A thin loop along a crease (the Barth ball at factor 5) has its smallest angle
+    // at an ear over the rest of the loop: cut off, that ear covered finished triangles and
+    // the fronts ran on over them. A simple polygon always has such an ear; a front folded
+    // so that none is clear keeps the old choice.
+    int best = -1, smallest = node, x = node;
+    do {
+      if (fs_.nodes[x].angle < fs_.nodes[smallest].angle) smallest = x;
+      if ((best < 0 || fs_.nodes[x].angle < fs_.nodes[best].angle) && ear_is_clear(x)) best = x;
+      x = fs_.nodes[x].next;
+    } while (x != node);
+    if (best < 0) best = smallest;
     if (best != node) fs_.push(node);
     close_angle(best);
     ++forced_closures_;

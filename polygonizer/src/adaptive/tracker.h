@@ -322,6 +322,9 @@ class Tracker {
   int find_bridge(int node, double radius) const;
   // A front node inside the triangle (prev, node, next) or too close to its new edge, or -1.
   int find_closing_obstacle(int node) const;
+  // Whether no other point of node's own front lies in the triangle (prev, node, next), seen in
+  // node's tangent plane: the ear can be cut off without covering the rest of the front.
+  bool ear_is_clear(int node) const;
   // The start node of a front edge that the segment from vertex vu to point w (vertex vw, or -1
   // for a point not yet in the mesh) crosses, seen in the tangent plane of frame_vertex; or -1.
   // With `near`, the front nodes come from the cells it gathered (the same answer).
