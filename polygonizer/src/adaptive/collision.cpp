@@ -171,33 +171,44 @@ int Tracker::bridge_around(int node, int r) const {
   return find_bridge(node, 1.05 * far);
 }
 
-int Tracker::find_closing_obstacle(int node) const {
-  // Closing the angle adds the edge prev-next; the paper adds this test because with varying
-  // edge lengths a front point can sit inside the triangle (prev, node, next).
+Tracker::Ear Tracker::ear(int node) const {
+  // Closing the angle adds the edge prev-next; the paper tests the triangle it closes because
+  // with varying edge lengths a front point can sit inside it.
   const FrontNode& n = fs_.nodes[node];
-  const int va = fs_.nodes[n.prev].vertex, vb = fs_.nodes[n.next].vertex;
+  Ear e;
+  e.node = node;
+  e.va = fs_.nodes[n.prev].vertex;
+  e.vb = fs_.nodes[n.next].vertex;
   const Vec3& p = mesh_.positions[n.vertex];
-  const Vec3& N = mesh_.normals[n.vertex];
-  const Vec3& a = mesh_.positions[va];
-  const Vec3& b = mesh_.positions[vb];
-  const double radius = std::max((a - p).norm(), (b - p).norm());
+  const Vec3& a = mesh_.positions[e.va];
+  const Vec3& b = mesh_.positions[e.vb];
+  e.radius = std::max((a - p).norm(), (b - p).norm());
   // Inside test in the tangent plane of p: x is inside when it lies on p's side of the line
   // a-b (the sector test covers the two other sides).
-  const Vec3 ab = b - a;
-  const Vec3 inward = N.cross(ab);  // points into the triangle when the triangle is (a, p, b)
-  const double side_p = inward.dot(p - a);
+  e.inward = mesh_.normals[n.vertex].cross(b - a);  // into the triangle when it is (a, p, b)
+  e.side_p = e.inward.dot(p - a);
+  return e;
+}
+
+bool Tracker::in_ear(const Ear& e, int vq) const {
+  const int v = fs_.nodes[e.node].vertex;
+  if (vq == v || vq == e.va || vq == e.vb) return false;
+  const Vec3& x = mesh_.positions[vq];
+  if ((x - mesh_.positions[v]).norm() >= e.radius || !same_side(mesh_.normals[v], vq)) return false;
+  // On p's side of line a-b, with a small tolerance so points right on the new edge count.
+  if (e.inward.dot(x - mesh_.positions[e.va]) * e.side_p < -0.05 * e.side_p * e.side_p) return false;
+  return in_sector(e.node, x, 0);
+}
+
+int Tracker::find_closing_obstacle(int node) const {
+  const Ear e = ear(node);
+  const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
   int best = -1;
   double best_d = std::numeric_limits<double>::infinity();
-  front_hash_.for_each_near(p, radius, [&](int q) {
+  front_hash_.for_each_near(p, e.radius, [&](int q) {
     const int vq = fs_.nodes[q].vertex;
-    if (vq == n.vertex || vq == va || vq == vb) return;
-    const Vec3& x = mesh_.positions[vq];
-    const double d = (x - p).norm();
-    if (d >= radius || d > best_d || (d == best_d && q > best)) return;
-    if (!same_side(N, vq)) return;
-    // On p's side of line a-b, with a small tolerance so points right on the new edge count.
-    if (inward.dot(x - a) * side_p < -0.05 * side_p * side_p) return;
-    if (!in_sector(node, x, 0)) return;
+    const double d = (mesh_.positions[vq] - p).norm();
+    if (d > best_d || (d == best_d && q > best) || !in_ear(e, vq)) return;
     best = q;
     best_d = d;
   });
@@ -207,23 +218,9 @@ int Tracker::find_closing_obstacle(int node) const {
 bool Tracker::ear_is_clear(int node) const {
   // find_closing_obstacle's test on the front's own points: in a small stuck front the points
   // in the ear are the front itself, folded flat (a sliver loop along a crease).
-  const FrontNode& n = fs_.nodes[node];
-  const int va = fs_.nodes[n.prev].vertex, vb = fs_.nodes[n.next].vertex;
-  const Vec3& p = mesh_.positions[n.vertex];
-  const Vec3& N = mesh_.normals[n.vertex];
-  const Vec3& a = mesh_.positions[va];
-  const Vec3& b = mesh_.positions[vb];
-  const double radius = std::max((a - p).norm(), (b - p).norm());
-  const Vec3 inward = N.cross(b - a);
-  const double side_p = inward.dot(p - a);
-  for (int q = fs_.nodes[n.next].next; q != n.prev; q = fs_.nodes[q].next) {
-    const int vq = fs_.nodes[q].vertex;
-    if (vq == n.vertex || vq == va || vq == vb) continue;
-    const Vec3& x = mesh_.positions[vq];
-    if ((x - p).norm() >= radius || !same_side(N, vq)) continue;
-    if (inward.dot(x - a) * side_p < -0.05 * side_p * side_p) continue;
-    if (in_sector(node, x, 0)) return false;
-  }
+  const Ear e = ear(node);
+  for (int q = fs_.nodes[fs_.nodes[node].next].next; q != fs_.nodes[node].prev; q = fs_.nodes[q].next)
+    if (in_ear(e, fs_.nodes[q].vertex)) return false;
   return true;
 }
 

@@ -320,7 +320,19 @@ class Tracker {
   // The front node within radius that node bridges to best (the bridge leaving the largest
   // smallest angle, nearest first among good ones), or -1.
   int find_bridge(int node, double radius) const;
-  // A front node inside the triangle (prev, node, next) or too close to its new edge, or -1.
+  // The triangle (prev, node, next) that closing node's angle adds.
+  struct Ear {
+    int node = -1, va = -1, vb = -1;  // the node, its prev's and its next's vertices
+    double radius = 0;                // the longer of its two sides at node
+    Vec3 inward = Vec3::Zero();       // normal at node x (b - a): into the triangle (a, p, b)
+    double side_p = 0;                // inward . (p - a)
+  };
+  Ear ear(int node) const;
+  // Whether the front point at vertex vq lies in the ear, as the paper's closing test sees it in
+  // the tangent plane at node: nearer to node than the ear's longer side, facing the same way,
+  // on node's side of the new edge (points right on it count) and inside node's sector.
+  bool in_ear(const Ear& e, int vq) const;
+  // The nearest front node in the ear (find_closing_obstacle), or -1.
   int find_closing_obstacle(int node) const;
   // Whether no other point of node's own front lies in the triangle (prev, node, next), seen in
   // node's tangent plane: the ear can be cut off without covering the rest of the front.
