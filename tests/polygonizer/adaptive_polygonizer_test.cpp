@@ -248,6 +248,24 @@ TEST(AdaptivePolygonizer, TriangleCapEndsWithAClearError) {
   }
 }
 
+TEST(AdaptivePolygonizer, SearchBoundEndsWithAClearErrorNamingThePlace) {
+  // The searches of a sphere look at about 38 points a step; a bound of 1 is passed in the first
+  // window of 4096 steps (the sphere at factor 30 takes about 14,700).
+  Sphere sphere(Vec3::Zero(), 1.0);
+  AdaptiveOptions o = coarse(30);
+  EXPECT_NO_THROW(polygonize_adaptive(sphere, o));
+  o.max_search_visits = 1;
+  try {
+    polygonize_adaptive(sphere, o);
+    FAIL() << "no error";
+  } catch (const LimitExceededError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("neighbour searches"), std::string::npos) << what;
+    EXPECT_NE(what.find("(bound 1)"), std::string::npos) << what;
+    EXPECT_NE(what.find("near ("), std::string::npos) << what;
+  }
+}
+
 TEST(AdaptivePolygonizer, InvalidOptionsAndEmptyFieldsAreErrors) {
   Sphere sphere(Vec3::Zero(), 1.0);
   AdaptiveOptions o;

@@ -126,6 +126,7 @@ adaptive::Settings resolve(const Field& field, const AdaptiveOptions& o) {
   const double derived = std::min(5e7, std::max(1e4, 20 * box_area / tri_area));
   s.max_triangles = o.max_triangles > 0 ? o.max_triangles : static_cast<std::size_t>(derived);
   s.max_steps = o.max_steps > 0 ? o.max_steps : 4 * s.max_triangles + 10000;
+  s.search_visits_per_step = o.max_search_visits > 0 ? o.max_search_visits : adaptive::kSearchVisitsPerStep;
   return s;
 }
 
@@ -224,10 +225,10 @@ double min_angle_degrees(const Mesh& mesh) {
 }
 
 // Whether a run may be made again after it failed or missed a bound: not after a run stopped
-// by the caller's own bounds (max_triangles, max_steps: a run made again with shorter edges would
-// pass them sooner), nor in paper mode (the algorithm as printed, whatever it gives).
+// by the caller's own bounds (max_triangles, max_steps, max_search_visits: a run made again with
+// shorter edges would pass them sooner), nor in paper mode (the algorithm as printed, whatever it gives).
 bool remeshing_allowed(const AdaptiveOptions& o) {
-  return o.variant == Variant::Improved && o.max_triangles == 0 && o.max_steps == 0;
+  return o.variant == Variant::Improved && o.max_triangles == 0 && o.max_steps == 0 && o.max_search_visits == 0;
 }
 
 // The surface meshed once with the options as given (polygonize_adaptive may call it more than

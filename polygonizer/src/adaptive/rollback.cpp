@@ -448,7 +448,7 @@ void Tracker::compact() {
   for (auto& tri : mesh_.triangles)
     for (int& v : tri) v = remap[v];
   dead_.assign(m, 0);
-  vertex_hash_ = SpatialHash(s_.hash_cell);
+  vertex_hash_ = SpatialHash(s_.hash_cell, Crowding::split);
   for (int v = 0; v < m; ++v) vertex_hash_.insert(v, mesh_.positions[v]);
 }
 

@@ -2,6 +2,8 @@
 // or over boxes (triangles, for the seeding's coverage tests).
 // Queries visit cells in a fixed order and cells keep insertion order, so results are
 // deterministic; callers that pick "the nearest" still break ties by id.
+// Optionally (Crowding::split) a cell crowded with points hands them to a finer grid over its
+// extent, so that searches stay local where edges are far shorter than the cell.
 #pragma once
 
 #include <cdp/core/field.h>
@@ -13,25 +15,66 @@
 
 namespace cdp::adaptive {
 
+// What a cell does when more than kCrowdedCell points are inserted into it.
+enum class Crowding {
+  keep,   // nothing: every query in the cell looks at all its points
+  split,  // its points move to a finer hash over the cell (see SpatialHash::insert)
+};
+
 class SpatialHash {
  public:
-  explicit SpatialHash(double cell_size) : h_(cell_size), inv_h_(1.0 / cell_size) {}
+  explicit SpatialHash(double cell_size, Crowding crowding = Crowding::keep)
+      : SpatialHash(cell_size, crowding, 0) {}
 
   double cell_size() const { return h_; }
   // Ids looked at by the searches so far (an upper bound; a search stopping early counts its
   // whole last cell): the cost of the searches, which the tracker bounds.
   std::uint64_t visits() const { return visits_ + (coarser_ ? coarser_->visits() : 0); }
 
-  void insert(int id, const Vec3& p) { cell(key(cell_of(p))).push_back(id); }
+  // With Crowding::split, a cell that would hold more than kCrowdedCell points hands them to a
+  // finer hash over its extent (cells kSplitRatio times smaller, at most kMaxSplitDepth levels
+  // down, which bounds the splitting of coincident points). The tracker's vertex hash needs it:
+  // on the Barth ball at factor 10 the necks' edges are a hundredth of the cell, thousands of
+  // vertices shared a cell, and the test of each new point against the finished mesh looked at
+  // all of them (over 6000 points a step, the search bound). A split cell's points are visited
+  // in the finer hash's order, so only callers whose answers do not depend on order may use it.
+  // Such a hash keeps each point's position, to hand it on; it holds points, not boxes.
+  void insert(int id, const Vec3& p) {
+    const auto c = static_cast<std::size_t>(cell(key(cell_of(p))));
+    if (crowding_ == Crowding::keep) {
+      ids_[c].push_back(id);
+      return;
+    }
+    if (finer_[c]) {
+      finer_[c]->insert(id, p);
+      return;
+    }
+    ids_[c].push_back(id);
+    points_[c].push_back(p);
+    if (ids_[c].size() <= kCrowdedCell || depth_ >= kMaxSplitDepth) return;
+    finer_[c].reset(new SpatialHash(h_ / kSplitRatio, Crowding::split, depth_ + 1));
+    for (std::size_t i = 0; i < ids_[c].size(); ++i) finer_[c]->insert(ids_[c][i], points_[c][i]);
+    std::vector<int>().swap(ids_[c]);
+    std::vector<Vec3>().swap(points_[c]);
+  }
 
   void remove(int id, const Vec3& p) {
     const int c = find(key(cell_of(p)));
     if (c < 0) return;
-    auto& v = ids_[static_cast<std::size_t>(c)];
+    const auto u = static_cast<std::size_t>(c);
+    if (crowding_ == Crowding::split && finer_[u]) {
+      finer_[u]->remove(id, p);
+      return;
+    }
+    auto& v = ids_[u];
     for (std::size_t i = 0; i < v.size(); ++i)
       if (v[i] == id) {
         v[i] = v.back();
         v.pop_back();
+        if (crowding_ == Crowding::split) {
+          points_[u][i] = points_[u].back();
+          points_[u].pop_back();
+        }
         return;
       }
   }
@@ -50,7 +93,7 @@ class SpatialHash {
     }
     for (std::int64_t k = a.k; k <= b.k; ++k)
       for (std::int64_t j = a.j; j <= b.j; ++j)
-        for (std::int64_t i = a.i; i <= b.i; ++i) cell(key({i, j, k})).push_back(id);
+        for (std::int64_t i = a.i; i <= b.i; ++i) ids_[static_cast<std::size_t>(cell(key({i, j, k})))].push_back(id);
   }
 
   // Calls fn(id) for every id stored in a cell overlapping the cube of half-side r around p;
@@ -81,7 +124,7 @@ class SpatialHash {
     g.runs.clear();
     g.hi[0] = g.lo[0] - 1;
     const Cell a = cell_of(lo), b = cell_of(hi);
-    if (coarser_ || spanned(a, b) > static_cast<double>(ids_.size())) return;
+    if (coarser_ || crowding_ == Crowding::split || spanned(a, b) > static_cast<double>(ids_.size())) return;
     g.lo[0] = a.i, g.lo[1] = a.j, g.lo[2] = a.k;
     g.hi[0] = b.i, g.hi[1] = b.j, g.hi[2] = b.k;
     for (std::int64_t k = a.k; k <= b.k; ++k)
@@ -128,6 +171,8 @@ class SpatialHash {
   bool any_in(const Vec3& lo, const Vec3& hi, Pred&& pred) const {
     const Cell a = cell_of(lo), b = cell_of(hi);
     const auto visit = [&](int c) {
+      if (crowding_ == Crowding::split && finer_[static_cast<std::size_t>(c)])
+        return any_in_finer(c, lo, hi, pred);
       const std::vector<int>& ids = ids_[static_cast<std::size_t>(c)];
       visits_ += ids.size();
       for (int id : ids)
@@ -160,6 +205,21 @@ class SpatialHash {
   }
 
  private:
+  SpatialHash(double cell_size, Crowding crowding, int depth)
+      : h_(cell_size), inv_h_(1.0 / cell_size), crowding_(crowding), depth_(depth) {}
+
+  // any_in over a split cell's points. The box needs no clipping to the cell: the finer hash's
+  // cells all lie inside it, at most kSplitRatio^3 of them on its first level, and a box over
+  // more cells than it holds visits its occupied cells instead (any_in).
+  template <class Pred>
+  bool any_in_finer(int c, const Vec3& lo, const Vec3& hi, Pred& pred) const {
+    const SpatialHash& f = *finer_[static_cast<std::size_t>(c)];
+    const std::uint64_t before = f.visits_;
+    const bool hit = f.any_in(lo, hi, pred);
+    visits_ += f.visits_ - before;
+    return hit;
+  }
+
   mutable std::uint64_t visits_ = 0;
   struct Cell {
     std::int64_t i, j, k;
@@ -204,7 +264,8 @@ class SpatialHash {
       if (slot.key == k) return slot.cell;
     }
   }
-  std::vector<int>& cell(std::uint64_t k) {
+  // The index of the cell with key k, made empty if there is none.
+  int cell(std::uint64_t k) {
     if (2 * (ids_.size() + 1) > slots_.size()) grow();
     const std::size_t mask = slots_.size() - 1;
     for (std::size_t s = slot_hash(k) & mask;; s = (s + 1) & mask) {
@@ -212,9 +273,14 @@ class SpatialHash {
       if (slot.cell < 0) {
         slot = {k, static_cast<int>(ids_.size())};
         keys_.push_back(k);
-        return ids_.emplace_back();
+        ids_.emplace_back();
+        if (crowding_ == Crowding::split) {
+          points_.emplace_back();
+          finer_.emplace_back();
+        }
+        return slot.cell;
       }
-      if (slot.key == k) return ids_[static_cast<std::size_t>(slot.cell)];
+      if (slot.key == k) return slot.cell;
     }
   }
   void grow() {
@@ -238,8 +304,19 @@ class SpatialHash {
   // of its level.
   static constexpr std::int64_t kMaxBoxSpan = 4;
   static constexpr double kLevelRatio = 4;
+  // Crowding::split: a cell splits past 128 points, about 20 times what a cell two edges wide
+  // holds on a surface meshed evenly (about 7), so that only cells whose edges are several times
+  // shorter than the hash is sized for split; four times finer cells hold about 16 times fewer
+  // of a surface's points, and four levels reach edges 256 times shorter.
+  static constexpr std::size_t kCrowdedCell = 128;
+  static constexpr double kSplitRatio = 4;
+  static constexpr int kMaxSplitDepth = 4;
 
   double h_, inv_h_;
+  Crowding crowding_ = Crowding::keep;
+  int depth_ = 0;  // levels of splitting above this hash
+  std::vector<std::vector<Vec3>> points_;                   // Crowding::split: of each id, as ids_
+  std::vector<std::unique_ptr<SpatialHash>> finer_;         // Crowding::split: of each split cell
   std::vector<Slot> slots_;
   std::vector<std::vector<int>> ids_;
   std::vector<std::uint64_t> keys_;  // of each occupied cell, as ids_

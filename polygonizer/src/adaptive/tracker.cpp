@@ -25,11 +25,20 @@ constexpr double kShortLanding = 0.75;
 constexpr int kWalkLegs = 4;
 // A new point this close to a finished vertex (in units of the step) lies on finished mesh.
 constexpr double kOverMesh = 0.3;
+// A manifold mesh with c components, genus g and b borders of E_b edges in all has
+// T = 2V - E_b + 2b + 4g - 4c triangles on V vertices, at most 2V + 4g; a handle of a mesh the
+// tracker makes holds far more than 4 vertices, so T stays below 3V. The Barth ball at factor 3
+// went on making triangles between the 415,118 vertices it had (5.7 million triangles after
+// 18 million steps, about 0.3 a step and 0.4 units of area per 262,144 steps): a front stuck
+// in a cycle of closures and splits over finished mesh. The search bound used to stop it, by
+// the cost of its searches among crowded vertices, until the vertex hash split crowded cells.
+constexpr std::size_t kTrianglesPerVertex = 3;
+constexpr std::size_t kTriangleSlack = 64;  // the first hexagon and other tiny meshes, with room
 }  // namespace
 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
     : field_(field), s_(settings), mesh_(mesh),
-      front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell), finer_zones_(settings.finer_zones) {}
+      front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell, Crowding::split), finer_zones_(settings.finer_zones) {}
 
 void Tracker::measure(std::span<const Vec3> points, std::vector<std::optional<Placed>>& out) const {
   // Timed in two parts, so that the stats can show what the paper claims (curvature costs
@@ -202,9 +211,8 @@ bool Tracker::over_finished_mesh(const Vec3& x, const Vec3& normal, double d) co
   // run over it and would go on meshing the surface again. Refused, such placements turn a
   // runaway front into a stalled one, which the stall bounds end with an error naming the place.
   const double r = kOverMesh * d;
-  bool hit = false;
-  vertex_hash_.for_each_near(x, r, [&](int w) {
-    if (!hit && front_refs_[w] == 0 && (mesh_.positions[w] - x).norm() < r && same_side(normal, w)) hit = true;
+  const bool hit = vertex_hash_.any_in(x.array() - r, x.array() + r, [&](int w) {
+    return front_refs_[w] == 0 && (mesh_.positions[w] - x).norm() < r && same_side(normal, w);
   });
   if (hit) ++over_mesh_;
   return hit;
@@ -248,6 +256,14 @@ void Tracker::emit_triangle(int a, int b, int c) {
   if (estimated_area_ > 0 && area_ > kAreaBound * estimated_area_)
     throw LimitExceededError("adaptive: the mesh covers more than " + std::to_string(static_cast<int>(kAreaBound)) +
                              " times the area the seed grid measures; a front is running over finished mesh near " +
+                             format_point(pa));
+  // Triangles made again on vertices already meshed, which the area bound sees late or never
+  // (each adds little area; kTrianglesPerVertex says why no manifold mesh gets here).
+  if (mesh_.triangles.size() > kTrianglesPerVertex * mesh_.positions.size() + kTriangleSlack)
+    throw LimitExceededError("adaptive: the mesh has " + std::to_string(mesh_.triangles.size()) + " triangles on " +
+                             std::to_string(mesh_.positions.size()) +
+                             " vertices, more than a manifold mesh can have; a front is meshing finished mesh "
+                             "again near " +
                              format_point(pa));
   if (mesh_.triangles.size() > s_.max_triangles)
     throw LimitExceededError("adaptive: more than " + std::to_string(s_.max_triangles) +
@@ -432,11 +448,11 @@ void Tracker::check_search_budget(int node) {
   const std::uint64_t visits = search_visits();
   const std::uint64_t in_window = visits - window_visits_;
   window_visits_ = visits;
-  if (in_window <= kSearchVisitsPerStep * kSearchWindow) return;
+  if (in_window <= s_.search_visits_per_step * kSearchWindow) return;
   const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
   throw LimitExceededError("adaptive: the fronts' neighbour searches looked at " + std::to_string(in_window / kSearchWindow) +
                            " points a step over the last " + std::to_string(kSearchWindow) + " steps (bound " +
-                           std::to_string(kSearchVisitsPerStep) + "), near " + format_point(p) +
+                           std::to_string(s_.search_visits_per_step) + "), near " + format_point(p) +
                            ": edges far shorter than elsewhere crowd the search cells there, or a front is "
                            "running over finished mesh; raise min_edge");
 }

@@ -38,6 +38,17 @@ struct FinerZone {
   double radius, edge;
 };
 
+// The bound on the cost of the neighbour searches: points looked at per front step, averaged
+// over windows of kSearchWindow steps (the default of AdaptiveOptions::max_search_visits).
+// Surfaces the method meshes take 40-130 over a whole run (bunny VIS-800, torus, tanglecube,
+// Chmutov, 50 blobs at factors 1 and 3); a window far above it has edges much shorter than the
+// hash cells somewhere (the vertex hash splits crowded cells, four levels deep; the front hash
+// does not) or a front running over finished mesh, and would go on for hours; it is stopped
+// with an error naming the place instead. A window rather than the whole run, so that a run
+// that degenerates late is stopped soon after.
+inline constexpr std::uint64_t kSearchVisitsPerStep = 5000;
+inline constexpr std::uint64_t kSearchWindow = 4096;
+
 // Options with every default resolved.
 struct Settings {
   Sizing sizing;
@@ -45,6 +56,7 @@ struct Settings {
   double collision_factor = 1.3;
   std::size_t max_triangles = 0;
   std::size_t max_steps = 0;
+  std::uint64_t search_visits_per_step = kSearchVisitsPerStep;  // AdaptiveOptions::max_search_visits
   bool curvature_properties = false;
   // Variant::Improved's additions inside the tracker (Variant::Paper turns them off): the
   // grading of new points' targets, and points along an expansion's first and last new front
@@ -96,15 +108,6 @@ class StalledFrontError : public LimitExceededError {
 // over what meshing runs measure and stops such a runaway in less than half the time.
 inline constexpr double kAreaBound = 4;
 
-// The bound on the cost of the neighbour searches: points looked at per front step, averaged
-// over windows of kSearchWindow steps. Surfaces the method meshes take 40-130 over a whole run
-// (bunny VIS-800, torus, tanglecube, Chmutov, 50 blobs at factors 1 and 3); a window far above
-// it has edges much shorter than the hash cells somewhere (a min_edge far below the typical
-// edge, at a near-singular point) or a front running over finished mesh, and would go on for
-// hours; it is stopped with an error naming the place instead. A window rather than the whole
-// run, so that a run that degenerates late is stopped soon after.
-inline constexpr std::uint64_t kSearchVisitsPerStep = 5000;
-inline constexpr std::uint64_t kSearchWindow = 4096;
 
 // Normals whose angle is below arccos of this belong to one side of the surface (see same_side).
 inline constexpr double kSameSideCosine = 0;
@@ -184,7 +187,7 @@ class Tracker {
   // Points looked at by the spatial searches (front and vertex hashes).
   std::uint64_t search_visits() const { return front_hash_.visits() + vertex_hash_.visits(); }
   // Throws LimitExceededError, naming the place of `node`, when the searches have cost more than
-  // kSearchVisitsPerStep a step.
+  // Settings::search_visits_per_step a step.
   void check_search_budget(int node);
   std::size_t splits() const { return splits_; }
   std::size_t merges() const { return merges_; }
@@ -376,7 +379,10 @@ class Tracker {
   // entry is stale once its start node has left the fronts or links elsewhere.
   mutable std::priority_queue<std::tuple<double, int, int>> front_edges_;
   FrontSet fs_;
-  SpatialHash front_hash_, vertex_hash_;
+  SpatialHash front_hash_;
+  // Splits crowded cells (Crowding::split), which changes the order of its points: every query
+  // on it marks, tests for any, or takes a minimum with ties broken by id.
+  SpatialHash vertex_hash_;
   std::vector<int> front_refs_;  // front nodes of each vertex: 0 once it is finished
   std::vector<int> stack_;
   // Rollbacks: vertices left without a triangle, the places rolled back (point, times), and

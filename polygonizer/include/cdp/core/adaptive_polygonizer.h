@@ -110,6 +110,10 @@ struct AdaptiveOptions {
   // 5e7; max_steps = 4 max_triangles + 10^4).
   std::size_t max_triangles = 0;
   std::size_t max_steps = 0;
+  // The neighbour searches' cost: points they look at per front step, averaged over windows of
+  // 4096 steps. 0: 5000, a hundred times what meshing runs take (about 40-130); a window above it
+  // has edges far shorter than the search cells somewhere or a front running over finished mesh.
+  std::size_t max_search_visits = 0;
   // Called now and then with an estimate of the fraction of the meshing done.
   ProgressCallback progress;
   // Called on entering each phase: "sampling the seed grid", "meshing along creases" (a field
