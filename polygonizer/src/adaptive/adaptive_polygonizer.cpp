@@ -680,7 +680,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
   st.extra["deferrals"] = tracker->deferrals();
   st.extra["anticipations"] = tracker->anticipations();
   st.extra["side_points"] = tracker->side_points();
-  st.extra["forced_closures"] = tracker->forced_closures();
+  st.extra["forced_closures"] = tracker->forced_closures() + (creased ? creased->forced_closures : 0);
   st.extra["rollbacks"] = tracker->rollbacks();
   st.extra["rollbacks_failed"] = tracker->failed_rollbacks();
   st.extra["remeshed_with_rollbacks"] = remeshed;

@@ -495,6 +495,7 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
     out.steps += tracker.steps();
     out.splits += tracker.splits();
     out.merges += tracker.merges();
+    out.forced_closures += tracker.forced_closures();
     out.patch_refusals += tracker.patch_refusals();
   }
   for (std::size_t v = 0; v < nc; ++v) {

@@ -40,6 +40,8 @@ struct CreaseMesh {
   std::vector<double> target, mac, shape_index;
   std::size_t crease_vertices = 0, pieces = 0;
   std::size_t steps = 0, splits = 0, merges = 0;
+  // Stuck fronts the patches' trackers closed ear by ear (Tracker::forced_closures).
+  std::size_t forced_closures = 0;
   // Bridges, closures and placements the patch tests refused (Tracker::patch_refusals).
   std::size_t patch_refusals = 0;
 };

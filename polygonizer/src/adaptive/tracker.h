@@ -283,6 +283,8 @@ class Tracker {
   void link(int a, int b);
   // The longest edge on any front now (edges that left the fronts are dropped lazily).
   double longest_front_edge() const;
+  // Whether the front through node is a slit: narrower than min_edge, on one sheet (see step).
+  bool is_slit(int node) const;
   void remove_node(int node);
   void refresh(int node);  // recompute the angle and requeue
   void relabel(int start, int front);
