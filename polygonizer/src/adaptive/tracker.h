@@ -108,7 +108,6 @@ class StalledFrontError : public LimitExceededError {
 // over what meshing runs measure and stops such a runaway in less than half the time.
 inline constexpr double kAreaBound = 4;
 
-
 // Normals whose angle is below arccos of this belong to one side of the surface (see same_side).
 inline constexpr double kSameSideCosine = 0;
 
