@@ -611,8 +611,7 @@ void Tracker::step(int& f) {
   // either, and is closed the same way: the Barth ball at factor 9 left an 11-point slit 0.21
   // long and 0.002 wide (min_edge 0.0021) along a crease loop on the ball, and every round of
   // shorter expansions stalled on it.
-  const bool slit = rounds >= 2 && size > kSmallFront && is_slit(node);
-  if (rounds >= 2 && (size <= kSmallFront || slit)) {
+  if (rounds >= 2 && (size <= kSmallFront || is_slit(node))) {
     // A small hole that no expansion fits into is closed like the paper's last three points:
     // the ear of smallest front angle first (it is below pi, since the angles of a small
     // front sum to about (size - 2) pi), among the ears that hold no other point of the
