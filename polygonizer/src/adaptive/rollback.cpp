@@ -449,7 +449,7 @@ void Tracker::compact() {
     for (int& v : tri) v = remap[v];
   dead_.assign(m, 0);
   vertex_hash_ = SpatialHash(s_.hash_cell, Crowding::split);
-  for (int v = 0; v < m; ++v) vertex_hash_.insert(v, mesh_.positions[v]);
+  for (int v = 0; v < m; ++v) vertex_hash_.insert(v, mesh_.positions[v], vertex_position());
 }
 
 }  // namespace cdp::adaptive

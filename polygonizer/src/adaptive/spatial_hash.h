@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 namespace cdp::adaptive {
@@ -38,24 +39,28 @@ class SpatialHash {
   // vertices shared a cell, and the test of each new point against the finished mesh looked at
   // all of them (over 6000 points a step, the search bound). A split cell's points are visited
   // in the finer hash's order, so only callers whose answers do not depend on order may use it.
-  // Such a hash keeps each point's position, to hand it on; it holds points, not boxes.
+  // Such a hash holds points, not boxes, and keeps their ids only: a split asks position_of(id)
+  // where each point it hands on lies (the point's position when it was inserted). A hash that
+  // never splits never calls it.
   void insert(int id, const Vec3& p) {
+    insert(id, p, [](int) -> Vec3 { throw std::logic_error("SpatialHash: a splitting hash needs positions"); });
+  }
+  template <class PositionOf>
+  void insert(int id, const Vec3& p, const PositionOf& position_of) {
     const auto c = static_cast<std::size_t>(cell(key(cell_of(p))));
     if (crowding_ == Crowding::keep) {
       ids_[c].push_back(id);
       return;
     }
     if (finer_[c]) {
-      finer_[c]->insert(id, p);
+      finer_[c]->insert(id, p, position_of);
       return;
     }
     ids_[c].push_back(id);
-    points_[c].push_back(p);
     if (ids_[c].size() <= kCrowdedCell || depth_ >= kMaxSplitDepth) return;
     finer_[c].reset(new SpatialHash(h_ / kSplitRatio, Crowding::split, depth_ + 1));
-    for (std::size_t i = 0; i < ids_[c].size(); ++i) finer_[c]->insert(ids_[c][i], points_[c][i]);
+    for (const int moved : ids_[c]) finer_[c]->insert(moved, moved == id ? p : position_of(moved), position_of);
     std::vector<int>().swap(ids_[c]);
-    std::vector<Vec3>().swap(points_[c]);
   }
 
   void remove(int id, const Vec3& p) {
@@ -71,10 +76,6 @@ class SpatialHash {
       if (v[i] == id) {
         v[i] = v.back();
         v.pop_back();
-        if (crowding_ == Crowding::split) {
-          points_[u][i] = points_[u].back();
-          points_[u].pop_back();
-        }
         return;
       }
   }
@@ -274,10 +275,7 @@ class SpatialHash {
         slot = {k, static_cast<int>(ids_.size())};
         keys_.push_back(k);
         ids_.emplace_back();
-        if (crowding_ == Crowding::split) {
-          points_.emplace_back();
-          finer_.emplace_back();
-        }
+        if (crowding_ == Crowding::split) finer_.emplace_back();
         return slot.cell;
       }
       if (slot.key == k) return slot.cell;
@@ -315,8 +313,7 @@ class SpatialHash {
   double h_, inv_h_;
   Crowding crowding_ = Crowding::keep;
   int depth_ = 0;  // levels of splitting above this hash
-  std::vector<std::vector<Vec3>> points_;                   // Crowding::split: of each id, as ids_
-  std::vector<std::unique_ptr<SpatialHash>> finer_;         // Crowding::split: of each split cell
+  std::vector<std::unique_ptr<SpatialHash>> finer_;  // Crowding::split: of each split cell
   std::vector<Slot> slots_;
   std::vector<std::vector<int>> ids_;
   std::vector<std::uint64_t> keys_;  // of each occupied cell, as ids_

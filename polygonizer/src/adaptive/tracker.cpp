@@ -78,7 +78,7 @@ int Tracker::add_vertex(const Placed& placed) {
   mac_.push_back(c.mac);
   shape_index_.push_back(c.shape_index);
   front_refs_.push_back(0);
-  vertex_hash_.insert(v, placed.point);
+  vertex_hash_.insert(v, placed.point, vertex_position());
   return v;
 }
 
@@ -421,7 +421,7 @@ void Tracker::adopt_finished(std::span<const double> target, std::span<const dou
   mac_.assign(mac.begin(), mac.end());
   shape_index_.assign(shape_index.begin(), shape_index.end());
   front_refs_.assign(n, 0);
-  for (std::size_t v = 0; v < n; ++v) vertex_hash_.insert(static_cast<int>(v), mesh_.positions[v]);
+  for (std::size_t v = 0; v < n; ++v) vertex_hash_.insert(static_cast<int>(v), mesh_.positions[v], vertex_position());
   for (const auto& t : mesh_.triangles) {
     const Vec3& pa = mesh_.positions[t[0]];
     area_ += 0.5 * (mesh_.positions[t[1]] - pa).cross(mesh_.positions[t[2]] - pa).norm();

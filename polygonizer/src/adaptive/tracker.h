@@ -384,6 +384,10 @@ class Tracker {
   // Splits crowded cells (Crowding::split), which changes the order of its points: every query
   // on it marks, tests for any, or takes a minimum with ties broken by id.
   SpatialHash vertex_hash_;
+  // Where the vertex hash's points are, for a crowded cell that splits (SpatialHash::insert).
+  auto vertex_position() const {
+    return [this](int v) -> const Vec3& { return mesh_.positions[static_cast<std::size_t>(v)]; };
+  }
   std::vector<int> front_refs_;  // front nodes of each vertex: 0 once it is finished
   std::vector<int> stack_;
   // Rollbacks: vertices left without a triangle, the places rolled back (point, times), and
