@@ -474,6 +474,31 @@ TEST(AdaptiveSlits, TheBarthBallsSlitAtFactorNineIsClosed) {
   expect_topology(r.mesh, 1, 30);
 }
 
+// Two overlapping spheres on a bar. The crease tracing cannot lay out its creases (where the
+// spheres' seam meets the bar its pieces become tangent), so it is meshed smooth across them,
+// with edges down to min_edge along every crease and long ones elsewhere. At factors 5 and 6
+// fronts went wrong at a crease and crowded the neighbour searches past their bound (5,000 front
+// points a step), which ended the run. Past the default bound the run is now made again with
+// rollbacks, as after a stall, and that run meshes them.
+TEST(AdaptiveSearchBound, TwoSpheresOnABarMeshSmoothAcrossTheirCreases) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "about 5 s in the normal build, several times that under the sanitizers";
+#endif
+  const auto field = test::field_from_json(expression(
+      "min(min(sqrt((x-0.5)^2+y^2+z^2)-0.85, sqrt((x+0.5)^2+y^2+z^2)-0.85), "
+      "max(abs(x)-1.2,max(abs(y+0.9)-0.25,abs(z)-0.25)))",
+      1.7));
+  for (const double factor : {5.0, 6.0}) {
+    SCOPED_TRACE(factor);
+    AdaptiveOptions o;
+    o.factor = factor;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    EXPECT_FALSE(r.stats.extra.at("creases.followed").get<bool>());
+    EXPECT_TRUE(r.stats.extra.at("remeshed_with_rollbacks").get<bool>());
+    expect_topology(r.mesh, 1, 0);
+  }
+}
+
 // Walls that face each other across the solid are not a cut when each is a surface of its own: a
 // shell 0.05 thick (its walls' facing vertices within two edges at factors 1-3, the grid of the
 // test cannot tell them apart, their triangles lie on the surface) meshes as two spheres.

@@ -127,6 +127,7 @@ adaptive::Settings resolve(const Field& field, const AdaptiveOptions& o) {
   s.max_triangles = o.max_triangles > 0 ? o.max_triangles : static_cast<std::size_t>(derived);
   s.max_steps = o.max_steps > 0 ? o.max_steps : 4 * s.max_triangles + 10000;
   s.search_visits_per_step = o.max_search_visits > 0 ? o.max_search_visits : adaptive::kSearchVisitsPerStep;
+  s.callers_search_bound = o.max_search_visits > 0;
   return s;
 }
 

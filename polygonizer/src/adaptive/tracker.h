@@ -45,7 +45,9 @@ struct FinerZone {
 // hash cells somewhere (the vertex hash splits crowded cells, four levels deep; the front hash
 // does not) or a front running over finished mesh, and would go on for hours; it is stopped
 // with an error naming the place instead. A window rather than the whole run, so that a run
-// that degenerates late is stopped soon after.
+// that degenerates late is stopped soon after. Past this default bound the error is a
+// StalledFrontError, which the polygonizer meets as a stall, by meshing again with rollbacks;
+// past a caller's own bound (AdaptiveOptions::max_search_visits) it is not.
 inline constexpr std::uint64_t kSearchVisitsPerStep = 5000;
 inline constexpr std::uint64_t kSearchWindow = 4096;
 
@@ -57,6 +59,7 @@ struct Settings {
   std::size_t max_triangles = 0;
   std::size_t max_steps = 0;
   std::uint64_t search_visits_per_step = kSearchVisitsPerStep;  // AdaptiveOptions::max_search_visits
+  bool callers_search_bound = false;  // search_visits_per_step is the caller's, not the default
   bool curvature_properties = false;
   // Variant::Improved's additions inside the tracker (Variant::Paper turns them off): the
   // grading of new points' targets, and points along an expansion's first and last new front
@@ -92,7 +95,9 @@ struct Settings {
   double hash_cell = 1;
 };
 
-// The error of a front that cannot advance even at a quarter of min_edge.
+// The error of a front that cannot advance even at a quarter of min_edge, or whose searches
+// pass the default bound on their cost (kSearchVisitsPerStep): both where a front has gone
+// wrong, which a run with rollbacks undoes early.
 class StalledFrontError : public LimitExceededError {
  public:
   using LimitExceededError::LimitExceededError;

@@ -113,6 +113,8 @@ struct AdaptiveOptions {
   // The neighbour searches' cost: points they look at per front step, averaged over windows of
   // 4096 steps. 0: 5000, a hundred times what meshing runs take (about 40-130); a window above it
   // has edges far shorter than the search cells somewhere or a front running over finished mesh.
+  // Past the default bound the surface is meshed again with rollbacks, as after a stalled front,
+  // before any error; past a bound set here the run ends with LimitExceededError.
   std::size_t max_search_visits = 0;
   // Called now and then with an estimate of the fraction of the meshing done.
   ProgressCallback progress;
