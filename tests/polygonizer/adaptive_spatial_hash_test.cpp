@@ -58,8 +58,12 @@ TEST(AdaptiveSpatialHash, ACrowdedCellSplitsWithoutLosingPointsAndKeepsSearchesL
     split.for_each_near(c, r, [&](int id) { ++seen[id]; });
     for (std::size_t i = 0; i < p.size(); ++i) {
       const int id = static_cast<int>(i);
-      if (present[i] && in_box(p[i], lo, hi)) EXPECT_EQ(seen.count(id), 1u) << "query " << q << " lost point " << id;
-      if (!present[i]) EXPECT_EQ(seen.count(id), 0u) << "query " << q << " found removed point " << id;
+      if (present[i] && in_box(p[i], lo, hi)) {
+        EXPECT_EQ(seen.count(id), 1u) << "query " << q << " lost point " << id;
+      }
+      if (!present[i]) {
+        EXPECT_EQ(seen.count(id), 0u) << "query " << q << " found removed point " << id;
+      }
     }
     for (const auto& [id, times] : seen) EXPECT_EQ(times, 1) << "query " << q << " point " << id;
   }
