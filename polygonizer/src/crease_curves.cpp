@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <unordered_map>
 
 namespace cdp {
@@ -97,22 +98,39 @@ struct Tracer {
     return piece(p, a).gradient.cross(piece(p, b).gradient).normalized();
   }
 
-  // A third piece whose zero set lies within `reach` of p and which is taken there: the corner
-  // of the three, if the projection reaches one on the surface within 2 reach.
-  bool corner_near(const Vec3& p, const Branch& a, const Branch& b, double reach, Vec3& corner) const {
+  // The corner where the walk from p along tangent t meets a third piece: one whose zero set
+  // lies within `reach` of p and which is taken there, if the projection onto the three reaches
+  // a point on the surface within 2 reach that is p itself (within the active radius) or lies
+  // ahead; the nearest such. Corners behind are where the walk came from. Every third piece is
+  // looked at, not only the first: where a sphere's seam meets the face of a bar, three corners
+  // lie within 0.03 of each other (two spheres on a bar, where the bar's edge leaves one sphere
+  // and enters the other), and the walk from one of them towards the next found the one it
+  // started at, stepped past the next, and stopped without a corner. A corner ahead must also
+  // lie within max_turn of the tangent, as a step would (closer than min_spacing, any way
+  // ahead): the chord to a corner 0.23 away along a sphere's arc on the bar's side strayed from
+  // the crease by more than kOnTracedCurve, and the arc was traced three times.
+  bool corner_near(const Vec3& p, const Vec3& t, const Branch& a, const Branch& b, double reach, Vec3& corner) const {
     const Vec3 ga = piece(p, a).gradient.normalized(), gb = piece(p, b).gradient.normalized();
+    bool found = false;
+    double nearest = std::numeric_limits<double>::infinity();
     for (const FieldPiece& q : field.pieces(p, reach)) {
       const Vec3 g = q.gradient.normalized();
       if (g.dot(ga) > kSamePieceCosine || g.dot(gb) > kSamePieceCosine) continue;
       if (!(std::abs(q.value) <= reach * q.gradient.norm())) continue;
       const std::vector<Branch> three{a, b, q.branch};
       const CreaseProjection c = project_to_crease(field, p, three, o.newton);
-      if (!c.ok() || (c.point - p).norm() > 2 * reach) continue;
+      const double d = (c.point - p).norm();
+      if (!c.ok() || d > 2 * reach || d >= nearest) continue;
+      if (d > kActiveRadius * tol) {
+        const double along = (c.point - p).dot(t);
+        if (along <= 0 || (d > min_spacing && along < std::cos(o.max_turn) * d)) continue;
+      }
       if (!both_active(c.point, ga, g)) continue;
       corner = c.point;
-      return true;
+      nearest = d;
+      found = true;
     }
-    return false;
+    return found;
   }
 
   // Walks from `start` along the crease of a and b in direction `dir` (+1 or -1 times the
@@ -130,13 +148,10 @@ struct Tracer {
         throw LimitExceededError("trace_creases: more than " + std::to_string(o.max_points) +
                                  " crease points (CreaseTracingOptions::max_points)");
       Vec3 corner;
-      if (corner_near(p, a, b, step, corner)) {
+      if (corner_near(p, t, a, b, step, corner)) {
         if ((corner - p).norm() <= kActiveRadius * tol) return End::Corner;  // p is the corner
-        // Only ahead: a corner behind is where this walk started.
-        if ((corner - p).dot(t) > 0) {
-          out.push_back(corner);
-          return End::Corner;
-        }
+        out.push_back(corner);
+        return End::Corner;
       }
       // Predictor along the tangent, corrector onto the crease; shorter steps where the crease
       // turns fast or the projection fails.

@@ -10,6 +10,7 @@
 #include <cdp/core/models/compiled.h>
 #include <cdp/core/models/expression.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <set>
@@ -235,6 +236,38 @@ TEST(CreaseCurves, LoopsOfACylindersRimsTwoSpheresAndABoxMinusASphere) {
   EXPECT_EQ(loops, 6u);
   EXPECT_EQ(holes.curves.size(), 18u);
   EXPECT_EQ(holes.corners.size(), 8u);
+}
+
+// Two overlapping spheres on a bar (radius 0.85 at x = -0.5 and 0.5; the bar |x| <= 1.2,
+// -1.15 <= y <= -0.65, |z| <= 0.25). Where the spheres' seam meets the bar's top face, a face
+// 0.025 wide is left between three corners on each side: the seam's (0, -0.65, +-sqrt(0.05))
+// and the two where the bar's edge leaves one sphere and enters the other (+-(0.5 - sqrt(0.2375)),
+// -0.65, +-0.25). A walk from one of them towards the next took the corner it started from for
+// the only one near, stepped past the next and stopped (4 stops at resolution 64); and a walk
+// jumped to a corner 0.23 ahead along a sphere's arc on the bar's side, a chord that strayed
+// from the arc, so the arc was traced three times. Every crease once: the seam; the arcs of
+// each sphere on the top face (2 short ones each by the seam, 1 each at the bar's ends) and on
+// the two sides (2 each); the top edges' pieces between the spheres (2) and at the ends (4);
+// the end faces' edges (8); the bottom's long edges (2).
+TEST(CreaseCurves, TwoSpheresOnABarHaveEveryCornerOfTheFaceBetweenThem) {
+  const Expression bar = Expression(
+      "min(min(sqrt((x-0.5)^2+y^2+z^2)-0.85, sqrt((x+0.5)^2+y^2+z^2)-0.85), "
+      "max(abs(x)-1.2,max(abs(y+0.9)-0.25,abs(z)-0.25)))",
+      {}, Box{Vec3::Constant(-1.7), Vec3::Constant(1.7)});
+  CreaseTracingOptions o;
+  o.resolution = 64;
+  const CreaseTracingResult r = trace_creases(bar, o);
+  EXPECT_EQ(r.stops, 0u);
+  EXPECT_EQ(r.corners.size(), 18u);
+  EXPECT_EQ(r.curves.size(), 27u);
+  for (const CreaseCurve& c : r.curves) EXPECT_TRUE(c.closed || (c.starts_at_corner && c.ends_at_corner));
+  const double seam = std::sqrt(0.05), edge = 0.5 - std::sqrt(0.2375);
+  for (const Vec3& corner : {Vec3(0, -0.65, seam), Vec3(0, -0.65, -seam), Vec3(edge, -0.65, 0.25),
+                             Vec3(-edge, -0.65, 0.25), Vec3(edge, -0.65, -0.25), Vec3(-edge, -0.65, -0.25)}) {
+    double nearest = 1;
+    for (const Vec3& q : r.corners) nearest = std::min(nearest, (q - corner).norm());
+    EXPECT_LT(nearest, 1e-8) << corner.transpose();
+  }
 }
 
 TEST(CreaseCurves, TheGyroidAndBarthBallsRimsAreAllFoundOnce) {
