@@ -12,6 +12,12 @@
 namespace cdp::test {
 
 inline constexpr const char* kTanglecube = "x^4 - 5*x^2 + y^4 - 5*y^2 + z^4 - 5*z^2 + 11.8";
+// Two overlapping spheres (radius 0.85 at x = -0.5 and 0.5) on a bar (|x| <= 1.2,
+// -1.15 <= y <= -0.65, |z| <= 0.25), in the box +-1.7: where the spheres' seam meets the bar's
+// top face, three of its corners lie within 0.03 of each other.
+inline constexpr const char* kSpheresOnABar =
+    "min(min(sqrt((x-0.5)^2+y^2+z^2)-0.85, sqrt((x+0.5)^2+y^2+z^2)-0.85), "
+    "max(abs(x)-1.2,max(abs(y+0.9)-0.25,abs(z)-0.25)))";
 
 inline std::unique_ptr<Field> tanglecube() {
   return std::make_unique<Expression>(kTanglecube, std::map<std::string, double>{}, Box{{-3, -3, -3}, {3, 3, 3}});

@@ -453,12 +453,6 @@ TEST(AdaptiveScales, ASphereBesideAThinTubeMeshesWithTheTubesHashCells) {
   expect_topology(r3.mesh, 2, 1);
 }
 
-// Two overlapping spheres on a bar (its creases meet in corners 0.025 apart where the spheres'
-// seam meets the bar).
-const char* kSpheresOnABar =
-    "min(min(sqrt((x-0.5)^2+y^2+z^2)-0.85, sqrt((x+0.5)^2+y^2+z^2)-0.85), "
-    "max(abs(x)-1.2,max(abs(y+0.9)-0.25,abs(z)-0.25)))";
-
 // A stuck front narrower than min_edge and lying on one sheet (a slit) is closed by ears
 // (Tracker::is_slit). The Barth ball at factor 9 with min_edge 0.0021 (the run made again with a
 // lower min_edge, meshing along the creases) stalled at an 11-point slit 0.21 long and 0.002 wide
@@ -490,7 +484,7 @@ TEST(AdaptiveSearchBound, TwoSpheresOnABarMeshSmoothAcrossTheirCreases) {
 #if defined(__SANITIZE_ADDRESS__)
   GTEST_SKIP() << "about 5 s in the normal build, several times that under the sanitizers";
 #endif
-  const auto field = test::field_from_json(expression(kSpheresOnABar, 1.7));
+  const auto field = test::field_from_json(expression(test::kSpheresOnABar, 1.7));
   for (const double factor : {5.0, 6.0}) {
     SCOPED_TRACE(factor);
     AdaptiveOptions o;
@@ -506,7 +500,7 @@ TEST(AdaptiveSearchBound, TwoSpheresOnABarMeshSmoothAcrossTheirCreases) {
 // face the spheres' seam leaves on the bar (crease_test.cpp), the layout failed, and the surface
 // was meshed smooth: factors 5, 6, 8 and 9 failed. Now every factor follows the creases.
 TEST(AdaptiveCreasePatches, TwoSpheresOnABarMeshAlongTheirCreasesAtEveryFactor) {
-  const auto field = test::field_from_json(expression(kSpheresOnABar, 1.7));
+  const auto field = test::field_from_json(expression(test::kSpheresOnABar, 1.7));
   for (const double factor : {1.0, 5.0, 8.0, 9.0, 10.0}) {
     SCOPED_TRACE(factor);
     AdaptiveOptions o;

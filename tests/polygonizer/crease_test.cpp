@@ -16,6 +16,8 @@
 #include <set>
 #include <string>
 
+#include "common/test_fields.h"
+
 namespace cdp {
 namespace {
 
@@ -250,10 +252,7 @@ TEST(CreaseCurves, LoopsOfACylindersRimsTwoSpheresAndABoxMinusASphere) {
 // the two sides (2 each); the top edges' pieces between the spheres (2) and at the ends (4);
 // the end faces' edges (8); the bottom's long edges (2).
 TEST(CreaseCurves, TwoSpheresOnABarHaveEveryCornerOfTheFaceBetweenThem) {
-  const Expression bar = Expression(
-      "min(min(sqrt((x-0.5)^2+y^2+z^2)-0.85, sqrt((x+0.5)^2+y^2+z^2)-0.85), "
-      "max(abs(x)-1.2,max(abs(y+0.9)-0.25,abs(z)-0.25)))",
-      {}, Box{Vec3::Constant(-1.7), Vec3::Constant(1.7)});
+  const Expression bar = expression(test::kSpheresOnABar, 1.7);
   CreaseTracingOptions o;
   o.resolution = 64;
   const CreaseTracingResult r = trace_creases(bar, o);
