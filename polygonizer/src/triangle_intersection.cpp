@@ -690,6 +690,21 @@ bool triangle_is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
   return projection_axis(a, b, c) < 0;
 }
 
+// A computed m.d, with d = q - s computed too, is off from the exact value of m.(q - s) by at most
+// about 4 units in the last place of sum |m_i| |d_i| (m is any vector: it is chosen, not computed
+// exactly); the margin is 1e-14 of that sum, and a margin below the smallest normal double (an
+// underflow) decides nothing.
+bool apart_at_shared_vertex(const Vec3& s, const Vec3& a1, const Vec3& a2, const Vec3& b1, const Vec3& b2) {
+  const Vec3 da1 = a1 - s, da2 = a2 - s, db1 = b1 - s, db2 = b2 - s;
+  const Vec3 m = (da1.normalized() + da2.normalized()).normalized() - (db1.normalized() + db2.normalized()).normalized();
+  const auto side = [&](const Vec3& d) {
+    const double x = m.dot(d), margin = 1e-14 * m.cwiseAbs().dot(d.cwiseAbs());
+    if (!(margin >= std::numeric_limits<double>::min())) return 0;
+    return x > margin ? 1 : x < -margin ? -1 : 0;
+  };
+  return side(da1) == 1 && side(da2) == 1 && side(db1) == -1 && side(db2) == -1;
+}
+
 bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
   for (const Tri* t : {&a, &b})
     for (const Vec3& p : *t)

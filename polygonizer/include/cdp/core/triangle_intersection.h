@@ -59,4 +59,15 @@ std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* 
 // and whose triangles are not degenerate (non-empty boxes above).
 bool nondegenerate_triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);
 
+// A floating-point filter before the exact test, for two triangles (s, a1, a2) and (s, b1, b2)
+// that share exactly the vertex s: true only when a plane through s has a1 and a2 strictly on
+// one side and b1 and b2 strictly on the other, so that the triangles meet only at s, which
+// triangles_intersect does not count. Decides no sign that rounding could flip; false when
+// unsure, for corners that are not finite, and for coordinates so small that products underflow.
+// The plane's normal is the difference of the triangles' mean directions from s: it separates
+// two angles at s whose bisectors are more than twice the wider half-angle apart, as two
+// triangles of one fan with a triangle between them are (the pairs a local intersection test
+// meets most, each straddling the other's plane). About a fifth of the exact test's cost there.
+bool apart_at_shared_vertex(const Vec3& s, const Vec3& a1, const Vec3& a2, const Vec3& b1, const Vec3& b2);
+
 }  // namespace cdp
