@@ -567,7 +567,8 @@ class Improver {
   // apart_by_plane leaves unsure are nearly all such: in star_intersects, a star triangle and a
   // triangle around one of the star's outer corners; none of them intersected on the torus or the
   // bunny, and the exact test was a seventh of star_intersects). The same position under two
-  // ids is not shared here: apart_at_shared_vertex then finds that corner on neither side.
+  // ids is not shared here; apart_at_shared_vertex cannot find it strictly on both sides of its
+  // plane, so it answers false and the exact test decides.
   static bool apart_at_shared_corner(const std::array<Vec3, 3>& a, const Tri& ia, const std::array<Vec3, 3>& b,
                                      const Tri& ib) {
     int i = -1, j = -1;

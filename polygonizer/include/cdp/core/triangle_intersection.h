@@ -67,7 +67,7 @@ bool nondegenerate_triangles_intersect(const std::array<Vec3, 3>& a, const std::
 // The plane's normal is the difference of the triangles' mean directions from s: it separates
 // two angles at s whose bisectors are more than twice the wider half-angle apart, as two
 // triangles of one fan with a triangle between them are (the pairs a local intersection test
-// meets most, each straddling the other's plane). About a fifth of the exact test's cost there.
+// meets most, each straddling the other's plane).
 bool apart_at_shared_vertex(const Vec3& s, const Vec3& a1, const Vec3& a2, const Vec3& b1, const Vec3& b2);
 
 }  // namespace cdp
