@@ -338,7 +338,11 @@ TEST(AdaptiveTolerance, ReportsTheTrianglesFartherThanEpsMeasuredDensely) {
   EXPECT_GT(beyond, 0u);
   EXPECT_EQ(over, beyond);
   EXPECT_GT(measured, over);
-  EXPECT_DOUBLE_EQ(r.stats.extra.at("quality.over_tolerance_worst").get<double>(), worst);
+  // The same distance by two computations (the polygonizer's Newton path, the test's nearest of
+  // the path's end and its foot steps; on a sphere both are radial): equal within the accuracy
+  // both projections are asked for, not bit for bit (they differed by 48 ulps on one mesh).
+  EXPECT_NEAR(r.stats.extra.at("quality.over_tolerance_worst").get<double>(), worst,
+              1e-10 * field->bounds().diagonal());
 }
 
 TEST(AdaptiveTolerance, TrianglesNearTheBoundAreMeasuredBeforeTheyAreSplit) {
