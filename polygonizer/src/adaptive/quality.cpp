@@ -89,14 +89,21 @@ constexpr double kRelaxRatio = 1.15;
 // Plain sweeps of the relaxation, each flips then moves; where they leave the mesh's mean ratio
 // over the aim, the search sweeps below take over. One, because the later ones buy little for
 // what they cost. Over issue 18's 343-run bounds sweep (the 9 experiment fields and the 40
-// topology-sweep fields, factors 1-5 and tolerances 5e-2-1e-3), against 4: the same triangle
-// counts, every run within every bound, the mean over runs of the mean ratio 1.186 -> 1.208 (the
-// worst 1.2487 -> 1.2499, 43 runs instead of 5 finishing with search sweeps), 0.76 of the time
-// and of the field evaluations; the mean Phong error of bunny VIS-800, Igea VIS-4004, tanglecube
-// and random blobs at factors 3 and 5 0.3-1.3 % higher (tanglecube at 5: 0.4 % lower), what
-// edges 0.3-1.3 % shorter would win back if the error goes as the edge length. 2 sweeps: 1.194,
-// 0.86 of the time. Instructions (callgrind, one thread): torus factor 20 3785M -> 2509M, bunny VIS-800
-// factor 3 2118M -> 1635M.
+// topology-sweep fields, factors 1-5 and tolerances 5e-2-1e-3), against 4:
+// - every run within every bound; the same triangle counts but in 25 tolerance runs (up to 8
+//   triangles either way: the tolerance's refinement sees other positions);
+// - the mean over runs of the mean ratio 1.186 -> 1.208 (the worst 1.2487 -> 1.2499; 43 runs
+//   instead of 5 finish with search sweeps);
+// - the smallest angle over all runs the same (21.13 degrees); a run's own lower in 181 runs and
+//   higher in 58, the mean 31.67 -> 30.87, by up to 11 degrees where it was far above 30 (coarse
+//   meshes of few blobs), and 30.01 -> 25.50 on one (blobs37 at 1e-3);
+// - 0.76 of the time and of the field evaluations;
+// - the mean Phong error of bunny VIS-800, Igea VIS-4004, tanglecube and random blobs at factors
+//   3 and 5 0.3-1.3 % higher (tanglecube at 5: 0.4 % lower), what edges 0.3-1.3 % shorter would
+//   win back if the error goes as the edge length.
+// 2 sweeps: a mean ratio of 1.194 in 0.86 of the time. Instructions in polygonize_adaptive
+// (callgrind, one thread, -O2 -g): torus factor 20 3913M -> 2645M, bunny VIS-800 factor 3
+// 2030M -> 1571M.
 constexpr int kRelaxSweeps = 1;
 // A flip of the relaxation that brings the valences nearer 6 may raise the two triangles'
 // summed edge ratio by up to this share, which the moves that follow more than make up for.
