@@ -1,6 +1,7 @@
 #include <cdp/core/newton_projection.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -110,13 +111,16 @@ std::vector<ProjectionResult> project_to_surface(const Field& field, std::span<c
 }
 
 std::span<const ProjectionResult> BatchProjector::project(const Field& field, std::span<const Vec3> starts,
-                                                          std::span<const ProjectionOptions> options) {
+                                                          std::span<const ProjectionOptions> options, double hessians_below) {
   if (options.size() != starts.size())
     throw std::invalid_argument("project_to_surface: " + std::to_string(starts.size()) + " start points but " +
                                 std::to_string(options.size()) + " options");
   const std::size_t n = starts.size();
   results_.assign(n, ProjectionResult{});
   limits_.resize(n);
+  hessians_.resize(n);
+  has_hessian_.assign(n, 0);
+  hessian_seconds_ = 0;
   active_.clear();
   int rounds = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -131,11 +135,48 @@ std::span<const ProjectionResult> BatchProjector::project(const Field& field, st
   for (int round = 0; round < rounds && !active_.empty(); ++round) {
     const std::size_t m = active_.size();
     for (std::size_t k = 0; k < m; ++k) points_[k] = results_[active_[k]].point;
-    field.values_gradients(points_.data(), values_.data(), gradients_.data(), m);
+    // The points near convergence (see the header) go to gradients_hessians, the rest to
+    // values_gradients; each point's value and gradient end up at its slot k either way.
+    near_.clear();
+    if (hessians_below > 0 && round > 0)
+      for (std::size_t k = 0; k < m; ++k)
+        if (results_[active_[k]].residual <= hessians_below) near_.push_back(k);
+    if (near_.empty()) {
+      field.values_gradients(points_.data(), values_.data(), gradients_.data(), m);
+    } else {
+      const std::size_t h = near_.size();
+      split_points_.resize(m);
+      split_values_.resize(m);
+      split_gradients_.resize(m);
+      round_hessians_.resize(h);
+      // The near points first, then the others, each group in its order; scattered back below.
+      std::size_t far = h;
+      for (std::size_t k = 0, j = 0; k < m; ++k) {
+        if (j < h && near_[j] == k) split_points_[j++] = points_[k];
+        else split_points_[far++] = points_[k];
+      }
+      const auto start = std::chrono::steady_clock::now();
+      field.gradients_hessians(split_points_.data(), split_values_.data(), split_gradients_.data(),
+                               round_hessians_.data(), h);
+      hessian_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (h < m)
+        field.values_gradients(split_points_.data() + h, split_values_.data() + h, split_gradients_.data() + h, m - h);
+      far = h;
+      for (std::size_t k = 0, j = 0; k < m; ++k) {
+        const std::size_t from = j < h && near_[j] == k ? j++ : far++;
+        values_[k] = split_values_[from];
+        gradients_[k] = split_gradients_[from];
+      }
+    }
     std::size_t kept = 0;
-    for (std::size_t k = 0; k < m; ++k) {
+    for (std::size_t k = 0, j = 0; k < m; ++k) {
       const std::size_t i = active_[k];
-      if (!newton_round(results_[i], starts[i], values_[k], gradients_[k], limits_[i])) active_[kept++] = i;
+      const bool with_hessian = j < near_.size() && near_[j] == k;
+      if (with_hessian) ++j;
+      const bool ended = newton_round(results_[i], starts[i], values_[k], gradients_[k], limits_[i]);
+      // The Hessian is at the result's point only where the round ended without a step.
+      if (ended && with_hessian && results_[i].point == points_[k]) hessians_[i] = round_hessians_[j - 1], has_hessian_[i] = 1;
+      if (!ended) active_[kept++] = i;
     }
     active_.resize(kept);
   }

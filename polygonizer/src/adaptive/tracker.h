@@ -231,6 +231,12 @@ class Tracker {
 
  private:
   // One new point's walk along the surface (see place_points).
+  // What measure may take instead of evaluating a point: the gradient and Hessian already
+  // evaluated there (BatchProjector::hessian); a null Hessian where none was.
+  struct Known {
+    const Vec3* gradient = nullptr;
+    const Mat3* hessian = nullptr;
+  };
   struct Walk {
     Vec3 at, normal, heading;
     Vec3 start_gradient;  // where this leg's Newton started (ProjectionResult::start_gradient)
@@ -245,6 +251,7 @@ class Tracker {
     std::vector<Walk> walks;
     std::vector<std::size_t> legging;  // the walks taking the current leg
     std::vector<Vec3> starts, landed, crease_at, crease_n;
+    std::vector<Known> known;
     std::vector<ProjectionOptions> options;
     std::vector<std::optional<Placed>> measured;
     std::vector<std::optional<Vec3>> creases;
@@ -253,8 +260,9 @@ class Tracker {
   // measure's buffers of field derivatives.
   struct DerivativeBuffers {
     std::vector<double> values;
-    std::vector<Vec3> gradients;
+    std::vector<Vec3> points, gradients;
     std::vector<Mat3> hessians;
+    std::vector<std::size_t> which;  // of the points, those evaluated here
   };
   struct ExpandOutcome {
     bool expanded = false;
@@ -269,7 +277,9 @@ class Tracker {
   // --- tracker.cpp
   // Curvature at each point into out; nothing where the gradient vanishes. One gradients_hessians
   // batch.
-  void measure(std::span<const Vec3> points, std::vector<std::optional<Placed>>& out) const;
+  // `known` (optional, one per point): see Known.
+  void measure(std::span<const Vec3> points, std::vector<std::optional<Placed>>& out,
+               std::span<const Known> known = {}) const;
   int add_vertex(const Placed& placed);
   // New surface points about distance d from vertex v, one in each tangent direction, as far
   // as they can be placed in order: the first direction where Newton fails or lands somewhere

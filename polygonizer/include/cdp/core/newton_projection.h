@@ -62,16 +62,32 @@ struct ProjectionLimits {
 // each time would cost more than the Newton steps on a cheap field.
 class BatchProjector {
  public:
-  // The results stay valid until the next call.
+  // The results stay valid until the next call. With `hessians_below` > 0, a point whose
+  // residual (|F| / |grad F|) after the round before was at most that is evaluated with
+  // gradients_hessians instead of values_gradients: a point one Newton step from converging,
+  // whose evaluation then ends the projection more often than not. Where it does, the result
+  // keeps that Hessian (hessian()), and a caller that needs the Hessian where the projection
+  // lands (the tracker's curvature) does not evaluate that point a second time. The points, and
+  // so the results, are those of project_to_surface where the field's two calls give the same
+  // value and gradient.
   std::span<const ProjectionResult> project(const Field& field, std::span<const Vec3> starts,
-                                            std::span<const ProjectionOptions> options);
+                                            std::span<const ProjectionOptions> options, double hessians_below = 0);
+  // The Hessian at results[i].point from the last round of the last call, or nullptr when that
+  // round was not evaluated with Hessians.
+  const Mat3* hessian(std::size_t i) const { return has_hessian_[i] ? &hessians_[i] : nullptr; }
+  // Wall time of the last call's rounds with Hessians (the tracker reports the Hessians' cost).
+  double hessian_seconds() const { return hessian_seconds_; }
 
  private:
   std::vector<ProjectionResult> results_;
   std::vector<detail::ProjectionLimits> limits_;
   std::vector<std::size_t> active_;  // the points still iterating, in order
-  std::vector<Vec3> points_, gradients_;
-  std::vector<double> values_;
+  std::vector<Vec3> points_, gradients_, split_points_, split_gradients_;
+  std::vector<double> values_, split_values_;
+  std::vector<std::size_t> near_;  // of the round's points, those evaluated with Hessians
+  std::vector<Mat3> round_hessians_, hessians_;
+  std::vector<char> has_hessian_;
+  double hessian_seconds_ = 0;
 };
 
 }  // namespace cdp
