@@ -162,6 +162,16 @@ Starts random_starts(const Field& field, std::size_t n, unsigned seed) {
   return s;
 }
 
+// The same status, iterations, residual and point, bit for bit.
+::testing::AssertionResult same_result(const ProjectionResult& a, const ProjectionResult& b) {
+  if (a.status != b.status) return ::testing::AssertionFailure() << to_string(a.status) << " vs " << to_string(b.status);
+  if (a.iterations != b.iterations) return ::testing::AssertionFailure() << a.iterations << " vs " << b.iterations << " iterations";
+  if (!same_bits(a.residual, b.residual)) return ::testing::AssertionFailure() << "residual " << a.residual << " vs " << b.residual;
+  for (int k = 0; k < 3; ++k)
+    if (!same_bits(a.point[k], b.point[k])) return ::testing::AssertionFailure() << "coordinate " << k << " differs";
+  return ::testing::AssertionSuccess();
+}
+
 TEST(NewtonProjection, BatchedGivesEveryPointTheSingleResultBitForBit) {
   std::vector<std::unique_ptr<Field>> fields;
   fields.push_back(test::tanglecube());
@@ -186,10 +196,7 @@ TEST(NewtonProjection, BatchedGivesEveryPointTheSingleResultBitForBit) {
     ASSERT_EQ(batched.size(), single.size());
     for (std::size_t i = 0; i < single.size(); ++i) {
       const ProjectionResult &a = single[i], &b = batched[i];
-      ASSERT_EQ(a.status, b.status) << "point " << i;
-      ASSERT_EQ(a.iterations, b.iterations) << "point " << i;
-      ASSERT_TRUE(same_bits(a.residual, b.residual)) << "point " << i;
-      for (int k = 0; k < 3; ++k) ASSERT_TRUE(same_bits(a.point[k], b.point[k])) << "point " << i;
+      ASSERT_TRUE(same_result(a, b)) << "point " << i;
       ++seen[a.status];
     }
   }
@@ -251,10 +258,7 @@ TEST(NewtonProjection, BatchedWithHessiansNearConvergenceGivesTheSameResultsAndT
     evaluated_with_hessians += field->counts().gradient_hessian;
     for (std::size_t i = 0; i < plain.size(); ++i) {
       const ProjectionResult &a = plain[i], &b = r[i];
-      ASSERT_EQ(a.status, b.status) << "point " << i;
-      ASSERT_EQ(a.iterations, b.iterations) << "point " << i;
-      ASSERT_TRUE(same_bits(a.residual, b.residual)) << "point " << i;
-      for (int k = 0; k < 3; ++k) ASSERT_TRUE(same_bits(a.point[k], b.point[k])) << "point " << i;
+      ASSERT_TRUE(same_result(a, b)) << "point " << i;
       // The last evaluation had a Hessian where the one before left the point within `below`
       // and the last did not move it.
       const bool expected = last_round_had_hessian(*field, s.points[i], s.options[i], b, below);
