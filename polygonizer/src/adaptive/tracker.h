@@ -230,13 +230,13 @@ class Tracker {
   const std::vector<double>& vertex_edge_length() const { return target_; }
 
  private:
-  // One new point's walk along the surface (see place_points).
   // What measure may take instead of evaluating a point: the gradient and Hessian already
   // evaluated there (BatchProjector::hessian); a null Hessian where none was.
   struct Known {
     const Vec3* gradient = nullptr;
     const Mat3* hessian = nullptr;
   };
+  // One new point's walk along the surface (see place_points).
   struct Walk {
     Vec3 at, normal, heading;
     Vec3 start_gradient;  // where this leg's Newton started (ProjectionResult::start_gradient)
@@ -276,8 +276,7 @@ class Tracker {
 
   // --- tracker.cpp
   // Curvature at each point into out; nothing where the gradient vanishes. One gradients_hessians
-  // batch.
-  // `known` (optional, one per point): see Known.
+  // batch, of the points without a Hessian in `known` (optional, one per point; see Known).
   void measure(std::span<const Vec3> points, std::vector<std::optional<Placed>>& out,
                std::span<const Known> known = {}) const;
   int add_vertex(const Placed& placed);
