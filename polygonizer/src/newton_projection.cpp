@@ -111,7 +111,8 @@ std::vector<ProjectionResult> project_to_surface(const Field& field, std::span<c
 }
 
 std::span<const ProjectionResult> BatchProjector::project(const Field& field, std::span<const Vec3> starts,
-                                                          std::span<const ProjectionOptions> options, double hessians_below) {
+                                                          std::span<const ProjectionOptions> options,
+                                                          double hessians_below) {
   if (options.size() != starts.size())
     throw std::invalid_argument("project_to_surface: " + std::to_string(starts.size()) + " start points but " +
                                 std::to_string(options.size()) + " options");
@@ -175,7 +176,8 @@ std::span<const ProjectionResult> BatchProjector::project(const Field& field, st
       if (with_hessian) ++j;
       const bool ended = newton_round(results_[i], starts[i], values_[k], gradients_[k], limits_[i]);
       // The Hessian is at the result's point only where the round ended without a step.
-      if (ended && with_hessian && results_[i].point == points_[k]) hessians_[i] = round_hessians_[j - 1], has_hessian_[i] = 1;
+      if (ended && with_hessian && results_[i].point == points_[k])
+        hessians_[i] = round_hessians_[j - 1], has_hessian_[i] = 1;
       if (!ended) active_[kept++] = i;
     }
     active_.resize(kept);

@@ -3,7 +3,6 @@
 #include <cdp/core/crease.h>
 #include <cdp/core/errors.h>
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -58,25 +57,20 @@ void Tracker::measure(std::span<const Vec3> points, std::vector<std::optional<Pl
   const auto start = Clock::now();
   const std::size_t n = points.size();
   DerivativeBuffers& d = derivatives_;
-  // The points without a known Hessian, evaluated in one call (all of them, in place, when none
-  // is known: on a field whose Newton converges in one step nothing is).
-  const bool any_known = std::any_of(known.begin(), known.end(), [](const Known& k) { return k.hessian; });
+  // The points without a known Hessian, evaluated in one call.
   d.which.clear();
   d.points.clear();
-  if (any_known)
-    for (std::size_t i = 0; i < n; ++i)
-      if (!known[i].hessian) d.which.push_back(i), d.points.push_back(points[i]);
-  const std::size_t m = any_known ? d.which.size() : n;
+  for (std::size_t i = 0; i < n; ++i)
+    if (known.empty() || !known[i].hessian) d.which.push_back(i), d.points.push_back(points[i]);
+  const std::size_t m = d.which.size();
   d.values.resize(m);
   d.gradients.resize(m);
   d.hessians.resize(m);
-  if (m > 0)
-    field_.gradients_hessians(any_known ? d.points.data() : points.data(), d.values.data(), d.gradients.data(),
-                              d.hessians.data(), m);
+  if (m > 0) field_.gradients_hessians(d.points.data(), d.values.data(), d.gradients.data(), d.hessians.data(), m);
   const auto evaluated = Clock::now();
   out.assign(n, std::nullopt);
   for (std::size_t i = 0, k = 0; i < n; ++i) {
-    const bool here = k < m && (!any_known || d.which[k] == i);
+    const bool here = k < m && d.which[k] == i;
     const Vec3& g = here ? d.gradients[k] : *known[i].gradient;
     const Mat3& h = here ? d.hessians[k] : *known[i].hessian;
     if (here) ++k;
@@ -141,7 +135,8 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
       b.options.push_back(po);
     }
     if (b.legging.empty()) break;
-    const std::span<const ProjectionResult> r = b.newton.project(field_, b.starts, b.options, kHessianResidualTolerances * po.tolerance);
+    const std::span<const ProjectionResult> r =
+        b.newton.project(field_, b.starts, b.options, kHessianResidualTolerances * po.tolerance);
     hessian_seconds_ += b.newton.hessian_seconds();
     curvature_seconds_ += b.newton.hessian_seconds();
     b.landed.clear();
