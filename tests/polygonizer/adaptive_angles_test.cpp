@@ -69,15 +69,7 @@ const std::vector<Surface>& smooth_surfaces() {
   return v;
 }
 
-void expect_sound(const Mesh& mesh, const std::string& what) {
-  const MeshTopology t = analyze_topology(mesh);
-  EXPECT_TRUE(t.closed()) << what;
-  EXPECT_TRUE(t.edge_manifold()) << what;
-  EXPECT_TRUE(t.vertex_manifold()) << what;
-  EXPECT_TRUE(t.oriented()) << what;
-  EXPECT_GT(t.signed_volume, 0.0) << what;
-  EXPECT_EQ(test::count_self_intersections(mesh), 0u) << what;
-}
+using test::expect_sound;
 
 // The repair and the relaxation move vertices: each must still lie on the surface (first-order
 // distance within Newton's tolerance, 1e-10 of the diagonal, with room for rounding) and carry

@@ -1,17 +1,20 @@
 // Independent checks of polygonizer output used by the polygonizer tests: a reference topology
 // from a simple marching-tetrahedra polygonization, the self-intersection count of
-// <cdp/raytrace/self_intersection.h>, distances to the surface and triangle shape statistics.
+// <cdp/raytrace/self_intersection.h>, distances to the surface, triangle shape statistics, and
+// expect_sound (the checks every output mesh must pass).
 #pragma once
 
 #include <cdp/core/field.h>
 #include <cdp/core/mesh.h>
 #include <cdp/core/mesh_topology.h>
 #include <cdp/raytrace/self_intersection.h>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -125,6 +128,18 @@ inline ShapeStats shape_stats(const Mesh& mesh) {
   s.thin_fraction = thin / n;
   s.std_ratio = std::sqrt(std::max(0.0, sum2 / n - s.mean_ratio * s.mean_ratio));
   return s;
+}
+
+// A mesh a polygonizer may hand out: closed, edge- and vertex-manifold, oriented, outward
+// (positive volume), free of self-intersections.
+inline void expect_sound(const Mesh& mesh, const std::string& what) {
+  const MeshTopology t = analyze_topology(mesh);
+  EXPECT_TRUE(t.closed()) << what;
+  EXPECT_TRUE(t.edge_manifold()) << what;
+  EXPECT_TRUE(t.vertex_manifold()) << what;
+  EXPECT_TRUE(t.oriented()) << what;
+  EXPECT_GT(t.signed_volume, 0.0) << what;
+  EXPECT_EQ(count_self_intersections(mesh), 0u) << what;
 }
 
 }  // namespace cdp::test

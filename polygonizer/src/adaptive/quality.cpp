@@ -944,7 +944,16 @@ class Improver {
       if (w != a && w != b) c = w;
     for (int w : m_.triangles[u])
       if (w != a && w != b) d = w;
-    if (repair && (on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d))) return false;
+    // Next to a crease, a repair insertion keeps to one face: the quad flat (the flip's test,
+    // kCreaseFlatCos), the edge it removes not both of whose ends lie on the crease (it may run
+    // along it), and the new vertex landing with its gradient on that face (below). The Barth
+    // ball's crease patches left caps there that nothing else could open: a crease finely
+    // spaced for the steep side, the flat side's vertices far off along its tangent (0.61
+    // degrees at factor 6).
+    const bool creased = repair && (on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d));
+    if (creased && ((on_crease(a) && on_crease(b)) ||
+                    !(face_normal(m_.triangles[t]).dot(face_normal(m_.triangles[u])) > kCreaseFlatCos)))
+      return false;
     ProjectionOptions po;
     po.tolerance = 1e-10 * o_.diagonal;
     const double l = (P(a) - P(b)).norm();
@@ -957,6 +966,9 @@ class Improver {
     if (!(g.squaredNorm() > 0)) return false;
     const Vec3 ng = g.normalized();
     if (!(ng.dot(m_.normals[a]) > 0 && ng.dot(m_.normals[b]) > 0)) return false;
+    if (creased && !(ng.dot(face_normal(m_.triangles[t])) > kCreaseFlatCos &&
+                     ng.dot(face_normal(m_.triangles[u])) > kCreaseFlatCos))
+      return false;
     // t = (a, b, c) in its own rotation, u = (b, a, d).
     const int m = static_cast<int>(m_.positions.size());
     add_vertex(pr.point, ng);
