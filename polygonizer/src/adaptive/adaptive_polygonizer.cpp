@@ -43,6 +43,21 @@ const char* to_string(Variant variant) { return variant == Variant::Paper ? "pap
 
 namespace {
 
+// The sharpest crease of a traced layout, as the angle at which its two faces meet (180 degrees
+// less the angle between the two pieces' outward normals, as Tracker::acute_crease_between
+// measures it) at the traced point where it is smallest, and that point.
+std::optional<std::pair<double, Vec3>> sharpest_crease(const Field& field, const CreaseTracingResult& traced) {
+  std::optional<std::pair<double, Vec3>> best;
+  for (const CreaseCurve& c : traced.curves)
+    for (const Vec3& p : c.points) {
+      const Vec3 na = field.piece(p, c.pieces[0]).gradient, nb = field.piece(p, c.pieces[1]).gradient;
+      if (!(na.squaredNorm() > 0 && nb.squaredNorm() > 0)) continue;
+      const double degrees = 180.0 - std::atan2(na.cross(nb).norm(), na.dot(nb)) * 180.0 / std::numbers::pi;
+      if (!best || degrees < best->first) best = std::pair(degrees, p);
+    }
+  return best;
+}
+
 // Variant::Improved repairs triangles whose smallest angle is under 30 degrees: the issue's
 // goal is every triangle at 20 degrees or more and 99% at 30 or more, and aiming the repair at
 // the higher bound leaves the lower one a margin.
@@ -414,6 +429,30 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
            << format_point(tightest.second) << ", below min_edge (" << s.sizing.min_edge
            << "), detail finer than the mesh's shortest edge";
       message += bend.str();
+    }
+    // Meshed across its creases by choice (CreaseHandling::Ignore, or the paper variant, which
+    // has no crease handling): the fronts meet a crease as curvature without bound, and do not
+    // always close across a sharp one (the box less a ball, the gyroid ball, the spheres on a
+    // bar at factors 8 and 9 fail so, with errors that named a stuck front or the neighbour
+    // searches' bound and advised another min_edge). The message says that the field has
+    // creases, names the sharpest and the way that meshes them, unless the tracker has already
+    // named the crease where its front stalled.
+    const bool across_by_choice = options.creases == CreaseHandling::Ignore || options.variant == Variant::Paper;
+    if (across_by_choice && field.has_pieces() && message.find(adaptive::kAlongCreaseAdvice) == std::string::npos) {
+      try {
+        CreaseTracingOptions co;
+        co.resolution = options.seed_resolution;
+        if (const auto sharpest = sharpest_crease(field, trace_creases(field, co))) {
+          std::ostringstream crease;
+          crease << "; the field has creases, which this run meshed across as if they were curvature (the sharpest: "
+                 << "faces meeting at " << std::lround(sharpest->first) << " degrees near "
+                 << format_point(sharpest->second) << "); the improved variant with creases: follow (the defaults) "
+                 << "meshes along them";
+          message += crease.str();
+        }
+      } catch (const std::exception&) {
+        // no layout to name (a tracing bound or a field that fails there): the message as it is
+      }
     }
     return crease_fallback.empty() ? message
                                    : message + " (meshed as smooth after crease-aware meshing failed: " + crease_fallback + ")";

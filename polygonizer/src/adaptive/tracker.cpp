@@ -692,7 +692,7 @@ void Tracker::step(int& f) {
                    format_point(crease->point) + " (the points " + format_point(mesh_.positions[u]) + " and " +
                    format_point(mesh_.positions[w]) + " on its two faces are " +
                    std::to_string((mesh_.positions[u] - mesh_.positions[w]).norm()) +
-                   " apart): a crease this sharp is meshed only along it (creases: follow, the default)";
+                   " apart): " + std::string(kAlongCreaseAdvice);
       } else if (thin) {
         const auto& [u, w] = *thin;
         message += ": the surface there has two sheets facing opposite ways " +

@@ -103,6 +103,10 @@ class StalledFrontError : public LimitExceededError {
   using LimitExceededError::LimitExceededError;
 };
 
+// How an error that names an acute crease a front stalled at ends: the way such a crease is
+// meshed (polygonize_adaptive adds its own advice to other errors of a run across creases).
+inline constexpr const char* kAlongCreaseAdvice = "a crease this sharp is meshed only along it (creases: follow, the default)";
+
 // How many times the grid's measure of the area the mesh may cover before the run is stopped
 // as a runaway (Crofton's estimate from the grid's crossed edges is within about 2x on surfaces
 // the grid resolves). Over 343 runs (the topology sweep's 40 fields and experiments/fields at
