@@ -236,6 +236,18 @@ def batched_vs_scalar(run):
     return sorted(rows, key=lambda r: r["batched"])
 
 
+def thread_speedups(run):
+    """Rows {benchmark, label, speedup, one, two} of the benchmarks that time one run on one thread
+    and one on two (counter speedup_1_to_2; bench/adaptive.cpp's BM_AdaptiveThreads)."""
+    rows = []
+    for b in run["benchmarks"]:
+        v = None if b.get("error") else counter_median(b, "speedup_1_to_2")
+        if v is not None:
+            rows.append({"benchmark": key(b), "label": b.get("label", ""), "speedup": v,
+                         "one": counter_median(b, "seconds_1_thread"), "two": counter_median(b, "seconds_2_threads")})
+    return sorted(rows, key=lambda r: r["benchmark"])
+
+
 PER_ITEM_COUNTERS = ("evals_per_vertex", "evaluations_per_vertex", "tracking_evals_per_vertex", "evaluations_per_triangle")
 
 
@@ -323,4 +335,6 @@ def export(run):
     for r in batched_vs_scalar(run):
         if r["gain"]:
             bigger.append({"name": "ratio batched/scalar " + r["batched"], "unit": "ratio", "value": r["gain"]})
+    for r in thread_speedups(run):
+        bigger.append({"name": "ratio 1/2 threads " + r["benchmark"], "unit": "ratio", "value": r["speedup"]})
     return smaller, bigger

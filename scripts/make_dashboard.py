@@ -216,6 +216,22 @@ def inrun_section(runs):
         out.append('<p class="note">Not available: no pair of benchmarks named …/values_batched and …/values_scalar '
                    'in the latest run.</p>')
 
+    # One thread against two (the same mesh, bit for bit, or the benchmark fails).
+    rows = bl.thread_speedups(latest)
+    out.append("<h3>Speedup from one thread to two (the same mesh on both)</h3>")
+    if rows:
+        out.append(table(["Benchmark", "Label", "1 thread (s)", "2 threads (s)", "Speedup"],
+                         [[E(r["benchmark"]), E(r["label"]), fnum(r["one"], "{:.4g}"), fnum(r["two"], "{:.4g}"),
+                           fnum(r["speedup"], "{:.3f}")] for r in rows]))
+        series = {}
+        for i, run in enumerate(runs):
+            for r in bl.thread_speedups(run):
+                series.setdefault(r["benchmark"].split(":", 1)[1], [None] * len(runs))[i] = r["speedup"]
+        out.append(img(ratio_plot(runs, series, "time on 1 thread / time on 2", "speedup"),
+                       "thread speedup over commits"))
+    else:
+        out.append('<p class="note">Not available: no benchmark reports speedup_1_to_2 in the latest run.</p>')
+
     # Evaluations per vertex (and per triangle).
     rows = bl.evaluations_per_item(latest)
     out.append("<h3>Field evaluations per vertex and per triangle</h3>")

@@ -125,6 +125,23 @@ class InRunRatios(unittest.TestCase):
         self.assertAlmostEqual(rows[0]["gain"], 2.0)
         self.assertEqual(rows[0]["by"], "evaluations_per_second")
 
+    def test_thread_speedup(self):
+        r = run("a" * 40, "2026-01-01T00:00:00+00:00")
+        self.assertEqual(bl.thread_speedups(r), [])
+        r["benchmarks"].append(bench("bench_adaptive", "BM_AdaptiveThreads/shape:1/manual_time", [50 * x for x in NOISE],
+                                     label="bunny_vis800/adaptive/threads", kind="real",
+                                     counters={"seconds_1_thread": [0.06] * 5, "seconds_2_threads": [0.05] * 5,
+                                               "speedup_1_to_2": [1.2] * 5}))
+        rows = bl.thread_speedups(r)
+        self.assertEqual(len(rows), 1)
+        self.assertAlmostEqual(rows[0]["speedup"], 1.2)
+        self.assertAlmostEqual(rows[0]["two"], 0.05)
+        ratios = {e["name"]: e["value"] for e in bl.export(r)[1] if e["unit"] == "ratio"}
+        self.assertAlmostEqual(ratios["ratio 1/2 threads bench_adaptive:BM_AdaptiveThreads/shape:1/manual_time"], 1.2)
+        page = make_dashboard.inrun_section([r])
+        self.assertIn("Speedup from one thread to two", page)
+        self.assertIn("1.200", page)
+
     def test_missing_benchmarks_give_no_ratio(self):
         r = run("a" * 40, "2026-01-01T00:00:00+00:00")
         r["benchmarks"] = r["benchmarks"][:1]
