@@ -80,7 +80,8 @@ struct AdaptiveOptions {
   // curvature below min_edge is meshed once more with min_edge a quarter of that radius (not
   // below 2e-4 of the diagonal, where a crease or singular point is more likely than a bend);
   // stats "min_edge_lowered" says so, and when that run fails too the first error stands, with
-  // the second's appended.
+  // the second's appended. In tolerance mode a surface every such run fails on is meshed once
+  // more with every edge turning the normal by at most a radian (stats "turn_limited").
   double min_edge = 0;
   double max_edge = 0;
   // Hartmann's rule reproduces the paper's edge ratios (see README); the printed formula gives
