@@ -169,6 +169,16 @@ def ratio_plot(runs, series, title, ylabel):
     return png(fig)
 
 
+def ratio_series(runs, rows_of, name, value):
+    """{benchmark name without its program: [row[value] per run, None where missing]} of the rows
+    rows_of(run) gives for each run, named by row[name]."""
+    series = {}
+    for i, run in enumerate(runs):
+        for r in rows_of(run):
+            series.setdefault(r[name].split(":", 1)[1], [None] * len(runs))[i] = r[value]
+    return series
+
+
 def inrun_section(runs):
     out = ["<h2>Ratios measured in one run</h2><p>Absolute times drift between machines; these ratios of two "
            "benchmarks of the same run do not (much).</p>"]
@@ -206,10 +216,7 @@ def inrun_section(runs):
     if rows:
         out.append(table(["Batched", "Scalar", "Gain", "By"],
                          [[E(r["batched"]), E(r["scalar"]), fnum(r["gain"], "{:.3f}"), E(r["by"])] for r in rows]))
-        series = {}
-        for i, run in enumerate(runs):
-            for r in bl.batched_vs_scalar(run):
-                series.setdefault(r["batched"].split(":", 1)[1], [None] * len(runs))[i] = r["gain"]
+        series = ratio_series(runs, bl.batched_vs_scalar, "batched", "gain")
         out.append(img(ratio_plot(runs, series, "batched / scalar evaluation rate", "gain"),
                        "batched vs scalar gain over commits"))
     else:
@@ -223,10 +230,7 @@ def inrun_section(runs):
         out.append(table(["Benchmark", "Label", "1 thread (s)", "2 threads (s)", "Speedup"],
                          [[E(r["benchmark"]), E(r["label"]), fnum(r["one"], "{:.4g}"), fnum(r["two"], "{:.4g}"),
                            fnum(r["speedup"], "{:.3f}")] for r in rows]))
-        series = {}
-        for i, run in enumerate(runs):
-            for r in bl.thread_speedups(run):
-                series.setdefault(r["benchmark"].split(":", 1)[1], [None] * len(runs))[i] = r["speedup"]
+        series = ratio_series(runs, bl.thread_speedups, "benchmark", "speedup")
         out.append(img(ratio_plot(runs, series, "time on 1 thread / time on 2", "speedup"),
                        "thread speedup over commits"))
     else:

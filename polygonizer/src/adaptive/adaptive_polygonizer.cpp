@@ -801,14 +801,6 @@ std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions
   return lowered;
 }
 
-// The same error, with what the retry below did.
-template <class Error>
-[[noreturn]] void rethrow_with(const Error& first, double min_edge, const std::string& second) {
-  std::ostringstream m;
-  m << first.what() << " (meshed again with min_edge " << min_edge << ", which failed too: " << second << ")";
-  throw Error(m.str());
-}
-
 // How many of issue 18's bounds `mesh` misses (see kBoundMinDegrees): a smallest angle under
 // kBoundMinDegrees, more than kBoundShareUnder30 of the triangles with one under 30 degrees, a
 // mean longest/shortest edge over kBoundMeanEdgeRatio, triangles farther from the surface than
@@ -863,8 +855,6 @@ std::size_t over_tolerance(const PolygonizeResult& r) {
   return r.stats.extra.at("quality.over_tolerance").get<std::size_t>();
 }
 
-// polygonize_adaptive without the re-run for issue 18's bounds: the first mesh, or the one made
-// with min_edge lowered.
 // Tolerance mode asks for chords up to the diameter of a bend tighter than the tolerance
 // (chord_for_deviation), which can step over the necks of a surface like the Barth ball. Where
 // every run below fails (the first, the careful and finer ones it makes again, and those with a
@@ -876,6 +866,8 @@ std::size_t over_tolerance(const PolygonizeResult& r) {
 // 850 triangles, 3,020 with the bound on every run). The stats say so (`turn_limited`).
 constexpr double kTurnLimit = 1;
 
+// polygonize_adaptive without the re-run for issue 18's bounds: the first mesh, or the one made
+// with min_edge lowered, or (tolerance mode) the turn-limited one.
 PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const EvaluationCounts before = field.counts();
@@ -923,14 +915,15 @@ PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOpti
     }
   }
   // The first error stands, with what the runs made again did.
-  const std::string turn =
+  std::ostringstream retries;
+  const char* const turn =
       may_limit_turn ? " (and with every edge turning the normal by at most a radian, which failed too)" : "";
-  if (!lowered) {
-    if (no_surface) throw NoSurfaceError(std::string(no_surface->what()) + turn);
-    throw LimitExceededError(std::string(limit->what()) + turn);
-  }
-  if (no_surface) rethrow_with(*no_surface, *lowered, second + turn);
-  rethrow_with(*limit, *lowered, second + turn);
+  if (lowered)
+    retries << " (meshed again with min_edge " << *lowered << ", which failed too: " << second << turn << ")";
+  else
+    retries << turn;
+  if (no_surface) throw NoSurfaceError(no_surface->what() + retries.str());
+  throw LimitExceededError(limit->what() + retries.str());
 }
 
 }  // namespace

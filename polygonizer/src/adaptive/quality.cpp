@@ -951,9 +951,9 @@ class Improver {
     // spaced for the steep side, the flat side's vertices far off along its tangent (0.61
     // degrees at factor 6).
     const bool creased = repair && (on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d));
-    if (creased && ((on_crease(a) && on_crease(b)) ||
-                    !(face_normal(m_.triangles[t]).dot(face_normal(m_.triangles[u])) > kCreaseFlatCos)))
-      return false;
+    const Vec3 face_t = creased ? face_normal(m_.triangles[t]) : Vec3::Zero();
+    const Vec3 face_u = creased ? face_normal(m_.triangles[u]) : Vec3::Zero();
+    if (creased && ((on_crease(a) && on_crease(b)) || !(face_t.dot(face_u) > kCreaseFlatCos))) return false;
     ProjectionOptions po;
     po.tolerance = 1e-10 * o_.diagonal;
     const double l = (P(a) - P(b)).norm();
@@ -966,9 +966,7 @@ class Improver {
     if (!(g.squaredNorm() > 0)) return false;
     const Vec3 ng = g.normalized();
     if (!(ng.dot(m_.normals[a]) > 0 && ng.dot(m_.normals[b]) > 0)) return false;
-    if (creased && !(ng.dot(face_normal(m_.triangles[t])) > kCreaseFlatCos &&
-                     ng.dot(face_normal(m_.triangles[u])) > kCreaseFlatCos))
-      return false;
+    if (creased && !(ng.dot(face_t) > kCreaseFlatCos && ng.dot(face_u) > kCreaseFlatCos)) return false;
     // t = (a, b, c) in its own rotation, u = (b, a, d).
     const int m = static_cast<int>(m_.positions.size());
     add_vertex(pr.point, ng);
