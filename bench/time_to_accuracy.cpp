@@ -9,13 +9,20 @@
 // field's normalized gradient). The ground truth has evaluate's cache key, so the cache of
 // `make reproduce` in results/cache is reused; a missing one is computed and saved there.
 //
-// Design. Each family walks a parameter ladder in growing triangle count:
-//   adaptive_factor     factor 1, 1.5, 2, 3, 4, 5, 6, 8, 10, 13, 16, 20 (default clamps: min_edge
-//                       2e-3 and max_edge 0.1 of the diagonal, as in the experiments)
-//   adaptive_tolerance  SizingMode::Tolerance, eps = diagonal x 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5
+// Design. Each family walks a parameter ladder in growing triangle count, every rung about
+// sqrt(2) times the triangles of the one before (kRungsPerDoubling), so that the run chosen
+// overshoots a target by about as much whatever the method:
+//   adaptive_factor     factor 2^(j/4) from 1 to 19 (triangles go as the factor squared; default
+//                       clamps: min_edge 2e-3 and max_edge 0.1 of the diagonal, as in the
+//                       experiments)
+//   adaptive_tolerance  SizingMode::Tolerance, eps = diagonal x 3e-3 / 2^(j/2) down to 8e-6
+//                       (triangles go as 1 / eps)
 //   mt, mc              the paper's precisions 0..5 on the variational fields (cell = constraint
 //                       spacing x 1, 0.7, 0.6, 0.5, 0.4, 0.3), then cells diagonal / N for
-//                       N = 16 x sqrt(2)^k up to 4096, those finer than the last precision's cell
+//                       N = 16 x 2^(k/4) up to 4096, those finer than the last precision's cell
+// With the ladders of before (factors 1, 1.5, 2, 3, 4, 5, 6, 8, 10, 13, 16, 20; eps 3e-3, 1e-3,
+// 3e-4 ...; N = 16 x sqrt(2)^k) one rung was 1.4-2.3, 3.3 and 2 times the triangles of the one
+// before, and a method's ratio to another moved by up to that much with where its rungs fell.
 // and stops one step after both targets are reached (none when the step reaching them took over
 // half the time bound). Bounds: a family stops after a run slower than kMaxRunSeconds or larger
 // than kMaxTriangles (the polygonizers' own max_triangles is set a little above, so a runaway run
@@ -78,6 +85,12 @@ constexpr double kPhongTargetDeg = 0.5;
 constexpr double kDepthTargetRelative = 1e-4;
 constexpr double kMaxRunSeconds = 5.0;
 constexpr std::size_t kMaxTriangles = 2'000'000;
+// Rungs of each ladder per doubling of the triangle count (see Design).
+constexpr int kRungsPerDoubling = 2;
+// The ladders' ends: the adaptive factors up to this, the tolerances (of the diagonal) from the
+// first down to the last; the marching cells go from diagonal / 16 to diagonal / 4096.
+constexpr double kLastFactor = 20;
+constexpr double kFirstTolerance = 3e-3, kLastTolerance = 8e-6;
 constexpr int kTimingRuns = 3;
 // Runs whose silhouette disagrees with the surface's on more than this share of the rays miss or
 // add a part of the surface and do not count (their Phong and depth means leave that part out).
@@ -139,15 +152,22 @@ std::vector<Step> ladder(const Field& field, const std::string& family) {
   const double diag = field.bounds().diagonal();
   std::vector<Step> steps;
   if (family == "adaptive_factor") {
-    for (double k : {1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 13.0, 16.0, 20.0})
+    // Triangles go as the factor squared: a doubling is sqrt(2) in the factor.
+    for (int j = 0;; ++j) {
+      const double k = std::pow(2.0, j / (2.0 * kRungsPerDoubling));
+      if (k > kLastFactor) break;
       steps.push_back({"factor", k, [k](const Field& f) {
                          AdaptiveOptions o;
                          o.factor = k;
                          o.max_triangles = kMaxTriangles + kMaxTriangles / 4;
                          return polygonize_adaptive(f, o);
                        }});
+    }
   } else if (family == "adaptive_tolerance") {
-    for (double t : {3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5})
+    // Triangles go as 1 / eps.
+    for (int j = 0;; ++j) {
+      const double t = kFirstTolerance * std::pow(2.0, -j / static_cast<double>(kRungsPerDoubling));
+      if (t < kLastTolerance) break;
       steps.push_back({"tolerance/diag", t, [t, diag](const Field& f) {
                          AdaptiveOptions o;
                          o.sizing = SizingMode::Tolerance;
@@ -155,6 +175,7 @@ std::vector<Step> ladder(const Field& field, const std::string& family) {
                          o.max_triangles = kMaxTriangles + kMaxTriangles / 4;
                          return polygonize_adaptive(f, o);
                        }});
+    }
   } else {
     const bool mc = family == "mc";
     auto run = [mc](const MarchingOptions& o) {
@@ -170,8 +191,9 @@ std::vector<Step> ladder(const Field& field, const std::string& family) {
         finest = *spacing * precision_scale(p);
       }
     }
-    for (int k = 0; k <= 16; ++k) {
-      const double n = 16 * std::pow(std::sqrt(2.0), k);
+    // Triangles go as N squared.
+    for (int k = 0; k <= 16 * kRungsPerDoubling; ++k) {
+      const double n = 16 * std::pow(2.0, k / (2.0 * kRungsPerDoubling));
       if (diag / n >= finest * 0.999) continue;
       MarchingOptions o;
       o.cell_size = diag / n;
@@ -190,8 +212,8 @@ bool reaches(const Outcome& o, const std::string& target) {
 std::string format_step(const Step& s) {
   char buf[64];
   if (s.param == "precision") std::snprintf(buf, sizeof buf, "P%g", s.value);
-  else if (s.param == "factor") std::snprintf(buf, sizeof buf, "k=%g", s.value);
-  else if (s.param == "tolerance/diag") std::snprintf(buf, sizeof buf, "eps=%g d", s.value);
+  else if (s.param == "factor") std::snprintf(buf, sizeof buf, "k=%.3g", s.value);
+  else if (s.param == "tolerance/diag") std::snprintf(buf, sizeof buf, "eps=%.3g d", s.value);
   else std::snprintf(buf, sizeof buf, "h=d/%.0f", 1 / s.value);
   return buf;
 }
