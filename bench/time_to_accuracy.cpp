@@ -9,22 +9,23 @@
 // field's normalized gradient). The ground truth has evaluate's cache key, so the cache of
 // `make reproduce` in results/cache is reused; a missing one is computed and saved there.
 //
-// Design. Each family walks a parameter ladder in growing triangle count, every rung about
-// sqrt(2) times the triangles of the one before (kRungsPerDoubling), so that the run chosen
-// overshoots a target by about as much whatever the method:
+// Design. Each family walks a parameter ladder in growing triangle count, and stops one step
+// after both targets are reached (none when the step reaching them took over
+// half the time bound). The ladders step by about sqrt(2) in triangles (kRungsPerDoubling), so
+// that the run chosen overshoots a target by about as much whatever the method:
 //   adaptive_factor     factor 2^(j/4) from 1 to 19 (triangles go as the factor squared; default
 //                       clamps: min_edge 2e-3 and max_edge 0.1 of the diagonal, as in the
 //                       experiments)
 //   adaptive_tolerance  SizingMode::Tolerance, eps = diagonal x 3e-3 / 2^(j/2) down to 8e-6
 //                       (triangles go as 1 / eps)
 //   mt, mc              the paper's precisions 0..5 on the variational fields (cell = constraint
-//                       spacing x 1, 0.7, 0.6, 0.5, 0.4, 0.3), then cells diagonal / N for
-//                       N = 16 x 2^(k/4) up to 4096, those finer than the last precision's cell
+//                       spacing x 1, 0.7, 0.6, 0.5, 0.4, 0.3: 1.4-2 times the triangles a step,
+//                       kept as the paper's), then cells diagonal / N for N = 16 x 2^(k/4) up to
+//                       4096, those finer than the last precision's cell
 // With the ladders of before (factors 1, 1.5, 2, 3, 4, 5, 6, 8, 10, 13, 16, 20; eps 3e-3, 1e-3,
 // 3e-4 ...; N = 16 x sqrt(2)^k) one rung was 1.4-2.3, 3.3 and 2 times the triangles of the one
 // before, and a method's ratio to another moved by up to that much with where its rungs fell.
-// and stops one step after both targets are reached (none when the step reaching them took over
-// half the time bound). Bounds: a family stops after a run slower than kMaxRunSeconds or larger
+// Bounds: a family stops after a run slower than kMaxRunSeconds or larger
 // than kMaxTriangles (the polygonizers' own max_triangles is set a little above, so a runaway run
 // throws instead of going on). A run that throws (the adaptive method does on some surfaces)
 // counts as not reaching and the walk goes on. A run whose silhouette disagrees with the

@@ -196,13 +196,15 @@ namespace {
 // gradient_hessian's eleven sums, for two of the four lanes of the other kernels (centre j goes
 // to lane j mod 4). Each lane sees the same operations in the same order as in a four-lane loop,
 // so every sum, and the value and gradient, are the bits value_gradient gives. Two lanes at a
-// time, because eleven sums of four lanes (22 SSE2 registers, with the temporaries over 30) do
-// not fit the 16 registers: the four-lane loop kept spilling them to memory.
+// time, because eleven sums of four lanes (22 SSE2 registers, with the temporaries over 30) are
+// far over the 16 registers: the four-lane loop kept spilling them to memory (171 stack accesses
+// in the function); two lanes spill far less. The centre arrays are padded to a multiple of four
+// (solve), so both halves read whole pairs.
 struct HessianLanes {
   A2 acc = A2::Zero(), gx = A2::Zero(), gy = A2::Zero(), gz = A2::Zero(), sr = A2::Zero(), hxx = A2::Zero(),
      hxy = A2::Zero(), hxz = A2::Zero(), hyy = A2::Zero(), hyz = A2::Zero(), hzz = A2::Zero();
 };
-void hessian_lanes(const Vec3& q, const double* cx, const double* cy, const double* cz, const double* w_,
+void hessian_lanes(const Vec3& q, const double* cx, const double* cy, const double* cz, const double* weights,
                    std::size_t m, std::size_t first, HessianLanes& s) {
   for (std::size_t j = first; j < m; j += 4) {
     const A2 dx = q.x() - CMap2(cx + j);
@@ -210,7 +212,7 @@ void hessian_lanes(const Vec3& q, const double* cx, const double* cy, const doub
     const A2 dz = q.z() - CMap2(cz + j);
     const A2 r2 = dx * dx + dy * dy + dz * dz;
     const A2 r = r2.sqrt();
-    const A2 w = CMap2(w_ + j);
+    const A2 w = CMap2(weights + j);
     s.acc += w * (r2 * r);
     const A2 wr = w * r;
     s.gx += wr * dx;
@@ -219,7 +221,8 @@ void hessian_lanes(const Vec3& q, const double* cx, const double* cy, const doub
     s.sr += wr;
     // Hessian of |d|^3: 3 (|d| I + d d^T / |d|), which tends to 0 at d = 0. Eigen 3.4's select
     // is a loop of scalar divisions and branches: it runs only where a lane sits exactly on a
-    // centre, and elsewhere the packet division gives the same quotients. The two changes make
+    // centre (or the point is not finite), and elsewhere the packet division gives the same
+    // quotients. The two changes make
     // gradient_hessian 1.6 times faster (bench_fields_data, BM_Vis): 4.1 -> 2.5 us on the bunny
     // VIS-800, where the Hessians were a fifth of a run at factor 3.
     const A2 wi = (r > 0.0).all() ? A2(w / r) : A2((r > 0.0).select(w / r, A2::Zero()));

@@ -13,8 +13,9 @@
 // Evaluation runs over the centres in structure-of-arrays form, four at a time with Eigen's
 // fixed-size arrays (SIMD packets); value(), value_gradient(), gradient_hessian() and values()
 // share that kernel (gradient_hessian runs it as two halves of two lanes each, for registers),
-// and sum in the same order, so a value is the same bit for bit whichever path computes it. The *_scalar functions are a plain one-centre-at-a-time reference (for tests and
-// the benchmark's comparison); they agree to rounding, not bit for bit.
+// and sum in the same order, so a value is the same bit for bit whichever path computes it. The
+// *_scalar functions are a plain one-centre-at-a-time reference (for tests and the benchmark's
+// comparison); they agree to rounding, not bit for bit.
 #pragma once
 
 #include <cdp/core/field.h>
