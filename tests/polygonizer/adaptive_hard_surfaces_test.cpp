@@ -251,10 +251,11 @@ std::vector<Case> all_cases() {
   const auto surfaces = hard_surfaces();
   for (std::size_t s = 0; s < surfaces.size(); ++s) {
 #if defined(__SANITIZE_ADDRESS__)
-    // Several times slower under the sanitizers: a subset at factor 2 and tolerance 1e-2, named so that a surface
-    // added to the list does not change it: creases (the cube; the box minus a ball, whose acute
-    // hole rims only crease-aware meshing meshes), an acute crease that fails (the gyroid ball), a cavity, a needle, genus 5 and a few blob fields. The runaways (the Barth
-    // ball, the fifty blobs: 264 s under the sanitizers) are left to the normal build.
+    // Several times slower under the sanitizers: a subset at factor 2 and tolerance 1e-2, named
+    // so that a surface added to the list does not change it: creases (the cube; the box minus a
+    // ball, whose acute hole rims only crease-aware meshing meshes), an acute crease that fails
+    // (the gyroid ball), a cavity, a needle, genus 5 and a few blob fields. The runaways (the
+    // Barth ball, the fifty blobs: 264 s under the sanitizers) are left to the normal build.
     static const std::set<std::string> kUnderSanitizers = {
         "cube", "gyroid_ball", "box_minus_ball", "hollow_sphere", "needle", "tanglecube",
         "random_blobs_1", "random_blobs_5", "random_blobs_9", "random_blobs_13", "random_blobs_17"};

@@ -895,25 +895,23 @@ PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOpti
   }
   AdaptiveOptions again = options;
   if (lowered) again.min_edge = *lowered;
-  std::string second;
-  if (lowered) {
+  // A run made again: its mesh, or nothing (and its error's text in `error`, where given).
+  const auto retry = [&](double max_turn, std::string* error) -> std::optional<PolygonizeResult> {
     try {
       std::pair<double, Vec3> ignored;
-      return finish(mesh_once(field, again, ignored));
+      return finish(mesh_once(field, again, ignored, false, max_turn));
     } catch (const NoSurfaceError& e) {
-      second = e.what();
+      if (error) *error = e.what();
     } catch (const LimitExceededError& e) {
-      second = e.what();
+      if (error) *error = e.what();
     }
-  }
-  if (may_limit_turn) {
-    try {
-      std::pair<double, Vec3> ignored;
-      return finish(mesh_once(field, again, ignored, false, kTurnLimit));
-    } catch (const NoSurfaceError&) {
-    } catch (const LimitExceededError&) {
-    }
-  }
+    return std::nullopt;
+  };
+  std::string second;
+  if (lowered)
+    if (std::optional<PolygonizeResult> r = retry(0, &second)) return std::move(*r);
+  if (may_limit_turn)
+    if (std::optional<PolygonizeResult> r = retry(kTurnLimit, nullptr)) return std::move(*r);
   // The first error stands, with what the runs made again did.
   std::ostringstream retries;
   const char* const turn =

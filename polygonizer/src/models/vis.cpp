@@ -248,7 +248,9 @@ double Vis::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) 
   gradient = (3.0 * Vec3(lane_sum(lo.gx, hi.gx), lane_sum(lo.gy, hi.gy), lane_sum(lo.gz, hi.gz)) + a_) * inv_scale_;
   const double s = lane_sum(lo.sr, hi.sr);
   const double xy = lane_sum(lo.hxy, hi.hxy), xz = lane_sum(lo.hxz, hi.hxz), yz = lane_sum(lo.hyz, hi.hyz);
-  hessian << s + lane_sum(lo.hxx, hi.hxx), xy, xz, xy, s + lane_sum(lo.hyy, hi.hyy), yz, xz, yz, s + lane_sum(lo.hzz, hi.hzz);
+  hessian << s + lane_sum(lo.hxx, hi.hxx), xy, xz,  //
+      xy, s + lane_sum(lo.hyy, hi.hyy), yz,             //
+      xz, yz, s + lane_sum(lo.hzz, hi.hzz);
   hessian *= 3.0 * inv_scale_ * inv_scale_;
   return lane_sum(lo.acc, hi.acc) + (a0_ + a_.dot(q));
 }
