@@ -758,6 +758,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
   st.extra["quality.refine_cleared"] = quality.refine_cleared;
   st.extra["quality.relax_searched"] = quality.relax_searched;
   st.extra["quality.relax_search_sweeps"] = quality.relax_search_sweeps;
+  st.extra["quality.relax_crossings"] = quality.relax_crossings;
   st.extra["quality.collapses"] = quality.collapses;
   st.extra["quality.splits"] = quality.splits;
   st.extra["quality.inserts"] = quality.inserts;

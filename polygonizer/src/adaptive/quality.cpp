@@ -131,6 +131,11 @@ constexpr double kRelaxKeepDegrees = 30;
 // The relaxation's vertices per block of its parallel passes: enough to outweigh handing a
 // block to a thread (a target costs about a microsecond, a projection a few field calls).
 constexpr std::size_t kRelaxBlock = 256;
+// On several threads the relaxation judges at most this many candidates between two tests of
+// their moves for intersections (see relax_sweeps): enough for every core to take blocks of
+// kRelaxBlock, few enough that a move refused there takes back at most this many judged after
+// it. The chunks start at kRelaxBlock and double up to this while no move is refused.
+constexpr std::size_t kRelaxChunk = 4096;
 // hash_box: a triangle's box is stored grown by this share of a hash cell (about a fifth of an
 // edge), so that moving a corner by less than that stores it again nowhere.
 constexpr double kHashSlack = 0.1;
@@ -176,6 +181,8 @@ class Improver {
       : field_(field), smooth_(field.smooth()), m_(mesh), o_(o), workers_(detail::worker_count(o.threads)),
         vt_(mesh.positions.size()), crease_(mesh.positions.size(), -1),
         alive_(mesh.triangles.size(), 1), hash_(cell_size(mesh)) {
+    // Nothing reads its visits, and intersecting_turn queries it on several threads at once.
+    hash_.set_counting(false);
     for (int t = 0; t < static_cast<int>(m_.triangles.size()); ++t) {
       for (int v : m_.triangles[t]) vt_[v].push_back(t);
       hash_box(t);
@@ -527,9 +534,19 @@ class Improver {
   }
 
   // ---- intersections with the triangles nearby
+  // A triangle of the star star_hits tests.
+  struct StarTriangle {
+    Tri ids;
+    std::array<Vec3, 3> p;
+    Vec3 lo, hi, normal;  // box; unnormalized normal (apart_by_plane)
+  };
   void hash_box(int t) {
     const Tri& x = m_.triangles[t];
-    const Vec3 lo = P(x[0]).cwiseMin(P(x[1])).cwiseMin(P(x[2])), hi = P(x[0]).cwiseMax(P(x[1])).cwiseMax(P(x[2]));
+    hash_cover(t, P(x[0]).cwiseMin(P(x[1])).cwiseMin(P(x[2])), P(x[0]).cwiseMax(P(x[1])).cwiseMax(P(x[2])));
+  }
+  // Makes the box triangle t is stored with in the hash hold [lo, hi] (its box, or one over
+  // several positions of its corners, see intersecting_turn).
+  void hash_cover(int t, const Vec3& lo, const Vec3& hi) {
     // Stale entries of earlier shapes stay and are filtered. A triangle is stored with its box
     // grown by kHashSlack cells, and not again while its box stays inside that: the small moves
     // of the relaxation would otherwise add a copy of each triangle around v at every move.
@@ -629,14 +646,41 @@ class Improver {
   // triangle whose box meets its own (the star's triangles share v and are not tested against
   // each other: the facing test keeps them from folding over one another).
   bool star_intersects(int v, const Vec3& moved) {
-    const auto pos = [&](int w) -> const Vec3& { return w == v ? moved : P(w); };
-    std::vector<StarTriangle>& star = star_buffer_;
+    return star_hits(v, moved, [&](int w) -> const Vec3& { return P(w); }, stamp_.data(), ++stamp_id_, star_buffer_);
+  }
+  // Whether triangle x, with corners pb, meets a triangle of `star` (its box lo, hi and its
+  // corners' largest magnitude): star_hits' test of each triangle found near the star.
+  static bool meets_star(const std::vector<StarTriangle>& star, const Vec3& lo, const Vec3& hi, double magnitude,
+                         const Tri& x, const std::array<Vec3, 3>& pb) {
+    const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
+    if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
+    const Vec3 nb = (pb[1] - pb[0]).cross(pb[2] - pb[0]);
+    // One rounding bound for x against every star triangle, from the whole star's box and
+    // magnitude: at least each pair's own (plane_bound grows with both), so as safe, and the
+    // exact test decides whatever it leaves unsure.
+    const double bound = plane_bound(std::max(std::max(blo.cwiseAbs().maxCoeff(), bhi.cwiseAbs().maxCoeff()), magnitude),
+                                     (hi.cwiseMax(bhi) - lo.cwiseMin(blo)).norm());
+    for (const StarTriangle& a : star) {
+      if ((blo.array() > a.hi.array()).any() || (bhi.array() < a.lo.array()).any()) continue;
+      if (apart_by_plane(a.p, a.ids, a.normal, pb, x, bound) || apart_by_plane(pb, x, nb, a.p, a.ids, bound)) continue;
+      if (apart_at_shared_corner(a.p, a.ids, pb, x)) continue;
+      if (exact_intersect(a.p, pb)) return true;  // the star's triangles are not degenerate (star_hits)
+    }
+    return false;
+  }
+  // star_intersects with every vertex but v at at(w), where the box each triangle is stored
+  // with in the hash must hold it (hash_box, hash_cover).
+  // Reads the mesh and the hash only (stamp and star are the caller's), so that calls with
+  // their own stamp and star may run on several threads while nothing changes the mesh.
+  template <class At>
+  bool star_hits(int v, const Vec3& moved, const At& at, std::uint32_t* stamp, std::uint32_t id,
+                 std::vector<StarTriangle>& star) const {
+    const auto pos = [&](int w) -> const Vec3& { return w == v ? moved : at(w); };
     star.clear();
     Vec3 lo = moved, hi = moved;
     double magnitude = 0;
-    ++stamp_id_;
     for (int u : vt_[v]) {
-      stamp_[u] = stamp_id_;
+      stamp[u] = id;
       const Tri& t = m_.triangles[u];
       StarTriangle x{t, {pos(t[0]), pos(t[1]), pos(t[2])}, {}, {}, {}};
       if (triangle_is_degenerate(x.p[0], x.p[1], x.p[2])) return true;
@@ -648,31 +692,72 @@ class Improver {
       magnitude = std::max({magnitude, x.lo.cwiseAbs().maxCoeff(), x.hi.cwiseAbs().maxCoeff()});
       star.push_back(x);
     }
-    return hash_.any_in(lo, hi, [&](int u) {
-      if (stamp_[u] == stamp_id_) return false;
-      stamp_[u] = stamp_id_;
+    const auto hits = [&](int u) {
+      if (stamp[u] == id) return false;
+      stamp[u] = id;
       // The box u is stored with holds its triangle (hash_box): one apart from the star's
       // rules it out before its corners are read (most of the triangles found).
       if ((hashed_lo_[u].array() > hi.array()).any() || (hashed_hi_[u].array() < lo.array()).any() || !alive_[u])
         return false;
-      const Tri& x = m_.triangles[u];
-      const std::array<Vec3, 3> pb{P(x[0]), P(x[1]), P(x[2])};
-      const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
-      if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
-      const Vec3 nb = (pb[1] - pb[0]).cross(pb[2] - pb[0]);
-      // One rounding bound for u against every star triangle, from the whole star's box and
-      // magnitude: at least each pair's own (plane_bound grows with both), so as safe, and the
-      // exact test decides whatever it leaves unsure.
-      const double bound = plane_bound(std::max(std::max(blo.cwiseAbs().maxCoeff(), bhi.cwiseAbs().maxCoeff()), magnitude),
-                                       (hi.cwiseMax(bhi) - lo.cwiseMin(blo)).norm());
-      for (const StarTriangle& a : star) {
-        if ((blo.array() > a.hi.array()).any() || (bhi.array() < a.lo.array()).any()) continue;
-        if (apart_by_plane(a.p, a.ids, a.normal, pb, x, bound) || apart_by_plane(pb, x, nb, a.p, a.ids, bound)) continue;
-        if (apart_at_shared_corner(a.p, a.ids, pb, x)) continue;
-        if (exact_intersect(a.p, pb)) return true;  // the star's triangles are not degenerate (above)
+      const Tri& x = m_.triangles[u];  // not in v's star, so v is not among its corners
+      return meets_star(star, lo, hi, magnitude, x, {at(x[0]), at(x[1]), at(x[2])});
+    };
+    return hash_.any_in(lo, hi, hits);
+  }
+
+  // A move of the relaxation: the vertex, and its position and normal before.
+  struct Turn {
+    int v;
+    Vec3 from, from_normal;
+  };
+  // intersecting_turn's arrays, made once a sweep (the mesh's connectivity does not change
+  // while the relaxation moves vertices) and left clean after each call.
+  struct TurnScratch {
+    static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+    TurnScratch(std::size_t vertices, unsigned workers)
+        : turn_of(vertices, kNone), stamps(std::max(workers, 1u)), ids(stamps.size(), 0), stars(stamps.size()) {}
+    std::vector<std::size_t> turn_of;  // by vertex: its turn in the call, or kNone
+    std::vector<std::vector<std::uint32_t>> stamps;  // by worker, as star_hits wants them
+    std::vector<std::uint32_t> ids;
+    std::vector<std::vector<StarTriangle>> stars;
+    std::vector<char> hit;
+  };
+  // The first of `turns` (moves made in this order, all applied now) whose star at the
+  // positions of its turn (the moves before it made, those after it not) intersects a triangle
+  // outside it, as star_intersects would have found then; turns.size() if none. First every
+  // triangle the turns changed is stored in the hash with a box over its corners before and
+  // after (which holds it at any turn; most already are, see hash_cover); then the turns are
+  // tested on all cores, the hash only read.
+  std::size_t intersecting_turn(const std::vector<Turn>& turns, TurnScratch& x) {
+    if (turns.empty()) return 0;
+    constexpr std::size_t kNone = TurnScratch::kNone;
+    for (std::size_t k = 0; k < turns.size(); ++k) x.turn_of[static_cast<std::size_t>(turns[k].v)] = k;
+    for (const Turn& turn : turns)
+      for (int u : vt_[turn.v]) {
+        Vec3 lo = P(m_.triangles[u][0]), hi = lo;
+        for (int w : m_.triangles[u]) {
+          lo = lo.cwiseMin(P(w)), hi = hi.cwiseMax(P(w));
+          if (const std::size_t j = x.turn_of[static_cast<std::size_t>(w)]; j != kNone)
+            lo = lo.cwiseMin(turns[j].from), hi = hi.cwiseMax(turns[j].from);
+        }
+        hash_cover(u, lo, hi);
       }
-      return false;
+    x.hit.assign(turns.size(), 0);
+    detail::parallel_blocks(turns.size(), kRelaxBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned w) {
+      std::vector<std::uint32_t>& stamp = x.stamps[w];
+      if (stamp.empty()) stamp.assign(m_.triangles.size(), 0);
+      std::uint32_t& id = x.ids[w];  // a worker's stamps outlive its blocks and calls
+      for (std::size_t k = begin; k < end; ++k) {
+        if (id == std::numeric_limits<std::uint32_t>::max()) std::fill(stamp.begin(), stamp.end(), 0), id = 0;
+        const auto at = [&](int q) -> const Vec3& {
+          const std::size_t j = x.turn_of[static_cast<std::size_t>(q)];
+          return j != kNone && j > k ? turns[j].from : P(q);
+        };
+        x.hit[k] = star_hits(turns[k].v, P(turns[k].v), at, stamp.data(), ++id, x.stars[w]);
+      }
     });
+    for (const Turn& turn : turns) x.turn_of[static_cast<std::size_t>(turn.v)] = kNone;
+    return static_cast<std::size_t>(std::find(x.hit.begin(), x.hit.end(), 1) - x.hit.begin());
   }
 
   // ---- operations. Each returns whether it was applied and pushes the triangles it changed.
@@ -1317,13 +1402,24 @@ class Improver {
                                     std::span(opts).subspan(begin, end - begin));
                                 std::copy(part.begin(), part.end(), landed.begin() + static_cast<std::ptrdiff_t>(begin));
                               });
+      // The moves are judged in order, each at the positions the moves before it left, and
+      // applied. On several threads the intersection test (star_intersects, the costliest
+      // check) is left out of that loop: after every chunk of candidates judged, the moves they
+      // made are tested on all cores, each at the positions of its turn (intersecting_turn). The
+      // first refused there (1 in about 1250 moves kept over issue 18's bounds sweep, the runs
+      // made again included) and the moves after it are taken back, and the judging goes on
+      // after it. So the moves kept are those of the loop with the test inside, which one thread
+      // runs, and a tolerance too: there judging a move evaluates the field (its star's distance
+      // estimate), and the moves judged twice would make the evaluation counts depend on the
+      // number of threads.
       bool changed = false;
-      for (std::size_t i = 0; i < moving.size(); ++i) {
-        if (!landed[i].ok() || !(landed[i].gradient.squaredNorm() > 0)) continue;
+      std::vector<Turn> turns;
+      const auto judge = [&](std::size_t i, bool test_intersections) {
+        if (!landed[i].ok() || !(landed[i].gradient.squaredNorm() > 0)) return false;
         const int v = moving[i];
         const Vec3 ng = landed[i].gradient.normalized();
         const Vec3& target = landed[i].point;
-        if (!(ng.dot(m_.normals[v]) > kMoveNormalCos)) continue;
+        if (!(ng.dot(m_.normals[v]) > kMoveNormalCos)) return false;
         const StarShape before = star_shape(v);
         const double floor = facing_floor(vt_[v]);
         const Vec3 saved = P(v), saved_n = m_.normals[v];
@@ -1336,21 +1432,59 @@ class Improver {
         const double new_dist = ok ? worst_star_distance(v) : 0;
         m_.positions[v] = saved;
         m_.normals[v] = saved_n;
-        ok = ok && may_replace(new_dist, vt_[v]);
-        if (ok) ok = !star_intersects(v, target);
-        if (!ok) continue;
+        if (!(ok && may_replace(new_dist, vt_[v]))) return false;
+        if (test_intersections && star_intersects(v, target)) {
+          ++r_.relax_crossings;
+          return false;
+        }
         m_.positions[v] = target;
         m_.normals[v] = ng;
         // Unlike try_move, the crease test is not asked again (3 evaluations): v was not on a
         // crease, and Newton lands it on one piece's zero set, on a crease only by accident.
+        turns.push_back({v, saved, saved_n});
         moved[v] = 1;
-        for (int u : vt_[v]) {
+        return true;
+      };
+      const auto keep = [&](const Turn& turn) {
+        for (int u : vt_[turn.v]) {
           hash_box(u);
           touch(u);
         }
         ++r_.relaxed;
         if (search) ++r_.relax_searched;
         changed = true;
+      };
+      if (workers_ <= 1 || o_.tolerance > 0) {
+        for (std::size_t i = 0; i < moving.size(); ++i)
+          if (judge(i, true)) {
+            keep(turns.back());
+            turns.pop_back();
+          }
+      } else {
+        TurnScratch scratch(m_.positions.size(), workers_);
+        std::vector<std::size_t> judged;  // the candidate (index in `moving`) of each turn
+        std::size_t chunk = kRelaxBlock;
+        for (std::size_t i = 0; i < moving.size();) {
+          turns.clear();
+          judged.clear();
+          for (const std::size_t stop = std::min(moving.size(), i + chunk); i < stop; ++i)
+            if (judge(i, false)) judged.push_back(i);
+          const std::size_t refused = intersecting_turn(turns, scratch);
+          for (std::size_t k = turns.size(); k-- > refused;) {
+            m_.positions[turns[k].v] = turns[k].from;
+            m_.normals[turns[k].v] = turns[k].from_normal;
+            moved[turns[k].v] = 0;
+          }
+          for (std::size_t k = 0; k < refused; ++k) keep(turns[k]);
+          if (refused < turns.size()) {
+            ++r_.relax_crossings;
+            i = judged[refused] + 1;
+          }
+          // Where moves are refused, shorter chunks, down to one candidate: the moves judged
+          // again after a refusal stay a bounded share of the work (a blob field at 5e-2 with a
+          // refusal every few moves: 790 chunks of 4096 made the run three times as long).
+          chunk = refused < turns.size() ? std::max<std::size_t>(1, chunk / 4) : std::min(kRelaxChunk, 2 * chunk);
+        }
       }
       if (!changed) break;
     }
@@ -1567,11 +1701,6 @@ class Improver {
   // The corners of the relaxation's flips in its current sweep.
   std::vector<char> flipped_;
   // star_intersects' triangles, kept from call to call.
-  struct StarTriangle {
-    Tri ids;
-    std::array<Vec3, 3> p;
-    Vec3 lo, hi, normal;  // box; unnormalized normal (apart_by_plane)
-  };
   std::vector<StarTriangle> star_buffer_;
   // estimate_distance's memo, by triangle slot (see there).
   mutable std::vector<EstimateEntry> estimates_;

@@ -34,6 +34,8 @@ struct QualityReport {
   // Of `relaxed`, the moves of the search sweeps (QualityOptions::aim_mean_edge_ratio), and
   // how many such sweeps ran.
   std::size_t relax_searched = 0, relax_search_sweeps = 0;
+  // Moves of the relaxation refused because the moved star would cross a triangle nearby.
+  std::size_t relax_crossings = 0;
   // Vertices added: splits of edges for the tolerance, inserts in the quad around a cap's
   // longest edge for the angles.
   std::size_t splits = 0, inserts = 0;
@@ -83,8 +85,9 @@ struct QualityOptions {
   // mesh laid across creases as if smooth: its triangles across a crease stay stretched, and
   // the moves beside them may leave worse angles to the repair that follows.
   double aim_mean_edge_ratio = 0;
-  // Threads of the independent passes: the relaxation's targets, and for a thread-safe field
-  // their projections and each refinement round's tolerance estimates. 0 all cores (at most
+  // Threads of the independent passes: the relaxation's targets, without a tolerance the
+  // intersection tests of its moves, and for a thread-safe field their projections and each
+  // refinement round's tolerance estimates. 0 all cores (at most
   // 8), 1 the caller's only. The mesh and the evaluation counts are the same, bit for bit, on
   // any number.
   int threads = 0;

@@ -28,6 +28,12 @@ class SpatialHash {
       : SpatialHash(cell_size, crowding, 0) {}
 
   double cell_size() const { return h_; }
+  // Without counting, the const queries write nothing, so several threads may query the hash at
+  // once (while none inserts); visits() then stays 0. Counting is on by default.
+  void set_counting(bool on) {
+    counting_ = on;
+    if (coarser_) coarser_->set_counting(on);
+  }
   // Ids looked at by the searches so far (an upper bound; a search stopping early counts its
   // whole last cell): the cost of the searches, which the tracker bounds.
   std::uint64_t visits() const { return visits_ + (coarser_ ? coarser_->visits() : 0); }
@@ -59,6 +65,7 @@ class SpatialHash {
     ids_[c].push_back(id);
     if (ids_[c].size() <= kCrowdedCell || depth_ >= kMaxSplitDepth) return;
     finer_[c].reset(new SpatialHash(h_ / kSplitRatio, Crowding::split, depth_ + 1));
+    finer_[c]->counting_ = counting_;
     for (const int moved : ids_[c]) finer_[c]->insert(moved, moved == id ? p : position_of(moved), position_of);
     std::vector<int>().swap(ids_[c]);
   }
@@ -88,7 +95,10 @@ class SpatialHash {
   void insert_box(int id, const Vec3& lo, const Vec3& hi) {
     const Cell a = cell_of(lo), b = cell_of(hi);
     if (b.i - a.i > kMaxBoxSpan || b.j - a.j > kMaxBoxSpan || b.k - a.k > kMaxBoxSpan) {
-      if (!coarser_) coarser_ = std::make_unique<SpatialHash>(h_ * kLevelRatio);
+      if (!coarser_) {
+        coarser_ = std::make_unique<SpatialHash>(h_ * kLevelRatio);
+        coarser_->counting_ = counting_;
+      }
       coarser_->insert_box(id, lo, hi);
       return;
     }
@@ -147,7 +157,7 @@ class SpatialHash {
     for (const auto& r : g.runs) {
       if (r.i < a.i || r.i > b.i || r.j < a.j || r.j > b.j || r.k < a.k || r.k > b.k) continue;
       const std::vector<int>& ids = ids_[static_cast<std::size_t>(r.cell)];
-      visits_ += ids.size();
+      if (counting_) visits_ += ids.size();
       for (int id : ids)
         if (pred(id)) return true;
     }
@@ -175,7 +185,7 @@ class SpatialHash {
       if (crowding_ == Crowding::split && finer_[static_cast<std::size_t>(c)])
         return any_in_finer(c, lo, hi, pred);
       const std::vector<int>& ids = ids_[static_cast<std::size_t>(c)];
-      visits_ += ids.size();
+      if (counting_) visits_ += ids.size();
       for (int id : ids)
         if (pred(id)) return true;
       return false;
@@ -215,6 +225,7 @@ class SpatialHash {
   template <class Pred>
   bool any_in_finer(int c, const Vec3& lo, const Vec3& hi, Pred& pred) const {
     const SpatialHash& f = *finer_[static_cast<std::size_t>(c)];
+    if (!counting_) return f.any_in(lo, hi, pred);
     const std::uint64_t before = f.visits_;
     const bool hit = f.any_in(lo, hi, pred);
     visits_ += f.visits_ - before;
@@ -222,6 +233,7 @@ class SpatialHash {
   }
 
   mutable std::uint64_t visits_ = 0;
+  bool counting_ = true;
   struct Cell {
     std::int64_t i, j, k;
   };
