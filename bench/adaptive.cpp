@@ -228,8 +228,8 @@ void BM_AdaptiveBookkeeping(benchmark::State& state) {
 BENCHMARK(BM_AdaptiveBookkeeping)->ArgName("shape")->DenseRange(0, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // Issue 14's "all cores": each iteration meshes the field on one thread and on two
-// (AdaptiveOptions::threads: the seed grid, the relaxation's targets and projections, the final
-// checks share them) and requires the two meshes to be the same bit for bit; it reports both
+// (AdaptiveOptions::threads: the seed grid, the relaxation's targets, projections and
+// intersection tests, the final checks share them) and requires the two meshes to be the same bit for bit; it reports both
 // times and their ratio, speedup_1_to_2. The manual time is the two-thread run's. Tanglecube
 // (a cheap field: the serial tracking dominates) and the bunny VIS-800 (a dear one), at factor
 // 3. On a machine with one core the second run has nothing to share and the ratio is about 1.

@@ -29,10 +29,12 @@ class SpatialHash {
 
   double cell_size() const { return h_; }
   // Without counting, the const queries write nothing, so several threads may query the hash at
-  // once (while none inserts); visits() then stays 0. Counting is on by default.
+  // once (while none inserts); visits() then stops growing. Counting is on by default.
   void set_counting(bool on) {
     counting_ = on;
     if (coarser_) coarser_->set_counting(on);
+    for (auto& f : finer_)
+      if (f) f->set_counting(on);
   }
   // Ids looked at by the searches so far (an upper bound; a search stopping early counts its
   // whole last cell): the cost of the searches, which the tracker bounds.
