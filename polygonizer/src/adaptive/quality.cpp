@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -710,10 +711,12 @@ class Improver {
     return hash_.any_in(lo, hi, hits);
   }
 
-  // A move of the relaxation: the vertex, and its position and normal before.
+  // A move of the relaxation: the vertex, its position and normal before, and its candidate
+  // (index among the sweep's projected moves).
   struct Turn {
     int v;
     Vec3 from, from_normal;
+    std::size_t candidate;
   };
   // intersecting_turn's arrays, made once a sweep (the mesh's connectivity does not change
   // while the relaxation moves vertices) and left clean after each call.
@@ -1418,13 +1421,13 @@ class Improver {
       // estimate), and the moves judged twice would make the evaluation counts depend on the
       // number of threads.
       bool changed = false;
-      std::vector<Turn> turns;
-      const auto judge = [&](std::size_t i, bool test_intersections) {
-        if (!landed[i].ok() || !(landed[i].gradient.squaredNorm() > 0)) return false;
+      // Candidate i's move, applied, or nothing when it is refused.
+      const auto judge = [&](std::size_t i, bool test_intersections) -> std::optional<Turn> {
+        if (!landed[i].ok() || !(landed[i].gradient.squaredNorm() > 0)) return std::nullopt;
         const int v = moving[i];
         const Vec3 ng = landed[i].gradient.normalized();
         const Vec3& target = landed[i].point;
-        if (!(ng.dot(m_.normals[v]) > kMoveNormalCos)) return false;
+        if (!(ng.dot(m_.normals[v]) > kMoveNormalCos)) return std::nullopt;
         const StarShape before = star_shape(v);
         const double floor = facing_floor(vt_[v]);
         const Vec3 saved = P(v), saved_n = m_.normals[v];
@@ -1437,18 +1440,17 @@ class Improver {
         const double new_dist = ok ? worst_star_distance(v) : 0;
         m_.positions[v] = saved;
         m_.normals[v] = saved_n;
-        if (!(ok && may_replace(new_dist, vt_[v]))) return false;
+        if (!(ok && may_replace(new_dist, vt_[v]))) return std::nullopt;
         if (test_intersections && star_intersects(v, target)) {
           ++r_.relax_crossings;
-          return false;
+          return std::nullopt;
         }
         m_.positions[v] = target;
         m_.normals[v] = ng;
         // Unlike try_move, the crease test is not asked again (3 evaluations): v was not on a
         // crease, and Newton lands it on one piece's zero set, on a crease only by accident.
-        turns.push_back({v, saved, saved_n});
         moved[v] = 1;
-        return true;
+        return Turn{v, saved, saved_n, i};
       };
       const auto keep = [&](const Turn& turn) {
         for (int u : vt_[turn.v]) {
@@ -1461,19 +1463,15 @@ class Improver {
       };
       if (workers_ <= 1 || o_.tolerance > 0) {
         for (std::size_t i = 0; i < moving.size(); ++i)
-          if (judge(i, true)) {
-            keep(turns.back());
-            turns.pop_back();
-          }
+          if (const std::optional<Turn> turn = judge(i, true)) keep(*turn);
       } else {
         TurnScratch scratch(m_.positions.size(), workers_);
-        std::vector<std::size_t> judged;  // the candidate (index in `moving`) of each turn
+        std::vector<Turn> turns;
         std::size_t chunk = kRelaxBlock;
         for (std::size_t i = 0; i < moving.size();) {
           turns.clear();
-          judged.clear();
           for (const std::size_t stop = std::min(moving.size(), i + chunk); i < stop; ++i)
-            if (judge(i, false)) judged.push_back(i);
+            if (const std::optional<Turn> turn = judge(i, false)) turns.push_back(*turn);
           const std::size_t refused = intersecting_turn(turns, scratch);
           for (std::size_t k = turns.size(); k-- > refused;) {
             m_.positions[turns[k].v] = turns[k].from;
@@ -1483,7 +1481,7 @@ class Improver {
           for (std::size_t k = 0; k < refused; ++k) keep(turns[k]);
           if (refused < turns.size()) {
             ++r_.relax_crossings;
-            i = judged[refused] + 1;
+            i = turns[refused].candidate + 1;
           }
           // Where moves are refused, shorter chunks, down to one candidate: the moves judged
           // again after a refusal stay a bounded share of the work (a blob field at 5e-2 with a

@@ -222,9 +222,9 @@ void hessian_lanes(const Vec3& q, const double* cx, const double* cy, const doub
     // Hessian of |d|^3: 3 (|d| I + d d^T / |d|), which tends to 0 at d = 0. Eigen 3.4's select
     // is a loop of scalar divisions and branches: it runs only where a lane sits exactly on a
     // centre (or the point is not finite), and elsewhere the packet division gives the same
-    // quotients. The two changes make
-    // gradient_hessian 1.6 times faster (bench_fields_data, BM_Vis): 4.1 -> 2.5 us on the bunny
-    // VIS-800, where the Hessians were a fifth of a run at factor 3.
+    // quotients. The two changes make gradient_hessian 1.6 times faster (bench_fields_data,
+    // BM_Vis): 4.1 -> 2.5 us on the bunny VIS-800, where the Hessians were a fifth of a run at
+    // factor 3.
     const A2 wi = (r > 0.0).all() ? A2(w / r) : A2((r > 0.0).select(w / r, A2::Zero()));
     const A2 wx = wi * dx, wy = wi * dy;
     s.hxx += wx * dx;
