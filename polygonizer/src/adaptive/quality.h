@@ -85,9 +85,9 @@ struct QualityOptions {
   // mesh laid across creases as if smooth: its triangles across a crease stay stretched, and
   // the moves beside them may leave worse angles to the repair that follows.
   double aim_mean_edge_ratio = 0;
-  // Threads of the independent passes: the relaxation's targets, without a tolerance the
-  // intersection tests of its moves, and for a thread-safe field their projections and each
-  // refinement round's tolerance estimates. 0 all cores (at most
+  // Threads of the independent passes: the relaxation's targets and the intersection tests of
+  // its moves, and for a thread-safe field their projections and each refinement round's
+  // tolerance estimates. 0 all cores (at most
   // 8), 1 the caller's only. The mesh and the evaluation counts are the same, bit for bit, on
   // any number.
   int threads = 0;

@@ -101,8 +101,7 @@ struct AdaptiveOptions {
   // by default: a mesh that is wrong without saying so is worse than a slower run.
   bool check_self_intersections = true;
   // Threads of the data-parallel passes (the seed grid of a thread-safe field, the relaxation's
-  // targets and projections and, without a tolerance, its intersection tests, the tolerance's
-  // estimates, the final checks):
+  // targets, projections and intersection tests, the tolerance's estimates, the final checks):
   // 0 all cores this process may run on (its CPU affinity; at most 8), 1 the caller's only. The
   // tracker itself runs on the caller's thread. The mesh is the same, bit for bit, on any number.
   int threads = 0;
