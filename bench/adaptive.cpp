@@ -229,10 +229,11 @@ BENCHMARK(BM_AdaptiveBookkeeping)->ArgName("shape")->DenseRange(0, 1)->UseManual
 
 // Issue 14's "all cores": each iteration meshes the field on one thread and on two
 // (AdaptiveOptions::threads: the seed grid, the relaxation's targets, projections and
-// intersection tests, the final checks share them) and requires the two meshes to be the same bit for bit; it reports both
-// times and their ratio, speedup_1_to_2. The manual time is the two-thread run's. Tanglecube
-// (a cheap field: the serial tracking dominates) and the bunny VIS-800 (a dear one), at factor
-// 3. On a machine with one core the second run has nothing to share and the ratio is about 1.
+// intersection tests, the final checks share them) and requires the two meshes to be the same
+// bit for bit; it reports both times and their ratio, speedup_1_to_2. The manual time is the
+// two-thread run's. Tanglecube (a cheap field: the serial tracking dominates) and the bunny
+// VIS-800 (a dear one), at factor 3. On a machine with one core the second run has nothing to
+// share and the ratio is about 1.
 void BM_AdaptiveThreads(benchmark::State& state) {
   const int shape = static_cast<int>(state.range(0));  // 0 tanglecube, 1 bunny VIS-800
   std::unique_ptr<Field> tanglecube;

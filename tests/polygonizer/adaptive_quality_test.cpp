@@ -32,7 +32,6 @@ bool on_cube_edge(const Vec3& p) {
   return at_face >= 2;
 }
 
-using test::count_self_intersections;
 using test::expect_sound;
 
 double min_angle_degrees(const Mesh& mesh) { return angle_statistics(mesh).min_degrees; }
