@@ -37,6 +37,8 @@ namespace {
 // Exit status when the experiment ran but some of its runs failed (their rows in the tables say
 // why); 1 stays "the experiment itself could not run" (a bad file, bad options).
 constexpr int kSomeRunsFailed = 2;
+// The most repetitions of a timed run (polygonize --repeat allows as many).
+constexpr long long kMaxRepeats = 100;
 
 struct Run {
   std::string id;
@@ -60,6 +62,7 @@ struct Experiment {
   std::string projection = "perspective";
   std::string normals;  // evaluate --normals; empty: evaluate's default (the file's)
   bool keep_meshes = true;
+  int repeats = 1;  // polygonize --repeat: each run's time is the median of this many
 };
 
 std::string format_number(double v) {
@@ -95,7 +98,7 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
   e.name = file.stem().string();
   const nlohmann::json spec = cdp::read_json_file(file);
   cdp::JsonReader r(spec, file.string(), "", file.parent_path());
-  r.check_keys({"description", "seed", "field", "evaluation", "keep_meshes", "runs"});
+  r.check_keys({"description", "seed", "field", "evaluation", "keep_meshes", "repeats", "runs"});
   e.description = r.string("description", "");
   e.seed = r.integer("seed", 1);
 
@@ -128,6 +131,9 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
     ev.finish({"views", "resolution", "projection", "normals"});
   }
   e.keep_meshes = r.boolean("keep_meshes", true);
+  const long long repeats = r.integer("repeats", 1);
+  if (repeats < 1 || repeats > kMaxRepeats) r.fail("repeats", "must be between 1 and " + std::to_string(kMaxRepeats));
+  e.repeats = static_cast<int>(repeats);
 
   for (auto& run : r.objects("runs")) {
     const std::string method = run.choice("method", {"adaptive", "mc", "mt"});
@@ -192,7 +198,7 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
     }
   }
   if (e.runs.empty()) r.fail("runs", "needs at least one run");
-  r.finish({"description", "seed", "field", "evaluation", "keep_meshes", "runs"});
+  r.finish({"description", "seed", "field", "evaluation", "keep_meshes", "repeats", "runs"});
   return e;
 }
 
@@ -212,6 +218,7 @@ struct Paths {
 std::vector<std::vector<std::string>> run_commands(const Experiment& e, const Paths& p, const Run& r) {
   std::vector<std::string> poly{(bin_dir() / "polygonize").string(), p.field.string(), "-o", p.mesh(r).string()};
   poly.insert(poly.end(), r.polygonize_args.begin(), r.polygonize_args.end());
+  if (e.repeats > 1) poly.insert(poly.end(), {"--repeat", std::to_string(e.repeats)});
   poly.insert(poly.end(), {"--stats", (p.run_dir(r) / "stats.json").string()});
   std::vector<std::string> eval{(bin_dir() / "evaluate").string(),
                                 p.field.string(),

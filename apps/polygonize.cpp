@@ -1,4 +1,4 @@
-// build/bin/polygonize FIELD.json -o OUT.ply [--method adaptive|mc|mt] [options] [--stats STATS.json]
+// build/bin/polygonize FIELD.json -o OUT.ply [--method adaptive|mc|mt] [options] [--stats STATS.json] [--repeat N]
 // One front end for the adaptive polygonizer and the two baselines: the same field file, the
 // same mesh output (PLY, OBJ or OFF by extension, vertex normals from the field gradient) and
 // the same STATS.json, so that experiments compare like with like.
@@ -15,15 +15,25 @@
 #include <cdp/io/mesh_io.h>
 #include <cdp/io/polygonize_stats_json.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace {
 
 // Integer options are ints in the libraries; larger values are refused here with their range
 // rather than wrapping around.
 constexpr long long kIntMax = 2147483647;
+// --repeat is for timing a run, not for a benchmark loop (bench/ has those).
+constexpr long long kMaxRepeat = 100;
+
+bool same_mesh(const cdp::Mesh& a, const cdp::Mesh& b) {
+  return a.positions == b.positions && a.normals == b.normals && a.triangles == b.triangles &&
+         a.corner_normals == b.corner_normals && a.vertex_scalars == b.vertex_scalars;
+}
 
 // Runs an algorithm on the field of `path`; its errors (no surface, a bound reached, bad
 // options) are about that field, so their messages get its name in front, as every other
@@ -70,6 +80,7 @@ int main(int argc, char** argv) {
         ->excludes(quiet_flag);
     int seed_resolution = 32;
     int threads = 0;
+    int repeat = 1;
     long long max_triangles = 0;
     CLI::Option* seed_option = app.add_option("--seed-resolution", seed_resolution,
                                               "cells along the longest side of the seed grid")
@@ -82,6 +93,12 @@ int main(int argc, char** argv) {
         ->capture_default_str()
         ->type_name("N")
         ->transform(cdp::app::integer_in(0, kIntMax));
+    app.add_option("--repeat", repeat,
+                   "run the method N times (1-100) for a steadier time: STATS.json gives the run of median time "
+                   "and every run's time (repeat_seconds); the meshes must agree bit for bit")
+        ->capture_default_str()
+        ->type_name("N")
+        ->transform(cdp::app::integer_in(1, kMaxRepeat));
     CLI::Option* max_triangles_option =
         app.add_option("--max-triangles", max_triangles, "stop with an error beyond N triangles")
             ->type_name("N")
@@ -178,29 +195,50 @@ int main(int argc, char** argv) {
     const auto field = cdp::load_field(field_path);
     const cdp::ProgressCallback progress = reporter.callback();
 
-    cdp::PolygonizeResult result;
-    if (adaptive) {
-      cdp::AdaptiveOptions& o = adaptive_options;
-      if (tolerance->count() > 0) o.sizing = cdp::SizingMode::Tolerance;
-      o.variant = variant == "paper" ? cdp::Variant::Paper : cdp::Variant::Improved;
-      o.creases = creases == "ignore" ? cdp::CreaseHandling::Ignore : cdp::CreaseHandling::Follow;
-      o.triangle_count = triangle_count == "paper" ? cdp::TriangleCountRule::PaperFloor : cdp::TriangleCountRule::Hartmann;
-      if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
-      if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
-      o.threads = threads;
-      o.progress = progress;
-      o.phase = reporter.phase_callback();
-      result = name_field(field_path, [&] { return cdp::polygonize_adaptive(*field, o); });
-    } else {
-      cdp::MarchingOptions& o = marching_options;
-      o.traversal = traversal == "grid" ? cdp::Traversal::Grid : cdp::Traversal::Continuation;
-      if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
-      if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
-      o.threads = threads;
-      reporter.phase("meshing");
-      o.progress = progress;
-      result = name_field(field_path, [&] { return method == "mc" ? cdp::marching_cubes(*field, o) : cdp::marching_tetrahedra(*field, o); });
+    const auto run_once = [&]() -> cdp::PolygonizeResult {
+      if (adaptive) {
+        cdp::AdaptiveOptions& o = adaptive_options;
+        if (tolerance->count() > 0) o.sizing = cdp::SizingMode::Tolerance;
+        o.variant = variant == "paper" ? cdp::Variant::Paper : cdp::Variant::Improved;
+        o.creases = creases == "ignore" ? cdp::CreaseHandling::Ignore : cdp::CreaseHandling::Follow;
+        o.triangle_count = triangle_count == "paper" ? cdp::TriangleCountRule::PaperFloor : cdp::TriangleCountRule::Hartmann;
+        if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
+        if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
+        o.threads = threads;
+        o.progress = progress;
+        o.phase = reporter.phase_callback();
+        return name_field(field_path, [&] { return cdp::polygonize_adaptive(*field, o); });
+      } else {
+        cdp::MarchingOptions& o = marching_options;
+        o.traversal = traversal == "grid" ? cdp::Traversal::Grid : cdp::Traversal::Continuation;
+        if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
+        if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
+        o.threads = threads;
+        reporter.phase("meshing");
+        o.progress = progress;
+        return name_field(field_path, [&] { return method == "mc" ? cdp::marching_cubes(*field, o) : cdp::marching_tetrahedra(*field, o); });
+      }
+    };
+
+    // With --repeat the method runs again on the same field; every run must make the same mesh
+    // (the library promises it), and the statistics are those of the run of median time, so a
+    // run slowed by the machine's other work does not decide a comparison of times.
+    cdp::PolygonizeResult result = run_once();
+    std::vector<cdp::PolygonizeStats> runs{result.stats};
+    for (int i = 1; i < repeat; ++i) {
+      reporter.phase("repetition " + std::to_string(i + 1) + " of " + std::to_string(repeat));
+      cdp::PolygonizeResult again = run_once();
+      if (!same_mesh(again.mesh, result.mesh))
+        throw std::runtime_error(field_path + ": repetition " + std::to_string(i + 1) +
+                                 " made a different mesh from the first (the method should be deterministic: "
+                                 "please report this)");
+      runs.push_back(std::move(again.stats));
     }
+    std::vector<std::size_t> by_time(runs.size());
+    for (std::size_t i = 0; i < by_time.size(); ++i) by_time[i] = i;
+    std::stable_sort(by_time.begin(), by_time.end(),
+                     [&](std::size_t a, std::size_t b) { return runs[a].seconds < runs[b].seconds; });
+    result.stats = runs[by_time[(runs.size() - 1) / 2]];
 
     reporter.phase("writing " + out_path);
     cdp::write_mesh(result.mesh, out_path);
@@ -209,6 +247,10 @@ int main(int argc, char** argv) {
       cdp::add_angle_statistics(result.mesh, result.stats);
       nlohmann::json j = cdp::to_json(result.stats);
       j["field"] = field_path;
+      if (repeat > 1) {
+        j["repeat_seconds"] = nlohmann::json::array();
+        for (const auto& r : runs) j["repeat_seconds"].push_back(r.seconds);
+      }
       cdp::write_file_atomically(stats_path, j.dump(2) + "\n", "statistics");
     }
     // The tolerance is a promise: triangles the refinement could not bring under it (detail

@@ -7,7 +7,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
 
 #include "common/run_command.h"
 
@@ -92,6 +96,25 @@ TEST(ExperimentApp, TinySweepWritesRunsAndSummary) {
     EXPECT_EQ(read_text(out / "meshes" / (id + ".ply")), read_text(out2 / "meshes" / (id + ".ply"))) << id;
 }
 
+TEST(ExperimentApp, RepeatsTimeEveryRunSeveralTimes) {
+  // "repeats": each run's polygonize gets --repeat, and its stats keep every time, the median
+  // being the run's `seconds`.
+  test::TempDir dir("experiment_app_repeats");
+  const auto file = dir.write("tiny.json", R"({"field": {"type": "torus", "major_radius": 1, "minor_radius": 0.4},
+      "repeats": 3, "runs": [{"method": "adaptive", "factor": 2}, {"method": "mt", "cell": 0.1}],
+      "evaluation": {"views": 1, "resolution": 16}})");
+  const fs::path out = dir.path / "out";
+  const auto r = test::run_app("experiment", file.string() + " --out " + out.string() + " --jobs 1");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const auto& run : read_json(out / "summary.json")["runs"]) {
+    ASSERT_TRUE(run["stats"].contains("repeat_seconds")) << run.dump();
+    std::vector<double> times = run["stats"]["repeat_seconds"].get<std::vector<double>>();
+    ASSERT_EQ(times.size(), 3u);
+    std::sort(times.begin(), times.end());
+    EXPECT_EQ(run["stats"]["seconds"].get<double>(), times[1]);
+  }
+}
+
 TEST(ExperimentApp, BadExperimentFilesAreRefusedWithTheKeyNamed) {
   test::TempDir dir("experiment_app_bad");
   struct Case {
@@ -104,6 +127,10 @@ TEST(ExperimentApp, BadExperimentFilesAreRefusedWithTheKeyNamed) {
       {R"({"field": "missing_field.json", "runs": [{"method": "adaptive", "factor": 2}]})", "missing_field.json"},
       {R"({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "mt", "cell": 0.1, "factor": 2}]})", "factor"},
       {R"({"field": {"type": "sphere", "radius": 1}, "runs": [)", "tiny.json"},
+      {R"({"field": {"type": "sphere", "radius": 1}, "repeats": 0, "runs": [{"method": "adaptive", "factor": 2}]})",
+       "repeats"},
+      {R"({"field": {"type": "sphere", "radius": 1}, "repeats": 101, "runs": [{"method": "adaptive", "factor": 2}]})",
+       "repeats"},
   };
   for (const auto& c : cases) {
     const auto file = dir.write("tiny.json", c.json);

@@ -10,6 +10,9 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
 
 #include "common/run_command.h"
 
@@ -115,6 +118,38 @@ TEST(PolygonizeApp, AdaptiveRunThatCannotFinishIsAnErrorWithoutOutput) {
   EXPECT_FALSE(std::filesystem::exists(stats));
 }
 
+std::string read_bytes(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST_P(PolygonizeApp, RepeatReportsTheRunOfMedianTimeAndTheSameMesh) {
+  // --repeat N times the method N times on one field (claims on time compare medians, not one
+  // run that the machine's other work may have slowed): the mesh is the one run's, byte for
+  // byte; STATS.json keeps every run's time, its `seconds` is their median and its counts are
+  // the one run's.
+  const std::string method = GetParam();
+  test::TempDir dir("polygonize_app_repeat_" + method);
+  const auto field = dir.write("torus.json", kTorus);
+  const std::string common = field.string() + " --method " + method + (method == "adaptive" ? " --factor 2" : " --cell 0.1");
+  const auto once = test::run_app("polygonize", common + " -o " + (dir.path / "once.ply").string() + " --stats " +
+                                                    (dir.path / "once.json").string());
+  ASSERT_EQ(once.exit_code, 0) << once.err;
+  const auto thrice = test::run_app("polygonize", common + " -o " + (dir.path / "thrice.ply").string() + " --repeat 3 --stats " +
+                                                      (dir.path / "thrice.json").string());
+  ASSERT_EQ(thrice.exit_code, 0) << thrice.err;
+  EXPECT_EQ(read_bytes(dir.path / "once.ply"), read_bytes(dir.path / "thrice.ply"));
+  const auto a = read_json(dir.path / "once.json"), b = read_json(dir.path / "thrice.json");
+  EXPECT_FALSE(a.contains("repeat_seconds"));
+  ASSERT_TRUE(b.contains("repeat_seconds"));
+  std::vector<double> times = b["repeat_seconds"].get<std::vector<double>>();
+  ASSERT_EQ(times.size(), 3u);
+  std::sort(times.begin(), times.end());
+  EXPECT_EQ(b["seconds"].get<double>(), times[1]);
+  EXPECT_EQ(a["field_evaluations"], b["field_evaluations"]);
+  EXPECT_EQ(a["triangles"], b["triangles"]);
+}
+
 TEST(PolygonizeAppErrors, BadArgumentsAndFieldsGiveAOneLineErrorAndNoOutput) {
   test::TempDir dir("polygonize_app_errors");
   const auto torus = dir.write("torus.json", kTorus);
@@ -138,6 +173,8 @@ TEST(PolygonizeAppErrors, BadArgumentsAndFieldsGiveAOneLineErrorAndNoOutput) {
       {nan.string() + " -o " + out, ""},
       {empty.string() + " -o " + out, ""},
       {torus.string(), "--output is required"},
+      {torus.string() + " -o " + out + " --repeat 0", "--repeat: expects an integer between 1 and 100"},
+      {torus.string() + " -o " + out + " --repeat 101", "--repeat: expects an integer between 1 and 100"},
   };
   for (const auto& c : cases) {
     const auto r = test::run_app("polygonize", c.args);
