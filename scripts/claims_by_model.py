@@ -6,7 +6,8 @@ Models: the bunny VIS-800 (Table 1, results/table1/), the Igea VIS-4004, the hor
 and a random blob field (results/NAME/, experiments/NAME.json: factors 1-5, MT and MC at cells that
 match the adaptive triangle counts). Each claim gets one verdict per model, as table1.py judges it
 (the paper's Table 1 numbers only where the paper measured: the bunny), and an overall verdict:
-holds everywhere, holds on some, fails everywhere, or not measurable.
+holds everywhere, holds on some, fails everywhere, within noise (times whose repeated runs overlap),
+or not measurable.
 """
 import argparse
 import os
@@ -25,14 +26,20 @@ STYLE = {"adaptive": ("Ours (factor)", "C0", "o"), "mt": ("MT", "C3", "^"), "mc"
 
 
 def overall(verdicts):
-    """One verdict over models: True/False/'partly'/None per model (None: not measurable)."""
+    """One verdict over models: True/False/'partly'/'noise'/None per model (None: not measurable,
+    'noise': the times compared were within the machine's noise)."""
     judged = [v for v in verdicts if v is not None]
     if not judged:
         return "not measurable"
+    where = " it was measured" if len(judged) < len(verdicts) else ""
     if all(v is True for v in judged):
-        return "holds everywhere" + (" it was measured" if len(judged) < len(verdicts) else "")
+        return "holds everywhere" + where
     if all(v is False for v in judged):
-        return "fails everywhere" + (" it was measured" if len(judged) < len(verdicts) else "")
+        return "fails everywhere" + where
+    if all(v == "noise" for v in judged):
+        return "within noise everywhere" + where
+    if not any(v is True or v == "partly" for v in judged):
+        return "fails or within noise everywhere" + where
     return "holds on some"
 
 

@@ -63,6 +63,14 @@ def outside_field_us(stats, metrics, seconds, vertices):
     return 1e6 * (seconds - field) / vertices
 
 
+def time_range_ms(stats):
+    """(fastest, slowest) of a repeated run's times in ms, or None for a run timed once."""
+    times = [number(t) for t in (stats.get("repeat_seconds") or [])]
+    if len(times) < 2 or any(t is None for t in times):
+        return None
+    return (1000 * min(times), 1000 * max(times))
+
+
 def run_row(run):
     """The numbers of one run that the tables, claims and plots use (None where missing)."""
     st, m = run.get("stats", {}), run.get("metrics", {})
@@ -75,6 +83,9 @@ def run_row(run):
         "variant": run.get("variant", ""),
         "parameter": run["parameter"], "status": run.get("status"), "reason": run.get("reason", ""),
         "time_ms": sec * 1000 if sec is not None else None,
+        # With experiment "repeats" (polygonize --repeat) `time_ms` is the median of several runs
+        # and this their range, which the claims on time compare rather than single times.
+        "time_ms_range": time_range_ms(st),
         "triangles": tri, "vertices": verts,
         "triangles_per_s": tri / sec if tri and sec else None,
         "evaluations_per_triangle": ev / tri if ev and tri else None,

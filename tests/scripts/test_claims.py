@@ -124,6 +124,39 @@ class Claims(unittest.TestCase):
         self.assertEqual(claims_by_model.overall(["partly", "partly"]), "holds on some")
         self.assertEqual(claims_by_model.overall([False, False]), "fails everywhere")
         self.assertEqual(claims_by_model.overall([None, None]), "not measurable")
+        self.assertEqual(claims_by_model.overall(["noise", "noise"]), "within noise everywhere")
+        self.assertEqual(claims_by_model.overall([False, "noise"]), "fails or within noise everywhere")
+        self.assertEqual(claims_by_model.overall([True, "noise"]), "holds on some")
+
+    def test_time_to_accuracy_decides_only_where_the_repeated_runs_do_not_overlap(self):
+        # The Igea's committed rows once had ours 556 ms against MT's 558 ms at the same depth
+        # error: one run each, and the next regeneration said the opposite. With repeated runs
+        # a verdict needs the ranges apart; overlapping ranges are within noise.
+        def rows(ours_range, mt_ranges):
+            ours = [row("adaptive", k, time_ms=250.0 * k / 3, depth_error_relative=1e-3 * 3 / k, phong_error=3.0 / k)
+                    for k in range(1, 6)]
+            ours[2]["time_ms_range"] = ours_range
+            mt = [row("mt", p, time_ms=t, phong_error=e, depth_error_relative=d, time_ms_range=rg)
+                  for (p, t, e, d), rg in zip(((1, 200.0, 2.0, 2e-3), (3, 300.0, 0.5, 5e-4)), mt_ranges)]
+            return {"adaptive": ours, "mt": mt}
+
+        # Ours at factor 3: 250 ms. Both targets lie midway (log-log) between MT's two runs, so
+        # MT's time there is sqrt(200 * 300) ≈ 245 ms, its range sqrt(190 * 290) ≈ 235 to
+        # sqrt(210 * 310) ≈ 255 ms.
+        v = verdicts(rows((240.0, 260.0), [(190.0, 210.0), (290.0, 310.0)]))
+        self.assertEqual(find(v, "For the same accuracy"), "noise")
+        v = verdicts(rows((200.0, 230.0), [(190.0, 210.0), (290.0, 310.0)]))
+        self.assertIs(find(v, "For the same accuracy"), True)
+        v = verdicts(rows((260.0, 280.0), [(190.0, 210.0), (290.0, 310.0)]))
+        self.assertIs(find(v, "For the same accuracy"), False)
+        # Single runs (no ranges) are still judged, as before: a tie is within noise.
+        self.assertEqual(table1.faster(250.0, 250.0, 250.0, 250.0), "noise")
+        self.assertIs(table1.faster(249.0, 249.0, 250.0, 250.0), True)
+        text = [c for c in table1.claims(rows((240.0, 260.0), [(190.0, 210.0), (290.0, 310.0)]), PAPER)
+                if c[0].startswith("For the same accuracy")][0][3]
+        self.assertIn("within noise", text)
+        self.assertIn("runs: ours 240–260", text)
+        self.assertEqual(table1.verdict("noise"), "within noise")
 
 
 if __name__ == "__main__":
