@@ -95,6 +95,7 @@ int main(int argc, char** argv) {
         ->transform(cdp::app::integer_in(0, kIntMax));
     app.add_option("--repeat", repeat,
                    "run the method N times (1-100) for a steadier time: STATS.json gives the run of median time "
+                   "(the lower middle one for an even N) "
                    "and every run's time (repeat_seconds); the meshes must agree bit for bit")
         ->capture_default_str()
         ->type_name("N")
@@ -221,12 +222,12 @@ int main(int argc, char** argv) {
     };
 
     // With --repeat the method runs again on the same field; every run must make the same mesh
-    // (the library promises it), and the statistics are those of the run of median time, so a
-    // run slowed by the machine's other work does not decide a comparison of times.
+    // (the library promises it), and the statistics are those of the run of median time (for an
+    // even N the lower of the two middle ones), so that a run slowed by the machine's other work
+    // does not decide a comparison of times.
     cdp::PolygonizeResult result = run_once();
     std::vector<cdp::PolygonizeStats> runs{result.stats};
     for (int i = 1; i < repeat; ++i) {
-      reporter.phase("repetition " + std::to_string(i + 1) + " of " + std::to_string(repeat));
       cdp::PolygonizeResult again = run_once();
       if (!same_mesh(again.mesh, result.mesh))
         throw std::runtime_error(field_path + ": repetition " + std::to_string(i + 1) +

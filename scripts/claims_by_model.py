@@ -6,8 +6,8 @@ Models: the bunny VIS-800 (Table 1, results/table1/), the Igea VIS-4004, the hor
 and a random blob field (results/NAME/, experiments/NAME.json: factors 1-5, MT and MC at cells that
 match the adaptive triangle counts). Each claim gets one verdict per model, as table1.py judges it
 (the paper's Table 1 numbers only where the paper measured: the bunny), and an overall verdict:
-holds everywhere, holds on some, fails everywhere, within noise (times whose repeated runs overlap),
-or not measurable.
+holds everywhere, holds on some, fails everywhere, within noise everywhere (times whose repeated
+runs overlap), fails or within noise everywhere (no model where it holds), or not measurable.
 """
 import argparse
 import os

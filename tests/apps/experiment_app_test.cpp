@@ -106,7 +106,8 @@ TEST(ExperimentApp, RepeatsTimeEveryRunSeveralTimes) {
   const fs::path out = dir.path / "out";
   const auto r = test::run_app("experiment", file.string() + " --out " + out.string() + " --jobs 1");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const auto& run : read_json(out / "summary.json")["runs"]) {
+  const auto summary = read_json(out / "summary.json");
+  for (const auto& run : summary["runs"]) {
     ASSERT_TRUE(run["stats"].contains("repeat_seconds")) << run.dump();
     std::vector<double> times = run["stats"]["repeat_seconds"].get<std::vector<double>>();
     ASSERT_EQ(times.size(), 3u);
