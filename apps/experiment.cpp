@@ -25,6 +25,7 @@
 #include <iomanip>
 #include <iostream>
 #include <mutex>
+#include <shared_mutex>
 #include <sstream>
 #include <thread>
 
@@ -301,8 +302,20 @@ void write_json_atomically(const nlohmann::json& j, const fs::path& path) {
   cdp::write_file_atomically(path, j.dump(2) + "\n");
 }
 
-// One run: polygonize, then evaluate. Its outcome goes to runs/ID/status.json.
-bool execute_run(const Experiment& e, const Paths& p, const Run& r) {
+// Keeps a timed polygonization (an experiment with "repeats") from sharing the machine with the
+// experiment's other steps: polygonize takes it alone, evaluations share it. The times the claims
+// compare are then the method's, not the method's plus the waiting for another job's cores.
+struct Timing {
+  std::shared_mutex machine;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  double since_start() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+};
+
+// One run: polygonize, then evaluate. Its outcome goes to runs/ID/status.json, with each step's
+// start and end in seconds since the experiment began (`steps`).
+bool execute_run(const Experiment& e, const Paths& p, const Run& r, Timing& timing) {
   const fs::path dir = p.run_dir(r);
   fs::create_directories(dir);
   fs::create_directories(p.mesh(r).parent_path());
@@ -313,7 +326,18 @@ bool execute_run(const Experiment& e, const Paths& p, const Run& r) {
   const char* steps[] = {"polygonize", "evaluate"};
   for (std::size_t i = 0; i < commands.size(); ++i) {
     { std::ofstream(log, std::ios::app) << "$ " << join_command(commands[i]) << "\n"; }
-    const int code = spawn_and_wait(commands[i], log);
+    int code = 0;
+    {
+      std::unique_lock<std::shared_mutex> alone(timing.machine, std::defer_lock);
+      std::shared_lock<std::shared_mutex> shared(timing.machine, std::defer_lock);
+      if (e.repeats > 1) {
+        if (i == 0) alone.lock();
+        else shared.lock();
+      }
+      const double begin = timing.since_start();
+      code = spawn_and_wait(commands[i], log);
+      status["steps"][steps[i]] = {{"start", begin}, {"end", timing.since_start()}};
+    }
     if (code != 0) {
       status["status"] = "failed";
       status["reason"] = std::string(steps[i]) + " failed (exit " + std::to_string(code) + "): " + last_line(log);
@@ -481,11 +505,12 @@ int main(int argc, char** argv) {
     }
     fs::create_directories(out);
     write_json_atomically(e.field, p.field);
-    if (only) return execute_run(e, p, *only) ? 0 : kSomeRunsFailed;
+    Timing timing;
+    if (only) return execute_run(e, p, *only, timing) ? 0 : kSomeRunsFailed;
 
     // Everything: the first run alone, so that it computes and caches the ground truth that all
-    // runs share; then the rest in parallel (each single-threaded apart from the evaluation); then
-    // the summary.
+    // runs share; then the rest in parallel (with "repeats", each polygonization alone: Timing);
+    // then the summary.
     std::atomic<std::size_t> next{0};
     std::atomic<int> failed{0}, done{0};
     std::mutex print;
@@ -497,7 +522,7 @@ int main(int argc, char** argv) {
           if (i >= limit) return;
         } while (!next.compare_exchange_weak(i, i + 1));
         const auto t0 = std::chrono::steady_clock::now();
-        const bool ok = execute_run(e, p, e.runs[i]);
+        const bool ok = execute_run(e, p, e.runs[i], timing);
         failed += !ok;
         const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         std::lock_guard lock(print);

@@ -96,23 +96,44 @@ TEST(ExperimentApp, TinySweepWritesRunsAndSummary) {
     EXPECT_EQ(read_text(out / "meshes" / (id + ".ply")), read_text(out2 / "meshes" / (id + ".ply"))) << id;
 }
 
-TEST(ExperimentApp, RepeatsTimeEveryRunSeveralTimes) {
+TEST(ExperimentApp, RepeatsTimeEveryRunSeveralTimesEachPolygonizationAlone) {
   // "repeats": each run's polygonize gets --repeat, and its stats keep every time, the median
-  // being the run's `seconds`.
+  // being the run's `seconds`. The polygonizations are timed with the machine to themselves:
+  // with two jobs, no other step of the experiment runs while one does (status.json's steps).
   test::TempDir dir("experiment_app_repeats");
   const auto file = dir.write("tiny.json", R"({"field": {"type": "torus", "major_radius": 1, "minor_radius": 0.4},
-      "repeats": 3, "runs": [{"method": "adaptive", "factor": 2}, {"method": "mt", "cell": 0.1}],
-      "evaluation": {"views": 1, "resolution": 16}})");
+      "repeats": 3, "runs": [{"method": "adaptive", "factor": [2, 3]}, {"method": "mt", "cell": [0.1, 0.08]}],
+      "evaluation": {"views": 2, "resolution": 48}})");
   const fs::path out = dir.path / "out";
-  const auto r = test::run_app("experiment", file.string() + " --out " + out.string() + " --jobs 1");
+  const auto r = test::run_app("experiment", file.string() + " --out " + out.string() + " --jobs 2");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto summary = read_json(out / "summary.json");
+  ASSERT_EQ(summary["runs"].size(), 4u);
+  struct Step {
+    std::string id, name;
+    double start, end;
+  };
+  std::vector<Step> steps;
   for (const auto& run : summary["runs"]) {
     ASSERT_TRUE(run["stats"].contains("repeat_seconds")) << run.dump();
     std::vector<double> times = run["stats"]["repeat_seconds"].get<std::vector<double>>();
     ASSERT_EQ(times.size(), 3u);
     std::sort(times.begin(), times.end());
     EXPECT_EQ(run["stats"]["seconds"].get<double>(), times[1]);
+    const auto status = read_json(out / "runs" / run["id"].get<std::string>() / "status.json");
+    for (const std::string name : {"polygonize", "evaluate"}) {
+      ASSERT_TRUE(status["steps"].contains(name)) << status.dump();
+      steps.push_back({run["id"], name, status["steps"][name]["start"], status["steps"][name]["end"]});
+      EXPECT_LE(steps.back().start, steps.back().end);
+    }
+  }
+  for (const Step& a : steps) {
+    for (const Step& b : steps) {
+      if (a.name != "polygonize" || &a == &b) continue;
+      EXPECT_TRUE(a.end <= b.start || b.end <= a.start)
+          << a.id << " polygonize [" << a.start << ", " << a.end << "] overlaps " << b.id << " " << b.name << " ["
+          << b.start << ", " << b.end << "]";
+    }
   }
 }
 
