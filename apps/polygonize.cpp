@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -196,29 +197,32 @@ int main(int argc, char** argv) {
     const auto field = cdp::load_field(field_path);
     const cdp::ProgressCallback progress = reporter.callback();
 
+    // The options once; each repetition (--repeat) then runs the method again with them.
+    if (adaptive) {
+      cdp::AdaptiveOptions& o = adaptive_options;
+      if (tolerance->count() > 0) o.sizing = cdp::SizingMode::Tolerance;
+      o.variant = variant == "paper" ? cdp::Variant::Paper : cdp::Variant::Improved;
+      o.creases = creases == "ignore" ? cdp::CreaseHandling::Ignore : cdp::CreaseHandling::Follow;
+      o.triangle_count = triangle_count == "paper" ? cdp::TriangleCountRule::PaperFloor : cdp::TriangleCountRule::Hartmann;
+      if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
+      if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
+      o.threads = threads;
+      o.progress = progress;
+      o.phase = reporter.phase_callback();
+    } else {
+      cdp::MarchingOptions& o = marching_options;
+      o.traversal = traversal == "grid" ? cdp::Traversal::Grid : cdp::Traversal::Continuation;
+      if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
+      if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
+      o.threads = threads;
+      o.progress = progress;
+    }
     const auto run_once = [&]() -> cdp::PolygonizeResult {
-      if (adaptive) {
-        cdp::AdaptiveOptions& o = adaptive_options;
-        if (tolerance->count() > 0) o.sizing = cdp::SizingMode::Tolerance;
-        o.variant = variant == "paper" ? cdp::Variant::Paper : cdp::Variant::Improved;
-        o.creases = creases == "ignore" ? cdp::CreaseHandling::Ignore : cdp::CreaseHandling::Follow;
-        o.triangle_count = triangle_count == "paper" ? cdp::TriangleCountRule::PaperFloor : cdp::TriangleCountRule::Hartmann;
-        if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
-        if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
-        o.threads = threads;
-        o.progress = progress;
-        o.phase = reporter.phase_callback();
-        return name_field(field_path, [&] { return cdp::polygonize_adaptive(*field, o); });
-      } else {
-        cdp::MarchingOptions& o = marching_options;
-        o.traversal = traversal == "grid" ? cdp::Traversal::Grid : cdp::Traversal::Continuation;
-        if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
-        if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
-        o.threads = threads;
-        reporter.phase("meshing");
-        o.progress = progress;
-        return name_field(field_path, [&] { return method == "mc" ? cdp::marching_cubes(*field, o) : cdp::marching_tetrahedra(*field, o); });
-      }
+      if (adaptive) return name_field(field_path, [&] { return cdp::polygonize_adaptive(*field, adaptive_options); });
+      reporter.phase("meshing");
+      return name_field(field_path, [&] {
+        return method == "mc" ? cdp::marching_cubes(*field, marching_options) : cdp::marching_tetrahedra(*field, marching_options);
+      });
     };
 
     // With --repeat the method runs again on the same field; every run must make the same mesh
@@ -236,7 +240,7 @@ int main(int argc, char** argv) {
       runs.push_back(std::move(again.stats));
     }
     std::vector<std::size_t> by_time(runs.size());
-    for (std::size_t i = 0; i < by_time.size(); ++i) by_time[i] = i;
+    std::iota(by_time.begin(), by_time.end(), std::size_t{0});
     std::stable_sort(by_time.begin(), by_time.end(),
                      [&](std::size_t a, std::size_t b) { return runs[a].seconds < runs[b].seconds; });
     result.stats = runs[by_time[(runs.size() - 1) / 2]];

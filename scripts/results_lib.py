@@ -67,9 +67,10 @@ def time_range_ms(stats):
     """The middle half of a repeated run's times in ms (the 2nd and 4th of 5, the extremes of 3
     or fewer), or None for a run timed once. Not the fastest and slowest: those spread further
     the more often a run is repeated, the middle half does not."""
-    times = sorted(number(t) for t in (stats.get("repeat_seconds") or []) if number(t) is not None)
-    if len(times) < 2 or len(times) != len(stats.get("repeat_seconds") or []):
+    times = [number(t) for t in stats.get("repeat_seconds") or []]
+    if len(times) < 2 or None in times:
         return None
+    times.sort()
     q = (len(times) - 1) // 4
     return (1000 * times[q], 1000 * times[len(times) - 1 - q])
 
