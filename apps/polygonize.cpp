@@ -119,10 +119,21 @@ int main(int argc, char** argv) {
                               ->transform(cdp::app::positive_number());
     CLI::Option* tolerance = adaptive_group
                                  ->add_option("--tolerance", adaptive_options.tolerance,
-                                              "edges for a chord deviation of EPS instead of --factor")
+                                              "edges for a chord deviation of EPS instead of --factor, and (variant "
+                                              "improved) every triangle measured and split until it lies within EPS "
+                                              "of the surface")
                                  ->type_name("EPS")
                                  ->transform(cdp::app::positive_number())
                                  ->excludes(factor);
+    CLI::Option* chord = adaptive_group
+                             ->add_option("--chord", adaptive_options.tolerance,
+                                          "edges for a chord deviation of EPS at each point's smallest radius of "
+                                          "curvature, without --tolerance's bound: nothing measured or refined (about "
+                                          "a third of its field evaluations), the distance not bounded")
+                             ->type_name("EPS")
+                             ->transform(cdp::app::positive_number())
+                             ->excludes(factor)
+                             ->excludes(tolerance);
     adaptive_group
         ->add_option("--min-edge", adaptive_options.min_edge, "shortest edge (default 2e-3 of the box diagonal; a default run that fails where the surface bends more tightly is made once more with a quarter of that radius, not below 2e-4 of the diagonal)")
         ->type_name("L")
@@ -201,6 +212,7 @@ int main(int argc, char** argv) {
     if (adaptive) {
       cdp::AdaptiveOptions& o = adaptive_options;
       if (tolerance->count() > 0) o.sizing = cdp::SizingMode::Tolerance;
+      if (chord->count() > 0) o.sizing = cdp::SizingMode::Chord;
       o.variant = variant == "paper" ? cdp::Variant::Paper : cdp::Variant::Improved;
       o.creases = creases == "ignore" ? cdp::CreaseHandling::Ignore : cdp::CreaseHandling::Follow;
       o.triangle_count = triangle_count == "paper" ? cdp::TriangleCountRule::PaperFloor : cdp::TriangleCountRule::Hartmann;

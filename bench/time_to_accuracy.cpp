@@ -1,7 +1,7 @@
 // Time to accuracy: how long each method needs to reach a given accuracy, rather than how fast it
 // makes triangles. For four fields (bunny VIS-800, Igea VIS-4004, tanglecube, random blobs) and
-// four method families (adaptive by factor, adaptive by tolerance, Marching Tetrahedra, Marching
-// Cubes) it finds the fastest run that reaches
+// five method families (adaptive by factor, by tolerance and by chord deviation, Marching
+// Tetrahedra, Marching Cubes) it finds the fastest run that reaches
 //   phong: a mean Phong error <= 0.5 degrees (AccuracyMetrics::phong_deg.mean), and
 //   depth: a mean depth error <= 1e-4 of the box diagonal (AccuracyMetrics::depth_relative_mean),
 // measured as `evaluate` measures them with Table 1's camera (experiments/table1.json: 6 views,
@@ -18,6 +18,7 @@
 //                       experiments)
 //   adaptive_tolerance  SizingMode::Tolerance, eps = diagonal x 3e-3 / 2^(j/2) down to 8e-6
 //                       (triangles go as 1 / eps)
+//   adaptive_chord      SizingMode::Chord (the tolerance's sizing without its bound), the same eps
 //   mt, mc              the paper's precisions 0..5 on the variational fields (cell = constraint
 //                       spacing x 1, 0.7, 0.6, 0.5, 0.4, 0.3: 1.4-2 times the triangles a step,
 //                       kept as the paper's), then cells diagonal / N for N = 16 x 2^(k/4) up to
@@ -106,7 +107,7 @@ const char* const kFields[][2] = {{"bunny_vis800", "experiments/fields/bunny_vis
                                   {"igea_vis4004", "experiments/fields/igea_vis4004.json"},
                                   {"tanglecube", "experiments/fields/tanglecube.json"},
                                   {"random_blobs", "experiments/fields/random_blobs.json"}};
-const char* const kFamilies[] = {"adaptive_factor", "adaptive_tolerance", "mt", "mc"};
+const char* const kFamilies[] = {"adaptive_factor", "adaptive_tolerance", "adaptive_chord", "mt", "mc"};
 const char* const kTargets[] = {"phong", "depth"};
 
 std::string read_text(const std::string& path) {
@@ -164,14 +165,15 @@ std::vector<Step> ladder(const Field& field, const std::string& family) {
                          return polygonize_adaptive(f, o);
                        }});
     }
-  } else if (family == "adaptive_tolerance") {
+  } else if (family == "adaptive_tolerance" || family == "adaptive_chord") {
     // Triangles go as 1 / eps.
+    const SizingMode mode = family == "adaptive_chord" ? SizingMode::Chord : SizingMode::Tolerance;
     for (int j = 0;; ++j) {
       const double t = kFirstTolerance * std::pow(2.0, -j / static_cast<double>(kRungsPerDoubling));
       if (t < kLastTolerance) break;
-      steps.push_back({"tolerance/diag", t, [t, diag](const Field& f) {
+      steps.push_back({"tolerance/diag", t, [t, diag, mode](const Field& f) {
                          AdaptiveOptions o;
-                         o.sizing = SizingMode::Tolerance;
+                         o.sizing = mode;
                          o.tolerance = t * diag;
                          o.max_triangles = kMaxTriangles + kMaxTriangles / 4;
                          return polygonize_adaptive(f, o);

@@ -251,7 +251,7 @@ def inrun_section(runs):
 
 
 TTA_FAMILIES = (("adaptive_factor", "adaptive (factor)", "o"), ("adaptive_tolerance", "adaptive (tolerance)", "s"),
-                ("mt", "MT", "^"), ("mc", "MC", "v"))
+                ("adaptive_chord", "adaptive (chord)", "D"), ("mt", "MT", "^"), ("mc", "MC", "v"))
 TTA_TARGETS = (("phong", "mean Phong error (°)", 0.5), ("depth", "mean depth error / box diagonal", 1e-4))
 
 

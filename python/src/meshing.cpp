@@ -23,7 +23,7 @@ namespace {
 
 struct Options {
   std::string method = "adaptive";
-  std::optional<double> factor, tolerance, min_edge, max_edge, cell;
+  std::optional<double> factor, tolerance, chord, min_edge, max_edge, cell;
   std::optional<long long> precision, seed_resolution, max_triangles;
   std::optional<std::string> triangle_count, traversal, face_ambiguity;
   std::optional<bool> check_self_intersections;
@@ -59,6 +59,7 @@ void check_applies(const Options& o) {
   } else {
     refuse(o.factor.has_value(), "factor");
     refuse(o.tolerance.has_value(), "tolerance");
+    refuse(o.chord.has_value(), "chord");
     refuse(o.min_edge.has_value(), "min_edge");
     refuse(o.max_edge.has_value(), "max_edge");
     refuse(o.triangle_count.has_value(), "triangle_count");
@@ -70,13 +71,18 @@ void check_applies(const Options& o) {
 
 AdaptiveOptions adaptive_options(const Options& o) {
   AdaptiveOptions a;
-  if (o.factor && o.tolerance) throw InvalidInputError("give either factor or tolerance, not both");
+  if (int(o.factor.has_value()) + int(o.tolerance.has_value()) + int(o.chord.has_value()) > 1)
+    throw InvalidInputError("give one of factor, tolerance and chord, not several");
   // The Python default is the paper's bunny example, factor 3 (the library's and the program's
   // is 2): pass factor explicitly to compare with a program run without --factor.
   a.factor = o.factor ? positive(o.factor, "factor") : 3.0;
   if (o.tolerance) {
     a.sizing = SizingMode::Tolerance;
     a.tolerance = positive(o.tolerance, "tolerance");
+  }
+  if (o.chord) {
+    a.sizing = SizingMode::Chord;
+    a.tolerance = positive(o.chord, "chord");
   }
   if (o.min_edge) a.min_edge = positive(o.min_edge, "min_edge");
   if (o.max_edge) a.max_edge = positive(o.max_edge, "max_edge");
@@ -158,7 +164,8 @@ Returns (vertices (N, 3) float64, faces (M, 3) int32, stats dict), or with retur
 stats is build/bin/polygonize's STATS.json as a dict (without "field").
 
 method "adaptive" (the paper's tracker): factor (default 3: edge = minimum radius of curvature /
-factor) or tolerance (chord deviation), min_edge, max_edge, triangle_count ("hartmann" or
+factor), tolerance (chord deviation, and every triangle measured and split until it lies within
+it of the surface) or chord (the same sizing without the bound: nothing measured), min_edge, max_edge, triangle_count ("hartmann" or
 "paper"), creases ("follow", the default: mesh edges along the creases of a min/max/abs field, or
 "ignore"), seed_resolution, max_triangles, check_self_intersections.
 Both: threads (0, the default, all cores, at most 8; 1 the calling thread only) for the seed grid of
@@ -175,19 +182,19 @@ void bind_meshing(py::module_& m) {
   m.def(
       "polygonize",
       [](const Field& field, std::string method, std::optional<double> factor, std::optional<double> tolerance,
-         std::optional<double> min_edge, std::optional<double> max_edge, std::optional<double> cell,
+         std::optional<double> chord, std::optional<double> min_edge, std::optional<double> max_edge, std::optional<double> cell,
          std::optional<long long> precision, std::optional<std::string> traversal, std::optional<std::string> face_ambiguity,
          std::optional<std::string> triangle_count, std::optional<long long> seed_resolution,
          std::optional<long long> max_triangles, std::optional<bool> check_self_intersections,
          std::optional<long long> threads, std::optional<std::string> creases, bool return_normals, py::object progress,
          py::object phase) {
-        Options o{method,        factor,         tolerance,      min_edge,       max_edge,
+        Options o{method,        factor,         tolerance,      chord,          min_edge,       max_edge,
                   cell,          precision,      seed_resolution, max_triangles, triangle_count,
                   traversal,     face_ambiguity, check_self_intersections, threads, creases};
         return run(field, o, return_normals, progress, phase);
       },
       py::arg("field"), py::arg("method") = "adaptive", py::kw_only(), py::arg("factor") = py::none(),
-      py::arg("tolerance") = py::none(), py::arg("min_edge") = py::none(), py::arg("max_edge") = py::none(),
+      py::arg("tolerance") = py::none(), py::arg("chord") = py::none(), py::arg("min_edge") = py::none(), py::arg("max_edge") = py::none(),
       py::arg("cell") = py::none(), py::arg("precision") = py::none(), py::arg("traversal") = py::none(),
       py::arg("face_ambiguity") = py::none(), py::arg("triangle_count") = py::none(),
       py::arg("seed_resolution") = py::none(), py::arg("max_triangles") = py::none(),

@@ -158,7 +158,7 @@ TEST(CommandLineApps, EveryProgramPrintsItsHelpOnStandardOutput) {
     }
   // polygonize sorts its options by method.
   const std::string help = test::run_app("polygonize", "--help").out;
-  for (const char* text : {"adaptive method", "--factor K", "--tolerance EPS", "mc and mt methods", "--cell H",
+  for (const char* text : {"adaptive method", "--factor K", "--tolerance EPS", "--chord EPS", "mc and mt methods", "--cell H",
                            "--precision P", "--seed-resolution N"})
     EXPECT_NE(help.find(text), std::string::npos) << text << "\n" << help;
   EXPECT_LT(help.find("adaptive method"), help.find("--factor K"));

@@ -104,6 +104,26 @@ TEST(PolygonizeApp, AToleranceTheMeshCannotKeepIsAOneLineWarningNamingWhere) {
   EXPECT_EQ(kept.err, "");
 }
 
+TEST(PolygonizeApp, AChordDeviationIsASizingNotAPromise) {
+  // --chord sizes as --tolerance does and measures nothing: the run that --tolerance warns about
+  // above writes its mesh silently, with the sizing named in the statistics and no triangle
+  // measured.
+  test::TempDir dir("polygonize_app_chord");
+  const auto field = dir.write("sphere.json", R"({"type": "sphere", "radius": 1})");
+  const auto out = dir.path / "out.ply", stats = dir.path / "stats.json";
+  const auto r = test::run_app("polygonize", field.string() + " -o " + out.string() +
+                                                 " --quiet --chord 1e-5 --min-edge 0.05 --stats " + stats.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_TRUE(analyze_topology(read_mesh(out)).watertight());
+  const auto s = read_json(stats);
+  EXPECT_EQ(s["sizing"], "chord");
+  EXPECT_EQ(s["tolerance"].get<double>(), 1e-5);
+  EXPECT_FALSE(s["tolerance_refinement"].get<bool>());
+  EXPECT_EQ(s["quality"]["measured_densely"].get<std::size_t>(), 0u);
+  EXPECT_EQ(s["quality"]["over_tolerance"].get<std::size_t>(), 0u);
+}
+
 TEST(PolygonizeApp, AdaptiveRunThatCannotFinishIsAnErrorWithoutOutput) {
   // A run stopped by a bound: a one-line error, no mesh file and no stats file.
   test::TempDir dir("polygonize_app_limit");
@@ -166,6 +186,10 @@ TEST(PolygonizeAppErrors, BadArgumentsAndFieldsGiveAOneLineErrorAndNoOutput) {
       {torus.string() + " -o " + out + " --method mc --factor 2", "--factor does not apply"},
       {torus.string() + " -o " + out + " --factor two", "--factor: expects a positive number, found \"two\""},
       {torus.string() + " -o " + out + " --factor 2 --tolerance 0.01", "--factor excludes --tolerance"},
+      {torus.string() + " -o " + out + " --chord 0.01 --tolerance 0.01", "--tolerance excludes --chord"},
+      {torus.string() + " -o " + out + " --chord 0.01 --factor 2", "excludes"},
+      {torus.string() + " -o " + out + " --chord 0", "--chord: expects a positive number"},
+      {torus.string() + " -o " + out + " --method mc --chord 0.01", "--chord does not apply"},
       {torus.string() + " -o " + out + " --method mt --precision 3", "precision"},
       {torus.string() + " -o " + (dir.path / "out.stl").string(), ".ply, .obj or .off"},
       {(dir.path / "missing.json").string() + " -o " + out, "missing.json"},

@@ -66,7 +66,10 @@ def test_progress_and_phase_callbacks(sphere):
     (lambda s: cdp.polygonize(s, "adaptive", cell=0.1), 'cell does not apply to method "adaptive"'),
     (lambda s: cdp.polygonize(s, "mc", factor=2), 'factor does not apply to method "mc"'),
     (lambda s: cdp.polygonize(s, "mt", face_ambiguity="join_inside"), 'face_ambiguity does not apply to method "mt"'),
-    (lambda s: cdp.polygonize(s, factor=2, tolerance=0.01), "give either factor or tolerance, not both"),
+    (lambda s: cdp.polygonize(s, factor=2, tolerance=0.01), "give one of factor, tolerance and chord, not several"),
+    (lambda s: cdp.polygonize(s, tolerance=0.01, chord=0.01), "give one of factor, tolerance and chord, not several"),
+    (lambda s: cdp.polygonize(s, chord=0), "chord must be a positive number, not 0.0"),
+    (lambda s: cdp.polygonize(s, "mt", chord=0.01), 'chord does not apply to method "mt"'),
     (lambda s: cdp.polygonize(s, factor=-1), "factor must be a positive number, not -1.0"),
     (lambda s: cdp.polygonize(s, min_edge=float("nan")), "min_edge must be a positive number, not nan"),
     (lambda s: cdp.polygonize(s, "marching"), 'method must be "adaptive", "mc" or "mt", not "marching"'),
@@ -106,6 +109,7 @@ def test_algorithm_errors_are_runtime_error_subclasses():
 @pytest.mark.parametrize("method, flags, options", [
     ("adaptive", ["--factor", "3"], {"factor": 3}),
     ("adaptive", ["--tolerance", "0.002", "--min-edge", "0.01"], {"tolerance": 0.002, "min_edge": 0.01}),
+    ("adaptive", ["--chord", "0.002"], {"chord": 0.002}),
     ("mc", ["--cell", "0.05"], {"cell": 0.05}),
     ("mt", ["--cell", "0.08", "--traversal", "grid"], {"cell": 0.08, "traversal": "grid"}),
     # Different thread counts on the two sides: the same arrays.
