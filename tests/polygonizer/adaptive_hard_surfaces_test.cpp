@@ -1,6 +1,6 @@
 // Hard surfaces for the adaptive polygonizer (the robustness issue's suite): CSG creases and
 // corners, shells and cavities, high-genus algebraic surfaces, thin and tiny components, random
-// blob fields, each at several factors and tolerances. Two promises, tested separately:
+// blob fields, each at several factors, tolerances and chord deviations. Two promises, tested separately:
 //  - never wrong without saying so: a run either returns a closed, oriented, manifold, outward
 //    mesh without self-intersections whose components and genus match an independent reference,
 //    or throws a clear error naming a place (every case, every factor);
@@ -170,13 +170,14 @@ struct Case {
   std::size_t surface;
   double factor;
   double tolerance = 0;  // positive: --tolerance instead of --factor
+  bool chord = false;    // with tolerance: --chord (SizingMode::Chord) instead of --tolerance
 };
 
 std::string case_name(const testing::TestParamInfo<Case>& info) {
   std::ostringstream tolerance;
   tolerance << info.param.tolerance;
   std::string n = hard_surfaces()[info.param.surface].name +
-                  (info.param.tolerance > 0 ? "_tolerance" + tolerance.str()
+                  (info.param.tolerance > 0 ? (info.param.chord ? "_chord" : "_tolerance") + tolerance.str()
                                             : "_factor" + std::to_string(static_cast<int>(info.param.factor)));
   for (char& c : n)
     if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
@@ -191,11 +192,13 @@ TEST_P(HardSurfaces, CorrectMeshOrClearError) {
   const auto field = test::field_from_json(h.json);
   AdaptiveOptions o;
   o.factor = factor;
+  const bool chord = GetParam().chord;
   if (tolerance > 0) {
-    o.sizing = SizingMode::Tolerance;
+    o.sizing = chord ? SizingMode::Chord : SizingMode::Tolerance;
     o.tolerance = tolerance;
   }
-  const std::string run = tolerance > 0 ? "tolerance " + std::to_string(tolerance) : "factor " + std::to_string(factor);
+  const std::string run = tolerance > 0 ? (chord ? "chord " : "tolerance ") + std::to_string(tolerance)
+                                        : "factor " + std::to_string(factor);
   std::string outcome;
   try {
     const PolygonizeResult r = polygonize_adaptive(*field, o);
@@ -211,8 +214,10 @@ TEST_P(HardSurfaces, CorrectMeshOrClearError) {
     EXPECT_EQ(t.genus, genus) << h.name;
     EXPECT_EQ(test::count_self_intersections(r.mesh), 0u) << h.name;
     EXPECT_EQ(r.stats.extra.at("uncovered_crossings").get<std::size_t>(), 0u);
-    const bool turn_limited = tolerance > 0 && std::find(h.turn_limited_at.begin(), h.turn_limited_at.end(),
-                                                          tolerance) != h.turn_limited_at.end();
+    // A chord deviation limits the turn from the start and makes no such last run.
+    const bool turn_limited = tolerance > 0 && !chord &&
+                              std::find(h.turn_limited_at.begin(), h.turn_limited_at.end(), tolerance) !=
+                                  h.turn_limited_at.end();
     EXPECT_EQ(r.stats.extra.at("turn_limited").get<bool>(), turn_limited) << h.name;
     if (h.bends_below_min_edge && tolerance == 0) {
       EXPECT_TRUE(r.stats.extra.at("min_edge_lowered").get<bool>());
@@ -230,7 +235,7 @@ TEST_P(HardSurfaces, CorrectMeshOrClearError) {
   if (outcome.rfind("error", 0) == 0) {
     // A clear error names the place.
     EXPECT_NE(outcome.find("near ("), std::string::npos) << outcome;
-    bool required = tolerance > 0;  // every surface meshes at every tolerance of the suite
+    bool required = tolerance > 0;  // every surface meshes at every tolerance and chord deviation of the suite
     for (double k : h.meshes_at) required = required || k == factor;
     EXPECT_FALSE(required) << h.name << " at " << run << " must mesh: " << outcome;
   }
@@ -251,7 +256,7 @@ std::vector<Case> all_cases() {
   const auto surfaces = hard_surfaces();
   for (std::size_t s = 0; s < surfaces.size(); ++s) {
 #if defined(__SANITIZE_ADDRESS__)
-    // Several times slower under the sanitizers: a subset at factor 2 and tolerance 1e-2, named
+    // Several times slower under the sanitizers: a subset at factor 2 and tolerance and chord 1e-2, named
     // so that a surface added to the list does not change it: creases (the cube; the box minus a
     // ball, whose acute hole rims only crease-aware meshing meshes), an acute crease that fails
     // (the gyroid ball), a cavity, a needle, genus 5 and a few blob fields. The runaways (the
@@ -262,11 +267,13 @@ std::vector<Case> all_cases() {
     if (kUnderSanitizers.count(surfaces[s].name)) {
       out.push_back({s, 2});
       out.push_back({s, 0, 1e-2});
+      out.push_back({s, 0, 1e-2, true});
     }
     continue;
 #endif
     for (double k : surfaces[s].meshes_at) out.push_back({s, k});
     for (double t : kTolerances) out.push_back({s, 0, t});
+    for (double t : kTolerances) out.push_back({s, 0, t, true});
   }
   return out;
 }

@@ -891,7 +891,8 @@ PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOpti
   std::optional<double> lowered;
   std::optional<NoSurfaceError> no_surface;
   std::optional<LimitExceededError> limit;
-  const bool may_limit_turn = remeshing_allowed(options) && options.sizing != SizingMode::Factor;
+  // SizingMode::Chord limits the turn from the start (kChordMaxTurn): the same run again would fail again.
+  const bool may_limit_turn = remeshing_allowed(options) && options.sizing == SizingMode::Tolerance;
   const auto finish = [&](PolygonizeResult result) {
     result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.stats.field_evaluations = field.counts() - before;
