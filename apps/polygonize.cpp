@@ -121,15 +121,16 @@ int main(int argc, char** argv) {
                                  ->add_option("--tolerance", adaptive_options.tolerance,
                                               "edges for a chord deviation of EPS instead of --factor, and (variant "
                                               "improved) every triangle measured and split until it lies within EPS "
-                                              "of the surface")
+                                              "of the surface where it can (a warning names the rest)")
                                  ->type_name("EPS")
                                  ->transform(cdp::app::positive_number())
                                  ->excludes(factor);
     CLI::Option* chord = adaptive_group
                              ->add_option("--chord", adaptive_options.tolerance,
                                           "edges for a chord deviation of EPS at each point's smallest radius of "
-                                          "curvature, without --tolerance's bound: nothing measured or refined (about "
-                                          "a third of its field evaluations), the distance not bounded")
+                                          "curvature, without --tolerance's bound: nothing measured or refined (the "
+                                          "Igea VIS-4004 at the same sizing: 129k field evaluations against 485k), the "
+                                          "distance not bounded; with --variant paper the same as --tolerance")
                              ->type_name("EPS")
                              ->transform(cdp::app::positive_number())
                              ->excludes(factor)

@@ -187,7 +187,7 @@ TEST(PolygonizeAppErrors, BadArgumentsAndFieldsGiveAOneLineErrorAndNoOutput) {
       {torus.string() + " -o " + out + " --factor two", "--factor: expects a positive number, found \"two\""},
       {torus.string() + " -o " + out + " --factor 2 --tolerance 0.01", "--factor excludes --tolerance"},
       {torus.string() + " -o " + out + " --chord 0.01 --tolerance 0.01", "--tolerance excludes --chord"},
-      {torus.string() + " -o " + out + " --chord 0.01 --factor 2", "excludes"},
+      {torus.string() + " -o " + out + " --chord 0.01 --factor 2", "--factor excludes --chord"},
       {torus.string() + " -o " + out + " --chord 0", "--chord: expects a positive number"},
       {torus.string() + " -o " + out + " --method mc --chord 0.01", "--chord does not apply"},
       {torus.string() + " -o " + out + " --method mt --precision 3", "precision"},

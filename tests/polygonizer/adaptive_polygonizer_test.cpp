@@ -8,6 +8,7 @@
 #include <cdp/core/mesh_topology.h>
 #include <cdp/core/models/compiled.h>
 
+#include <limits>
 #include <random>
 
 #include "common/test_fields.h"
@@ -211,6 +212,40 @@ TEST(AdaptivePolygonizer, ChordModeSizesForTheDeviationWithoutMeasuring) {
   }
 }
 
+// A chord deviation coarse for the curvature (eps = 0.3 on the unit sphere: the chord of that
+// sagitta is 1.43, longer than the radius) is held to edges turning the normal by a radian
+// (kChordMaxTurn) in the improved variant; the paper variant, which is the tolerance's sizing
+// without the cap, makes them as long as asked.
+TEST(AdaptivePolygonizer, ACoarseChordTurnsTheNormalByAtMostARadian) {
+  Sphere sphere(Vec3::Zero(), 1.0);
+  AdaptiveOptions o;
+  o.sizing = SizingMode::Chord;
+  o.tolerance = 0.3;
+  o.max_edge = 2;
+  const auto mean_edge = [](const Mesh& m) {
+    double sum = 0;
+    for (const auto& t : m.triangles)
+      for (int i = 0; i < 3; ++i) sum += (m.positions[t[i]] - m.positions[t[(i + 1) % 3]]).norm();
+    return sum / (3.0 * static_cast<double>(m.triangles.size()));
+  };
+  const auto capped = polygonize_adaptive(sphere, o);
+  expect_good_mesh(sphere, capped, {}, "chord 0.3");
+  o.variant = Variant::Paper;
+  const auto paper = polygonize_adaptive(sphere, o);
+  const auto max_turn = [](const Mesh& m) {
+    double worst = 0;
+    for (const auto& t : m.triangles)
+      for (int i = 0; i < 3; ++i)
+        worst = std::max(worst, std::acos(std::clamp(m.positions[t[i]].normalized().dot(m.positions[t[(i + 1) % 3]].normalized()), -1.0, 1.0)));
+    return worst;
+  };
+  // On the unit sphere an edge's turn is the angle between its ends' positions: at most 0.84
+  // with the cap (60 triangles), 1.20 without it (34; the chord asked for turns 1.55).
+  EXPECT_LE(max_turn(capped.mesh), 1.0);
+  EXPECT_GT(max_turn(paper.mesh), 1.1);
+  EXPECT_LT(mean_edge(capped.mesh), 0.9 * mean_edge(paper.mesh));
+}
+
 // Variant::Paper has no measurement to leave out: a chord deviation is the tolerance's sizing,
 // the same mesh bit for bit.
 TEST(AdaptivePolygonizer, PaperVariantChordIsItsTolerance) {
@@ -339,6 +374,13 @@ TEST(AdaptivePolygonizer, InvalidOptionsAndEmptyFieldsAreErrors) {
   o.min_edge = 1;
   o.max_edge = 0.5;
   EXPECT_THROW(polygonize_adaptive(sphere, o), InvalidInputError);
+  // A NaN tolerance is not "not given" (the default 1e-3 of the diagonal), in either mode.
+  for (const SizingMode mode : {SizingMode::Tolerance, SizingMode::Chord}) {
+    o = {};
+    o.sizing = mode;
+    o.tolerance = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(polygonize_adaptive(sphere, o), InvalidInputError) << to_string(mode);
+  }
   // A sphere outside its own box: no sign change anywhere.
   Sphere away(Vec3::Zero(), 1.0);
   away.set_bounds({Vec3(5, 5, 5), Vec3(6, 6, 6)});

@@ -118,6 +118,8 @@ adaptive::Settings resolve(const Field& field, const AdaptiveOptions& o) {
   s.diagonal = diag;
   s.sizing.mode = o.sizing;
   s.sizing.factor = o.factor;
+  // A NaN would otherwise pass for "not given" below.
+  if (std::isnan(o.tolerance)) throw InvalidInputError("adaptive: the tolerance must be a number, not nan");
   s.sizing.tolerance = positive_or_default(o.tolerance, 1e-3 * diag);
   if (o.variant == Variant::Improved && o.sizing == SizingMode::Tolerance) s.sizing.tolerance *= kToleranceSizingShare;
   // The chord sizing asks for chords longer than the radius of curvature where eps exceeds r / 8;
@@ -129,7 +131,7 @@ adaptive::Settings resolve(const Field& field, const AdaptiveOptions& o) {
   // The default min_edge matches the default tolerance (1e-3 of the diagonal); a smaller
   // tolerance asks for edges shorter as its square root (the sagitta grows as the edge
   // squared), and Variant::Improved lowers the default with it so that the clamp does not
-  // break the distance bound it promises.
+  // break the distance bound a tolerance promises, nor coarsen the sizing a chord asks for.
   double min_edge_default = 2e-3 * diag;
   if (o.variant == Variant::Improved && o.sizing != SizingMode::Factor && o.tolerance > 0 && o.tolerance < 1e-3 * diag)
     min_edge_default *= std::sqrt(o.tolerance / (1e-3 * diag));

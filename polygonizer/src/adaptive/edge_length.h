@@ -15,7 +15,8 @@ struct Sizing {
   // Positive: no edge longer than min_radius times this, the largest turn of the normal along
   // one edge in radians (1: the paper's factor 1). A tolerance far coarser than the curvature
   // (eps above r / 8) otherwise asks for chords longer than the radius: edges of 0.035 around
-  // the needle's tips, 0.04 thick, at eps = 1e-2. Set by the careful run (Settings::anticipate).
+  // the needle's tips, 0.04 thick, at eps = 1e-2. Set by the careful run (Settings::anticipate)
+  // and, from the start, by SizingMode::Chord in Variant::Improved (kChordMaxTurn).
   double max_turn = 0;
 };
 

@@ -25,13 +25,16 @@ enum class SizingMode {
   Tolerance,  // chord deviation: l = 2 sqrt(2 r eps - eps^2), so the chord sags at most eps
   // The sizing of Tolerance aimed at eps itself, without its bound: nothing is measured or
   // refined, so the mesh's distance to the surface is not bounded (a triangle sags about 4/3
-  // of its edges' eps, more where the curvature changes along it), and no edge turns the normal
-  // by more than a radian. Tolerance sizes for 0.65 eps and then measures every triangle: the
+  // of its edges' eps, more where the curvature changes along it); in Variant::Improved no edge
+  // longer than min_edge turns the normal by more than a radian. In Variant::Paper it is the
+  // tolerance, the same mesh. Tolerance sizes for 0.65 eps and then measures every triangle: the
   // Igea VIS-4004 at eps = 1.9e-4 of the diagonal, 41.2k triangles, 485k evaluations, 2.6 s on
   // one thread; Chord at 0.65 of that eps, 39.9k, 129k and 0.89 s, with mean Phong and depth
-  // errors of 0.445 degrees and 9.6e-5 of the diagonal against 0.437 and 9.5e-5. For a given
-  // mean error it also needs fewer triangles than Factor (factor 5.66 there: 52.2k triangles,
-  // 0.51 degrees).
+  // errors of 0.445 degrees and 9.6e-5 of the diagonal against 0.437 and 9.5e-5. On the
+  // time-to-accuracy benchmark's bunny VIS-800, Igea VIS-4004 and tanglecube it reaches a mean
+  // Phong or depth error with fewer triangles than Factor (the Igea: 37k triangles for 0.48
+  // degrees, factor 5.66 53k for 0.50); on its random blobs it needs more (37.5k against 29.5k
+  // to 1e-4 of the diagonal in depth).
   Chord,
 };
 
@@ -79,9 +82,11 @@ struct AdaptiveOptions {
   SizingMode sizing = SizingMode::Factor;
   // The paper's heuristic factor k: edge length = r_min / k. Used in SizingMode::Factor.
   double factor = 2.0;
-  // Target distance eps, used in SizingMode::Tolerance and SizingMode::Chord (the sagitta the
-  // edges are sized for, no bound). Non-positive: 1e-3 of the bounding-box diagonal. Variant::Improved: the largest distance between mesh and surface (sampled over
-  // every triangle, see src/adaptive/quality.h) is at most eps. Variant::Paper: eps is the
+  // Target distance eps, used in SizingMode::Tolerance and SizingMode::Chord. Non-positive:
+  // 1e-3 of the bounding-box diagonal; not a number: InvalidInputError. Tolerance with
+  // Variant::Improved: the largest distance between mesh and surface (sampled over every
+  // triangle, see src/adaptive/quality.h) is at most eps where the refinement can split (the
+  // rest is counted, stats "quality.over_tolerance"). Chord, and Variant::Paper: eps is the
   // sagitta of a chord at each point's smallest radius, which the mesh can exceed 2-4 times.
   double tolerance = 0;
   // Edge-length clamps. Non-positive: min_edge = 2e-3 and max_edge = 0.1 of the field's
