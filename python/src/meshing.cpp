@@ -165,8 +165,8 @@ stats is build/bin/polygonize's STATS.json as a dict (without "field").
 
 method "adaptive" (the paper's tracker): factor (default 3: edge = minimum radius of curvature /
 factor), tolerance (chord deviation, and every triangle measured and split until it lies within
-it of the surface where it can) or chord (the same sizing without the bound: nothing measured), min_edge, max_edge, triangle_count ("hartmann" or
-"paper"), creases ("follow", the default: mesh edges along the creases of a min/max/abs field, or
+it of the surface where it can) or chord (the same sizing without the bound: nothing measured),
+min_edge, max_edge, triangle_count ("hartmann" or "paper"), creases ("follow", the default: mesh edges along the creases of a min/max/abs field, or
 "ignore"), seed_resolution, max_triangles, check_self_intersections.
 Both: threads (0, the default, all cores, at most 8; 1 the calling thread only) for the seed grid of
 a thread-safe field and the adaptive method's final check; the mesh is the same on any number.
