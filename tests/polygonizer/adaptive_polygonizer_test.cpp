@@ -381,6 +381,13 @@ TEST(AdaptivePolygonizer, InvalidOptionsAndEmptyFieldsAreErrors) {
     o.tolerance = std::numeric_limits<double>::quiet_NaN();
     EXPECT_THROW(polygonize_adaptive(sphere, o), InvalidInputError) << to_string(mode);
   }
+  // Nor a NaN edge clamp the default clamp.
+  o = {};
+  o.min_edge = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(polygonize_adaptive(sphere, o), InvalidInputError);
+  o = {};
+  o.max_edge = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(polygonize_adaptive(sphere, o), InvalidInputError);
   // A sphere outside its own box: no sign change anywhere.
   Sphere away(Vec3::Zero(), 1.0);
   away.set_bounds({Vec3(5, 5, 5), Vec3(6, 6, 6)});

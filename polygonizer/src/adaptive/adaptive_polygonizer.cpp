@@ -118,8 +118,10 @@ adaptive::Settings resolve(const Field& field, const AdaptiveOptions& o) {
   s.diagonal = diag;
   s.sizing.mode = o.sizing;
   s.sizing.factor = o.factor;
-  // A NaN would otherwise pass for "not given" below.
+  // A NaN would otherwise pass for "not given" below (positive_or_default).
   if (std::isnan(o.tolerance)) throw InvalidInputError("adaptive: the tolerance must be a number, not nan");
+  if (std::isnan(o.min_edge)) throw InvalidInputError("adaptive: min_edge must be a number, not nan");
+  if (std::isnan(o.max_edge)) throw InvalidInputError("adaptive: max_edge must be a number, not nan");
   s.sizing.tolerance = positive_or_default(o.tolerance, 1e-3 * diag);
   if (o.variant == Variant::Improved && o.sizing == SizingMode::Tolerance) s.sizing.tolerance *= kToleranceSizingShare;
   // The chord sizing asks for chords longer than the radius of curvature where eps exceeds r / 8;

@@ -90,7 +90,7 @@ struct AdaptiveOptions {
   // sagitta of a chord at each point's smallest radius, which the mesh can exceed 2-4 times.
   double tolerance = 0;
   // Edge-length clamps. Non-positive: min_edge = 2e-3 and max_edge = 0.1 of the field's
-  // bounding-box diagonal. With the default min_edge (and the default max_triangles and
+  // bounding-box diagonal; not a number: InvalidInputError. With the default min_edge (and the default max_triangles and
   // max_steps, Variant::Improved), a surface that fails because it bends with a radius of
   // curvature below min_edge is meshed once more with min_edge a quarter of that radius (not
   // below 2e-4 of the diagonal, where a crease or singular point is more likely than a bend);
