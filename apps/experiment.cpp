@@ -44,7 +44,7 @@ constexpr long long kMaxRepeats = 100;
 struct Run {
   std::string id;
   std::string method;           // adaptive, mc, mt
-  std::string parameter_name;   // factor, tolerance, cell, precision
+  std::string parameter_name;   // factor, tolerance, chord, cell, precision
   double parameter = 0;
   std::string variant;          // adaptive: improved or paper (AdaptiveOptions::variant)
   std::string creases;          // adaptive: follow or ignore (AdaptiveOptions::creases)
@@ -139,20 +139,26 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
   for (auto& run : r.objects("runs")) {
     const std::string method = run.choice("method", {"adaptive", "mc", "mt"});
     if (method == "adaptive")
-      run.check_keys({"method", "label", "factor", "tolerance", "min_edge", "max_edge", "variant", "creases"});
+      run.check_keys({"method", "label", "factor", "tolerance", "chord", "min_edge", "max_edge", "variant", "creases"});
     else run.check_keys({"method", "label", "cell", "precision", "traversal"});
     std::vector<std::string> sweep_keys =
-        method == "adaptive" ? std::vector<std::string>{"factor", "tolerance"} : std::vector<std::string>{"cell", "precision"};
+        method == "adaptive" ? std::vector<std::string>{"factor", "tolerance", "chord"} : std::vector<std::string>{"cell", "precision"};
     std::string key;
     for (const auto& k : sweep_keys)
       if (run.has(k)) {
         if (!key.empty()) run.fail(k, "give either \"" + key + "\" or \"" + k + "\", not both");
         key = k;
       }
-    if (key.empty()) run.fail("needs \"" + sweep_keys[0] + "\" or \"" + sweep_keys[1] + "\" (a number or a list)");
+    if (key.empty()) {
+      std::string names;
+      for (std::size_t i = 0; i < sweep_keys.size(); ++i)
+        names += (i == 0 ? "" : i + 1 == sweep_keys.size() ? " or " : ", ") + ("\"" + sweep_keys[i] + "\"");
+      run.fail("needs " + names + " (a number or a list)");
+    }
     const std::vector<double> values = numbers_or_number(run, key);
     std::vector<std::string> fixed{"--method", method};
-    std::vector<std::string> known{"method", sweep_keys[0], sweep_keys[1]};
+    std::vector<std::string> known{"method"};
+    known.insert(known.end(), sweep_keys.begin(), sweep_keys.end());
     std::string variant, creases;
     if (method == "adaptive") {
       known.push_back("variant");

@@ -108,7 +108,7 @@ def plots(results, out):
             rows = rl.rows_by_method(rl.load_summary(name, results))
             for m in ("adaptive", "mt", "mc"):
                 pts = sorted((r[key[0]], r[key[1]]) for r in rows.get(m, [])
-                             if r["status"] == "ok" and r["parameter_name"] != "tolerance"
+                             if r["status"] == "ok" and r["parameter_name"] not in rl.DISTANCE_SWEEPS
                              and r.get(key[0]) and r.get(key[1]))
                 if pts:
                     label, color, marker = STYLE[m]

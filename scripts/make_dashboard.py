@@ -323,7 +323,7 @@ def quality_section(table_path):
 
     def paper_value(r, k):
         for p in paper.get(r.get("method"), []) or []:
-            if isinstance(p, dict) and p.get("precision") == r.get("parameter") and r.get("parameter_name") != "tolerance":
+            if isinstance(p, dict) and p.get("precision") == r.get("parameter") and r.get("parameter_name") not in ("tolerance", "chord"):
                 return p.get(k)
         return None
 

@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import results_lib as rl  # noqa: E402
 
 STYLE = {"adaptive": ("Ours (factor)", "C0", "o"), "adaptive_paper": ("Ours, paper mode (factor)", "C4", "D"),
-         "adaptive_tolerance": ("Ours (tolerance)", "C2", "s"),
+         "adaptive_tolerance": ("Ours (tolerance)", "C2", "s"), "adaptive_chord": ("Ours (chord)", "C5", "P"),
          "mt": ("Marching Tetrahedra", "C3", "^"), "mc": ("Marching Cubes", "C1", "v")}
 PAPER = {"adaptive": ("Paper: ours", "C0"), "mt": ("Paper: MT", "C3")}
 

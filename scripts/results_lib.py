@@ -7,6 +7,9 @@ import subprocess
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PAPER_TABLE = os.path.join(ROOT, "data", "paper_table1.json")
+# The adaptive method's sweeps aimed at a distance (polygonize --tolerance, --chord): no paper
+# row matches them, and they are drawn and tabled apart from the factor's runs.
+DISTANCE_SWEEPS = ("tolerance", "chord")
 
 
 def load_summary(name, results=None):
@@ -132,7 +135,7 @@ def rows_by_method(summary):
     for run in summary["runs"]:
         r = run_row(run)
         key = (r["method"] + ("_paper" if r["variant"] == "paper" else "") +
-               ("_tolerance" if r["parameter_name"] == "tolerance" else ""))
+               ("_" + r["parameter_name"] if r["parameter_name"] in DISTANCE_SWEEPS else ""))
         out.setdefault(key, []).append(r)
     for rows in out.values():
         rows.sort(key=lambda r: r["parameter"])

@@ -34,7 +34,8 @@ EXTRA = [
 LABELS = {"adaptive_paper": "Ours, paper mode (the algorithm as printed, factor k: --variant paper)",
           "adaptive": "Ours (adaptive, factor k: the paper plus grading, the local repair of slivers and the relaxation of stretched triangles)",
           "mt": "Marching Tetrahedra (precision p)",
-          "mc": "Marching Cubes (precision p)", "adaptive_tolerance": "Ours (adaptive, tolerance ε)"}
+          "mc": "Marching Cubes (precision p)", "adaptive_tolerance": "Ours (adaptive, tolerance ε)",
+          "adaptive_chord": "Ours (adaptive, chord deviation ε: sized for it, nothing measured)"}
 
 
 def fmt(v, f):
@@ -65,7 +66,7 @@ def markdown(rows, paper, env, summary):
            "one core per run. Depth errors are in the model's units (the scan's metres); the paper does not give its "
            "model's scale, so compare the trend, and see the relative column. Phong errors in degrees. "
            "Near-equilateral: longest/shortest edge ≤ 1.1 (as defined in raytrace/README.md).", ""]
-    for method in ["adaptive_paper", "adaptive", "mt", "mc", "adaptive_tolerance"]:
+    for method in ["adaptive_paper", "adaptive", "mt", "mc", "adaptive_tolerance", "adaptive_chord"]:
         if method not in rows:
             continue
         out += ["## " + LABELS[method], ""]
@@ -400,7 +401,7 @@ def main():
         w = csv.DictWriter(f, fieldnames=keys + ["paper_" + c[0] for c in COLUMNS], extrasaction="ignore")
         w.writeheader()
         for r in flat:
-            p = paper_row(paper, r["method"], r["parameter"]) if r["parameter_name"] != "tolerance" else None
+            p = paper_row(paper, r["method"], r["parameter"]) if r["parameter_name"] not in rl.DISTANCE_SWEEPS else None
             row = dict(r)
             for c in COLUMNS:
                 row["paper_" + c[0]] = p[c[0]] if p else None

@@ -148,6 +148,11 @@ TEST(ExperimentApp, BadExperimentFilesAreRefusedWithTheKeyNamed) {
       {R"({"field": {"type": "sphere", "radius": 1}, "runs": [], "evalutaion": {}})", "evalutaion"},
       {R"({"field": "missing_field.json", "runs": [{"method": "adaptive", "factor": 2}]})", "missing_field.json"},
       {R"({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "mt", "cell": 0.1, "factor": 2}]})", "factor"},
+      {R"({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "mt", "cell": 0.1, "chord": 0.01}]})", "chord"},
+      {R"({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "adaptive", "factor": 2, "chord": 0.01}]})",
+       "give either \"factor\" or \"chord\", not both"},
+      {R"({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "adaptive"}]})",
+       "needs \"factor\", \"tolerance\" or \"chord\""},
       {R"({"field": {"type": "sphere", "radius": 1}, "runs": [)", "tiny.json"},
       {R"({"field": {"type": "sphere", "radius": 1}, "repeats": 0, "runs": [{"method": "adaptive", "factor": 2}]})",
        "repeats"},
@@ -162,6 +167,38 @@ TEST(ExperimentApp, BadExperimentFilesAreRefusedWithTheKeyNamed) {
     EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.json << "\n" << r.err;
     EXPECT_FALSE(fs::exists(out / "summary.json")) << c.json;
   }
+}
+
+TEST(ExperimentApp, AChordSweepRunsTheChordSizingBesideTheTolerance) {
+  // "chord" is a third sweep key of the adaptive method: polygonize --chord, the run named and
+  // summarized by it, apart from the tolerance's runs at the same values.
+  test::TempDir dir("experiment_app_chord");
+  const auto file = dir.write("chord.json", R"({"field": {"type": "sphere", "radius": 1},
+      "runs": [{"method": "adaptive", "chord": [0.01, 0.003]}, {"method": "adaptive", "tolerance": 0.01}],
+      "evaluation": {"views": 2, "resolution": 24}})");
+  const fs::path out = dir.path / "out";
+  const auto r = test::run_app("experiment", file.string() + " --out " + out.string() + " --jobs 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto summary = read_json(out / "summary.json");
+  std::map<std::string, nlohmann::json> runs;
+  for (const auto& run : summary["runs"]) runs[run["id"]] = run;
+  ASSERT_EQ(runs.size(), 3u) << summary.dump(1);
+  for (const std::string id : {"adaptive_chord0.01", "adaptive_chord0.003", "adaptive_tolerance0.01"}) {
+    SCOPED_TRACE(id);
+    ASSERT_TRUE(runs.count(id)) << summary.dump(1);
+    const auto& run = runs[id];
+    EXPECT_EQ(run["status"], "ok") << run.value("reason", "");
+    const std::string mode = id.find("chord") != std::string::npos ? "chord" : "tolerance";
+    EXPECT_EQ(run["parameter_name"], mode);
+    EXPECT_EQ(run["stats"]["sizing"], mode);
+    EXPECT_EQ(run["metrics"]["topology"]["genus"].get<int>(), 0);
+  }
+  // The smaller deviation asks for shorter edges; chord 0.01 measures nothing that tolerance
+  // 0.01 measures and splits, and sizes for 0.01 where the tolerance sizes for a share of it.
+  EXPECT_GT(runs["adaptive_chord0.003"]["stats"]["triangles"].get<int>(),
+            runs["adaptive_chord0.01"]["stats"]["triangles"].get<int>());
+  EXPECT_LT(runs["adaptive_chord0.01"]["stats"]["triangles"].get<int>(),
+            runs["adaptive_tolerance0.01"]["stats"]["triangles"].get<int>());
 }
 
 TEST(ExperimentApp, FailedRunsMakeANonZeroExitAndReadOnlyModesWriteNothing) {

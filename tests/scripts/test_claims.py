@@ -174,5 +174,27 @@ class Claims(unittest.TestCase):
         self.assertIsNone(rl.time_range_ms({}))
         self.assertIsNone(rl.time_range_ms({"repeat_seconds": [0.1, None, 0.2]}))
 
+    def test_distance_sweeps_are_rows_of_their_own_with_no_paper_row(self):
+        # An experiment's "tolerance" and "chord" runs are tabled and drawn apart from the factor's,
+        # and never beside a paper row of the same number.
+        def run(name, value):
+            return {"id": "adaptive_{}{}".format(name, value), "method": "adaptive", "parameter_name": name,
+                    "parameter": value, "status": "ok", "stats": {"triangles": 100, "seconds": 0.1}, "metrics": {}}
+        summary = {"runs": [run("factor", 3), run("tolerance", 3), run("chord", 3), run("chord", 1)]}
+        by = rl.rows_by_method(summary)
+        self.assertEqual(sorted(by), ["adaptive", "adaptive_chord", "adaptive_tolerance"])
+        self.assertEqual([r["parameter"] for r in by["adaptive_chord"]], [1, 3])
+        self.assertIn("chord", rl.DISTANCE_SWEEPS)
+        text = table1.markdown(by, PAPER, {}, summary)
+        sections = {}
+        for part in text.split("\n## ")[1:]:
+            head, _, body = part.partition("\n")
+            sections[head] = [line for line in body.splitlines() if line.startswith("| 3 ")]
+        # The factor's run at 3 has the paper's (in parentheses); neither distance sweep at 3 does.
+        self.assertIn("(", sections[table1.LABELS["adaptive"]][0])
+        for m in ("adaptive_tolerance", "adaptive_chord"):
+            self.assertEqual(len(sections[table1.LABELS[m]]), 1, m)
+            self.assertNotIn("(", sections[table1.LABELS[m]][0], m)
+
 if __name__ == "__main__":
     unittest.main()
