@@ -7,6 +7,9 @@
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_topology.h>
 #include <cdp/core/models/compiled.h>
+#include <cdp/io/field_factory.h>
+
+#include <nlohmann/json.hpp>
 
 #include <limits>
 #include <random>
@@ -426,6 +429,63 @@ class Rewrapped : public Field {
 
 // The passes shared among threads give the mesh of the sequential ones, at a factor and with a
 // tolerance (where the refinement's shared edge midpoints save evaluations).
+// stats "phases.*": each phase's time and field evaluations, summed over every run a
+// polygonization makes. Their evaluations add up to the run's exactly, their seconds to at most
+// its seconds and to nearly all of them. A first run kept (the torus), a crease layout (the
+// cube: the creases phase evaluates) and blobs26 of the topology sweep at factor 1, which takes
+// the careful run and the quality re-run (runs whose phases are entered again).
+TEST(AdaptivePolygonizer, PhasesAddUpToTheRun) {
+  const Torus torus(Vec3::Zero(), 1.0, 0.4);
+  const std::unique_ptr<Field> cube = make_field(
+      nlohmann::json::parse(R"({"type": "expression", "value": "max(abs(x+0.0137),max(abs(y+0.0137),abs(z+0.0137)))-1",
+                                "bounds": [[-1.6, -1.6, -1.6], [1.6, 1.6, 1.6]]})"),
+      "cube");
+  const std::unique_ptr<Field> blobs26 =
+      load_field(std::string(CDP_SOURCE_DIR) + "/results/topology_sweep/fields/blobs26.json");
+  struct Case {
+    const char* name;
+    const Field* field;
+    double factor;
+  };
+  for (const Case& c : {Case{"torus", &torus, 3}, Case{"cube", cube.get(), 3}, Case{"blobs26", blobs26.get(), 1}}) {
+    SCOPED_TRACE(c.name);
+    AdaptiveOptions o;
+    o.factor = c.factor;
+    const PolygonizeResult r = polygonize_adaptive(*c.field, o);
+    const auto phase = [&](const std::string& name, const std::string& key) {
+      return r.stats.extra.at("phases." + name + "." + key);
+    };
+    EvaluationCounts sum;
+    double seconds = 0;
+    for (const char* name : {"seed_grid", "creases", "tracking", "quality", "checks"}) {
+      sum.value += phase(name, "value").get<std::uint64_t>();
+      sum.value_gradient += phase(name, "value_gradient").get<std::uint64_t>();
+      sum.gradient_hessian += phase(name, "gradient_hessian").get<std::uint64_t>();
+      const double s = phase(name, "seconds").get<double>();
+      EXPECT_GE(s, 0) << name;
+      seconds += s;
+    }
+    EXPECT_EQ(sum.value, r.stats.field_evaluations.value);
+    EXPECT_EQ(sum.value_gradient, r.stats.field_evaluations.value_gradient);
+    EXPECT_EQ(sum.gradient_hessian, r.stats.field_evaluations.gradient_hessian);
+    EXPECT_LE(seconds, r.stats.seconds);
+    EXPECT_GT(seconds, 0.5 * r.stats.seconds);
+    // The seed grid samples values; the relaxation projects its moves.
+    EXPECT_GT(phase("seed_grid", "value").get<std::uint64_t>(), 0u);
+    EXPECT_GT(phase("quality", "value_gradient").get<std::uint64_t>(), 0u);
+    const bool creases = std::string(c.name) == "cube";
+    EXPECT_EQ(r.stats.extra.at("creases.followed").get<bool>(), creases);
+    EXPECT_EQ(phase("creases", "value_gradient").get<std::uint64_t>() > 0, creases);
+    if (!creases) {
+      EXPECT_GT(phase("tracking", "gradient_hessian").get<std::uint64_t>(), 0u);
+    }
+    if (std::string(c.name) == "blobs26") {
+      EXPECT_TRUE(r.stats.extra.at("quality_rerun").get<bool>());
+      EXPECT_TRUE(r.stats.extra.at("remeshed_carefully").get<bool>());
+    }
+  }
+}
+
 TEST(AdaptivePolygonizer, ThreadSafeAndSequentialPassesGetTheSameMesh) {
   const Torus torus(Vec3::Zero(), 1.0, 0.35);
   ASSERT_TRUE(torus.thread_safe());

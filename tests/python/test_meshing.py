@@ -131,8 +131,13 @@ def test_same_arrays_as_the_polygonize_program(tmp_path, method, flags, options)
     assert bits(N) == bits(N_file)
     program_stats = json.loads(stats_path.read_text())
     timing = {"seconds", "curvature_seconds", "hessian_seconds", "seed_grid_seconds", "field"}
-    assert {k: v for k, v in stats.items() if k not in timing} == \
-        {k: v for k, v in program_stats.items() if k not in timing}
+
+    def untimed(s):
+        out = {k: v for k, v in s.items() if k not in timing}
+        if "phases" in out:  # each phase's seconds differ; its evaluation counts do not
+            out["phases"] = {name: {k: v for k, v in p.items() if k != "seconds"} for name, p in out["phases"].items()}
+        return out
+    assert untimed(stats) == untimed(program_stats)
 
 
 def test_creases_are_followed_or_ignored():

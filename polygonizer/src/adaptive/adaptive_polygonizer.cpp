@@ -25,6 +25,7 @@
 #include <numbers>
 #include <optional>
 #include <sstream>
+#include <string_view>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -49,6 +50,63 @@ const char* to_string(TriangleCountRule rule) {
 const char* to_string(Variant variant) { return variant == Variant::Paper ? "paper" : "improved"; }
 
 namespace {
+
+// Time and field evaluations by phase of the runs polygonize_adaptive makes (stats "phases.*"),
+// summed over every run it makes, failed and discarded ones included: the phases' evaluations
+// add up to the run's field_evaluations exactly, and their seconds to its seconds but for the
+// bookkeeping between runs (a few microseconds). A phase lasts from its entry to the next
+// phase's or the run's end, so "checks" holds the topology, intersection, gap and neck checks.
+class PhaseLedger {
+ public:
+  // The phases in the order a run enters them; each is written, zero where a run never entered it.
+  static constexpr std::array<std::string_view, 5> kNames{"seed_grid", "creases", "tracking", "quality", "checks"};
+
+  explicit PhaseLedger(const Field& field) : field_(field) {}
+  void enter(std::string_view name) {
+    close();
+    const auto it = std::find(kNames.begin(), kNames.end(), name);
+    current_ = static_cast<int>(it - kNames.begin());
+    start_ = std::chrono::steady_clock::now();
+    counts_ = field_.counts();
+  }
+  // Ends the current phase (a run's end, or its error).
+  void close() {
+    if (current_ < 0 || current_ >= static_cast<int>(kNames.size())) return;
+    Entry& e = entries_[current_];
+    e.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const EvaluationCounts d = field_.counts() - counts_;
+    e.evaluations.value += d.value;
+    e.evaluations.value_gradient += d.value_gradient;
+    e.evaluations.gradient_hessian += d.gradient_hessian;
+    current_ = -1;
+  }
+  void write(PolygonizeStats& st) const {
+    for (std::size_t i = 0; i < kNames.size(); ++i) {
+      const std::string key = "phases." + std::string(kNames[i]) + ".";
+      st.extra[key + "seconds"] = entries_[i].seconds;
+      st.extra[key + "value"] = entries_[i].evaluations.value;
+      st.extra[key + "value_gradient"] = entries_[i].evaluations.value_gradient;
+      st.extra[key + "gradient_hessian"] = entries_[i].evaluations.gradient_hessian;
+    }
+  }
+
+ private:
+  struct Entry {
+    double seconds = 0;
+    EvaluationCounts evaluations;
+  };
+  const Field& field_;
+  std::array<Entry, kNames.size()> entries_{};
+  int current_ = -1;
+  std::chrono::steady_clock::time_point start_{};
+  EvaluationCounts counts_;
+};
+
+// Closes the ledger's phase when a run ends, by its return or its error.
+struct PhaseCloser {
+  PhaseLedger& ledger;
+  ~PhaseCloser() { ledger.close(); }
+};
 
 // The sharpest crease of a traced layout, as the angle at which its two faces meet (180 degrees
 // less the angle between the two pieces' outward normals, as Tracker::acute_crease_between
@@ -271,16 +329,19 @@ bool remeshing_allowed(const AdaptiveOptions& o) {
 // caller's retry. `look_ahead`: Settings::look_ahead on every front (the run polygonize_adaptive
 // makes again when a mesh misses issue 18's bounds). `max_turn` > 0: Sizing::max_turn from the
 // start, the crease-aware patches included (polygonize_adaptive_once's last run in tolerance mode).
-PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, std::pair<double, Vec3>& bend,
-                           bool look_ahead = false, double max_turn = 0) {
+PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases,
+                           std::pair<double, Vec3>& bend, bool look_ahead = false, double max_turn = 0) {
   const adaptive::Settings s = resolve(field, options);
   const auto start = std::chrono::steady_clock::now();
   const EvaluationCounts before = field.counts();
 
-  const auto enter = [&](const char* phase) {
-    if (options.phase) options.phase(phase);
+  const PhaseCloser closer{phases};
+  // `name`: the ledger's (PhaseLedger::kNames); `text`: what AdaptiveOptions::phase is told.
+  const auto enter = [&](std::string_view name, const char* text) {
+    phases.enter(name);
+    if (options.phase) options.phase(text);
   };
-  enter("sampling the seed grid");
+  enter("seed_grid", "sampling the seed grid");
   SeedOptions seed_options;
   seed_options.resolution = options.seed_resolution;
   seed_options.threads = options.threads;
@@ -338,6 +399,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
   CreaseTracingResult traced;
   int crease_tracing_resolution = 0;
   if (options.creases == CreaseHandling::Follow && options.variant == Variant::Improved) {
+    phases.enter("creases");  // the tracing too; AdaptiveOptions::phase hears of it where it finds creases
     CreaseTracingOptions co;
     co.resolution = options.seed_resolution;
     for (int attempt = 0; attempt < kCreaseTracings; ++attempt, co.resolution *= 2) {
@@ -345,7 +407,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
         crease_tracing_resolution = co.resolution;
         traced = trace_creases(field, co);  // no work for a field without pieces
         if (!traced.curves.empty()) {
-          if (attempt == 0) enter("meshing along creases");
+          if (attempt == 0 && options.phase) options.phase("meshing along creases");
           creased = adaptive::mesh_crease_patches(field, traced, settings, estimated_area);
           crease_components = analyze_topology(creased->mesh).components;
           crease_fallback.clear();
@@ -390,7 +452,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
   bool remeshed = false;
   bool no_crossing = false;  // the seeding found no sign change at all
   const auto mesh_everything = [&] {
-    enter("meshing");
+    enter("tracking", "meshing");
     remeshed = false;
     try {
       mesh_surface(settings.anticipate);  // the careful run has the rollbacks on from the start
@@ -507,7 +569,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
         check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
     }
     if (repair) {
-      enter("repairing triangles");
+      enter("quality", "repairing triangles");
       adaptive::QualityOptions qo;
       qo.improve_below = kRepairBelowDegrees * std::numbers::pi / 180;
       qo.tolerance = s.sizing.mode == SizingMode::Tolerance ? tolerance : 0;
@@ -549,7 +611,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
         mesh.vertex_scalars["shape_index"] = std::move(shape);
       }
     }
-    enter("checking the mesh");
+    enter("checks", "checking the mesh");
     return check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
   };
   std::size_t components = 0;
@@ -707,6 +769,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, s
   PolygonizeStats& st = result.stats;
   st.components = components;
   st.method = "adaptive";
+  phases.close();  // the run's time ends here, the ledger's with it
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   st.field_evaluations = field.counts() - before;
   st.triangles = mesh.num_triangles();
@@ -888,7 +951,7 @@ constexpr double kTurnLimit = 1;
 
 // polygonize_adaptive without the re-run for issue 18's bounds: the first mesh, or the one made
 // with min_edge lowered, or (tolerance mode) the turn-limited one.
-PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOptions& options) {
+PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases) {
   const auto start = std::chrono::steady_clock::now();
   const EvaluationCounts before = field.counts();
   std::pair<double, Vec3> bend{std::numeric_limits<double>::infinity(), Vec3::Zero()};
@@ -904,7 +967,7 @@ PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOpti
     return result;
   };
   try {
-    return mesh_once(field, options, bend);
+    return mesh_once(field, options, phases, bend);
   } catch (const NoSurfaceError& e) {
     lowered = lowered_min_edge(field, options, bend);
     if (!lowered && !may_limit_turn) throw;
@@ -920,7 +983,7 @@ PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOpti
   const auto retry = [&](double max_turn, std::string* error) -> std::optional<PolygonizeResult> {
     try {
       std::pair<double, Vec3> ignored;
-      return finish(mesh_once(field, again, ignored, false, max_turn));
+      return finish(mesh_once(field, again, phases, ignored, false, max_turn));
     } catch (const NoSurfaceError& e) {
       if (error) *error = e.what();
     } catch (const LimitExceededError& e) {
@@ -950,10 +1013,15 @@ PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOpti
 PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const EvaluationCounts before = field.counts();
-  PolygonizeResult first = polygonize_adaptive_once(field, options);
-  if (!may_rerun_for_quality(options, first)) return first;
+  PhaseLedger phases(field);
+  PolygonizeResult first = polygonize_adaptive_once(field, options, phases);
+  const auto with_phases = [&](PolygonizeResult r) {
+    phases.write(r.stats);
+    return r;
+  };
+  if (!may_rerun_for_quality(options, first)) return with_phases(std::move(first));
   const int missed = missed_bounds(first.mesh, over_tolerance(first));
-  if (missed == 0) return first;
+  if (missed == 0) return with_phases(std::move(first));
   // The same min_edge as the first mesh (lowered when that was needed).
   AdaptiveOptions again = options;
   const bool lowered = first.stats.extra.at("min_edge_lowered").get<bool>();
@@ -961,7 +1029,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   std::optional<PolygonizeResult> second;
   try {
     std::pair<double, Vec3> ignored;
-    second = mesh_once(field, again, ignored, true);
+    second = mesh_once(field, again, phases, ignored, true);
   } catch (const NoSurfaceError&) {
   } catch (const LimitExceededError&) {
   }
@@ -972,7 +1040,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   result.stats.field_evaluations = field.counts() - before;
   result.stats.extra["quality_rerun"] = true;
   result.stats.extra["quality_rerun_kept"] = keep;
-  return result;
+  return with_phases(std::move(result));
 }
 
 }  // namespace cdp

@@ -150,7 +150,10 @@ struct AdaptiveOptions {
 // ({"min", "max"} after clamping), "triangle_count_rule", "sizing", "variant", the additions in
 // force ("grading", "quality_repair", "tolerance_refinement", "look_ahead": 0 or 1), the re-runs
 // ("min_edge_lowered", "quality_rerun", "quality_rerun_kept") and the repair's counts
-// ("quality.flips", "quality.moves", "quality.collapses", "quality.splits", ...).
+// ("quality.flips", "quality.moves", "quality.collapses", "quality.splits", ...), and the time
+// and field calls of each phase over every run made ("phases.NAME.seconds", ".value",
+// ".value_gradient", ".gradient_hessian" for seed_grid, creases, tracking, quality, checks),
+// whose calls add up to field_evaluations.
 PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& options = {});
 
 const char* to_string(SizingMode mode);
