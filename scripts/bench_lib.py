@@ -251,6 +251,25 @@ def thread_speedups(run):
 PER_ITEM_COUNTERS = ("evals_per_vertex", "evaluations_per_vertex", "tracking_evals_per_vertex", "evaluations_per_triangle")
 
 
+# BM_AdaptiveBookkeeping's microseconds per vertex outside the field: the whole run's and each
+# phase's (the run's stats "phases"), with the field's own beside them.
+BOOKKEEPING_PHASES = ("seed_grid", "tracking", "quality", "checks")
+
+
+def bookkeeping_by_phase(run):
+    """Rows {benchmark, label, total, field, phases: {phase: value}} of the benchmarks reporting
+    us_per_vertex and per-phase PHASE_us_per_vertex (None where a counter is missing)."""
+    rows = []
+    for b in run["benchmarks"]:
+        total = counter_median(b, "us_per_vertex")
+        if total is None:
+            continue
+        rows.append({"benchmark": key(b), "label": b.get("label", ""), "total": total,
+                     "field": counter_median(b, "field_us_per_vertex"),
+                     "phases": {p: counter_median(b, p + "_us_per_vertex") for p in BOOKKEEPING_PHASES}})
+    return sorted(rows, key=lambda r: r["benchmark"])
+
+
 def evaluations_per_item(run):
     rows = []
     for b in run["benchmarks"]:

@@ -236,6 +236,21 @@ def inrun_section(runs):
     else:
         out.append('<p class="note">Not available: no benchmark reports speedup_1_to_2 in the latest run.</p>')
 
+    # Where the bookkeeping goes: microseconds per vertex outside the field, by phase.
+    rows = bl.bookkeeping_by_phase(latest)
+    if rows:
+        prev = {r["benchmark"]: r["total"] for r in bl.bookkeeping_by_phase(runs[-2])} if len(runs) > 1 else {}
+        out.append("<h3>Time per vertex outside the field, by phase (µs)</h3>")
+        out.append('<p class="note">The run\'s time less its field calls priced one by one, split by the phases '
+                   'of its stats (<code>phases</code>): the seed grid, the fronts, the repair and relaxation, '
+                   'the final checks. The field\'s own time per vertex beside it.</p>')
+        out.append(table(["Benchmark", "Label", "Total", "Previous total"] + list(bl.BOOKKEEPING_PHASES) +
+                         ["Field"],
+                         [[E(r["benchmark"]), E(r["label"]), fnum(r["total"], "{:.2f}"),
+                           fnum(prev.get(r["benchmark"]), "{:.2f}")] +
+                          [fnum(r["phases"][p], "{:.2f}") for p in bl.BOOKKEEPING_PHASES] +
+                          [fnum(r["field"], "{:.2f}")] for r in rows]))
+
     # Evaluations per vertex (and per triangle).
     rows = bl.evaluations_per_item(latest)
     out.append("<h3>Field evaluations per vertex and per triangle</h3>")

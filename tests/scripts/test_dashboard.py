@@ -142,6 +142,25 @@ class InRunRatios(unittest.TestCase):
         self.assertIn("Speedup from one thread to two", page)
         self.assertIn("1.200", page)
 
+    def test_bookkeeping_by_phase(self):
+        r = run("a" * 40, "2026-01-01T00:00:00+00:00")
+        self.assertEqual(bl.bookkeeping_by_phase(r), [])
+        r["benchmarks"].append(bench("bench_adaptive", "BM_AdaptiveBookkeeping/shape:0/manual_time", [40 * x for x in NOISE],
+                                     label="torus/adaptive/bookkeeping", kind="real",
+                                     counters={"us_per_vertex": [8.25] * 5, "field_us_per_vertex": [0.21] * 5,
+                                               "seed_grid_us_per_vertex": [0.05] * 5,
+                                               "tracking_us_per_vertex": [3.5] * 5,
+                                               "quality_us_per_vertex": [3.75] * 5}))
+        rows = bl.bookkeeping_by_phase(r)
+        self.assertEqual(len(rows), 1)
+        self.assertAlmostEqual(rows[0]["total"], 8.25)
+        self.assertAlmostEqual(rows[0]["phases"]["quality"], 3.75)
+        self.assertIsNone(rows[0]["phases"]["checks"])  # not reported: shown as missing, not as 0
+        page = make_dashboard.inrun_section([r])
+        self.assertIn("Time per vertex outside the field, by phase", page)
+        self.assertIn("3.75", page)
+        self.assertIn("8.25", page)
+
     def test_missing_benchmarks_give_no_ratio(self):
         r = run("a" * 40, "2026-01-01T00:00:00+00:00")
         r["benchmarks"] = r["benchmarks"][:1]
