@@ -119,7 +119,7 @@ std::string read_text(const std::string& path) {
 
 // One rung of a ladder: a parameter value and the run it stands for.
 struct Step {
-  std::string param;  // "factor", "tolerance/diag", "precision", "cell/diag"
+  std::string param;  // "factor", "tolerance/diag", "chord/diag", "precision", "cell/diag"
   double value = 0;
   std::function<PolygonizeResult(const Field&)> run;
 };
@@ -171,7 +171,7 @@ std::vector<Step> ladder(const Field& field, const std::string& family) {
     for (int j = 0;; ++j) {
       const double t = kFirstTolerance * std::pow(2.0, -j / static_cast<double>(kRungsPerDoubling));
       if (t < kLastTolerance) break;
-      steps.push_back({"tolerance/diag", t, [t, diag, mode](const Field& f) {
+      steps.push_back({mode == SizingMode::Chord ? "chord/diag" : "tolerance/diag", t, [t, diag, mode](const Field& f) {
                          AdaptiveOptions o;
                          o.sizing = mode;
                          o.tolerance = t * diag;
@@ -216,7 +216,7 @@ std::string format_step(const Step& s) {
   char buf[64];
   if (s.param == "precision") std::snprintf(buf, sizeof buf, "P%g", s.value);
   else if (s.param == "factor") std::snprintf(buf, sizeof buf, "k=%.3g", s.value);
-  else if (s.param == "tolerance/diag") std::snprintf(buf, sizeof buf, "eps=%.3g d", s.value);
+  else if (s.param == "tolerance/diag" || s.param == "chord/diag") std::snprintf(buf, sizeof buf, "eps=%.3g d", s.value);
   else std::snprintf(buf, sizeof buf, "h=d/%.0f", 1 / s.value);
   return buf;
 }
@@ -395,6 +395,7 @@ void BM_SlowTimeToAccuracy(benchmark::State& state, int field_index, std::string
   const Outcome& o = c.outcome;
   state.counters["triangles"] = static_cast<double>(o.triangles);
   state.counters[o.step.param == "tolerance/diag" ? "tolerance_per_diag"
+                 : o.step.param == "chord/diag"   ? "chord_per_diag"
                  : o.step.param == "cell/diag"    ? "cell_per_diag"
                                                   : o.step.param] = o.step.value;
   state.counters["phong_deg"] = o.phong;

@@ -253,7 +253,7 @@ PER_ITEM_COUNTERS = ("evals_per_vertex", "evaluations_per_vertex", "tracking_eva
 
 # BM_AdaptiveBookkeeping's microseconds per vertex outside the field: the whole run's and each
 # phase's (the run's stats "phases"), with the field's own beside them.
-BOOKKEEPING_PHASES = ("seed_grid", "tracking", "quality", "checks")
+BOOKKEEPING_PHASES = ("seed_grid", "creases", "tracking", "quality", "checks")
 
 
 def bookkeeping_by_phase(run):
@@ -311,7 +311,7 @@ def time_to_accuracy(run):
         if not b.get("error"):
             row["seconds"] = summary(b)["median"]
             row["triangles"] = counter_median(b, "triangles")
-            for name in ("factor", "tolerance_per_diag", "precision", "cell_per_diag"):
+            for name in ("factor", "tolerance_per_diag", "chord_per_diag", "precision", "cell_per_diag"):
                 if counter_median(b, name) is not None:
                     row["parameter"], row["parameter_name"] = counter_median(b, name), name
             row["error"] = counter_median(b, "phong_deg" if target == "phong" else "depth_relative")

@@ -338,7 +338,7 @@ def quality_section(table_path):
 
     def paper_value(r, k):
         for p in paper.get(r.get("method"), []) or []:
-            if isinstance(p, dict) and p.get("precision") == r.get("parameter") and r.get("parameter_name") not in ("tolerance", "chord"):
+            if isinstance(p, dict) and p.get("precision") == r.get("parameter") and r.get("parameter_name") not in ("tolerance", "chord"):  # results_lib.DISTANCE_SWEEPS
                 return p.get(k)
         return None
 

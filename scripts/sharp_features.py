@@ -18,6 +18,8 @@ METHODS = [("adaptive", "factor", False, "Ours, along creases (factor)", "C0", "
            ("adaptive", "tolerance", False, "Ours, along creases (tolerance)", "C2", "s"),
            ("adaptive", "factor", True, "Ours, creases ignored (factor)", "C3", "x"),
            ("adaptive", "tolerance", True, "Ours, creases ignored (tolerance)", "C4", "+"),
+           ("adaptive", "chord", False, "Ours, along creases (chord)", "C5", "P"),
+           ("adaptive", "chord", True, "Ours, creases ignored (chord)", "C6", "*"),
            ("mc", "cell", False, "Marching Cubes", "C1", "v")]
 
 

@@ -214,6 +214,7 @@ TEST_P(HardSurfaces, CorrectMeshOrClearError) {
     EXPECT_EQ(t.genus, genus) << h.name;
     EXPECT_EQ(test::count_self_intersections(r.mesh), 0u) << h.name;
     EXPECT_EQ(r.stats.extra.at("uncovered_crossings").get<std::size_t>(), 0u);
+    test::expect_phases_add_up(r, h.name);  // min_edge lowered and turn-limited runs among them
     // A chord deviation limits the turn from the start and makes no such last run.
     const bool turn_limited = tolerance > 0 && !chord &&
                               std::find(h.turn_limited_at.begin(), h.turn_limited_at.end(), tolerance) !=

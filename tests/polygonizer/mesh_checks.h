@@ -1,9 +1,11 @@
 // Independent checks of polygonizer output used by the polygonizer tests: a reference topology
 // from a simple marching-tetrahedra polygonization, the self-intersection count of
 // <cdp/raytrace/self_intersection.h>, distances to the surface, triangle shape statistics, and
-// expect_sound (the checks every output mesh must pass).
+// expect_sound (the checks every output mesh must pass); expect_phases_add_up (the adaptive
+// method's stats "phases" against its totals).
 #pragma once
 
+#include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/field.h>
 #include <cdp/core/mesh.h>
 #include <cdp/core/mesh_topology.h>
@@ -85,6 +87,28 @@ inline Mesh marching_tetrahedra_reference(const Field& field, int n) {
 // Pairs of triangles that meet anywhere other than at the vertices or the edge they share
 // (exact test, Embree broad phase: <cdp/raytrace/self_intersection.h>, whose rules apply).
 inline std::size_t count_self_intersections(const Mesh& mesh) { return find_self_intersections(mesh).pairs; }
+
+// The phases of an adaptive run (stats "phases", kAdaptivePhases): their field calls add up to
+// the run's exactly, their seconds to at most its seconds and to nearly all of them (between
+// runs only a discarded run's stats and the bounds a re-run is judged by are left out: far
+// under kUncoveredShare of any run the tests make).
+inline void expect_phases_add_up(const PolygonizeResult& r, const std::string& what) {
+  constexpr double kUncoveredShare = 0.5;
+  EvaluationCounts sum;
+  double seconds = 0;
+  for (const std::string_view name : kAdaptivePhases) {
+    const auto at = [&](const char* key) { return r.stats.extra.at("phases." + std::string(name) + "." + key); };
+    sum.value += at("value").get<std::uint64_t>();
+    sum.value_gradient += at("value_gradient").get<std::uint64_t>();
+    sum.gradient_hessian += at("gradient_hessian").get<std::uint64_t>();
+    seconds += at("seconds").get<double>();
+  }
+  EXPECT_EQ(sum.value, r.stats.field_evaluations.value) << what;
+  EXPECT_EQ(sum.value_gradient, r.stats.field_evaluations.value_gradient) << what;
+  EXPECT_EQ(sum.gradient_hessian, r.stats.field_evaluations.gradient_hessian) << what;
+  EXPECT_LE(seconds, r.stats.seconds) << what;
+  EXPECT_GT(seconds, (1 - kUncoveredShare) * r.stats.seconds) << what;
+}
 
 // Largest first-order distance |F| / |grad F| of a mesh vertex to the surface.
 inline double max_surface_distance(const Field& field, const Mesh& mesh) {

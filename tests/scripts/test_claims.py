@@ -184,7 +184,6 @@ class Claims(unittest.TestCase):
         by = rl.rows_by_method(summary)
         self.assertEqual(sorted(by), ["adaptive", "adaptive_chord", "adaptive_tolerance"])
         self.assertEqual([r["parameter"] for r in by["adaptive_chord"]], [1, 3])
-        self.assertIn("chord", rl.DISTANCE_SWEEPS)
         text = table1.markdown(by, PAPER, {}, summary)
         sections = {}
         for part in text.split("\n## ")[1:]:

@@ -25,6 +25,7 @@
 #include <numbers>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string_view>
 #include <thread>
 #include <utility>
@@ -51,27 +52,28 @@ const char* to_string(Variant variant) { return variant == Variant::Paper ? "pap
 
 namespace {
 
-// Time and field evaluations by phase of the runs polygonize_adaptive makes (stats "phases.*"),
-// summed over every run it makes, failed and discarded ones included: the phases' evaluations
-// add up to the run's field_evaluations exactly, and their seconds to its seconds but for the
-// bookkeeping between runs (a few microseconds). A phase lasts from its entry to the next
-// phase's or the run's end, so "checks" holds the topology, intersection, gap and neck checks.
+// Time and field evaluations by phase (kAdaptivePhases) of the runs polygonize_adaptive makes
+// (stats "phases.*"), summed over every run it makes, failed and discarded ones included: the
+// phases' evaluations add up to the run's field_evaluations exactly (nothing between runs
+// evaluates), and their seconds to nearly all of its seconds (between runs: a discarded run's
+// stats and destructors, the bounds a re-run is judged by, a fraction of a percent). A phase
+// lasts from its entry to the next phase's or the run's end.
 class PhaseLedger {
  public:
-  // The phases in the order a run enters them; each is written, zero where a run never entered it.
-  static constexpr std::array<std::string_view, 5> kNames{"seed_grid", "creases", "tracking", "quality", "checks"};
+  static constexpr const auto& kNames = kAdaptivePhases;  // each written, zero where never entered
 
   explicit PhaseLedger(const Field& field) : field_(field) {}
   void enter(std::string_view name) {
     close();
     const auto it = std::find(kNames.begin(), kNames.end(), name);
+    if (it == kNames.end()) throw std::logic_error("PhaseLedger: no phase " + std::string(name));
     current_ = static_cast<int>(it - kNames.begin());
     start_ = std::chrono::steady_clock::now();
     counts_ = field_.counts();
   }
   // Ends the current phase (a run's end, or its error).
   void close() {
-    if (current_ < 0 || current_ >= static_cast<int>(kNames.size())) return;
+    if (current_ < 0) return;
     Entry& e = entries_[current_];
     e.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     const EvaluationCounts d = field_.counts() - counts_;
@@ -469,6 +471,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
         remeshed = true;
         mesh_surface(true);
         if (seeding.uncovered > 0) throw NoSurfaceError("uncovered sign changes");
+        phases.enter("checks");
         check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
       } catch (const std::exception&) {
         throw stalled;
@@ -565,8 +568,10 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
         const Vec3 n = (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a);  // twice the area
         seen += 0.5 * n.cwiseAbs().sum() / kMeanCrossings;
       }
-      if (seen > kOverlapArea * estimated_area)
+      if (seen > kOverlapArea * estimated_area) {
+        phases.enter("checks");
         check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+      }
     }
     if (repair) {
       enter("quality", "repairing triangles");
@@ -596,6 +601,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
       quality = adaptive::improve_mesh(field, mesh, qo);
     }
     if (s.curvature_properties) {
+      if (!repair) phases.enter("quality");
       if (quality.moves + quality.relaxed + quality.collapses + quality.splits + quality.inserts == 0) {
         mesh.vertex_scalars["mac"] = tracker->vertex_mac();
         mesh.vertex_scalars["shape_index"] = tracker->vertex_shape_index();
@@ -622,7 +628,10 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
       mesh_everything();
       // The patches' topology before the repair works on it; intersections after (the repair
       // removes some that chords on the two faces of an acute crease make).
-      if (creased) check_mesh(mesh, seeding.seeds + crease_components, false, options.threads);
+      if (creased) {
+        phases.enter("checks");
+        check_mesh(mesh, seeding.seeds + crease_components, false, options.threads);
+      }
       components = repair_and_check();
     } catch (const NoSurfaceError& e) {
       if (!fall_back(e)) throw;

@@ -15,7 +15,9 @@
 #include <cdp/core/polygonize_result.h>
 #include <cdp/core/progress.h>
 
+#include <array>
 #include <cstddef>
+#include <string_view>
 
 namespace cdp {
 
@@ -90,8 +92,8 @@ struct AdaptiveOptions {
   // sagitta of a chord at each point's smallest radius, which the mesh can exceed 2-4 times.
   double tolerance = 0;
   // Edge-length clamps. Non-positive: min_edge = 2e-3 and max_edge = 0.1 of the field's
-  // bounding-box diagonal; not a number: InvalidInputError. With the default min_edge (and the default max_triangles and
-  // max_steps, Variant::Improved), a surface that fails because it bends with a radius of
+  // bounding-box diagonal; not a number: InvalidInputError. With the default min_edge (and the
+  // default max_triangles and max_steps, Variant::Improved), a surface that fails because it bends with a radius of
   // curvature below min_edge is meshed once more with min_edge a quarter of that radius (not
   // below 2e-4 of the diagonal, where a crease or singular point is more likely than a bend);
   // stats "min_edge_lowered" says so, and when that run fails too the first error stands, with
@@ -151,10 +153,18 @@ struct AdaptiveOptions {
 // force ("grading", "quality_repair", "tolerance_refinement", "look_ahead": 0 or 1), the re-runs
 // ("min_edge_lowered", "quality_rerun", "quality_rerun_kept") and the repair's counts
 // ("quality.flips", "quality.moves", "quality.collapses", "quality.splits", ...), and the time
-// and field calls of each phase over every run made ("phases.NAME.seconds", ".value",
-// ".value_gradient", ".gradient_hessian" for seed_grid, creases, tracking, quality, checks),
-// whose calls add up to field_evaluations.
+// and field calls of each phase of kAdaptivePhases over every run made ("phases.NAME.seconds",
+// ".value", ".value_gradient", ".gradient_hessian"), whose calls add up to field_evaluations.
 PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& options = {});
+
+// The phases of stats "phases", in the order a run enters them: the seed grid (and the hash
+// cell's curvature sample); the crease layout (its tracing and patches); the tracking (the
+// seeding and the fronts); the quality (the repair, the relaxation, the tolerance's refinement,
+// the curvature properties on request); the checks (topology, intersections, the gap and neck
+// searches, wherever a run makes them). An error's crease tracing for its message counts in the
+// phase that failed.
+inline constexpr std::array<std::string_view, 5> kAdaptivePhases{"seed_grid", "creases", "tracking", "quality",
+                                                                 "checks"};
 
 const char* to_string(SizingMode mode);
 const char* to_string(CreaseHandling creases);
