@@ -60,14 +60,12 @@ namespace {
 // lasts from its entry to the next phase's or the run's end.
 class PhaseLedger {
  public:
-  static constexpr const auto& kNames = kAdaptivePhases;  // each written, zero where never entered
-
   explicit PhaseLedger(const Field& field) : field_(field) {}
   void enter(std::string_view name) {
     close();
-    const auto it = std::find(kNames.begin(), kNames.end(), name);
-    if (it == kNames.end()) throw std::logic_error("PhaseLedger: no phase " + std::string(name));
-    current_ = static_cast<int>(it - kNames.begin());
+    const auto it = std::find(kAdaptivePhases.begin(), kAdaptivePhases.end(), name);
+    if (it == kAdaptivePhases.end()) throw std::logic_error("PhaseLedger: no phase " + std::string(name));
+    current_ = static_cast<int>(it - kAdaptivePhases.begin());
     start_ = std::chrono::steady_clock::now();
     counts_ = field_.counts();
   }
@@ -76,15 +74,13 @@ class PhaseLedger {
     if (current_ < 0) return;
     Entry& e = entries_[current_];
     e.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    const EvaluationCounts d = field_.counts() - counts_;
-    e.evaluations.value += d.value;
-    e.evaluations.value_gradient += d.value_gradient;
-    e.evaluations.gradient_hessian += d.gradient_hessian;
+    e.evaluations += field_.counts() - counts_;
     current_ = -1;
   }
+  // Every phase, zero where no run entered it.
   void write(PolygonizeStats& st) const {
-    for (std::size_t i = 0; i < kNames.size(); ++i) {
-      const std::string key = "phases." + std::string(kNames[i]) + ".";
+    for (std::size_t i = 0; i < kAdaptivePhases.size(); ++i) {
+      const std::string key = "phases." + std::string(kAdaptivePhases[i]) + ".";
       st.extra[key + "seconds"] = entries_[i].seconds;
       st.extra[key + "value"] = entries_[i].evaluations.value;
       st.extra[key + "value_gradient"] = entries_[i].evaluations.value_gradient;
@@ -98,7 +94,7 @@ class PhaseLedger {
     EvaluationCounts evaluations;
   };
   const Field& field_;
-  std::array<Entry, kNames.size()> entries_{};
+  std::array<Entry, kAdaptivePhases.size()> entries_{};
   int current_ = -1;
   std::chrono::steady_clock::time_point start_{};
   EvaluationCounts counts_;
@@ -338,7 +334,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
   const EvaluationCounts before = field.counts();
 
   const PhaseCloser closer{phases};
-  // `name`: the ledger's (PhaseLedger::kNames); `text`: what AdaptiveOptions::phase is told.
+  // `name`: the ledger's (kAdaptivePhases); `text`: what AdaptiveOptions::phase is told.
   const auto enter = [&](std::string_view name, const char* text) {
     phases.enter(name);
     if (options.phase) options.phase(text);

@@ -93,12 +93,13 @@ struct AdaptiveOptions {
   double tolerance = 0;
   // Edge-length clamps. Non-positive: min_edge = 2e-3 and max_edge = 0.1 of the field's
   // bounding-box diagonal; not a number: InvalidInputError. With the default min_edge (and the
-  // default max_triangles and max_steps, Variant::Improved), a surface that fails because it bends with a radius of
-  // curvature below min_edge is meshed once more with min_edge a quarter of that radius (not
-  // below 2e-4 of the diagonal, where a crease or singular point is more likely than a bend);
-  // stats "min_edge_lowered" says so, and when that run fails too the first error stands, with
-  // the second's appended. In tolerance mode a surface every such run fails on is meshed once
-  // more with every edge turning the normal by at most a radian (stats "turn_limited").
+  // default max_triangles and max_steps, Variant::Improved), a surface that fails because it
+  // bends with a radius of curvature below min_edge is meshed once more with min_edge a quarter
+  // of that radius (not below 2e-4 of the diagonal, where a crease or singular point is more
+  // likely than a bend); stats "min_edge_lowered" says so, and when that run fails too the
+  // first error stands, with the second's appended. In tolerance mode a surface every such run
+  // fails on is meshed once more with every edge turning the normal by at most a radian (stats
+  // "turn_limited").
   double min_edge = 0;
   double max_edge = 0;
   // Hartmann's rule reproduces the paper's edge ratios (see README); the printed formula gives

@@ -48,6 +48,12 @@ struct EvaluationCounts {
   EvaluationCounts operator-(const EvaluationCounts& o) const {
     return {value - o.value, value_gradient - o.value_gradient, gradient_hessian - o.gradient_hessian};
   }
+  EvaluationCounts& operator+=(const EvaluationCounts& o) {
+    value += o.value;
+    value_gradient += o.value_gradient;
+    gradient_hessian += o.gradient_hessian;
+    return *this;
+  }
 };
 
 // One smooth piece of a field built with min, max or abs (a CSG shape): which argument the
