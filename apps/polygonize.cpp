@@ -89,7 +89,8 @@ int main(int argc, char** argv) {
                                    ->type_name("N")
                                    ->transform(cdp::app::integer_in(2, kIntMax));
     app.add_option("--threads", threads,
-                   "threads of the seed grid (thread-safe fields) and of the adaptive method's final check "
+                   "threads of the seed grid (thread-safe fields), the adaptive method's relaxation and final check, "
+                   "and a second for half of each costly evaluation while it tracks (a VIS from 1024 centres) "
                    "(0: all cores this process may use, at most 8); the mesh is the same on any number")
         ->capture_default_str()
         ->type_name("N")

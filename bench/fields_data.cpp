@@ -5,6 +5,11 @@
 //     value_gradient, gradient_hessian: the SIMD kernel (Field interface) against the plain
 //     one-centre-at-a-time loop (Vis::*_scalar), in the same run; the dashboard divides the pair.
 //   BM_Vis/<field>/values_batched: Field::values over the whole point set in one call.
+//   BM_Vis/<field>/<kind>/helper, kind value_gradient or gradient_hessian: the vectorized kernel
+//     with a helper thread lent (polygonizer/src/helper_thread.h), which sums half the lanes of
+//     a model from Vis::kSplit*Centres centres; counter split_share, the share of evaluations
+//     split (0 on one processor, or below the threshold). Back to back, as here, a hand-over
+//     costs less than between the tracker's evaluations.
 //   BM_Mpu/<field>/<kind>: the MPU models (bunny_mpu, horse_mpu, igea_mpu), same kinds.
 //   BM_VisSolve/<field>: the VIS system (assembly, null-space Cholesky, residual check) for the
 //     400, 1000 or 2002 points drawn from the scan; BM_VisSolveSlow/igea_vis4004 (seconds).
@@ -23,8 +28,12 @@
 
 #include <benchmark/benchmark.h>
 
+#include "../polygonizer/src/helper_thread.h"
+
+#include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -66,8 +75,11 @@ const std::vector<Vec3>& near_surface_points(const std::string& field_name) {
 
 enum Kind { kValue, kValueGradient, kGradientHessian, kBatched };
 
-void evaluate(benchmark::State& state, const std::string& name, Kind kind, bool scalar) {
+void evaluate(benchmark::State& state, const std::string& name, Kind kind, bool scalar, bool helper = false) {
   const Field& f = field(name);
+  std::optional<detail::LendHelper> lend;
+  if (helper) lend.emplace(2);
+  const std::uint64_t split_before = detail::lent_helper() ? detail::lent_helper()->tasks_run() : 0;
   const auto* vis = dynamic_cast<const Vis*>(&f);
   const std::vector<Vec3>& pts = near_surface_points(name);
   std::vector<double> out(pts.size());
@@ -96,6 +108,10 @@ void evaluate(benchmark::State& state, const std::string& name, Kind kind, bool 
     evaluations += static_cast<double>(pts.size());
   }
   state.counters["evaluations_per_second"] = benchmark::Counter(evaluations, benchmark::Counter::kIsRate);
+  if (helper) {
+    const std::uint64_t split = detail::lent_helper() ? detail::lent_helper()->tasks_run() - split_before : 0;
+    state.counters["split_share"] = evaluations > 0 ? static_cast<double>(split) / evaluations : 0.0;
+  }
 }
 
 void vis_solve(benchmark::State& state, const std::string& name) {
@@ -148,6 +164,10 @@ const char* kind_name(Kind k) {
             ("BM_Vis/" + name + "/" + kind_name(k) + (scalar ? "/scalar" : "/vectorized")).c_str(),
             [name, k, scalar](benchmark::State& s) { evaluate(s, name, k, scalar); })
             ->Unit(benchmark::kMicrosecond);
+    for (Kind k : {kValueGradient, kGradientHessian})
+      benchmark::RegisterBenchmark(("BM_Vis/" + name + "/" + kind_name(k) + "/helper").c_str(),
+                                   [name, k](benchmark::State& s) { evaluate(s, name, k, false, true); })
+          ->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark(("BM_Vis/" + name + "/values_batched").c_str(),
                                  [name](benchmark::State& s) { evaluate(s, name, kBatched, false); })
         ->Unit(benchmark::kMicrosecond);

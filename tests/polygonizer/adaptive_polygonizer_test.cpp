@@ -7,6 +7,7 @@
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_topology.h>
 #include <cdp/core/models/compiled.h>
+#include <cdp/core/models/vis.h>
 #include <cdp/io/field_factory.h>
 
 #include <nlohmann/json.hpp>
@@ -14,8 +15,10 @@
 #include <limits>
 #include <random>
 
+#include "../../polygonizer/src/parallel.h"
 #include "common/test_fields.h"
 #include "polygonizer/mesh_checks.h"
+#include "polygonizer/oriented_point_sets.h"
 
 namespace cdp {
 namespace {
@@ -303,6 +306,33 @@ TEST(AdaptivePolygonizer, SameMeshOnOneThreadOrSeveral) {
   }
   o.threads = -1;
   EXPECT_THROW(polygonize_adaptive(*field, o), InvalidInputError);
+}
+
+// On two threads the tracker's evaluations of a costly field run half their sums on a helper
+// thread (helper_thread.h; a VIS's Hessians from 1,024 centres, its values and gradients from
+// 3,072): the same mesh and the same evaluation counts as on one, and the stats count the split
+// evaluations. A cheap field splits none.
+TEST(AdaptivePolygonizer, ACostlyFieldsEvaluationsSplitOnTwoThreadsWithTheSameMesh) {
+  const Vis vis(test::sphere_points(static_cast<int>(Vis::kSplitGradientHessianCentres / 2 + 2)), 0.02);
+  ASSERT_GE(vis.num_centres(), Vis::kSplitGradientHessianCentres);
+  ASSERT_LT(vis.num_centres(), Vis::kSplitValueGradientCentres);
+  AdaptiveOptions o = coarse(2);
+  o.threads = 1;
+  const auto a = polygonize_adaptive(vis, o);
+  EXPECT_EQ(a.stats.extra.at("split_evaluations").get<double>(), 0.0);
+  o.threads = 2;
+  const auto b = polygonize_adaptive(vis, o);
+  ASSERT_EQ(a.mesh.triangles, b.mesh.triangles);
+  ASSERT_EQ(a.mesh.positions, b.mesh.positions);
+  EXPECT_EQ(a.stats.field_evaluations.total(), b.stats.field_evaluations.total());
+  // Every Hessian of the tracking, and nothing of the other phases'.
+  EXPECT_EQ(b.stats.extra.at("split_evaluations").get<double>(),
+            b.stats.extra.at("phases.tracking.gradient_hessian").get<double>());
+  if (detail::available_processors() >= 2) {  // else none is lent (helper_thread.h)
+    EXPECT_GT(b.stats.extra.at("split_evaluations").get<double>(), 0.0);
+  }
+  const Torus torus(Vec3::Zero(), 1.0, 0.35);
+  EXPECT_EQ(polygonize_adaptive(torus, o).stats.extra.at("split_evaluations").get<double>(), 0.0);
 }
 
 // With a tolerance the refinement measures each round's triangles on all cores first: the same

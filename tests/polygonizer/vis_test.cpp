@@ -7,7 +7,10 @@
 #include <cdp/io/field_factory.h>
 
 #include <random>
+#include <vector>
 
+#include "../../polygonizer/src/helper_thread.h"
+#include "../../polygonizer/src/parallel.h"
 #include "common/test_fields.h"
 #include "polygonizer/oriented_point_sets.h"
 
@@ -122,6 +125,48 @@ TEST(Vis, DerivativesMatchFiniteDifferencesAndTheScalarReference) {
   Mat3 H;
   vis.gradient_hessian(vis.centres()[3], g, H);
   EXPECT_TRUE(H.allFinite());
+}
+
+// With a helper thread lent (helper_thread.h), evaluations over enough centres run half their
+// lanes on it: the same bits as without, and the helper does run them.
+TEST(Vis, AHelperThreadGivesTheSameBits) {
+  Vis vis(test::sphere_points(150), 0.02);
+  vis.set_split_centres(vis.num_centres(), vis.num_centres());  // both split, on 300 centres
+  const Box box = vis.bounds();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec3> at{vis.centres()[7]};  // on a centre: the Hessian's select branch
+  for (int i = 0; i < 200; ++i) at.push_back(box.min + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(box.size()));
+  struct Values {
+    double v, vg, gh;
+    Vec3 g, g2;
+    Mat3 h;
+  };
+  const auto evaluate = [&] {
+    std::vector<Values> out(at.size());
+    for (std::size_t i = 0; i < at.size(); ++i) {
+      out[i].v = vis.value(at[i]);
+      out[i].vg = vis.value_gradient(at[i], out[i].g);
+      out[i].gh = vis.gradient_hessian(at[i], out[i].g2, out[i].h);
+    }
+    return out;
+  };
+  const std::vector<Values> alone = evaluate();
+  const detail::LendHelper lend(2);
+  if (detail::available_processors() < 2) GTEST_SKIP() << "one processor: no helper is lent";
+  ASSERT_NE(detail::lent_helper(), nullptr);
+  const std::vector<Values> helped = evaluate();
+  EXPECT_EQ(detail::lent_helper()->tasks_run(), 2 * at.size());
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    EXPECT_EQ(helped[i].v, alone[i].v) << i;
+    EXPECT_EQ(helped[i].vg, alone[i].vg) << i;
+    EXPECT_EQ(helped[i].gh, alone[i].gh) << i;
+    EXPECT_EQ(helped[i].g, alone[i].g) << i;
+    EXPECT_EQ(helped[i].g2, alone[i].g2) << i;
+    EXPECT_EQ(helped[i].h, alone[i].h) << i;
+    EXPECT_EQ(helped[i].vg, helped[i].v) << i;  // one kernel, whichever thread sums which lanes
+    EXPECT_EQ(helped[i].g, helped[i].g2) << i;
+  }
 }
 
 TEST(Vis, ConstraintSpacingIsTheClosestPairOfDataPoints) {

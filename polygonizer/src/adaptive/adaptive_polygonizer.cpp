@@ -1,6 +1,7 @@
 // polygonize_adaptive: resolves the options, finds seeds on every component, runs the tracker
 // from each seed not yet covered, and fills in the common statistics.
 #include "crease_patches.h"
+#include "../helper_thread.h"
 #include "../parallel.h"
 #include "quality.h"
 #include "seeding.h"
@@ -20,6 +21,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <exception>
 #include <limits>
 #include <numbers>
@@ -77,8 +79,11 @@ class PhaseLedger {
     e.evaluations += field_.counts() - counts_;
     current_ = -1;
   }
+  // Evaluations a run split with a helper thread (helper_thread.h; stats "split_evaluations").
+  void add_split_evaluations(std::uint64_t n) { split_evaluations_ += n; }
   // Every phase, zero where no run entered it.
   void write(PolygonizeStats& st) const {
+    st.extra["split_evaluations"] = split_evaluations_;
     for (std::size_t i = 0; i < kAdaptivePhases.size(); ++i) {
       const std::string key = "phases." + std::string(kAdaptivePhases[i]) + ".";
       st.extra[key + "seconds"] = entries_[i].seconds;
@@ -95,6 +100,7 @@ class PhaseLedger {
   };
   const Field& field_;
   std::array<Entry, kAdaptivePhases.size()> entries_{};
+  std::uint64_t split_evaluations_ = 0;
   int current_ = -1;
   std::chrono::steady_clock::time_point start_{};
   EvaluationCounts counts_;
@@ -443,7 +449,14 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
       mesh.triangles = creased->mesh.triangles;
       tracker->adopt_finished(creased->target, creased->mac, creased->shape_index);
     }
-    seeding = adaptive::seed_every_component(field, grid, s.sizing.min_edge, settings.hash_cell, *tracker, mesh);
+    {
+      // The tracker's field calls come one or two points at a time: a costly field may run half
+      // of each on a second core, with the same bits (helper_thread.h). Lent for the tracking
+      // only, which runs no parallel pass beside it.
+      const detail::LendHelper helper(options.threads);
+      seeding = adaptive::seed_every_component(field, grid, s.sizing.min_edge, settings.hash_cell, *tracker, mesh);
+      phases.add_split_evaluations(helper.tasks_run());
+    }
     tracker->compact();
   };
 

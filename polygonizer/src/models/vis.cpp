@@ -1,6 +1,8 @@
 #include <cdp/core/errors.h>
 #include <cdp/core/models/vis.h>
 
+#include "../helper_thread.h"
+
 #include <Eigen/Cholesky>
 #include <Eigen/Householder>
 #include <Eigen/QR>
@@ -8,18 +10,18 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace cdp {
 
 namespace {
 
 using A4 = Eigen::Array4d;
-using CMap = Eigen::Map<const A4>;
 using A2 = Eigen::Array2d;
-using CMap2 = Eigen::Map<const A2>;
 
 // Lanes are summed in a fixed order, so every kernel gives the same bits for the same sums.
 inline double lane_sum(const A4& a) { return (a[0] + a[1]) + (a[2] + a[3]); }
+
 
 std::string fmt(double x) {
   char buf[32];
@@ -148,15 +150,93 @@ void Vis::solve(const std::string& source) {
                             fmt(info_.interpolation_residual) + " of the offset (limit " + fmt(kVisMaxResidual) + ")");
 }
 
+namespace {
+
+// What every kernel computes first for W of its four lanes (centre j goes to lane j mod 4): the
+// offsets from q to centres j, j + 1, ..., their distances and the centres' weights. Each lane
+// sees the same operations in the same order whatever W, so the kernels' sums have the same bits
+// whether four lanes run together or two and two, on one thread or on two.
+template <int W>
+struct Offsets {
+  using A = Eigen::Array<double, W, 1>;
+  using Map = Eigen::Map<const A>;
+  A dx, dy, dz, r2, r, w;
+  Offsets(const Vec3& q, const double* cx, const double* cy, const double* cz, const double* weights, std::size_t j)
+      : dx(q.x() - Map(cx + j)), dy(q.y() - Map(cy + j)), dz(q.z() - Map(cz + j)), r2(dx * dx + dy * dy + dz * dz),
+        r(r2.sqrt()), w(Map(weights + j)) {}
+};
+
+// value_gradient's four sums, over all four lanes (W = 4, from lane 0) or two of them (W = 2,
+// from lane 0 or 2: the halves a helper thread and the caller compute side by side).
+template <int W>
+struct GradientSums {
+  using A = Eigen::Array<double, W, 1>;
+  A acc = A::Zero(), gx = A::Zero(), gy = A::Zero(), gz = A::Zero();
+};
+template <int W>
+GradientSums<W> gradient_sums(const Vec3& q, const double* cx, const double* cy, const double* cz,
+                              const double* weights, std::size_t m, std::size_t first) {
+  GradientSums<W> s;
+  for (std::size_t j = first; j < m; j += 4) {
+    const Offsets<W> d(q, cx, cy, cz, weights, j);
+    s.acc += d.w * (d.r2 * d.r);
+    const typename Offsets<W>::A wr = d.w * d.r;  // grad |d|^3 = 3 |d| d
+    s.gx += wr * d.dx;
+    s.gy += wr * d.dy;
+    s.gz += wr * d.dz;
+  }
+  return s;
+}
+
+// lane_sum of the four lanes, from their two halves.
+double lane_sum(const A2& low, const A2& high) { return (low[0] + low[1]) + (high[0] + high[1]); }
+
+// gradient_hessian's eleven sums, for two of the four lanes (from lane 0 or 2). Two lanes at a
+// time, because eleven sums of four lanes (22 SSE2 registers, with the temporaries over 30) are
+// far over the 16 registers: the four-lane loop kept spilling them to memory (171 stack accesses
+// in the function); two lanes spill far less. The centre arrays are padded to a multiple of four
+// (solve), so both halves read whole pairs.
+struct HessianLanes {
+  A2 acc = A2::Zero(), gx = A2::Zero(), gy = A2::Zero(), gz = A2::Zero(), sr = A2::Zero(), hxx = A2::Zero(),
+     hxy = A2::Zero(), hxz = A2::Zero(), hyy = A2::Zero(), hyz = A2::Zero(), hzz = A2::Zero();
+};
+HessianLanes hessian_lanes(const Vec3& q, const double* cx, const double* cy, const double* cz, const double* weights,
+                           std::size_t m, std::size_t first) {
+  HessianLanes s;
+  for (std::size_t j = first; j < m; j += 4) {
+    const Offsets<2> d(q, cx, cy, cz, weights, j);
+    s.acc += d.w * (d.r2 * d.r);
+    const A2 wr = d.w * d.r;
+    s.gx += wr * d.dx;
+    s.gy += wr * d.dy;
+    s.gz += wr * d.dz;
+    s.sr += wr;
+    // Hessian of |d|^3: 3 (|d| I + d d^T / |d|), which tends to 0 at d = 0. Eigen 3.4's select
+    // is a loop of scalar divisions and branches: it runs only where a lane sits exactly on a
+    // centre (or the point is not finite), and elsewhere the packet division gives the same
+    // quotients. The two changes make gradient_hessian 1.6 times faster (bench_fields_data,
+    // BM_Vis): 4.1 -> 2.5 us on the bunny VIS-800, where the Hessians were a fifth of a run at
+    // factor 3.
+    const A2 wi = (d.r > 0.0).all() ? A2(d.w / d.r) : A2((d.r > 0.0).select(d.w / d.r, A2::Zero()));
+    const A2 wx = wi * d.dx, wy = wi * d.dy;
+    s.hxx += wx * d.dx;
+    s.hxy += wx * d.dy;
+    s.hxz += wx * d.dz;
+    s.hyy += wy * d.dy;
+    s.hyz += wy * d.dz;
+    s.hzz += wi * d.dz * d.dz;
+  }
+  return s;
+}
+
+}  // namespace
+
 double Vis::rbf_sum(const Vec3& q) const {
   A4 acc = A4::Zero();
   const std::size_t m = w_.size();
   for (std::size_t j = 0; j < m; j += 4) {
-    const A4 dx = q.x() - CMap(cx_.data() + j);
-    const A4 dy = q.y() - CMap(cy_.data() + j);
-    const A4 dz = q.z() - CMap(cz_.data() + j);
-    const A4 r2 = dx * dx + dy * dy + dz * dz;
-    acc += CMap(w_.data() + j) * (r2 * r2.sqrt());
+    const Offsets<4> d(q, cx_.data(), cy_.data(), cz_.data(), w_.data(), j);
+    acc += d.w * (d.r2 * d.r);
   }
   return lane_sum(acc);
 }
@@ -172,79 +252,35 @@ void Vis::eval_values(const Vec3* points, double* out, std::size_t n) const {
 
 double Vis::eval_value_gradient(const Vec3& p, Vec3& gradient) const {
   const Vec3 q = to_local(p);
-  A4 acc = A4::Zero(), gx = A4::Zero(), gy = A4::Zero(), gz = A4::Zero();
   const std::size_t m = w_.size();
-  for (std::size_t j = 0; j < m; j += 4) {
-    const A4 dx = q.x() - CMap(cx_.data() + j);
-    const A4 dy = q.y() - CMap(cy_.data() + j);
-    const A4 dz = q.z() - CMap(cz_.data() + j);
-    const A4 r2 = dx * dx + dy * dy + dz * dz;
-    const A4 r = r2.sqrt();
-    const A4 w = CMap(w_.data() + j);
-    acc += w * (r2 * r);
-    const A4 wr = w * r;  // grad |d|^3 = 3 |d| d
-    gx += wr * dx;
-    gy += wr * dy;
-    gz += wr * dz;
+  const auto sums = [this, q, m](auto width, std::size_t first) {
+    return gradient_sums<decltype(width)::value>(q, cx_.data(), cy_.data(), cz_.data(), w_.data(), m, first);
+  };
+  using Two = std::integral_constant<int, 2>;
+  if (detail::HelperThread* helper = detail::lent_helper(); helper && m >= split_value_gradient_) {
+    GradientSums<2> lo;
+    const GradientSums<2> hi = helper->run_beside([sums] { return sums(Two{}, 2); }, [&] { lo = sums(Two{}, 0); });
+    gradient = (3.0 * Vec3(lane_sum(lo.gx, hi.gx), lane_sum(lo.gy, hi.gy), lane_sum(lo.gz, hi.gz)) + a_) * inv_scale_;
+    return lane_sum(lo.acc, hi.acc) + (a0_ + a_.dot(q));
   }
-  gradient = (3.0 * Vec3(lane_sum(gx), lane_sum(gy), lane_sum(gz)) + a_) * inv_scale_;
-  return lane_sum(acc) + (a0_ + a_.dot(q));
+  const GradientSums<4> s = sums(std::integral_constant<int, 4>{}, 0);
+  gradient = (3.0 * Vec3(lane_sum(s.gx), lane_sum(s.gy), lane_sum(s.gz)) + a_) * inv_scale_;
+  return lane_sum(s.acc) + (a0_ + a_.dot(q));
 }
-
-namespace {
-
-// gradient_hessian's eleven sums, for two of the four lanes of the other kernels (centre j goes
-// to lane j mod 4). Each lane sees the same operations in the same order as in a four-lane loop,
-// so every sum, and the value and gradient, are the bits value_gradient gives. Two lanes at a
-// time, because eleven sums of four lanes (22 SSE2 registers, with the temporaries over 30) are
-// far over the 16 registers: the four-lane loop kept spilling them to memory (171 stack accesses
-// in the function); two lanes spill far less. The centre arrays are padded to a multiple of four
-// (solve), so both halves read whole pairs.
-struct HessianLanes {
-  A2 acc = A2::Zero(), gx = A2::Zero(), gy = A2::Zero(), gz = A2::Zero(), sr = A2::Zero(), hxx = A2::Zero(),
-     hxy = A2::Zero(), hxz = A2::Zero(), hyy = A2::Zero(), hyz = A2::Zero(), hzz = A2::Zero();
-};
-void hessian_lanes(const Vec3& q, const double* cx, const double* cy, const double* cz, const double* weights,
-                   std::size_t m, std::size_t first, HessianLanes& s) {
-  for (std::size_t j = first; j < m; j += 4) {
-    const A2 dx = q.x() - CMap2(cx + j);
-    const A2 dy = q.y() - CMap2(cy + j);
-    const A2 dz = q.z() - CMap2(cz + j);
-    const A2 r2 = dx * dx + dy * dy + dz * dz;
-    const A2 r = r2.sqrt();
-    const A2 w = CMap2(weights + j);
-    s.acc += w * (r2 * r);
-    const A2 wr = w * r;
-    s.gx += wr * dx;
-    s.gy += wr * dy;
-    s.gz += wr * dz;
-    s.sr += wr;
-    // Hessian of |d|^3: 3 (|d| I + d d^T / |d|), which tends to 0 at d = 0. Eigen 3.4's select
-    // is a loop of scalar divisions and branches: it runs only where a lane sits exactly on a
-    // centre (or the point is not finite), and elsewhere the packet division gives the same
-    // quotients. The two changes make gradient_hessian 1.6 times faster (bench_fields_data,
-    // BM_Vis): 4.1 -> 2.5 us on the bunny VIS-800, where the Hessians were a fifth of a run at
-    // factor 3.
-    const A2 wi = (r > 0.0).all() ? A2(w / r) : A2((r > 0.0).select(w / r, A2::Zero()));
-    const A2 wx = wi * dx, wy = wi * dy;
-    s.hxx += wx * dx;
-    s.hxy += wx * dy;
-    s.hxz += wx * dz;
-    s.hyy += wy * dy;
-    s.hyz += wy * dz;
-    s.hzz += wi * dz * dz;
-  }
-}
-// lane_sum of the four lanes, from their two halves.
-double lane_sum(const A2& low, const A2& high) { return (low[0] + low[1]) + (high[0] + high[1]); }
-
-}  // namespace
 
 double Vis::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const {
   const Vec3 q = to_local(p);
+  const std::size_t m = w_.size();
+  const auto half = [this, q, m](std::size_t first) {
+    return hessian_lanes(q, cx_.data(), cy_.data(), cz_.data(), w_.data(), m, first);
+  };
   HessianLanes lo, hi;
-  hessian_lanes(q, cx_.data(), cy_.data(), cz_.data(), w_.data(), w_.size(), 0, lo);
-  hessian_lanes(q, cx_.data(), cy_.data(), cz_.data(), w_.data(), w_.size(), 2, hi);
+  if (detail::HelperThread* helper = detail::lent_helper(); helper && m >= split_gradient_hessian_) {
+    hi = helper->run_beside([half] { return half(2); }, [&] { lo = half(0); });
+  } else {
+    lo = half(0);
+    hi = half(2);
+  }
   gradient = (3.0 * Vec3(lane_sum(lo.gx, hi.gx), lane_sum(lo.gy, hi.gy), lane_sum(lo.gz, hi.gz)) + a_) * inv_scale_;
   const double s = lane_sum(lo.sr, hi.sr);
   const double xy = lane_sum(lo.hxy, hi.hxy), xz = lane_sum(lo.hxz, hi.hxz), yz = lane_sum(lo.hyz, hi.hyz);

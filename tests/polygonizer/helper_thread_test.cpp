@@ -1,0 +1,72 @@
+// The helper thread lent to serial evaluations (polygonizer/src/helper_thread.h): both parts of
+// a task run, the helper's result comes back, it wakes after sleeping, and it is lent only
+// where the caller allows a second thread.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include "../../polygonizer/src/helper_thread.h"
+#include "../../polygonizer/src/parallel.h"
+
+namespace cdp::detail {
+namespace {
+
+TEST(HelperThread, RunsBothPartsAndReturnsTheHelpersResult) {
+  HelperThread helper;
+  std::vector<int> mine;
+  for (int i = 0; i < 10000; ++i) {
+    const std::thread::id caller = std::this_thread::get_id();
+    const auto [value, elsewhere] = helper.run_beside(
+        [i, caller] { return std::pair<long, bool>(3L * i, std::this_thread::get_id() != caller); },
+        [&] { mine.push_back(i); });
+    ASSERT_EQ(value, 3L * i);
+    ASSERT_TRUE(elsewhere);
+  }
+  EXPECT_EQ(mine.size(), 10000u);
+  EXPECT_EQ(helper.tasks_run(), 10000u);
+}
+
+TEST(HelperThread, WakesAfterSleeping) {
+  HelperThread helper;
+  EXPECT_EQ(helper.run_beside([] { return 1; }, [] {}), 1);
+  // Well past the idle spin (half a millisecond): the helper sleeps, and a task wakes it.
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(helper.run_beside([] { return 2; }, [] {}), 2);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(helper.tasks_run(), 2u);
+  // Destroyed while it sleeps: the destructor wakes and joins it (the test would hang otherwise).
+}
+
+TEST(LendHelper, LendsOnlyWithASecondThreadAndOnlyToItsThread) {
+  EXPECT_EQ(lent_helper(), nullptr);
+  if (available_processors() < 2) {
+    const LendHelper two(2);
+    EXPECT_EQ(lent_helper(), nullptr);  // the two would take turns on one processor
+    GTEST_SKIP() << "one processor: no helper is lent";
+  }
+  {
+    const LendHelper one(1);
+    EXPECT_EQ(lent_helper(), nullptr);
+  }
+  {
+    const LendHelper two(2);
+    HelperThread* helper = lent_helper();
+    ASSERT_NE(helper, nullptr);
+    EXPECT_EQ(lent_helper(), helper);  // one helper for the scope, started on first use
+    {
+      const LendHelper inner(2);  // one is lent already: the same stays
+      EXPECT_EQ(lent_helper(), helper);
+    }
+    EXPECT_EQ(lent_helper(), helper);
+    HelperThread* seen_elsewhere = helper;
+    std::thread([&] { seen_elsewhere = lent_helper(); }).join();
+    EXPECT_EQ(seen_elsewhere, nullptr);
+    EXPECT_EQ(helper->run_beside([] { return 7; }, [] {}), 7);
+  }
+  EXPECT_EQ(lent_helper(), nullptr);
+}
+
+}  // namespace
+}  // namespace cdp::detail
