@@ -15,9 +15,11 @@ namespace {
 // How long an idle helper spins before it sleeps: a sleeping one takes tens of microseconds to
 // wake, more than the task it wakes for. The tracker's evaluations come a few microseconds
 // apart in bursts, with gaps of tens of microseconds (the bunny VIS-800 at factor 3: 7,260
-// Hessians in 64 ms); with 24 us (2000 pauses of 12 ns) the helper slept through many of those
-// gaps, and splitting its Hessians made the tracking 6 % slower instead of faster. The clock is
-// read every kSpinsPerClockRead pauses.
+// Hessians in 64 ms). With 24 us (2000 pauses of 12 ns) the helper slept through many of those
+// gaps: splitting the VIS-800's Hessians made its tracking 6.5 % slower, and the VIS-4004's
+// Hessians alone gained 3 %; with 500 us, 3.6 % slower (which is why a VIS-800 does not split,
+// Vis::kSplitGradientHessianCentres) and the VIS-4004 23 % faster with its values and gradients
+// split too. The clock is read every kSpinsPerClockRead pauses.
 constexpr std::chrono::microseconds kIdleSpin{500};
 constexpr int kSpinsPerClockRead = 64;
 // Rounds the caller spins on a task before it yields its processor each round instead: a task
@@ -74,7 +76,10 @@ void HelperThread::loop() noexcept {
         continue;
       }
       sleeping_.store(true, std::memory_order_seq_cst);
-      if (posted_.load(std::memory_order_seq_cst) == seen) posted_.wait(seen, std::memory_order_seq_cst);
+      if (posted_.load(std::memory_order_seq_cst) == seen) {
+        sleeps_.fetch_add(1, std::memory_order_relaxed);
+        posted_.wait(seen, std::memory_order_seq_cst);
+      }
       sleeping_.store(false, std::memory_order_relaxed);
       idle_since = Clock::now();
     }
@@ -86,6 +91,10 @@ void HelperThread::loop() noexcept {
 }
 
 HelperThread* lent_helper() noexcept { return t_lender ? t_lender->helper() : nullptr; }
+
+NoHelperHere::NoHelperHere() noexcept : saved_(t_lender) { t_lender = nullptr; }
+
+NoHelperHere::~NoHelperHere() { t_lender = saved_; }
 
 HelperThread* LendHelper::helper() noexcept {
   if (!helper_ && !failed_) {

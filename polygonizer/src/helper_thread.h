@@ -15,10 +15,14 @@
 // A caller lends a helper to the evaluations made on its thread for a scope (LendHelper); a model
 // that can split a sum asks lent_helper() and, given one, runs one part there and the other
 // itself. Each part must be a pure function of its inputs, so that the result is the same bits
-// with or without a helper, on any number of threads.
+// with or without a helper, on any number of threads. The helper keeps the floating-point
+// environment it started with (the default's: round to nearest, no flush to zero): a caller
+// that changes it inside the scope gets other bits from the helper's parts. Each thread that
+// lends (concurrent polygonize_adaptive calls) has its own helper.
 #pragma once
 
 #include <atomic>
+#include <cassert>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -28,9 +32,11 @@
 
 namespace cdp::detail {
 
+class LendHelper;
+
 class HelperThread {
  public:
-  // The most a task may hold (its captures) and return: a VIS Hessian's half is a point and two
+  // The most a task may hold (its captures) and return: a VIS Hessian's half holds the model, a
   // pointers, and returns eleven pairs of sums.
   static constexpr std::size_t kTaskBytes = 40;
   static constexpr std::size_t kResultBytes = 240;
@@ -54,15 +60,19 @@ class HelperThread {
                   sizeof(There) <= kTaskBytes && alignof(There) <= 8);
     static_assert(std::is_copy_constructible_v<Result> && std::is_trivially_destructible_v<Result> &&
                   sizeof(Result) <= kResultBytes && alignof(Result) <= 16);
+    assert(!busy_ && "run_beside: one task at a time (a `here` may not hand over another)");
+    busy_ = true;
     ::new (static_cast<void*>(task_bytes_)) There(there);
     post(&call<There, Result>);
     here();
     wait();
+    busy_ = false;
     return *std::launder(reinterpret_cast<const Result*>(result_));
   }
 
-  // Tasks the helper has run (for tests).
+  // Tasks the helper has run (the stats' split_evaluations), and the times it went to sleep.
   std::uint64_t tasks_run() const { return done_.load(std::memory_order_acquire); }
+  std::uint64_t sleeps() const { return sleeps_.load(std::memory_order_relaxed); }
 
  private:
   template <class F, class Result>
@@ -85,7 +95,23 @@ class HelperThread {
   // Whether the helper sleeps (or is about to) in posted_.wait: post then wakes it.
   alignas(64) std::atomic<bool> sleeping_{false};
   std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> sleeps_{0};
+  bool busy_ = false;  // the caller's: inside run_beside
   std::thread thread_;
+};
+
+// Withdraws the lent helper, if any, from this thread for its lifetime: parallel_blocks does so
+// while its workers run, so that no evaluation hands work to a helper beside them (an idle one
+// spins for at most kIdleSpin, then sleeps).
+class NoHelperHere {
+ public:
+  NoHelperHere() noexcept;
+  ~NoHelperHere();
+  NoHelperHere(const NoHelperHere&) = delete;
+  NoHelperHere& operator=(const NoHelperHere&) = delete;
+
+ private:
+  LendHelper* saved_;
 };
 
 // The helper lent to evaluations on this thread (its thread started at the first call), or
@@ -94,9 +120,10 @@ HelperThread* lent_helper() noexcept;
 
 // Lends a helper thread to the evaluations made on this thread while it lives, when `threads`
 // (0: the processors available, as worker_count reads it) allows a second thread, the process
-// may run on two processors or more, and no helper is lent already; otherwise nothing. The thread starts when an evaluation first asks for it, so
-// that fields which never split cost nothing. Not to be kept across parallel passes
-// (parallel.h): the helper would spin beside their threads for up to kIdleSpin.
+// may run on two processors or more, and no helper is lent already; otherwise nothing. The
+// thread starts when an evaluation first asks for it, so that fields which never split cost
+// nothing. parallel_blocks withdraws it while its workers run (NoHelperHere). A scope object:
+// destroyed on the thread that made it.
 class LendHelper {
  public:
   explicit LendHelper(int threads);

@@ -5,6 +5,8 @@
 // the order (sums, the smallest pairs): the answer is then the same on any number of threads.
 #pragma once
 
+#include "helper_thread.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
@@ -65,6 +67,9 @@ void parallel_blocks(std::size_t n, std::size_t block, unsigned workers, Fn&& fn
       next.store(blocks, std::memory_order_relaxed);  // the others stop at their next block
     }
   };
+  // A helper lent to this thread for its serial evaluations (helper_thread.h) must not spin
+  // beside the workers: none is lent to them, and this thread is one of them.
+  const NoHelperHere no_helper;
   std::vector<std::thread> threads;
   threads.reserve(workers - 1);
   for (unsigned w = 1; w < workers; ++w) threads.emplace_back(work, w);

@@ -454,8 +454,12 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
       // of each on a second core, with the same bits (helper_thread.h). Lent for the tracking
       // only, which runs no parallel pass beside it.
       const detail::LendHelper helper(options.threads);
+      struct Count {  // the splits of a run that throws count too, as its phases do
+        PhaseLedger& phases;
+        const detail::LendHelper& helper;
+        ~Count() { phases.add_split_evaluations(helper.tasks_run()); }
+      } count{phases, helper};
       seeding = adaptive::seed_every_component(field, grid, s.sizing.min_edge, settings.hash_cell, *tracker, mesh);
-      phases.add_split_evaluations(helper.tasks_run());
     }
     tracker->compact();
   };
