@@ -37,7 +37,7 @@ class LendHelper;
 class HelperThread {
  public:
   // The most a task may hold (its captures) and return: a VIS Hessian's half holds the model, a
-  // pointers, and returns eleven pairs of sums.
+  // point and a count, and returns eleven pairs of sums.
   static constexpr std::size_t kTaskBytes = 40;
   static constexpr std::size_t kResultBytes = 240;
 

@@ -10,7 +10,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <type_traits>
 
 namespace cdp {
 
@@ -21,7 +20,6 @@ using A2 = Eigen::Array2d;
 
 // Lanes are summed in a fixed order, so every kernel gives the same bits for the same sums.
 inline double lane_sum(const A4& a) { return (a[0] + a[1]) + (a[2] + a[3]); }
-
 
 std::string fmt(double x) {
   char buf[32];
@@ -253,17 +251,16 @@ void Vis::eval_values(const Vec3* points, double* out, std::size_t n) const {
 double Vis::eval_value_gradient(const Vec3& p, Vec3& gradient) const {
   const Vec3 q = to_local(p);
   const std::size_t m = w_.size();
-  const auto sums = [this, q, m](auto width, std::size_t first) {
-    return gradient_sums<decltype(width)::value>(q, cx_.data(), cy_.data(), cz_.data(), w_.data(), m, first);
-  };
-  using Two = std::integral_constant<int, 2>;
   if (detail::HelperThread* helper = detail::lent_helper(); helper && m >= split_value_gradient_) {
+    const auto half = [this, q, m](std::size_t first) {
+      return gradient_sums<2>(q, cx_.data(), cy_.data(), cz_.data(), w_.data(), m, first);
+    };
     GradientSums<2> lo;
-    const GradientSums<2> hi = helper->run_beside([sums] { return sums(Two{}, 2); }, [&] { lo = sums(Two{}, 0); });
+    const GradientSums<2> hi = helper->run_beside([half] { return half(2); }, [&] { lo = half(0); });
     gradient = (3.0 * Vec3(lane_sum(lo.gx, hi.gx), lane_sum(lo.gy, hi.gy), lane_sum(lo.gz, hi.gz)) + a_) * inv_scale_;
     return lane_sum(lo.acc, hi.acc) + (a0_ + a_.dot(q));
   }
-  const GradientSums<4> s = sums(std::integral_constant<int, 4>{}, 0);
+  const GradientSums<4> s = gradient_sums<4>(q, cx_.data(), cy_.data(), cz_.data(), w_.data(), m, 0);
   gradient = (3.0 * Vec3(lane_sum(s.gx), lane_sum(s.gy), lane_sum(s.gz)) + a_) * inv_scale_;
   return lane_sum(s.acc) + (a0_ + a_.dot(q));
 }

@@ -79,7 +79,7 @@ class Vis : public Field {
   // centres run half their lanes there, with the same bits. Handing a half over and back costs
   // about a microsecond in a run (0.6 us back to back), and a Hessian costs about 3 ns a centre,
   // a value and gradient 1.2 ns. Tracking times at factor 3 on two threads, split against not:
-  // bunny VIS-800 6 % slower (its Hessians split), VIS-2000 8 % faster (Hessians; 6 % with its
+  // bunny VIS-800 4 % slower (its Hessians split), VIS-2000 8 % faster (Hessians; 6 % with its
   // values and gradients split too), Igea VIS-4004 23 % faster (both).
   static constexpr std::size_t kSplitGradientHessianCentres = 1024;
   static constexpr std::size_t kSplitValueGradientCentres = 3072;
