@@ -295,8 +295,11 @@ def unreached(bench):
 
 def time_to_accuracy(run):
     """Rows {field, family, target, benchmark, seconds, triangles, parameter, parameter_name, error
-    (the accuracy reached), vs_mt, vs_mc, missing} of the BM_SlowTimeToAccuracy/<field>/<family>/
-    <target>[/...] benchmarks; missing holds the message when the target was not reached."""
+    (the accuracy reached), vs_mt, vs_mc, overhead, budget, missing} of the
+    BM_SlowTimeToAccuracy/<field>/<family>/<target>[/...] benchmarks; missing holds the message
+    when the target was not reached. overhead and budget (adaptive entries) are the counters
+    overhead_us_per_vertex and budget_us_per_vertex: the run's time per vertex beyond its floor of
+    field calls and its seed grid, and what that may be for half of MT's and MC's time."""
     rows = []
     for b in run["benchmarks"]:
         if not b["name"].startswith(TTA_PREFIX):
@@ -307,7 +310,7 @@ def time_to_accuracy(run):
         field, family, target = parts[:3]
         row = {"field": field, "family": family, "target": target, "benchmark": key(b), "missing": b.get("error"),
                "seconds": None, "triangles": None, "parameter": None, "parameter_name": None, "error": None,
-               "vs_mt": None, "vs_mc": None}
+               "vs_mt": None, "vs_mc": None, "overhead": None, "budget": None}
         if not b.get("error"):
             row["seconds"] = summary(b)["median"]
             row["triangles"] = counter_median(b, "triangles")
@@ -316,6 +319,8 @@ def time_to_accuracy(run):
                     row["parameter"], row["parameter_name"] = counter_median(b, name), name
             row["error"] = counter_median(b, "phong_deg" if target == "phong" else "depth_relative")
             row["vs_mt"], row["vs_mc"] = counter_median(b, "vs_mt"), counter_median(b, "vs_mc")
+            row["overhead"] = counter_median(b, "overhead_us_per_vertex")
+            row["budget"] = counter_median(b, "budget_us_per_vertex")
         rows.append(row)
     return rows
 

@@ -61,7 +61,8 @@ def tta_benchmarks(depth_reached=False):
     name = "BM_SlowTimeToAccuracy/bunny_vis800/{}/{}/iterations:1/manual_time"
     ok = [bench("bench_time_to_accuracy", name.format("adaptive_factor", "phong"), [10 * x for x in NOISE], kind="real",
                 label="k=3", counters={"triangles": [9000] * 5, "factor": [3] * 5, "phong_deg": [0.45] * 5,
-                                       "depth_relative": [2e-4] * 5, "vs_mt": [0.5] * 5}),
+                                       "depth_relative": [2e-4] * 5, "vs_mt": [0.5] * 5,
+                                       "overhead_us_per_vertex": [6.5] * 5, "budget_us_per_vertex": [-0.75] * 5}),
           bench("bench_time_to_accuracy", name.format("mt", "phong"), [20 * x for x in NOISE], kind="real",
                 label="P4", counters={"triangles": [30000] * 5, "precision": [4] * 5, "phong_deg": [0.4] * 5,
                                       "depth_relative": [3e-4] * 5})]
@@ -176,6 +177,9 @@ class InRunRatios(unittest.TestCase):
         self.assertEqual(rows[("adaptive_factor", "phong")]["parameter_name"], "factor")
         self.assertAlmostEqual(rows[("adaptive_factor", "phong")]["error"], 0.45)
         self.assertAlmostEqual(rows[("adaptive_factor", "phong")]["vs_mt"], 0.5)
+        self.assertAlmostEqual(rows[("adaptive_factor", "phong")]["overhead"], 6.5)
+        self.assertAlmostEqual(rows[("adaptive_factor", "phong")]["budget"], -0.75)
+        self.assertIsNone(rows[("mt", "phong")]["budget"])
         self.assertIn("not reached", rows[("mt", "depth")]["missing"])
         self.assertIsNone(rows[("mt", "depth")]["seconds"])
         # Not a polygonizer benchmark of the triangles-per-second ratios.
@@ -286,6 +290,8 @@ class Dashboard(unittest.TestCase):
         self.assertIn("<h2>Time to accuracy</h2>", page)
         self.assertIn("bunny_vis800 time to accuracy", page)
         self.assertIn("missing: depth target not reached", page)
+        self.assertIn("<th>Budget (µs/vertex)</th>", page)
+        self.assertIn("<td>-0.75</td>", page)
         # A target not reached in both runs is a result, not a regression; the export leaves it out.
         self.assertIn("0 regression(s)", page)
         self.assertNotIn("BM_SlowTimeToAccuracy/bunny_vis800/mt/depth/iterations:1/manual_time",
