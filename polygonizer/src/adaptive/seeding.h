@@ -4,9 +4,10 @@
 //  1. Sign changes. F is sampled on the seed grid; every grid edge whose ends differ in sign is
 //     a place the surface crosses. Coverage, not proximity, decides whether it is meshed: a sign
 //     change that a mesh triangle crosses is meshed. One that no triangle crosses is meshed too
-//     when a triangle facing the same way lies within one of its own (longest) edges of the
-//     surface point there (the mesh is a chord of the surface and can pass a grid node on the
-//     other side of where the surface does), or when a walk along the surface in steps of
+//     when the nearest triangle facing the same way within one of its own (longest) edges of the
+//     surface point there is about as far from that point as from the surface (the mesh is a
+//     chord of the surface and can pass a grid node on the other side of where the surface does;
+//     a triangle of another sheet is farther from the point than from its own sheet), or when a walk along the surface in steps of
 //     min_edge reaches such a triangle (detail finer than min_edge, a needle's tip, that the
 //     mesh stops short of: `below_resolution`). Anything else starts a new component, from a
 //     point whose curvature min_edge resolves first (seeds in unresolvable detail wait).
