@@ -26,8 +26,9 @@ constexpr int kBisections = 16;
 // thinner than an edge.
 constexpr double kSheetReach = 1.0;
 // A triangle within reach (kSheetReach) stands for the surface point x only where x is about as
-// far from the triangle's nearest point y as y is from the surface (the first-order distance
-// |F| / |grad F| at y, plus x's own where x is not on the surface): a chord lies over its own
+// far from the triangle's nearest point y as the triangle is from the surface (the first-order
+// distance |F| / |grad F| at its centroid, see Seeder::deviation, plus x's own where x is not on
+// the surface), or where F keeps one sign from x to y (see meshed_at): a chord lies over its own
 // sheet, at most a few times its deviation from the surface point it stands for, while a triangle
 // of another sheet is farther from x than from its own. Within an edge alone, the coarse
 // triangles of a ball's sphere (edges 0.38) passed for 21 of 60 small voids (diameter 0.1)
@@ -543,7 +544,7 @@ class Seeder {
       if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
       const SurfacePoint x{landed[i], g.normalized()};
       cover_.update();
-      if (meshed_at(x) || walks_to_mesh(x)) continue;
+      if (walks_to_mesh(x)) continue;  // its first test is meshed_at(x)
       unsure_.push_back({{}, false, x});
       consider_seed(x);
     }
@@ -571,7 +572,7 @@ class Seeder {
     cover_.update();
     for (const Witness& w : unsure_) {
       if (w.has_segment && cover_.crosses(w.change.a, w.change.b)) continue;
-      if (w.at && (meshed_at(*w.at) || walks_to_mesh(*w.at))) continue;
+      if (w.at && walks_to_mesh(*w.at)) continue;  // its first test is meshed_at
       if (report_.uncovered++ == 0) report_.first_uncovered = w.at ? w.at->point : 0.5 * (w.change.a + w.change.b);
     }
   }
