@@ -68,10 +68,19 @@ std::unique_ptr<Field> build_expression(JsonReader& r) {
       params[name] = v.get<double>();
     }
   }
+  std::map<std::string, std::string> definitions;
+  if (r.has("define")) {
+    const auto& d = r.raw("define");
+    if (!d.is_object()) r.fail("define", "expected an object {\"name\": \"formula\", ...}");
+    for (const auto& [name, v] : d.items()) {
+      if (!v.is_string()) r.fail("define." + name, "expected a formula (a string)");
+      definitions[name] = v.get<std::string>();
+    }
+  }
   if (!r.has("bounds")) r.fail("bounds", "missing required key (an expression has no box of its own)");
   const Box bounds = r.box("bounds");
   try {
-    return std::make_unique<Expression>(formula, params, bounds);
+    return std::make_unique<Expression>(formula, params, bounds, definitions);
   } catch (const InvalidInputError& e) {
     r.fail("value", e.what());
   }

@@ -2,6 +2,9 @@
 #include <cdp/core/field.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <tuple>
 
 namespace cdp {
 
@@ -14,30 +17,198 @@ FieldPiece Field::eval_piece(const Vec3& p, const std::vector<std::uint8_t>& bra
   return piece;
 }
 
-std::vector<FieldPiece> Field::pieces_near_branches(
-    const std::vector<std::uint8_t>& taken, const std::vector<double>& distance, double radius,
-    const std::function<FieldPiece(const std::vector<std::uint8_t>&)>& piece) {
+void Field::BranchRecord::add(bool branch, double gap, const Vec3& slope) {
+  taken.push_back(branch ? 1 : 0);
+  const double s2 = slope.squaredNorm();
+  const double g = std::abs(gap), s = std::sqrt(s2);
+  distance.push_back(g == 0.0 ? 0.0 : s > 0.0 ? g / s : std::numeric_limits<double>::infinity());
+  const bool sloped = s2 > 0.0 && std::isfinite(s2);
+  seam_step.push_back(g == 0.0 || !sloped ? Vec3::Zero() : Vec3(-gap / s2 * slope));
+  seam_normal.push_back(sloped ? Vec3(slope / s) : Vec3::Zero());
+}
+
+std::pair<double, Vec3> Field::eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+  if (!branch.empty())
+    throw InvalidInputError(type_name() + ": the model has no branch points, a piece's branch must be empty");
+  Vec3 g;
+  const double v = eval_value_gradient(p, g);
+  return {v, g};
+}
+
+std::vector<FieldPiece> Field::eval_pieces(const Vec3& p, double radius) const {
+  BranchRecord record;
+  if (!has_branch_points() || !eval_branch_record(p, record) || record.taken.empty()) return {};
+  return pieces_near_branches(p, record, radius);
+}
+
+bool Field::has_pieces() const {
+  if (!has_branch_points()) return false;
+  const auto& kinds = branch_kinds();
+  return std::find(kinds.begin(), kinds.end(), BranchKind::Creased) != kinds.end();
+}
+
+// What one test at sample p tells of branch point b (Field::branch_kinds): Hidden where flipping
+// it changes nothing at p; else, where its switch meets the surface near p, Smooth or Creased
+// by the normals on its two sides there; Unknown where no such point is found.
+Field::BranchKind Field::switch_verdict(const Vec3& p, const BranchRecord& record, std::size_t b, double cell,
+                                        std::uint64_t& evaluations) const {
+  std::vector<std::uint8_t> branch = record.taken;
+  branch[b] ^= 1u;
+  const auto flipped = eval_first_order(p, branch);
+  ++evaluations;
+  if (flipped.first == record.value && flipped.second == record.gradient) return BranchKind::Hidden;
+  // From p onto the switch and along it onto the surface: minimum-norm Newton steps on the two
+  // equations, the switch's signed distance (from a record at each point) and F with branch 0.
+  // Where the switch runs (nearly) parallel to the surface it does not meet it there: an onion's
+  // abs(d) - t switches at d = 0, midway between its shells.
+  branch[b] = 0;
+  const double tolerance = kBranchOnSurface * cell;
+  Vec3 q = p;
+  BranchRecord at = record;
+  for (int it = 0;; ++it) {
+    const Vec3& normal = at.seam_normal[b];
+    const double gap = -at.seam_step[b].dot(normal);
+    const auto [v0, g0] = eval_first_order(q, branch);
+    ++evaluations;
+    const double n0 = g0.norm();
+    if (!g0.allFinite() || !(n0 > 0.0) || !(normal.squaredNorm() > 0.0)) return BranchKind::Unknown;
+    if (std::abs(v0) <= tolerance * n0 && std::abs(gap) <= tolerance) {
+      branch[b] = 1;
+      const Vec3 g1 = eval_first_order(q, branch).second;
+      ++evaluations;
+      const double n1 = g1.norm();
+      // A kink of the field off the surface does not tell (a rounded box's max(|z| - c, 0) inside
+      // its flat faces, where the gradient is not finite either).
+      if (!g1.allFinite() || !(n1 > 0.0)) return BranchKind::Unknown;
+      return g0.dot(g1) > kSamePieceCosine * n0 * n1 ? BranchKind::Smooth : BranchKind::Creased;
+    }
+    if (it == kBranchSurfaceSteps) return BranchKind::Unknown;
+    const Vec3 u = g0 / n0;
+    const double c = normal.dot(u), det = 1 - c * c;  // the Gram matrix of the unit rows
+    if (!(det > kBranchSwitchAcross * kBranchSwitchAcross)) return BranchKind::Unknown;
+    // J = [normal; u], rhs [gap; v0 / n0]: step = -J^T (J J^T)^-1 rhs.
+    const double r0 = gap, r1 = v0 / n0;
+    const double l0 = (r0 - c * r1) / det, l1 = (r1 - c * r0) / det;
+    Vec3 step = -(l0 * normal + l1 * u);
+    if (step.norm() > cell) step *= cell / step.norm();
+    q += step;
+    at = BranchRecord{};
+    ++evaluations;
+    if (!eval_branch_record(q, at) || at.taken.size() != record.taken.size()) return BranchKind::Unknown;
+  }
+}
+
+const std::vector<Field::BranchKind>& Field::branch_kinds() const {
+  std::call_once(kinds_once_, [&] {
+    if (!has_branch_points()) return;
+    const Box& box = bounds();
+    const Vec3 cell = box.size() / kBranchSamples;
+    const double reach = 0.5 * cell.norm();
+    std::vector<BranchKind> kinds;
+    std::vector<int> smooth_tests;
+    std::uint64_t evaluations = 0;
+    for (int k = 0; k < kBranchSamples; ++k)
+      for (int j = 0; j < kBranchSamples; ++j)
+        for (int i = 0; i < kBranchSamples; ++i) {
+          const Vec3 p = box.min + Vec3((i + 0.5) * cell.x(), (j + 0.5) * cell.y(), (k + 0.5) * cell.z());
+          BranchRecord record;
+          ++evaluations;
+          if (!eval_branch_record(p, record)) continue;
+          if (kinds.empty()) {
+            kinds.assign(record.taken.size(), BranchKind::Unknown);
+            smooth_tests.assign(record.taken.size(), 0);
+          }
+          for (std::size_t b = 0; b < std::min(kinds.size(), record.taken.size()); ++b) {
+            if (!(record.distance[b] <= reach) || kinds[b] == BranchKind::Creased || smooth_tests[b] >= kBranchTests)
+              continue;
+            const BranchKind verdict = switch_verdict(p, record, b, cell.minCoeff(), evaluations);
+            if (verdict == BranchKind::Hidden && kinds[b] == BranchKind::Unknown) kinds[b] = BranchKind::Hidden;
+            if (verdict == BranchKind::Smooth) {
+              kinds[b] = BranchKind::Smooth;
+              ++smooth_tests[b];
+            }
+            if (verdict == BranchKind::Creased) kinds[b] = BranchKind::Creased;
+          }
+        }
+    n_value_gradient_.fetch_add(evaluations, std::memory_order_relaxed);
+    // Free in every piece: the Smooth branch points, and beside them the Hidden ones, which may
+    // show where the Smooth ones let them (a rounded box's abs(z) under max(|z| - c, 0)): a
+    // piece fixed to z > 0 there would go on flat where the box rounds below. In a field without
+    // Smooth branch points a Hidden one stays hidden, and is split as it always was.
+    const bool any_smooth = std::find(kinds.begin(), kinds.end(), BranchKind::Smooth) != kinds.end();
+    free_.assign(kinds.size(), false);
+    for (std::size_t b = 0; b < kinds.size(); ++b)
+      free_[b] = kinds[b] == BranchKind::Smooth || (any_smooth && kinds[b] == BranchKind::Hidden);
+    kinds_ = std::move(kinds);
+  });
+  return kinds_;
+}
+
+std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchRecord& record, double radius) const {
+  const std::vector<std::uint8_t>& taken = record.taken;
+  const std::vector<double>& distance = record.distance;
+  branch_kinds();
+  const auto is_free = [&](std::size_t k) { return k < free_.size() && free_[k]; };
   std::vector<int> split;
   for (std::size_t k = 0; k < taken.size(); ++k)
-    if (distance[k] <= radius) split.push_back(static_cast<int>(k));
+    if (distance[k] <= radius && !is_free(k)) split.push_back(static_cast<int>(k));
   // The nearest switches (ties: the earlier branch point), then back in program order.
   std::stable_sort(split.begin(), split.end(), [&](int a, int b) {
     return distance[static_cast<std::size_t>(a)] < distance[static_cast<std::size_t>(b)];
   });
   if (split.size() > static_cast<std::size_t>(kMaxSplitBranchPoints)) split.resize(kMaxSplitBranchPoints);
   std::sort(split.begin(), split.end());
-  std::vector<FieldPiece> out;
-  for (std::uint32_t mask = 0; mask < (1u << split.size()); ++mask) {
-    std::vector<std::uint8_t> branch = taken;
+  std::vector<std::uint8_t> base = taken;
+  bool any_free = false;
+  for (std::size_t k = 0; k < base.size(); ++k)
+    if (is_free(k)) {
+      base[k] = kFreeBranch;
+      any_free = true;
+    }
+  // Beside a free branch point, a fixed one may matter where the piece is evaluated away from p
+  // even though it does not at p: a rounded box's abs(x) under max(abs(x) - a, 0), which the
+  // max hides near x = 0 and shows past |x| = a. So where the field has free branch points, a
+  // choice that changes nothing at p is free too: the piece is then the field's own continuation
+  // there. (Without free branch points a hidden choice stays hidden, and the pieces are as
+  // they always were.)
+  if (any_free) {
+    std::uint64_t evaluations = 0;
+    for (std::size_t k = 0; k < base.size(); ++k) {
+      if (base[k] == kFreeBranch || std::binary_search(split.begin(), split.end(), static_cast<int>(k))) continue;
+      base[k] ^= 1u;
+      const auto [v, g] = eval_first_order(p, base);
+      ++evaluations;
+      base[k] = v == record.value && g == record.gradient ? kFreeBranch : taken[k];
+    }
+    n_value_gradient_.fetch_add(evaluations, std::memory_order_relaxed);
+  }
+  const std::size_t combinations = std::size_t{1} << split.size();
+  std::vector<FieldPiece> all;
+  std::vector<std::size_t> kept;
+  all.reserve(combinations);
+  for (std::size_t mask = 0; mask < combinations; ++mask) {
+    std::vector<std::uint8_t> branch = base;
     for (std::size_t j = 0; j < split.size(); ++j)
       if (mask >> j & 1u) branch[static_cast<std::size_t>(split[j])] ^= 1u;
-    FieldPiece next = piece(branch);
+    all.push_back(eval_piece(p, branch));
     // Different branches often give the same function (a choice inside an argument that is not
     // taken): the same numbers at p, bit for bit, are one piece.
-    const bool seen = std::any_of(out.begin(), out.end(), [&](const FieldPiece& q) {
-      return q.value == next.value && q.gradient == next.gradient && q.hessian == next.hessian;
-    });
-    if (!seen) out.push_back(std::move(next));
+    const FieldPiece& next = all.back();
+    const auto same = [&](std::size_t i) {
+      return all[i].value == next.value && all[i].gradient == next.gradient && all[i].hessian == next.hessian;
+    };
+    if (std::none_of(kept.begin(), kept.end(), same)) kept.push_back(mask);
+  }
+  std::vector<FieldPiece> out;
+  for (const std::size_t mask : kept) {
+    FieldPiece piece = all[mask];
+    if (any_free)  // likewise a split choice this piece does not depend on at p
+      for (std::size_t j = 0; j < split.size(); ++j) {
+        const FieldPiece& flipped = all[mask ^ (std::size_t{1} << j)];
+        if (flipped.value == piece.value && flipped.gradient == piece.gradient && flipped.hessian == piece.hessian)
+          piece.branch[static_cast<std::size_t>(split[j])] = kFreeBranch;
+      }
+    out.push_back(std::move(piece));
   }
   return out;
 }

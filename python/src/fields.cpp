@@ -255,13 +255,15 @@ void bind_fields(py::module_& m) {
       "strength]) tuples; kernel \"wyvill\" (default) or \"blinn\".");
   m.def(
       "expression",
-      [](py::object formula, py::object bounds, py::object params) {
-        return field_from_dict(spec("expression", {{"value", formula}, {"bounds", bounds}, {"params", params}}),
-                               "cdp.expression");
+      [](py::object formula, py::object bounds, py::object params, py::object define) {
+        return field_from_dict(
+            spec("expression", {{"value", formula}, {"bounds", bounds}, {"params", params}, {"define", define}}),
+            "cdp.expression");
       },
-      py::arg("formula"), py::arg("bounds"), py::arg("params") = py::none(),
+      py::arg("formula"), py::arg("bounds"), py::arg("params") = py::none(), py::arg("define") = py::none(),
       "{\"type\": \"expression\"}: a formula in x, y, z with exact derivatives (messages call the formula \"value\", "
-      "its JSON key).");
+      "its JSON key); params names numbers, define names sub-expressions ({\"r\": \"sqrt(x^2+y^2)\"}) the formula "
+      "and each other may use.");
 
   m.def("callable_field", &callable_field, py::arg("f"), py::arg("bounds"), py::arg("gradient") = py::none(),
         py::arg("hessian") = py::none(), py::kw_only(), py::arg("lipschitz") = py::none(),

@@ -90,7 +90,9 @@ TEST(FieldPieces, DerivativesOfAPieceMatchFiniteDifferences) {
 
 TEST(FieldPieces, OnlyModelsWithBranchPointsHavePieces) {
   EXPECT_TRUE(expression(kCube).has_pieces());
-  EXPECT_TRUE(expression("abs(x)-1").has_pieces());
+  EXPECT_TRUE(expression("abs(x)+y^2+z^2-1").has_pieces());  // a lens: its rim is a crease
+  // Two planes: abs switches at x = 0, away from the surface, so no crease (Field::branch_kinds).
+  EXPECT_FALSE(expression("abs(x)-1").has_pieces());
   EXPECT_FALSE(expression("x^2+y^2+z^2-1").has_pieces());
   EXPECT_FALSE(Sphere(Vec3::Zero(), 1.0).has_pieces());
 }
@@ -103,6 +105,8 @@ TEST(FieldPieces, SmoothModelsReportNoPiecesAndCountTheirEvaluations) {
   EXPECT_DOUBLE_EQ(whole.value, sphere.value(Vec3(2, 0, 0)));
   EXPECT_THROW(sphere.piece(Vec3::Zero(), {1}), InvalidInputError);
   const Expression cube = expression(kCube);
+  // The branch points' kinds are found once, with evaluations of their own (tested below).
+  cube.branch_kinds();
   cube.reset_counts();
   const auto corner = cube.pieces(Vec3(1, 1, 1), 0.01);
   EXPECT_EQ(corner.size(), 3u);
@@ -303,6 +307,83 @@ TEST(CreaseCurves, TheGyroidAndBarthBallsRimsAreAllFoundOnce) {
       }
     }
   }
+}
+
+// The fields SDF code writes: rounded primitives and smooth unions are C1 where their min, max
+// and clamps switch, so they have no crease; a sharp difference on top of them still has.
+const char* kRoundedBox = "sqrt(max(abs(x)-0.6,0)^2+max(abs(y)-0.4,0)^2+max(abs(z)-0.3,0)^2)-0.15";
+// Inigo Quilez's polynomial smooth minimum of the rounded box a and a sphere b, radius 0.2.
+Expression smooth_union(const std::string& outer = "u") {
+  return Expression(outer, {}, Box{Vec3::Constant(-1.2), Vec3::Constant(1.2)},
+                    {{"a", kRoundedBox},
+                     {"b", "sqrt((x-0.5)^2+(y-0.3)^2+z^2)-0.45"},
+                     {"h", "clamp(0.5+0.5*(b-a)/0.2,0,1)"},
+                     {"u", "b + h*(a-b) - 0.2*h*(1-h)"}});
+}
+
+using Kind = Field::BranchKind;
+
+TEST(BranchKinds, RoundedBoxesAndSmoothUnionsHaveNoCrease) {
+  // Branch points in program order: abs(x), max, abs(y), max, abs(z), max. The abs switch where
+  // the max hides them (|x| < 0.6 at x = 0).
+  const Expression box(kRoundedBox, {}, Box{Vec3::Constant(-1.1), Vec3::Constant(1.1)});
+  EXPECT_EQ(box.branch_kinds(),
+            (std::vector<Kind>{Kind::Hidden, Kind::Smooth, Kind::Hidden, Kind::Smooth, Kind::Hidden, Kind::Smooth}));
+  EXPECT_FALSE(box.has_pieces());
+  // On the rounded edge, right where max(|x| - 0.6, 0) switches: one piece, free there.
+  const Vec3 on_edge(0.6, 0.4 + 0.15, 0.1);
+  const auto edge = box.pieces(on_edge, 0.1);
+  ASSERT_EQ(edge.size(), 1u);
+  EXPECT_EQ(edge[0].branch, (std::vector<std::uint8_t>(6, Field::kFreeBranch)));
+  // A free piece is the field itself wherever it is evaluated.
+  for (const Vec3& q : {Vec3(-0.7, 0.5, 0.2), Vec3(0.1, -0.2, 0.44), Vec3(0.65, 0.45, 0.35)})
+    EXPECT_EQ(box.piece(q, edge[0].branch).value, box.value(q));
+  EXPECT_TRUE(trace_creases(box).curves.empty());
+
+  const Expression blend = smooth_union();
+  for (const Kind k : blend.branch_kinds()) EXPECT_NE(k, Kind::Creased);
+  EXPECT_FALSE(blend.has_pieces());
+}
+
+TEST(BranchKinds, SharpBooleansStayCreasedBesideSmoothOnes) {
+  // The cube (abs(x), abs(y), abs(z), the inner max, the outer one): its max are creases, and
+  // classifying them is counted, once.
+  const Expression cube = expression(kCube);
+  cube.reset_counts();
+  EXPECT_TRUE(cube.has_pieces());
+  const std::uint64_t classified = cube.counts().value_gradient;
+  EXPECT_GT(classified, 0u);
+  EXPECT_EQ(cube.branch_kinds()[3], Kind::Creased);
+  EXPECT_EQ(cube.branch_kinds()[4], Kind::Creased);
+  EXPECT_EQ(cube.counts().value_gradient, classified);
+  // The smooth union minus a cylinder along z: the last max is the only crease, two rims.
+  const Expression drilled = smooth_union("max(u, 0.2-sqrt(x^2+y^2))");
+  const auto& kinds = drilled.branch_kinds();
+  ASSERT_EQ(kinds.size(), 9u);
+  EXPECT_EQ(kinds.back(), Kind::Creased);
+  for (std::size_t k = 0; k + 1 < kinds.size(); ++k) EXPECT_NE(kinds[k], Kind::Creased) << k;
+  EXPECT_TRUE(drilled.has_pieces());
+  const CreaseTracingResult traced = trace_creases(drilled);
+  ASSERT_EQ(traced.curves.size(), 2u);
+  for (const CreaseCurve& c : traced.curves) {
+    EXPECT_TRUE(c.closed);
+    for (const Vec3& p : c.points) {
+      EXPECT_NEAR(std::hypot(p.x(), p.y()), 0.2, 1e-8);
+      EXPECT_NEAR(drilled.value(p), 0, 1e-8);
+    }
+    // The body's piece is free at every branch point but the cylinder's: the field itself where
+    // the cylinder does not cut, on both rims and far from them.
+    const std::vector<std::uint8_t>& body = drilled.piece(c.points[0], c.pieces[0]).gradient.z() != 0 ? c.pieces[0] : c.pieces[1];
+    for (const Vec3& q : {Vec3(0.7, 0.5, 0.3), Vec3(-0.7, -0.5, -0.3), Vec3(0.5, 0.3, 0.44)})
+      EXPECT_EQ(drilled.piece(q, body).value, drilled.value(q)) << q.transpose();
+  }
+}
+
+TEST(BranchKinds, ACubesPiecesAreAsTheyWere) {
+  // Without smooth branch points nothing is free: the pieces keep every branch fixed.
+  const Expression cube = expression(kCube);
+  for (const FieldPiece& q : cube.pieces(Vec3(0.98, -0.99, 1.0), 0.05))
+    for (const std::uint8_t b : q.branch) EXPECT_NE(b, Field::kFreeBranch);
 }
 
 TEST(CreaseCurves, SmoothFieldsHaveNone) {

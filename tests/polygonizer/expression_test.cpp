@@ -45,13 +45,81 @@ TEST(Expression, KnowsParametersPiAndFunctions) {
   EXPECT_DOUBLE_EQ(eval("abs(-3) + min(2, 5) + max(2, 5) + pow(2, 10)"), 3 + 2 + 5 + 1024);
 }
 
+// The functions SDF code uses: clamp, atan2, steps, hypot, min and max of many arguments, **.
+TEST(Expression, KnowsTheFunctionsDistanceFieldsUse) {
+  EXPECT_DOUBLE_EQ(eval("clamp(x, 0, 1) + clamp(y, -1, 1) + clamp(z, 0, 1)"), 0.5 - 1 + 1);
+  EXPECT_DOUBLE_EQ(eval("atan2(1, -1)"), 0.75 * std::numbers::pi);
+  EXPECT_DOUBLE_EQ(eval("atan(1)"), 0.25 * std::numbers::pi);
+  EXPECT_DOUBLE_EQ(eval("floor(y) + round(x) + round(-2.5)"), -2 + 1 - 3);  // round: half away from zero
+  EXPECT_DOUBLE_EQ(eval("mod(7, 3) + mod(-1, 3) + mod(1, -3)"), 1 + 2 - 2);  // the sign of the divisor
+  EXPECT_DOUBLE_EQ(eval("hypot(3, 4) + hypot(1, 2, 2)"), 5 + 3);
+  EXPECT_DOUBLE_EQ(eval("min(3, x, 2, z) + max(1, y, 7, -4)"), 0.5 + 7);
+  EXPECT_DOUBLE_EQ(eval("2**3**2 + -2**2 + 2 * 3**2"), 512 - 4 + 18);  // ** is ^
+}
+
+// Each new function's gradient and Hessian against central differences of the values.
+TEST(Expression, NewFunctionsHaveExactDerivatives) {
+  const Box box{{-2, -2, -2}, {2, 2, 2}};
+  for (const char* f : {"atan2(y - 0.3, x + 0.2) * z", "atan(x * y) + z", "hypot(x, 2 * y, z + 1)",
+                        "mod(x * y, 0.7) + z", "clamp(x * y, -0.5, 0.5) + z^2", "floor(3 * x) + y * z"}) {
+    SCOPED_TRACE(f);
+    const Expression e(f, {}, box);
+    const Vec3 p(0.37, 0.61, -0.45);
+    Vec3 g;
+    Mat3 H;
+    e.gradient_hessian(p, g, H);
+    const double h = 1e-5;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 d = h * Vec3::Unit(i);
+      EXPECT_NEAR(g[i], (e.value(p + d) - e.value(p - d)) / (2 * h), 1e-7);
+      const Vec3 dg = (e.gradient(p + d) - e.gradient(p - d)) / (2 * h);
+      for (int j = 0; j < 3; ++j) EXPECT_NEAR(H(j, i), dg[j], 1e-6);
+    }
+  }
+}
+
+// Named sub-expressions: used by name in any order, each evaluated once, errors named.
+TEST(Expression, DefinitionsNameSubExpressions) {
+  const Box box{{-1, -1, -1}, {1, 1, 1}};
+  const Expression e("min(a, b) - k", {{"r", 0.5}}, box,
+                     {{"b", "sqrt((x - 1)^2 + y^2 + z^2) - r"}, {"a", "sqrt(x^2 + y^2 + z^2) - r"}, {"k", "r / 5"}});
+  const Vec3 p(0.2, 0.1, -0.3);
+  EXPECT_DOUBLE_EQ(e.value(p), std::min(p.norm() - 0.5, (p - Vec3(1, 0, 0)).norm() - 0.5) - 0.1);
+  const Expression chained("c", {}, box, {{"c", "b + 1"}, {"b", "a * 2"}, {"a", "x"}});
+  EXPECT_DOUBLE_EQ(chained.value(Vec3(3, 0, 0)), 7);
+  // Derivatives pass through the slots.
+  Vec3 g;
+  Mat3 H;
+  const Expression squared("u * u", {}, box, {{"u", "x * y"}});
+  squared.gradient_hessian(Vec3(2, 3, 0), g, H);
+  EXPECT_DOUBLE_EQ(g.x(), 2 * 6 * 3);
+  EXPECT_DOUBLE_EQ(H(0, 1), 4 * 2 * 3);
+  // A definition nobody uses adds no branch point.
+  EXPECT_FALSE(Expression("x", {}, box, {{"unused", "abs(y)"}}).has_pieces());
+  const auto error_with = [&](const std::string& f, const std::map<std::string, std::string>& d,
+                              const std::map<std::string, double>& params = {}) {
+    try {
+      Expression bad(f, params, box, d);
+    } catch (const InvalidInputError& err) {
+      return std::string(err.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error_with("a", {{"a", "b"}, {"b", "a + 1"}}), "expression: in definition 'b': definition 'a' refers to itself at position 1");
+  EXPECT_EQ(error_with("a", {{"a", "x +"}}), "expression: in definition 'a': unexpected end of formula at position 4");
+  EXPECT_EQ(error_with("a", {{"x", "1"}}), "expression: definition 'x' shadows a built-in name");
+  EXPECT_EQ(error_with("a", {{"a", "1"}}, {{"a", 2}}), "expression: 'a' is both a parameter and a definition");
+  EXPECT_EQ(error_with("a", {{"2a", "1"}}), "expression: definition name '2a' is not a name (letters, digits, _)");
+}
+
 TEST(Expression, SyntaxErrorsNameThePosition) {
   EXPECT_EQ(error_of("x + * y"), "expression: unexpected '*' at position 5");
   EXPECT_EQ(error_of("x + (y"), "expression: expected ')', found the end at position 7");
   EXPECT_EQ(error_of("x + y)"), "expression: unexpected ')' at position 6");
   EXPECT_EQ(error_of("x + w"), "expression: unknown name 'w' at position 5");
   EXPECT_EQ(error_of("x + foo(y)"), "expression: unknown function 'foo' at position 5");
-  EXPECT_EQ(error_of("min(x)"), "expression: min takes 2 argument(s), found 1 at position 6");
+  EXPECT_EQ(error_of("min(x)"), "expression: min takes two or more arguments, found 1 at position 6");
+  EXPECT_EQ(error_of("clamp(x, 0)"), "expression: clamp takes 3 arguments, found 2 at position 11");
   EXPECT_EQ(error_of(""), "expression: unexpected end of formula at position 1");
   EXPECT_EQ(error_of("x # y"), "expression: unexpected '#' at position 3");
   EXPECT_EQ(error_of("x", {{"pi", 3}}), "expression: parameter 'pi' shadows a built-in name");

@@ -335,7 +335,6 @@ bool remeshing_allowed(const AdaptiveOptions& o) {
 // start, the crease-aware patches included (polygonize_adaptive_once's last run in tolerance mode).
 PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases,
                            std::pair<double, Vec3>& bend, bool look_ahead = false, double max_turn = 0) {
-  const adaptive::Settings s = resolve(field, options);
   const auto start = std::chrono::steady_clock::now();
   const EvaluationCounts before = field.counts();
 
@@ -346,6 +345,9 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
     if (options.phase) options.phase(text);
   };
   enter("seed_grid", "sampling the seed grid");
+  // Within the seed grid's phase: resolving asks has_pieces, whose first call samples a grid of
+  // its own to classify the field's branch points (Field::branch_kinds, once per field).
+  const adaptive::Settings s = resolve(field, options);
   SeedOptions seed_options;
   seed_options.resolution = options.seed_resolution;
   seed_options.threads = options.threads;

@@ -16,7 +16,11 @@ namespace cdp {
 
 namespace detail {
 
-enum class Op { Const, X, Y, Z, Add, Sub, Mul, Div, Neg, PowConst, Pow, Sqrt, Exp, Log, Sin, Cos, Tan, Abs, Min, Max };
+enum class Op {
+  Const, X, Y, Z, Add, Sub, Mul, Div, Neg, PowConst, Pow, Sqrt, Exp, Log, Sin, Cos, Tan, Atan, Atan2, Floor, Round,
+  Abs, Min, Max,
+  Store, Load  // a named sub-expression: pop it into slot `constant`; push slot `constant`
+};
 
 struct Instruction {
   Op op;
@@ -31,6 +35,9 @@ constexpr int kMaxStack = 64;
 // far beyond any formula a person writes and leave a wide margin for sanitizer builds' frames.
 constexpr int kMaxNesting = 256;
 constexpr int kMaxHeight = 10000;
+// Named sub-expressions ("define"), each evaluated once per run into a slot of a fixed array:
+// far more than a model written by hand names.
+constexpr int kMaxDefinitions = 256;
 
 // What a run does at the branch points (min, max, abs, numbered in program order): nothing
 // beyond taking the branch (Free); also report at each the branch taken and how far the surface
@@ -38,14 +45,14 @@ constexpr int kMaxHeight = 10000;
 enum class Branching { Free, Record, Forced };
 
 struct BranchLog {
-  const std::uint8_t* forced = nullptr;  // Forced: the branch to take at each branch point
-  std::uint8_t* taken = nullptr;         // Record: the branch taken
-  double* distance = nullptr;            // Record: |a - b| / |grad (a - b)| (|u| / |grad u| for abs)
+  const std::uint8_t* forced = nullptr;      // Forced: the branch to take at each branch point
+  Field::BranchRecord* record = nullptr;     // Record: the branch taken and where it switches
 };
 
 struct ExpressionProgram {
   std::vector<Instruction> code;
   int branch_points = 0;
+  int slots = 0;  // named sub-expressions kept
 
   template <class T>
   T run(const T& x, const T& y, const T& z) const {
@@ -55,21 +62,21 @@ struct ExpressionProgram {
   // Branch 0 is the first argument of min and max and +u for abs; 1 the second argument and -u.
   template <class T, Branching mode>
   T run(const T& x, const T& y, const T& z, [[maybe_unused]] const BranchLog& record) const {
-    using std::abs, std::cos, std::exp, std::log, std::max, std::min, std::pow, std::sin, std::sqrt, std::tan;
+    using std::abs, std::atan, std::atan2, std::cos, std::exp, std::floor, std::log, std::max, std::min, std::pow,
+        std::round, std::sin, std::sqrt, std::tan;
     // Raw storage: constructing kMaxStack jets per call would cost more than the formula.
     alignas(T) unsigned char storage[sizeof(T) * kMaxStack];
     T* stack = reinterpret_cast<T*>(storage);
+    alignas(T) unsigned char slot_storage[sizeof(T) * kMaxDefinitions];
+    T* slot = reinterpret_cast<T*>(slot_storage);
     int top = -1;
     [[maybe_unused]] int branch_point = 0;
     // At a branch point: the branch to take, given that `natural` is the one the values choose.
     [[maybe_unused]] const auto choose = [&](bool natural, const T& a, const T& b) {
       const int k = branch_point++;
-      if constexpr (mode == Branching::Forced) return record.forced[k] != 0;
-      if constexpr (mode == Branching::Record) {
-        record.taken[k] = natural ? 1 : 0;
-        const double gap = std::abs(a.v - b.v), slope = (a.g - b.g).norm();
-        record.distance[k] = gap == 0.0 ? 0.0 : slope > 0.0 ? gap / slope : std::numeric_limits<double>::infinity();
-      }
+      if constexpr (mode == Branching::Forced)
+        return record.forced[k] == Field::kFreeBranch ? natural : record.forced[k] != 0;
+      if constexpr (mode == Branching::Record) record.record->add(natural, a.v - b.v, a.g - b.g);
       return natural;
     };
     for (const Instruction& in : code) {
@@ -101,6 +108,12 @@ struct ExpressionProgram {
         case Op::Sin: stack[top] = sin(stack[top]); break;
         case Op::Cos: stack[top] = cos(stack[top]); break;
         case Op::Tan: stack[top] = tan(stack[top]); break;
+        case Op::Atan: stack[top] = atan(stack[top]); break;
+        case Op::Atan2: --top; stack[top] = atan2(stack[top], stack[top + 1]); break;
+        case Op::Floor: stack[top] = floor(stack[top]); break;
+        case Op::Round: stack[top] = round(stack[top]); break;
+        case Op::Store: new (&slot[static_cast<int>(in.constant)]) T(stack[top--]); break;
+        case Op::Load: new (&stack[++top]) T(slot[static_cast<int>(in.constant)]); break;
         case Op::Abs:
           if constexpr (mode == Branching::Free) stack[top] = abs(stack[top]);
           else if (choose(stack[top].v < 0, stack[top], -stack[top])) stack[top] = -stack[top];
@@ -121,15 +134,32 @@ struct Node {
   bool is_constant() const { return op == Op::Const; }
 };
 
+// The named sub-expressions of a formula: parsed when first used (so they may refer to each other
+// in any order), their code emitted once, ahead of the formula's, into a slot each.
+struct Definitions {
+  struct Entry {
+    const std::string* text;
+    enum class State { Unused, Parsing, Done } state = State::Unused;
+    double constant = 0;  // a definition without x, y, z is folded to its value
+    bool is_constant = false;
+    int slot = -1;
+  };
+  std::map<std::string, Entry> entries;
+  std::vector<Instruction> code;  // the definitions used, each followed by its Store
+  int slots = 0;
+};
+
 // Recursive-descent parser:
 //   expr  := term (('+' | '-') term)*
 //   term  := unary (('*' | '/') unary)*
 //   unary := ('-' | '+') unary | power
-//   power := primary ('^' unary)?          right-associative, binds tighter than unary minus
+//   power := primary (('^' | '**') unary)?   right-associative, binds tighter than unary minus
 //   primary := number | name | name '(' expr (',' expr)* ')' | '(' expr ')'
 class Parser {
  public:
-  Parser(const std::string& text, const std::map<std::string, double>& params) : s_(text), params_(params) {}
+  Parser(const std::string& text, const std::map<std::string, double>& params, Definitions& definitions,
+         std::string where = "")
+      : s_(text), params_(params), definitions_(definitions), where_(std::move(where)) {}
 
   Node parse() {
     Node n = expr();
@@ -140,7 +170,7 @@ class Parser {
 
  private:
   [[noreturn]] void error(const std::string& what) const {
-    throw InvalidInputError("expression: " + what + " at position " + std::to_string(pos_ + 1));
+    throw InvalidInputError("expression: " + where_ + what + " at position " + std::to_string(pos_ + 1));
   }
   void skip_space() {
     while (pos_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[pos_]))) ++pos_;
@@ -229,6 +259,11 @@ class Parser {
   }
   Node power() {
     Node base = primary();
+    skip_space();
+    if (s_.compare(pos_, 2, "**") == 0) {
+      pos_ += 2;
+      return binary(Op::Pow, std::move(base), unary());
+    }
     if (accept('^')) return binary(Op::Pow, std::move(base), unary());
     return base;
   }
@@ -255,6 +290,7 @@ class Parser {
       if (name == "z") return Node{Op::Z, 0, {}};
       if (name == "pi") return Node{Op::Const, std::numbers::pi, {}};
       if (auto it = params_.find(name); it != params_.end()) return Node{Op::Const, it->second, {}};
+      if (auto it = definitions_.entries.find(name); it != definitions_.entries.end()) return use(name, it->second, start);
       pos_ = start;
       error("unknown name '" + name + "'");
     }
@@ -265,11 +301,42 @@ class Parser {
     }
     error(std::string("unexpected '") + c + "'");
   }
+  // A named sub-expression: its code emitted the first time, a load of its slot each time.
+  Node use(const std::string& name, Definitions::Entry& e, std::size_t name_pos) {
+    using State = Definitions::Entry::State;
+    if (e.state == State::Parsing) {
+      pos_ = name_pos;
+      error("definition '" + name + "' refers to itself");
+    }
+    if (e.state == State::Unused) {
+      e.state = State::Parsing;
+      Parser inner(*e.text, params_, definitions_, "in definition '" + name + "': ");
+      inner.nesting_ = nesting_;
+      Node n = inner.parse();
+      if (n.is_constant()) {
+        e.is_constant = true;
+        e.constant = n.constant;
+      } else {
+        if (definitions_.slots >= kMaxDefinitions)
+          error("more than " + std::to_string(kMaxDefinitions) + " definitions in use");
+        emit(n, definitions_.code);
+        e.slot = definitions_.slots++;
+        definitions_.code.push_back({Op::Store, static_cast<double>(e.slot)});
+      }
+      e.state = State::Done;
+    }
+    if (e.is_constant) return Node{Op::Const, e.constant, {}};
+    return Node{Op::Load, static_cast<double>(e.slot), {}};
+  }
+
   Node call(const std::string& name, std::size_t name_pos) {
+    // Arity -1: two or more arguments (min, max, hypot fold them pairwise from the left).
     static const std::map<std::string, std::pair<Op, int>> functions = {
-        {"sqrt", {Op::Sqrt, 1}}, {"exp", {Op::Exp, 1}}, {"log", {Op::Log, 1}}, {"sin", {Op::Sin, 1}},
-        {"cos", {Op::Cos, 1}},   {"tan", {Op::Tan, 1}}, {"abs", {Op::Abs, 1}}, {"min", {Op::Min, 2}},
-        {"max", {Op::Max, 2}},   {"pow", {Op::Pow, 2}}};
+        {"sqrt", {Op::Sqrt, 1}},   {"exp", {Op::Exp, 1}},       {"log", {Op::Log, 1}},     {"sin", {Op::Sin, 1}},
+        {"cos", {Op::Cos, 1}},     {"tan", {Op::Tan, 1}},       {"atan", {Op::Atan, 1}},   {"floor", {Op::Floor, 1}},
+        {"round", {Op::Round, 1}}, {"abs", {Op::Abs, 1}},       {"min", {Op::Min, -1}},    {"max", {Op::Max, -1}},
+        {"pow", {Op::Pow, 2}},     {"atan2", {Op::Atan2, 2}},   {"mod", {Op::Floor, 2}},   {"hypot", {Op::Sqrt, -1}},
+        {"clamp", {Op::Min, 3}}};
     auto it = functions.find(name);
     if (it == functions.end()) {
       pos_ = name_pos;
@@ -281,12 +348,36 @@ class Parser {
     while (accept(',')) args.push_back(expr());
     const std::size_t close = pos_;
     expect(')');
-    if (static_cast<int>(args.size()) != it->second.second) {
+    const int arity = it->second.second;
+    if (arity > 0 ? static_cast<int>(args.size()) != arity : args.size() < 2) {
       pos_ = close;
-      error(name + " takes " + std::to_string(it->second.second) + " argument(s), found " +
-            std::to_string(args.size()));
+      error(name + " takes " + (arity > 0 ? std::to_string(arity) : std::string("two or more")) +
+            " arguments, found " + std::to_string(args.size()));
+    }
+    if (name == "clamp") {  // clamp(u, lo, hi) = min(max(u, lo), hi): two branch points
+      Node lo_clamped = binary(Op::Max, std::move(args[0]), std::move(args[1]));
+      return binary(Op::Min, std::move(lo_clamped), std::move(args[2]));
+    }
+    if (name == "mod") {  // mod(a, b) = a - b floor(a / b), the sign of b (GLSL's)
+      Node a = args[0], b = args[1];
+      Node q = unary_node(Op::Floor, binary(Op::Div, std::move(args[0]), std::move(args[1])));
+      return binary(Op::Sub, std::move(a), binary(Op::Mul, std::move(b), std::move(q)));
+    }
+    if (name == "hypot") {  // sqrt(a^2 + b^2 + ...)
+      Node sum = square(std::move(args[0]));
+      for (std::size_t i = 1; i < args.size(); ++i) sum = binary(Op::Add, std::move(sum), square(std::move(args[i])));
+      return unary_node(Op::Sqrt, std::move(sum));
+    }
+    if (arity < 0) {  // min, max
+      Node n = std::move(args[0]);
+      for (std::size_t i = 1; i < args.size(); ++i) n = binary(it->second.first, std::move(n), std::move(args[i]));
+      return n;
     }
     return node(it->second.first, std::move(args));
+  }
+  Node square(Node a) {
+    Node two{Op::Const, 2.0, {}};
+    return binary(Op::Pow, std::move(a), std::move(two));
   }
 
  public:
@@ -298,6 +389,8 @@ class Parser {
  private:
   const std::string& s_;
   const std::map<std::string, double>& params_;
+  Definitions& definitions_;
+  std::string where_;
   std::size_t pos_ = 0;
   int nesting_ = 0;
 };
@@ -306,8 +399,9 @@ int stack_depth(const std::vector<Instruction>& code) {
   int depth = 0, max_depth = 0;
   for (const auto& in : code) {
     switch (in.op) {
-      case Op::Const: case Op::X: case Op::Y: case Op::Z: ++depth; break;
-      case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Pow: case Op::Min: case Op::Max: --depth; break;
+      case Op::Const: case Op::X: case Op::Y: case Op::Z: case Op::Load: ++depth; break;
+      case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Pow: case Op::Atan2: case Op::Min: case Op::Max:
+      case Op::Store: --depth; break;
       default: break;
     }
     max_depth = std::max(max_depth, depth);
@@ -318,15 +412,29 @@ int stack_depth(const std::vector<Instruction>& code) {
 }  // namespace
 }  // namespace detail
 
-Expression::Expression(const std::string& formula, const std::map<std::string, double>& params, const Box& bounds)
+Expression::Expression(const std::string& formula, const std::map<std::string, double>& params, const Box& bounds,
+                       const std::map<std::string, std::string>& definitions)
     : formula_(formula), program_(std::make_unique<detail::ExpressionProgram>()) {
+  const auto built_in = [](const std::string& name) { return name == "x" || name == "y" || name == "z" || name == "pi"; };
   for (const auto& [name, v] : params) {
-    if (name == "x" || name == "y" || name == "z" || name == "pi")
-      throw InvalidInputError("expression: parameter '" + name + "' shadows a built-in name");
+    if (built_in(name)) throw InvalidInputError("expression: parameter '" + name + "' shadows a built-in name");
     if (!std::isfinite(v)) throw InvalidInputError("expression: parameter '" + name + "' is not finite");
   }
-  detail::Parser parser(formula_, params);
-  detail::Parser::emit(parser.parse(), program_->code);
+  detail::Definitions defs;
+  for (const auto& [name, text] : definitions) {
+    const bool word = !name.empty() && !std::isdigit(static_cast<unsigned char>(name[0])) &&
+                      std::all_of(name.begin(), name.end(),
+                                  [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+    if (!word) throw InvalidInputError("expression: definition name '" + name + "' is not a name (letters, digits, _)");
+    if (built_in(name)) throw InvalidInputError("expression: definition '" + name + "' shadows a built-in name");
+    if (params.count(name)) throw InvalidInputError("expression: '" + name + "' is both a parameter and a definition");
+    defs.entries[name].text = &text;
+  }
+  detail::Parser parser(formula_, params, defs);
+  const detail::Node root = parser.parse();
+  program_->code = std::move(defs.code);
+  program_->slots = defs.slots;
+  detail::Parser::emit(root, program_->code);
   for (const auto& in : program_->code)
     if (in.op == detail::Op::Min || in.op == detail::Op::Max || in.op == detail::Op::Abs) ++program_->branch_points;
   if (detail::stack_depth(program_->code) > detail::kMaxStack)
@@ -353,27 +461,38 @@ double Expression::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& he
   return r.v;
 }
 
-bool Expression::has_pieces() const { return program_->branch_points > 0; }
+bool Expression::has_branch_points() const { return program_->branch_points > 0; }
 
-std::vector<FieldPiece> Expression::eval_pieces(const Vec3& p, double radius) const {
-  const int n = program_->branch_points;
-  std::vector<std::uint8_t> taken(static_cast<std::size_t>(n));
-  std::vector<double> distance(static_cast<std::size_t>(n));
-  // Only the record of the branches is wanted, not the value.
-  program_->run<Jet1, detail::Branching::Record>(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1),
-                                                 Jet1::variable(p.z(), 2),
-                                                 detail::BranchLog{nullptr, taken.data(), distance.data()});
-  return pieces_near_branches(taken, distance, radius,
-                              [&](const std::vector<std::uint8_t>& branch) { return eval_piece(p, branch); });
+bool Expression::eval_branch_record(const Vec3& p, BranchRecord& record) const {
+  if (program_->branch_points == 0) return false;
+  const Jet1 natural = program_->run<Jet1, detail::Branching::Record>(
+      Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2), detail::BranchLog{nullptr, &record});
+  record.value = natural.v;
+  record.gradient = natural.g;
+  return true;
 }
 
-FieldPiece Expression::eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+void Expression::check_branch(const std::vector<std::uint8_t>& branch) const {
   if (branch.size() != static_cast<std::size_t>(program_->branch_points))
     throw InvalidInputError("expression: a piece's branch has " + std::to_string(branch.size()) +
                             " choices, the formula " + std::to_string(program_->branch_points) + " branch points");
+  for (const std::uint8_t b : branch)
+    if (b > kFreeBranch) throw InvalidInputError("expression: a piece's branch has a choice " + std::to_string(b));
+}
+
+std::pair<double, Vec3> Expression::eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+  check_branch(branch);
+  const Jet1 r = program_->run<Jet1, detail::Branching::Forced>(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1),
+                                                                Jet1::variable(p.z(), 2),
+                                                                detail::BranchLog{branch.data(), nullptr});
+  return {r.v, r.g};
+}
+
+FieldPiece Expression::eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+  check_branch(branch);
   const Jet2 r = program_->run<Jet2, detail::Branching::Forced>(
       Jet2::variable(p.x(), 0), Jet2::variable(p.y(), 1), Jet2::variable(p.z(), 2),
-      detail::BranchLog{branch.data(), nullptr, nullptr});
+      detail::BranchLog{branch.data(), nullptr});
   return piece_from_jet(branch, r);
 }
 

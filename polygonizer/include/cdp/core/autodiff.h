@@ -143,6 +143,39 @@ inline Jet<O> tan(const Jet<O>& u) {
   return chain(u, t, d, 2.0 * t * d);
 }
 
+template <int O>
+inline Jet<O> atan(const Jet<O>& u) {
+  const double d = 1.0 / (1.0 + u.v * u.v);
+  return chain(u, std::atan(u.v), d, -2.0 * u.v * d * d);
+}
+// The angle of (x, y) in (-pi, pi]: smooth except across its cut, the half-line x < 0, y = 0,
+// where it jumps by 2 pi (and undefined at the origin, where its gradient is not finite).
+template <int O>
+inline Jet<O> atan2(const Jet<O>& y, const Jet<O>& x) {
+  const double r2 = x.v * x.v + y.v * y.v;
+  const double fy = x.v / r2, fx = -y.v / r2;
+  Jet<O> r(std::atan2(y.v, x.v));
+  r.g = fy * y.g + fx * x.g;
+  if constexpr (O == 2) {
+    const double r4 = r2 * r2;
+    const double fxx = 2.0 * x.v * y.v / r4, fyy = -fxx, fxy = (y.v * y.v - x.v * x.v) / r4;
+    r.h = fy * y.h + fx * x.h + fxx * (x.g * x.g.transpose()) + fyy * (y.g * y.g.transpose()) +
+          fxy * (x.g * y.g.transpose() + y.g * x.g.transpose());
+  }
+  return r;
+}
+// Steps (floor, round): constant between their jumps, so zero derivatives there. A model that
+// repeats a shape with them (x - p * round(x / p)) must keep its surface off the jumps, where
+// the copies meet: nothing reports a crease there.
+template <int O>
+inline Jet<O> floor(const Jet<O>& u) {
+  return Jet<O>(std::floor(u.v));
+}
+template <int O>
+inline Jet<O> round(const Jet<O>& u) {
+  return Jet<O>(std::round(u.v));
+}
+
 namespace detail {
 
 // The branch points of a model written over jets (AutodiffField): while a BranchTrace is
@@ -154,8 +187,7 @@ namespace detail {
 // ordinary evaluation) they only cost the test of a null pointer.
 struct BranchTrace {
   const std::vector<std::uint8_t>* forced = nullptr;  // take these branches; record when null
-  std::vector<std::uint8_t> taken;                    // recorded: the branch taken
-  std::vector<double> distance;                       // recorded: |a - b| / |grad (a - b)|
+  Field::BranchRecord record;                         // recorded: the branch taken, where it switches
   std::size_t calls = 0;                              // branch points met
 };
 
@@ -178,10 +210,11 @@ class BranchTraceScope {
 template <int O>
 bool take_branch(BranchTrace& t, bool natural, const Jet<O>& a, const Jet<O>& b) {
   const std::size_t k = t.calls++;
-  if (t.forced) return k < t.forced->size() ? (*t.forced)[k] != 0 : natural;
-  t.taken.push_back(natural ? 1 : 0);
-  const double gap = std::abs(a.v - b.v), slope = (a.g - b.g).norm();
-  t.distance.push_back(gap == 0.0 ? 0.0 : slope > 0.0 ? gap / slope : std::numeric_limits<double>::infinity());
+  if (t.forced) {
+    if (k >= t.forced->size() || (*t.forced)[k] == Field::kFreeBranch) return natural;
+    return (*t.forced)[k] != 0;
+  }
+  t.record.add(natural, a.v - b.v, a.g - b.g);
   return natural;
 }
 

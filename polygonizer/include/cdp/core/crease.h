@@ -12,11 +12,6 @@
 
 namespace cdp {
 
-// Pieces whose unit gradients at one point agree to this cosine are the same piece: creases this
-// project meshes have dihedral angles far above the 2.6 degrees it allows (crease tracing and
-// crease-aware meshing compare pieces so, since one piece may carry several branch codes).
-inline constexpr double kSamePieceCosine = 0.999;
-
 struct CreaseOptions {
   int max_iterations = 40;
   // Converged when every piece's |F_i| / |grad F_i| is below this. Non-positive: 1e-10 times the

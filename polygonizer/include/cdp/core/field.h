@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <utility>
@@ -66,6 +67,12 @@ struct FieldPiece {
   Mat3 hessian = Mat3::Zero();
 };
 
+// Pieces whose unit gradients at one point agree to this cosine are the same piece: creases this
+// project meshes have dihedral angles far above the 2.6 degrees it allows (crease tracing and
+// crease-aware meshing compare pieces so, since one piece may carry several branch codes; a
+// branch point whose two branches agree so where they switch is no crease, Field::pieces).
+inline constexpr double kSamePieceCosine = 0.999;
+
 class Field {
  public:
   virtual ~Field() = default;
@@ -112,19 +119,55 @@ class Field {
   // The smooth pieces of the field near p: one per choice of branches of its min, max and abs
   // that is taken somewhere within `radius` of p (to first order: a branch point counts when
   // the surface where its two arguments are equal lies within `radius`), each evaluated at p,
-  // distinct pieces only, the branches as taken at p first. One piece where the field is smooth
-  // within `radius`; none from a model that does not report its pieces (then it is treated as
-  // smooth everywhere). Counted as one value_gradient and one gradient_hessian per piece.
+  // distinct pieces only, the branches as taken at p first. Branch points without a crease
+  // (BranchKind::Smooth) are never split: they are kFreeBranch in every piece. One piece where
+  // the field is smooth within `radius`; none from a model that does not report its pieces
+  // (then it is treated as smooth everywhere). Counted as one value_gradient and one
+  // gradient_hessian per piece.
   std::vector<FieldPiece> pieces(const Vec3& p, double radius) const {
     n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
     std::vector<FieldPiece> out = eval_pieces(p, radius);
     n_gradient_hessian_.fetch_add(out.size(), std::memory_order_relaxed);
     return out;
   }
-  // Whether the model may report more than one piece anywhere (it has branch points: min, max,
-  // abs). Cheap (a compiled model counts its branch points once, with one evaluation); a model
-  // without them is smooth and has no creases.
-  virtual bool has_pieces() const { return false; }
+  // Whether the model has creases: a branch point (min, max, abs) of kind Creased
+  // (branch_kinds), seen switching on the surface with different normals on its two sides. The
+  // first call classifies the branch points. A crease found nowhere on that grid (a feature
+  // smaller than its cells) is missed, as the crease tracer's grid would miss it.
+  bool has_pieces() const;
+
+  // What a branch point (min, max, abs; numbered as in FieldPiece::branch) makes where it
+  // switches. Smooth: its two branches meet with equal value and gradient (C1: a rounded box's
+  // max(|x| - a, 0)^2, a smooth union's clamp), so no crease anywhere. Creased: their normals
+  // differ somewhere (a sharp union, intersection or difference). Hidden: wherever it was seen
+  // switching, flipping it changed nothing, to the last bit (a later min or max took the other
+  // argument: the abs in a rounded box's max(|x| - a, 0)). Unknown: never seen switching on the
+  // surface (an onion's abs(d) - t switches at d = 0, between its two shells). Pieces never
+  // split a Smooth branch point, nor a Hidden one in a field with Smooth ones: those are
+  // kFreeBranch in every piece; the others are split where their switch is near.
+  enum class BranchKind : std::uint8_t { Unknown, Hidden, Smooth, Creased };
+  // Every branch point's kind, found once (the first call; thread-safe, and the same whatever
+  // the thread or order of the calls) from a grid of kBranchSamples^3 cell centres over
+  // bounds(): where a branch point's switch lies within half a cell's diagonal of a sample, the
+  // point where the switch meets the surface is sought from there (minimum-norm Newton steps on
+  // the switch and on F, at most kBranchSurfaceSteps, the other branch points as taken at the
+  // sample), and the field's normals with either branch compared there. Smooth only when every
+  // such test (at most kBranchTests a branch point) found the same normal to kSamePieceCosine;
+  // one difference makes it Creased. Counted as value_gradient evaluations. Empty for a model
+  // without branch points.
+  const std::vector<BranchKind>& branch_kinds() const;
+  static constexpr int kBranchSamples = 16;
+  static constexpr int kBranchTests = 8;
+  // On the surface and the switch: |F| / |grad F| and the distance to the switch below this
+  // share of a cell, where the steps end (a rounded box's max(|z| - c, 0) switches its radius
+  // inside its flat faces too, and an onion's abs(d) - t midway between its shells: kinks of the
+  // field the surface never meets).
+  static constexpr double kBranchOnSurface = 1e-3;
+  // At most this many steps from a sample onto the surface along a switch.
+  static constexpr int kBranchSurfaceSteps = 8;
+  // A switch whose normal and the surface's are this sine apart at the least (about 3 degrees)
+  // crosses the surface; a (nearly) parallel one is not followed.
+  static constexpr double kBranchSwitchAcross = 0.05;
   // Whether the model promises a regular zero set: its gradient continuous and nonzero wherever
   // the surface passes, so no crease, cusp or singular point (the VIS, MPU, blob and analytic
   // models, whose fits and kernels are C1 and whose special points, a sphere's centre or a
@@ -189,6 +232,24 @@ class Field {
     n_gradient_hessian_ = 0;
   }
 
+  // One evaluation's record of its branch points: `taken` the branch each took (0: first
+  // argument of min and max, +u for abs; 1: second argument, -u), `distance` how far its switch
+  // lies, to first order (|a - b| / |grad (a - b)|, |u| / |grad u| for abs), and `seam_step` the
+  // Newton step from the point onto that switch (-(a - b) grad (a - b) / |grad (a - b)|^2);
+  // `value` and `gradient` the field's there. (Public for the models' helpers in autodiff.h.)
+  struct BranchRecord {
+    std::vector<std::uint8_t> taken;
+    std::vector<double> distance;
+    std::vector<Vec3> seam_step;
+    std::vector<Vec3> seam_normal;  // grad (a - b) / |grad (a - b)| (zero where it has none)
+    double value = 0;
+    Vec3 gradient = Vec3::Zero();
+    void add(bool branch, double gap, const Vec3& slope);  // gap a - b, slope grad (a - b)
+  };
+  // In a piece's branch (FieldPiece::branch, Field::piece), this choice at a branch point means
+  // "the branch the values take": a switch with no crease (C1), which the piece follows.
+  static constexpr std::uint8_t kFreeBranch = 2;
+
  protected:
   virtual double eval_value(const Vec3& p) const = 0;
   virtual double eval_value_gradient(const Vec3& p, Vec3& gradient) const = 0;
@@ -207,35 +268,44 @@ class Field {
     for (std::size_t i = 0; i < n; ++i) values[i] = eval_gradient_hessian(points[i], gradients[i], hessians[i]);
   }
 
-  // Models built from min, max and abs override both (models/expression.h and
-  // models/autodiff_field.h do, each with pieces_near_branches below).
-  virtual std::vector<FieldPiece> eval_pieces(const Vec3& p, double radius) const {
-    (void)p;
-    (void)radius;
-    return {};
-  }
+  // The pieces near p (Field::pieces): from the model's record of its branch points at p and
+  // the kinds of its branch points. Models with branch points override eval_branch_record,
+  // eval_first_order and eval_piece instead (models/expression.h and models/autodiff_field.h).
+  virtual std::vector<FieldPiece> eval_pieces(const Vec3& p, double radius) const;
   virtual FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const;
 
-  // The pieces near p from one evaluation's record of its branch points: `taken` the branch each
-  // took (0: first argument of min and max, +u for abs; 1: second argument, -u) and `distance`
-  // how far its switch lies, to first order (|a - b| / |grad (a - b)|, |u| / |grad u| for abs).
-  // Every combination of the switches within `radius` (the nearest kMaxSplitBranchPoints) is
-  // evaluated with `piece`; equal pieces (the same numbers bit for bit) are kept once, the
-  // branches as taken first.
-  static std::vector<FieldPiece> pieces_near_branches(
-      const std::vector<std::uint8_t>& taken, const std::vector<double>& distance, double radius,
-      const std::function<FieldPiece(const std::vector<std::uint8_t>&)>& piece);
+  // Whether the model has branch points at all (cheap; the default: none).
+  virtual bool has_branch_points() const { return false; }
+  // One evaluation's record of the model's branch points at p (BranchRecord); false for a model
+  // without branch points.
+  virtual bool eval_branch_record(const Vec3& p, BranchRecord& record) const {
+    (void)p;
+    (void)record;
+    return false;
+  }
+  // The field's value and gradient with the given branches (kFreeBranch: as the values choose).
+  virtual std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const;
+
+  // The pieces near p from the record there: every branch point whose switch lies within `radius`
+  // and that is not Smooth is split into both branches (the nearest kMaxSplitBranchPoints),
+  // each combination evaluated with eval_piece; equal pieces (the same numbers bit for bit)
+  // are kept once, the branches as taken first.
+  std::vector<FieldPiece> pieces_near_branches(const Vec3& p, const BranchRecord& record, double radius) const;
   // At most this many branch points are split into both branches at one point, the nearest
   // switches first: 2^6 = 64 pieces, more than any corner of a CSG shape has (a cube's has 3),
   // and a bound on the work for formulas with many nearly tied min and max.
   static constexpr int kMaxSplitBranchPoints = 6;
-
   Box bounds_;
 
  private:
   mutable std::atomic<std::uint64_t> n_value_{0};
   mutable std::atomic<std::uint64_t> n_value_gradient_{0};
   mutable std::atomic<std::uint64_t> n_gradient_hessian_{0};
+  BranchKind switch_verdict(const Vec3& p, const BranchRecord& record, std::size_t b, double cell,
+                            std::uint64_t& evaluations) const;
+  mutable std::once_flag kinds_once_;
+  mutable std::vector<BranchKind> kinds_;
+  mutable std::vector<bool> free_;  // kFreeBranch in every piece (branch_kinds)
 };
 
 }  // namespace cdp

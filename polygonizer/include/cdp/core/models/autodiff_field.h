@@ -33,7 +33,7 @@ class AutodiffField : public Field {
  public:
   bool thread_safe() const override { return true; }
   // Whether evaluate calls min, max or abs (counted once, at the centre of the box).
-  bool has_pieces() const override {
+  bool has_branch_points() const override {
     int n = branch_points_.load(std::memory_order_relaxed);
     if (n < 0) {
       detail::BranchTrace trace;
@@ -57,12 +57,19 @@ class AutodiffField : public Field {
     hessian = r.h;
     return r.v;
   }
-  std::vector<FieldPiece> eval_pieces(const Vec3& p, double radius) const override {
+  bool eval_branch_record(const Vec3& p, BranchRecord& out) const override {
     detail::BranchTrace trace;
     record(p, trace);
-    if (trace.calls == 0) return {};
-    return pieces_near_branches(trace.taken, trace.distance, radius,
-                                [&](const std::vector<std::uint8_t>& branch) { return eval_piece(p, branch); });
+    if (trace.calls == 0) return false;
+    out = std::move(trace.record);
+    return true;
+  }
+  std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const override {
+    detail::BranchTrace trace;
+    trace.forced = &branch;
+    detail::BranchTraceScope scope(trace);
+    const Jet1 r = self().evaluate(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2));
+    return {r.v, r.g};
   }
   FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override {
     detail::BranchTrace trace;
@@ -83,9 +90,11 @@ class AutodiffField : public Field {
   const Derived& self() const { return static_cast<const Derived&>(*this); }
   void record(const Vec3& p, detail::BranchTrace& trace) const {
     detail::BranchTraceScope scope(trace);
-    self().evaluate(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2));
+    const Jet1 r = self().evaluate(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2));
+    trace.record.value = r.v;
+    trace.record.gradient = r.g;
   }
-  mutable std::atomic<int> branch_points_{-1};  // unknown until has_pieces is first asked
+  mutable std::atomic<int> branch_points_{-1};  // unknown until has_branch_points is first asked
 };
 
 // A compiled model from a functor with a templated call operator, registered by name with

@@ -1,6 +1,14 @@
-// A field from a formula in x, y, z: + - * / ^, parentheses, unary minus, numbers, named
-// parameters, pi, and sqrt exp log sin cos tan abs min max pow. The formula is compiled once to
-// a small stack program and run with doubles or jets, so gradient and Hessian are exact.
+// A field from a formula in x, y, z: + - * / ^ (or **), parentheses, unary minus, numbers,
+// named parameters, pi, named sub-expressions, and the functions
+//   sqrt exp log sin cos tan atan pow abs          one argument (pow two)
+//   min max hypot                                  two or more arguments
+//   clamp(u, lo, hi) = min(max(u, lo), hi)
+//   atan2(y, x)                                    cut along x < 0, y = 0 (a jump of 2 pi)
+//   floor round mod(a, b) = a - b floor(a / b)     steps, with zero derivative between jumps
+// The formula is compiled once to a small stack program and run with doubles or jets, so
+// gradient and Hessian are exact. min, max, abs and clamp are branch points: their creases are
+// known (Field::pieces). The steps are not: a surface that crosses one of their jumps (a
+// repeated shape that reaches the edge of its cell) has a crease or a gap nothing reports.
 #pragma once
 
 #include <cdp/core/field.h>
@@ -17,26 +25,33 @@ struct ExpressionProgram;
 
 class Expression : public Field {
  public:
-  // Throws InvalidInputError "expression: <problem> at position N" on a syntax error, an unknown
-  // name or a wrong argument count. `bounds` is required: a formula has no box of its own.
-  Expression(const std::string& formula, const std::map<std::string, double>& params, const Box& bounds);
+  // `definitions` names sub-expressions ({"r": "sqrt(x^2+y^2)"}) that the formula and each other
+  // may use by name, in any order; each used one is evaluated once per evaluation, and one
+  // without x, y, z is folded to a number. Throws InvalidInputError "expression: <problem> at
+  // position N" (prefixed "in definition 'NAME': " inside one) on a syntax error, an unknown
+  // name, a wrong argument count or a definition that refers to itself. `bounds` is required: a
+  // formula has no box of its own.
+  Expression(const std::string& formula, const std::map<std::string, double>& params, const Box& bounds,
+             const std::map<std::string, std::string>& definitions = {});
   ~Expression() override;
   std::string type_name() const override { return "expression"; }
   bool thread_safe() const override { return true; }  // evaluation reads immutable data only
   const std::string& formula() const { return formula_; }
-  bool has_pieces() const override;  // a min, max or abs anywhere in the formula
 
  protected:
   double eval_value(const Vec3& p) const override;
   double eval_value_gradient(const Vec3& p, Vec3& gradient) const override;
   double eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const override;
-  // Each min, max and abs is a branch point, numbered in the order the formula is evaluated
-  // (arguments before the call); a branch is 0 for the first argument (+u for abs), 1 for the
-  // second (-u).
-  std::vector<FieldPiece> eval_pieces(const Vec3& p, double radius) const override;
+  // Each min, max and abs is a branch point (clamp is two), numbered in the order the formula
+  // is evaluated (arguments before the call); a branch is 0 for the first argument (+u for abs),
+  // 1 for the second (-u), kFreeBranch for the one the values take.
+  bool has_branch_points() const override;
+  bool eval_branch_record(const Vec3& p, BranchRecord& record) const override;
+  std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
   FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
 
  private:
+  void check_branch(const std::vector<std::uint8_t>& branch) const;  // InvalidInputError unless one of ours
   std::string formula_;
   std::unique_ptr<detail::ExpressionProgram> program_;
 };
