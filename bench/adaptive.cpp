@@ -19,6 +19,7 @@
 
 #include <array>
 #include <chrono>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -291,6 +292,54 @@ void BM_AdaptiveThreads(benchmark::State& state) {
                               : "igea_vis4004/adaptive/threads");
 }
 BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 2)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// Models written as SDF code writes them, at factor 3: a rounded box, a smooth union of it with a
+// sphere (both C1 where their max and clamps switch: no crease), the union minus a cylinder (C1
+// seams and two sharp rims) and fogleman/sdf's README model (sharp creases only). Each
+// iteration meshes the model with its creases followed (the defaults), then ignored, then a
+// smooth sphere (an expression of its own): `creases_cost_ratio` is the first time over the
+// second (the SDF-models issue: at most 1.5 where the model is C1), `per_triangle_vs_sphere`
+// the time per triangle over the sphere's (at most 2); manual time = the default run's.
+void BM_AdaptiveSdf(benchmark::State& state) {
+  static const char* kRoundedBox = "sqrt(max(abs(x)-0.6,0)^2+max(abs(y)-0.4,0)^2+max(abs(z)-0.3,0)^2)-0.15";
+  const std::map<std::string, std::string> blend = {
+      {"a", kRoundedBox},
+      {"b", "sqrt((x-0.5)^2+(y-0.3)^2+z^2)-0.45"},
+      {"h", "clamp(0.5+0.5*(b-a)/0.2,0,1)"},
+      {"u", "b+h*(a-b)-0.2*h*(1-h)"}};
+  const Box box{Vec3::Constant(-1.2), Vec3::Constant(1.2)};
+  const int which = static_cast<int>(state.range(0));
+  static const char* kNames[] = {"rounded_box", "smooth_union", "smooth_union_minus_cylinder", "fogleman_readme"};
+  const Expression field = which == 0   ? Expression(kRoundedBox, {}, box)
+                           : which == 1 ? Expression("u", {}, box, blend)
+                           : which == 2 ? Expression("max(u, 0.2-sqrt(x^2+y^2))", {}, box, blend)
+                                        : Expression("max(max(sqrt(x^2+y^2+z^2)-1, max(abs(x),abs(y),abs(z))-0.75), "
+                                                     "-min(hypot(y,z)-0.5, hypot(x,z)-0.5, hypot(x,y)-0.5))",
+                                                     {}, box);
+  const Expression sphere("sqrt(x^2+y^2+z^2)-1", {}, box);
+  AdaptiveOptions o;
+  o.factor = 3;
+  double follow = 0, ignore = 0, follow_per_triangle = 0, sphere_per_triangle = 0, triangles = 0;
+  for (auto _ : state) {
+    o.creases = CreaseHandling::Follow;
+    const PolygonizeResult f = polygonize_adaptive(field, o);
+    o.creases = CreaseHandling::Ignore;
+    const PolygonizeResult i = polygonize_adaptive(field, o);
+    o.creases = CreaseHandling::Follow;
+    const PolygonizeResult s = polygonize_adaptive(sphere, o);
+    state.SetIterationTime(f.stats.seconds);
+    follow += f.stats.seconds;
+    ignore += i.stats.seconds;
+    triangles += static_cast<double>(f.stats.triangles);
+    follow_per_triangle += f.stats.seconds / static_cast<double>(f.stats.triangles);
+    sphere_per_triangle += s.stats.seconds / static_cast<double>(s.stats.triangles);
+  }
+  state.counters["triangles"] = triangles / static_cast<double>(state.iterations());
+  state.counters["creases_cost_ratio"] = follow / ignore;
+  state.counters["per_triangle_vs_sphere"] = follow_per_triangle / sphere_per_triangle;
+  state.SetLabel(std::string(kNames[which]) + "/adaptive/factor3");
+}
+BENCHMARK(BM_AdaptiveSdf)->ArgName("model")->DenseRange(0, 3)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // Components of very different scales: a torus tube of radius 0.003 beside a sphere of radius
 // 1.2 at factor 1, min_edge 1e-4 (the hashes sized by the tube's edges hold the sphere's

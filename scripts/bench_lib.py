@@ -248,6 +248,20 @@ def thread_speedups(run):
     return sorted(rows, key=lambda r: r["benchmark"])
 
 
+def sdf_model_costs(run):
+    """Rows {benchmark, label, creases, sphere, triangles} of the benchmarks that mesh an SDF model
+    with its creases followed and ignored and a sphere beside it (counters creases_cost_ratio and
+    per_triangle_vs_sphere; bench/adaptive.cpp's BM_AdaptiveSdf)."""
+    rows = []
+    for b in run["benchmarks"]:
+        v = None if b.get("error") else counter_median(b, "creases_cost_ratio")
+        if v is not None:
+            rows.append({"benchmark": key(b), "label": b.get("label", ""), "creases": v,
+                         "sphere": counter_median(b, "per_triangle_vs_sphere"),
+                         "triangles": counter_median(b, "triangles")})
+    return sorted(rows, key=lambda r: r["benchmark"])
+
+
 PER_ITEM_COUNTERS = ("evals_per_vertex", "evaluations_per_vertex", "tracking_evals_per_vertex", "evaluations_per_triangle")
 
 
@@ -330,7 +344,9 @@ def time_to_accuracy(run):
 def export(run):
     """github-action-benchmark's custom formats: (smaller_is_better, bigger_is_better), each a
     list of {name, unit, value, range, extra}. Times are medians in the benchmark's own unit;
-    rate counters (…per_second, …per_s) and the in-run ratios go to the bigger-is-better list."""
+    rate counters (…per_second, …per_s) and the in-run gains go to the bigger-is-better list, the
+    in-run costs (an SDF model's crease handling and time per triangle against a sphere) to the
+    smaller-is-better one."""
     c = run["context"]
     smaller, bigger = [], []
     for b in run["benchmarks"]:
@@ -361,4 +377,9 @@ def export(run):
             bigger.append({"name": "ratio batched/scalar " + r["batched"], "unit": "ratio", "value": r["gain"]})
     for r in thread_speedups(run):
         bigger.append({"name": "ratio 1/2 threads " + r["benchmark"], "unit": "ratio", "value": r["speedup"]})
+    for r in sdf_model_costs(run):  # costs: smaller is better
+        smaller.append({"name": "ratio creases follow/ignore " + r["benchmark"], "unit": "ratio", "value": r["creases"]})
+        if r["sphere"] is not None:
+            smaller.append({"name": "ratio per triangle sdf/sphere " + r["benchmark"], "unit": "ratio",
+                            "value": r["sphere"]})
     return smaller, bigger

@@ -236,6 +236,22 @@ def inrun_section(runs):
     else:
         out.append('<p class="note">Not available: no benchmark reports speedup_1_to_2 in the latest run.</p>')
 
+    # SDF models: the cost of following creases against ignoring them, and against a sphere.
+    rows = bl.sdf_model_costs(latest)
+    out.append("<h3>SDF models: creases followed against ignored, time per triangle against a sphere</h3>")
+    if rows:
+        out.append('<p class="note">Measured in one run at factor 3. A C1 model (rounded, smoothly united) has no '
+                   'crease, so following creases should cost at most 1.5 times ignoring them; each model at most '
+                   '2 times a smooth sphere\'s time per triangle.</p>')
+        out.append(table(["Benchmark", "Label", "Triangles", "Follow / ignore", "Per triangle / sphere"],
+                         [[E(r["benchmark"]), E(r["label"]), fnum(r["triangles"], "{:.0f}"),
+                           fnum(r["creases"], "{:.3f}"), fnum(r["sphere"], "{:.3f}")] for r in rows]))
+        series = ratio_series(runs, bl.sdf_model_costs, "benchmark", "creases")
+        out.append(img(ratio_plot(runs, series, "time with creases followed / ignored", "creases"),
+                       "SDF models' crease cost over commits"))
+    else:
+        out.append('<p class="note">Not available: no benchmark reports creases_cost_ratio in the latest run.</p>')
+
     # Where the bookkeeping goes: microseconds per vertex outside the field, by phase.
     rows = bl.bookkeeping_by_phase(latest)
     if rows:

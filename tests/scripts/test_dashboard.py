@@ -143,6 +143,23 @@ class InRunRatios(unittest.TestCase):
         self.assertIn("Speedup from one thread to two", page)
         self.assertIn("1.200", page)
 
+    def test_sdf_model_costs(self):
+        r = run("a" * 40, "2026-01-01T00:00:00+00:00")
+        self.assertEqual(bl.sdf_model_costs(r), [])
+        r["benchmarks"].append(bench("bench_adaptive", "BM_AdaptiveSdf/model:1/manual_time", [40 * x for x in NOISE],
+                                     label="smooth_union/adaptive/factor3", kind="real",
+                                     counters={"creases_cost_ratio": [1.1] * 5, "per_triangle_vs_sphere": [1.4] * 5,
+                                               "triangles": [3792] * 5}))
+        rows = bl.sdf_model_costs(r)
+        self.assertEqual(len(rows), 1)
+        self.assertAlmostEqual(rows[0]["creases"], 1.1)
+        self.assertAlmostEqual(rows[0]["sphere"], 1.4)
+        costs = {e["name"]: e["value"] for e in bl.export(r)[0] if e["unit"] == "ratio"}
+        self.assertAlmostEqual(costs["ratio creases follow/ignore bench_adaptive:BM_AdaptiveSdf/model:1/manual_time"], 1.1)
+        page = make_dashboard.inrun_section([r])
+        self.assertIn("SDF models", page)
+        self.assertIn("1.100", page)
+
     def test_bookkeeping_by_phase(self):
         r = run("a" * 40, "2026-01-01T00:00:00+00:00")
         self.assertEqual(bl.bookkeeping_by_phase(r), [])

@@ -1,0 +1,162 @@
+// Models written the way SDF modelling code writes them (fogleman/sdf, Inigo Quilez's distance
+// functions): rounded primitives and smooth booleans, which are C1 where their max, min and
+// clamps switch, beside sharp booleans, whose creases the mesher follows. Each at several
+// factors and tolerances, checked as the hard-surface suite checks: a sound mesh with the
+// reference's components and genus (closed forms, or marching tetrahedra stable between two grid
+// sizes), no self-intersection, and angles of at least 20 degrees on a model without creases and
+// 5 at creases. These must mesh (a clear error is a failure here).
+#include <gtest/gtest.h>
+
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/mesh_topology.h>
+
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/test_fields.h"
+#include "polygonizer/mesh_checks.h"
+
+namespace cdp {
+namespace {
+
+struct SdfModel {
+  std::string name;
+  std::string json;
+  int components = -1;  // closed form; -1: from the marching reference
+  int genus = -1;
+  bool creased = false;  // has creases the mesher must follow
+};
+
+// {"type": "expression", "value": value, "define": {...}, "bounds": ±half}
+std::string model(const std::string& value, double half, const std::map<std::string, std::string>& define = {}) {
+  std::ostringstream s;
+  s << R"({"type": "expression", "value": ")" << value << R"(", )";
+  if (!define.empty()) {
+    s << R"("define": {)";
+    bool first = true;
+    for (const auto& [name, formula] : define) {
+      s << (first ? "" : ", ") << '"' << name << R"(": ")" << formula << '"';
+      first = false;
+    }
+    s << "}, ";
+  }
+  s << R"("bounds": [[)" << -half << ", " << -half << ", " << -half << "], [" << half << ", " << half << ", " << half
+    << "]]}";
+  return s.str();
+}
+
+// Inigo Quilez's polynomial smooth minimum of a and b with radius k, as named sub-expressions.
+std::map<std::string, std::string> smooth_min(const std::string& a, const std::string& b, double k) {
+  const std::string K = std::to_string(k);
+  return {{"a", a}, {"b", b}, {"h", "clamp(0.5+0.5*(b-a)/" + K + ",0,1)"}, {"u", "b+h*(a-b)-" + K + "*h*(1-h)"}};
+}
+
+const std::string kRoundedBox = "sqrt(max(abs(x)-0.6,0)^2+max(abs(y)-0.4,0)^2+max(abs(z)-0.3,0)^2)-0.15";
+const std::string kSphere = "sqrt((x-0.5)^2+(y-0.3)^2+z^2)-0.45";
+
+std::vector<SdfModel> sdf_models() {
+  std::vector<SdfModel> v = {
+      {"rounded_box", model(kRoundedBox, 1.1), 1, 0},
+      {"smooth_union", model("u", 1.2, smooth_min(kRoundedBox, kSphere, 0.2)), 1, 0},
+      {"smooth_union_minus_cylinder", model("max(u, 0.2-sqrt(x^2+y^2))", 1.2, smooth_min(kRoundedBox, kSphere, 0.2)), 1,
+       1, true},
+      // A capsule chain: each capsule's clamp is C1 where its cylinder meets its caps.
+      {"capsules",
+       model("min(c1, c2)", 1.4,
+             {{"c1", "hypot(x+0.8-1.2*clamp((x+0.8)/1.2,0,1), y, z)-0.25"},
+              {"c2", "hypot(x-0.4, y-clamp(y,0,0.9), z)-0.2"}}),
+       1, 0, true},
+      {"onion", model("abs(" + kRoundedBox + ")-0.04", 1.2), 2, 0},
+      // fogleman/sdf's README model: sphere(1) & box(1.5) - the three cylinders(0.5).
+      {"fogleman_readme",
+       model("max(max(sqrt(x^2+y^2+z^2)-1, max(abs(x),abs(y),abs(z))-0.75), -min(hypot(y,z)-0.5, hypot(x,z)-0.5, "
+             "hypot(x,y)-0.5))",
+             1.2),
+       -1, -1, true},
+      {"drilled_sphere", model("max(sqrt(x^2+y^2+z^2)-1, 0.05-hypot(x,y))", 1.2), 1, 1, true},
+  };
+  return v;
+}
+
+struct Reference {
+  int components, genus;
+  bool stable;
+};
+
+Reference marching_reference(const std::string& name, const Field& field) {
+  static std::map<std::string, Reference> cache;
+  if (const auto it = cache.find(name); it != cache.end()) return it->second;
+  const MeshTopology a = analyze_topology(test::marching_tetrahedra_reference(field, 56));
+  const MeshTopology b = analyze_topology(test::marching_tetrahedra_reference(field, 72));
+  return cache[name] = {static_cast<int>(a.components), a.genus, a.components == b.components && a.genus == b.genus};
+}
+
+struct Case {
+  std::size_t model;
+  double factor;
+  double tolerance = 0;  // positive: SizingMode::Tolerance instead of the factor
+};
+
+std::string case_name(const testing::TestParamInfo<Case>& info) {
+  std::ostringstream s;
+  s << sdf_models()[info.param.model].name;
+  if (info.param.tolerance > 0) s << "_tolerance" << info.param.tolerance;
+  else s << "_factor" << info.param.factor;
+  std::string n = s.str();
+  for (char& c : n)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return n;
+}
+
+class SdfModels : public testing::TestWithParam<Case> {};
+
+TEST_P(SdfModels, MeshWithTheirCreasesAndGoodTriangles) {
+  const SdfModel m = sdf_models()[GetParam().model];
+  const auto field = test::field_from_json(m.json);
+  AdaptiveOptions o;
+  o.factor = GetParam().factor;
+  if (GetParam().tolerance > 0) {
+    o.sizing = SizingMode::Tolerance;
+    o.tolerance = GetParam().tolerance;
+  }
+  EXPECT_EQ(field->has_pieces(), m.creased) << m.name;
+  const PolygonizeResult r = polygonize_adaptive(*field, o);
+  const MeshTopology t = analyze_topology(r.mesh);
+  int components = m.components, genus = m.genus;
+  if (components < 0) {
+    const Reference ref = marching_reference(m.name, *field);
+    ASSERT_TRUE(ref.stable) << m.name << ": the marching reference is not stable between grid sizes";
+    components = ref.components, genus = ref.genus;
+  }
+  test::expect_sound(r.mesh, m.name);
+  EXPECT_EQ(static_cast<int>(t.components), components) << m.name;
+  EXPECT_EQ(t.genus, genus) << m.name;
+  EXPECT_EQ(r.stats.extra.at("uncovered_crossings").get<std::size_t>(), 0u);
+  // Creases followed, not meshed across after a failed layout.
+  EXPECT_EQ(r.stats.extra.at("creases.fallback").get<std::string>(), "") << m.name;
+  if (m.creased) EXPECT_GT(r.stats.extra.at("creases.curves").get<double>(), 0) << m.name;
+  const double min_angle = r.stats.extra.at("min_angle_degrees").get<double>();
+  EXPECT_GE(min_angle, m.creased ? 5.0 : 20.0) << m.name;
+  std::cout << "sdf-model " << m.name << " " << case_name({GetParam(), 0}) << ": " << t.triangles << " triangles, "
+            << r.stats.seconds << " s, min angle " << min_angle << "\n";
+}
+
+std::vector<Case> all_cases() {
+  std::vector<Case> out;
+  for (std::size_t s = 0; s < sdf_models().size(); ++s) {
+#if defined(__SANITIZE_ADDRESS__)
+    out.push_back({s, 3});  // several times slower under the sanitizers: one run each
+    continue;
+#endif
+    for (double k : {1.0, 3.0, 10.0}) out.push_back({s, k});
+    for (double t : {1e-1, 1e-2, 1e-3}) out.push_back({s, 0, t});
+  }
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(Adaptive, SdfModels, testing::ValuesIn(all_cases()), case_name);
+
+}  // namespace
+}  // namespace cdp
