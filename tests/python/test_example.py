@@ -1,4 +1,4 @@
-"""examples/mesh_numpy_implicit.py runs and writes what it says."""
+"""The examples (examples/) run and write what they say."""
 import os
 import subprocess
 import sys
@@ -16,3 +16,17 @@ def test_example_writes_a_mesh_and_a_picture(tmp_path):
     V, F = cdp.read_mesh(tmp_path / "wavy_torus.ply")
     assert topology(V, F) == (1, 1, True)
     assert (tmp_path / "wavy_torus.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_sdf_example_meshes_its_models(tmp_path):
+    """examples/sdf_models.py, on its two quickest models (each well under a second)."""
+    render = program("render")
+    result = subprocess.run([sys.executable, ROOT / "examples" / "sdf_models.py", "--out", tmp_path, "--render", render,
+                             "--only", "fogleman", "capsule_chain"], check=True, capture_output=True, text=True,
+                            env=dict(os.environ))
+    assert "fogleman:" in result.stdout and "minimum angle" in result.stdout and "FAILED" not in result.stdout
+    for name, genus in (("fogleman", 5), ("capsule_chain", 0)):
+        V, F = cdp.read_mesh(tmp_path / f"{name}.ply")
+        assert topology(V, F) == (1, genus, True)
+        assert cdp.field_from_json(tmp_path / f"{name}.json").type == "expression"
+        assert (tmp_path / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
