@@ -1103,30 +1103,26 @@ def repeat(other, spacing, count=None, padding=0):
                (other,))
 
 
-def twist(other, k):
-    """The model twisted about Z by k radians per unit of z (not distance-preserving)."""
-    other = _check(other, "twist")
-    k = _scalar(k, "twist: k")
+def _turn_xy(other, k, along, name):
+    """The model with (x, y) turned by k radians per unit of coordinate `along` (twist: z, bend: x)."""
+    other = _check(other, name)
+    k = _scalar(k, name + ": k")
 
     def render(R, p):
-        a = R.named("a", _lin((k,), (p[2],)))
+        a = R.named("a", _lin((k,), (p[along],)))
         cs, sn = R.named("c", f"cos({a})"), R.named("c", f"sin({a})")
         q = (R.fresh("p", f"{cs}*{p[0]} - {sn}*{p[1]}"), R.fresh("p", f"{sn}*{p[0]} + {cs}*{p[1]}"), p[2])
         return R.render(other, q)
 
-    return SDF(render, _box_radial(other._box, (0, 1)), f"twist({other._desc}, {k!r})", (other,))
+    return SDF(render, _box_radial(other._box, (0, 1)), f"{name}({other._desc}, {k!r})", (other,))
+
+
+def twist(other, k):
+    """The model twisted about Z by k radians per unit of z (not distance-preserving)."""
+    return _turn_xy(other, k, 2, "twist")
 
 
 def bend(other, k):
     """The model bent in the XY plane: (x, y) turned by k x radians, as fogleman/sdf (not
     distance-preserving)."""
-    other = _check(other, "bend")
-    k = _scalar(k, "bend: k")
-
-    def render(R, p):
-        a = R.named("a", _lin((k,), (p[0],)))
-        cs, sn = R.named("c", f"cos({a})"), R.named("c", f"sin({a})")
-        q = (R.fresh("p", f"{cs}*{p[0]} - {sn}*{p[1]}"), R.fresh("p", f"{sn}*{p[0]} + {cs}*{p[1]}"), p[2])
-        return R.render(other, q)
-
-    return SDF(render, _box_radial(other._box, (0, 1)), f"bend({other._desc}, {k!r})", (other,))
+    return _turn_xy(other, k, 0, "bend")

@@ -159,21 +159,6 @@ std::vector<HardSurface> hard_surfaces() {
   return v;
 }
 
-struct Reference {
-  int components, genus;
-  bool stable;
-};
-
-// Computed once per surface (the factors share it).
-Reference marching_reference(const std::string& name, const Field& field) {
-  static std::map<std::string, Reference> cache;
-  if (const auto it = cache.find(name); it != cache.end()) return it->second;
-  const MeshTopology a = analyze_topology(test::marching_tetrahedra_reference(field, 56));
-  const MeshTopology b = analyze_topology(test::marching_tetrahedra_reference(field, 72));
-  const Reference r{static_cast<int>(a.components), a.genus, a.components == b.components && a.genus == b.genus};
-  return cache[name] = r;
-}
-
 // Issue 12 asks for every factor and every tolerance: the suite runs three tolerances beside its
 // factors, a coarse one (edges up to max_edge on flat parts), one in between and a fine one.
 constexpr double kTolerances[] = {1e-1, 1e-2, 1e-3};
@@ -217,7 +202,7 @@ TEST_P(HardSurfaces, CorrectMeshOrClearError) {
     const MeshTopology t = analyze_topology(r.mesh);
     int components = h.components, genus = h.genus;
     if (components < 0) {
-      const Reference ref = marching_reference(h.name, *field);
+      const test::MarchingReference ref = test::marching_reference(h.name, *field);
       if (!ref.stable) GTEST_SKIP() << h.name << ": the marching reference is not stable between grid sizes";
       components = ref.components, genus = ref.genus;
     }

@@ -80,19 +80,6 @@ std::vector<SdfModel> sdf_models() {
   return v;
 }
 
-struct Reference {
-  int components, genus;
-  bool stable;
-};
-
-Reference marching_reference(const std::string& name, const Field& field) {
-  static std::map<std::string, Reference> cache;
-  if (const auto it = cache.find(name); it != cache.end()) return it->second;
-  const MeshTopology a = analyze_topology(test::marching_tetrahedra_reference(field, 56));
-  const MeshTopology b = analyze_topology(test::marching_tetrahedra_reference(field, 72));
-  return cache[name] = {static_cast<int>(a.components), a.genus, a.components == b.components && a.genus == b.genus};
-}
-
 struct Case {
   std::size_t model;
   double factor;
@@ -126,7 +113,7 @@ TEST_P(SdfModels, MeshWithTheirCreasesAndGoodTriangles) {
   const MeshTopology t = analyze_topology(r.mesh);
   int components = m.components, genus = m.genus;
   if (components < 0) {
-    const Reference ref = marching_reference(m.name, *field);
+    const test::MarchingReference ref = test::marching_reference(m.name, *field);
     ASSERT_TRUE(ref.stable) << m.name << ": the marching reference is not stable between grid sizes";
     components = ref.components, genus = ref.genus;
   }
@@ -136,7 +123,9 @@ TEST_P(SdfModels, MeshWithTheirCreasesAndGoodTriangles) {
   EXPECT_EQ(r.stats.extra.at("uncovered_crossings").get<std::size_t>(), 0u);
   // Creases followed, not meshed across after a failed layout.
   EXPECT_EQ(r.stats.extra.at("creases.fallback").get<std::string>(), "") << m.name;
-  if (m.creased) EXPECT_GT(r.stats.extra.at("creases.curves").get<double>(), 0) << m.name;
+  if (m.creased) {
+    EXPECT_GT(r.stats.extra.at("creases.curves").get<double>(), 0) << m.name;
+  }
   const double min_angle = r.stats.extra.at("min_angle_degrees").get<double>();
   EXPECT_GE(min_angle, m.creased ? 5.0 : 20.0) << m.name;
   std::cout << "sdf-model " << m.name << " " << case_name({GetParam(), 0}) << ": " << t.triangles << " triangles, "

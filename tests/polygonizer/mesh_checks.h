@@ -154,6 +154,20 @@ inline ShapeStats shape_stats(const Mesh& mesh) {
   return s;
 }
 
+// Components and genus of a field's surface from marching tetrahedra at 56 and 72 cells, and
+// whether the two grids agree (a reference is trusted only then); computed once per name.
+struct MarchingReference {
+  int components, genus;
+  bool stable;
+};
+inline MarchingReference marching_reference(const std::string& name, const Field& field) {
+  static std::map<std::string, MarchingReference> cache;
+  if (const auto it = cache.find(name); it != cache.end()) return it->second;
+  const MeshTopology a = analyze_topology(marching_tetrahedra_reference(field, 56));
+  const MeshTopology b = analyze_topology(marching_tetrahedra_reference(field, 72));
+  return cache[name] = {static_cast<int>(a.components), a.genus, a.components == b.components && a.genus == b.genus};
+}
+
 // A mesh a polygonizer may hand out: closed, edge- and vertex-manifold, oriented, outward
 // (positive volume), free of self-intersections.
 inline void expect_sound(const Mesh& mesh, const std::string& what) {
