@@ -35,13 +35,17 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("."), help="output folder (default: .)")
     parser.add_argument("--factor", type=float, default=3, help="the paper's heuristic factor (default 3)")
+    parser.add_argument("--black-box", action="store_true",
+                        help="call the function on every batch of points instead of tracing it (see cdp.trace)")
     parser.add_argument("--render", type=pathlib.Path, default=ROOT / "build" / "bin" / "render",
                         help="the render program (default: build/bin/render of this tree)")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
 
-    # No gradient or Hessian given: central differences (python/README.md has the steps).
-    field = cdp.callable_field(wavy_torus, bounds=((-1.5, -1.5, -0.5), (1.5, 1.5, 0.5)))
+    # Traced (cdp.trace): numpy arithmetic becomes an expression with exact derivatives, and no
+    # Python runs while meshing. With --black-box, the function is called on every batch of
+    # points and its derivatives come from central differences (python/README.md has the steps).
+    field = cdp.callable_field(wavy_torus, bounds=((-1.5, -1.5, -0.5), (1.5, 1.5, 0.5)), trace=not args.black_box)
     start = time.perf_counter()
     V, F, N, stats = cdp.polygonize(field, method="adaptive", factor=args.factor, return_normals=True)
     seconds = time.perf_counter() - start
@@ -53,7 +57,8 @@ def main():
           f"minimum angle {stats['min_angle_degrees']:.1f} deg")
     print(f"{seconds:.2f} s; field evaluations: {evaluations['value']} values, "
           f"{evaluations['value_gradient']} value+gradient, {evaluations['gradient_hessian']} gradient+Hessian; "
-          f"{field.python_calls} Python calls ({field.python_calls / stats['triangles']:.1f} per triangle)")
+          + (f"{field.python_calls} Python calls ({field.python_calls / stats['triangles']:.1f} per triangle)"
+             if isinstance(field, cdp.CallableField) else "traced: no Python calls while meshing"))
     print(f"maximum absolute curvature on the mesh: {curvature['mac'].min():.3g} to {curvature['mac'].max():.3g}")
 
     mesh_path = args.out / "wavy_torus.ply"

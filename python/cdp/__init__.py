@@ -1,5 +1,6 @@
 """The package `cdp`: the compiled module `cdp._cdp` re-exported (see python/README.md), and
-`cdp.sdf`, signed distance models written like fogleman/sdf (python/cdp/sdf.py).
+`cdp.sdf`, signed distance models written like fogleman/sdf (python/cdp/sdf.py), and `cdp.trace`,
+numpy functions of points turned into expression fields (python/cdp/trace.py).
 
 The functions that take a field also take anything with a `field()` method (a `cdp.sdf.SDF`):
 it is called with no arguments first (its box, padded), otherwise they are `cdp._cdp`'s own.
@@ -32,3 +33,28 @@ for _name in ("polygonize", "marching_cubes", "marching_tetrahedra", "curvature"
 del _name
 
 from . import sdf  # noqa: E402  (after the names above, which sdf does not use)
+from .trace import TraceError, trace, trace_formula  # noqa: E402
+
+__all__ += ["TraceError", "trace", "trace_formula"]
+
+
+@_functools.wraps(_cdp.callable_field)
+def callable_field(f, bounds, gradient=None, hessian=None, *, trace=True, **kwargs):
+    black_box = _cdp.callable_field(f, bounds, gradient, hessian, **kwargs)  # checks every argument
+    if trace and gradient is None and hessian is None:
+        try:
+            return globals()["trace"](f, bounds)
+        except TraceError:
+            pass  # a black box after all: derivatives by central differences, creases unknown
+    return black_box
+
+
+callable_field.__module__ = __name__
+callable_field.__doc__ = (
+    "callable_field(f, bounds, gradient=None, hessian=None, *, trace=True, lipschitz=None, gradient_step=None, "
+    "hessian_step=None, smooth=False)\n\n"
+    "A field from a Python function of points. With trace=True (the default) and no gradient or hessian given, f "
+    "is first traced (cdp.trace: called once on symbols; a function made of numpy arithmetic becomes an "
+    "expression field with exact derivatives and known creases, and no Python runs while meshing); if it cannot "
+    "be (cdp.trace(f, bounds) raises TraceError saying why), or with trace=False, it is the black box below, "
+    "called on every batch of points.\n\n" + (_cdp.callable_field.__doc__ or ""))

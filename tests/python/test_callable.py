@@ -56,7 +56,7 @@ def test_python_errors_in_the_field_propagate_and_leave_nothing_broken(expressio
             raise ArithmeticError("call 30 fails")
         return torus(p)
 
-    field = cdp.callable_field(flaky, BOX)
+    field = cdp.callable_field(flaky, BOX, trace=False)
     with pytest.raises(ArithmeticError, match="call 30 fails"):
         cdp.polygonize(field, factor=3)
     V, F, _ = cdp.polygonize(field, factor=3)  # the same field, the same module: fine again
@@ -76,7 +76,7 @@ def test_the_tracker_calls_python_once_per_batch_not_once_per_point(expression):
         sizes.append(len(p))
         return torus(p)
 
-    field = cdp.callable_field(recorded, BOX)
+    field = cdp.callable_field(recorded, BOX, trace=False)
     V, F, stats = cdp.polygonize(field, factor=3)
     evaluations = stats["field_evaluations"]
     # Every evaluation is in exactly one call: the seed grid's values all in the first call
@@ -117,7 +117,7 @@ def test_the_marching_methods_call_python_in_batches(expression, method, travers
         sizes.append(len(p))
         return torus(p)
 
-    field = cdp.callable_field(recorded, BOX)
+    field = cdp.callable_field(recorded, BOX, trace=False)
     V, F, stats = cdp.polygonize(field, method, cell=0.05, traversal=traversal)
     evaluations = stats["field_evaluations"]
     # Every evaluation is in exactly one call (7 points for a value and gradient by central
@@ -150,7 +150,7 @@ def test_a_callable_promised_smooth_skips_the_crease_probes():
     """smooth=True (the zero set has no creases) spares the repair's crease probes, three calls
     per vertex it touches, and changes nothing in the mesh; the default is False, as for any
     callable, which may hide a crease."""
-    assert cdp.callable_field(torus, BOX).smooth is False
+    assert cdp.callable_field(torus, BOX, trace=False).smooth is False
     assert cdp.expression("x^2 + y^2 + z^2 - 1", bounds=BOX).smooth is False  # a polynomial may have a node
     assert cdp.field_from_json({"type": "torus", "major_radius": 1, "minor_radius": 0.3}).smooth is True
     plain = cdp.callable_field(torus, BOX, gradient=torus_gradient)

@@ -131,13 +131,13 @@ def torus_numpy(p):
 
 
 def test_callable_field_values_are_one_vectorised_call():
-    f = cdp.callable_field(torus_numpy, BOX)
+    f = cdp.callable_field(torus_numpy, BOX, trace=False)
     assert isinstance(f, cdp.CallableField) and f.type == "python"
     p = np.random.default_rng(1).uniform(-1.5, 1.5, (1000, 3))
     assert np.array_equal(f.values(p), torus_numpy(p))
     assert f.python_calls == 1
     assert f.lipschitz_bound is None
-    assert cdp.callable_field(torus_numpy, BOX, lipschitz=4).lipschitz_bound == 4
+    assert cdp.callable_field(torus_numpy, BOX, lipschitz=4, trace=False).lipschitz_bound == 4
     assert np.array_equal(f.bounds, np.array(BOX, dtype=float))
 
 
@@ -145,7 +145,7 @@ def test_central_differences_against_exact_expression_derivatives():
     """The callable field evaluates the expression itself, so what differs from the expression's
     exact (automatic) derivatives is the finite differences alone."""
     exact = cdp.expression(TORUS, bounds=BOX)
-    approx = cdp.callable_field(exact.values, BOX)
+    approx = cdp.callable_field(exact.values, BOX, trace=False)
     p = np.random.default_rng(2).uniform(-1.2, 1.2, (400, 3)) * [1, 1, 0.3]
     # Away from the z axis, where sqrt(x^2 + y^2) is not differentiable.
     p = p[np.hypot(p[:, 0], p[:, 1]) > 0.3]
@@ -166,7 +166,7 @@ def test_central_differences_against_exact_expression_derivatives():
         sizes.append(len(q))
         return exact.values(q)
 
-    counted = cdp.callable_field(recorded, BOX)
+    counted = cdp.callable_field(recorded, BOX, trace=False)
     assert np.array_equal(counted.gradients(p[:3]), approx.gradients(p[:3]))
     assert np.array_equal(counted.hessians(p[:3]), approx.hessians(p[:3]))
     assert counted.python_calls == 2 and sizes == [3 * 7, 3 * 25]

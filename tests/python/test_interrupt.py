@@ -70,7 +70,7 @@ def test_sigint_interrupts_a_callable_field(reference):
     def torus(p):
         return (np.sqrt(p[:, 0] ** 2 + p[:, 1] ** 2) - 1) ** 2 + p[:, 2] ** 2 - 0.09
 
-    field = cdp.callable_field(torus, ((-1.5, -1.5, -0.5), (1.5, 1.5, 0.5)))
+    field = cdp.callable_field(torus, ((-1.5, -1.5, -0.5), (1.5, 1.5, 0.5)), trace=False)
     assert interrupted_after(lambda: cdp.polygonize(field, factor=20)) < 2.0
     still_works(reference)
 
@@ -84,7 +84,7 @@ def test_keyboard_interrupt_raised_by_the_function(reference):
             raise KeyboardInterrupt
         return (np.sqrt(p[:, 0] ** 2 + p[:, 1] ** 2) - 1) ** 2 + p[:, 2] ** 2 - 0.09
 
-    field = cdp.callable_field(torus, ((-1.5, -1.5, -0.5), (1.5, 1.5, 0.5)))
+    field = cdp.callable_field(torus, ((-1.5, -1.5, -0.5), (1.5, 1.5, 0.5)), trace=False)
     with pytest.raises(KeyboardInterrupt):
         cdp.polygonize(field, factor=3)
     still_works(reference)
