@@ -112,6 +112,32 @@ TEST(Expression, DefinitionsNameSubExpressions) {
   EXPECT_EQ(error_with("a", {{"2a", "1"}}), "expression: definition name '2a' is not a name (letters, digits, _)");
 }
 
+TEST(Expression, ASubtreeWrittenTwiceIsOneBranchPoint) {
+  // The smooth union's clamp written out at each use, as people write it without "define":
+  // shared, its min and max are two branch points, not six, and C1 (Field::branch_kinds).
+  const Box box{{-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}};
+  const std::string a = "(sqrt((x-0.3)^2+y^2+z^2)-0.5)", b = "(sqrt((x+0.3)^2+y^2+z^2)-0.5)";
+  const std::string h = "clamp(0.5+0.5*(" + b + "-" + a + ")/0.3, 0, 1)";
+  const Expression flat(b + "*(1-" + h + ")+" + a + "*" + h + "-0.3*" + h + "*(1-" + h + ")", {}, box);
+  const Expression named("b*(1-h)+a*h-0.3*h*(1-h)", {}, box,
+                         {{"a", a}, {"b", b}, {"h", "clamp(0.5+0.5*(b-a)/0.3, 0, 1)"}});
+  EXPECT_EQ(flat.branch_kinds().size(), 2u);
+  for (const Field::BranchKind k : flat.branch_kinds()) EXPECT_NE(k, Field::BranchKind::Creased);
+  EXPECT_FALSE(flat.has_pieces());
+  // The same bits as the named form and as each copy evaluated apart.
+  for (const Vec3 p : {Vec3(0.1, 0.2, 0.3), Vec3(-0.7, 0.05, 0.4), Vec3(0.9, -0.3, 0.0)}) {
+    Vec3 g1, g2;
+    Mat3 H1, H2;
+    EXPECT_EQ(flat.gradient_hessian(p, g1, H1), named.gradient_hessian(p, g2, H2));
+    EXPECT_EQ(g1, g2);
+    EXPECT_EQ(H1, H2);
+  }
+  // mod repeats its dividend; a branch point in it is one.
+  EXPECT_EQ(Expression("mod(abs(x) - 0.5, 0.3)", {}, box).branch_kinds().size(), 1u);
+  // Different constants are different subtrees.
+  EXPECT_EQ(Expression("max(x, 0.5) + max(x, 0.25)", {}, box).branch_kinds().size(), 2u);
+}
+
 TEST(Expression, SyntaxErrorsNameThePosition) {
   EXPECT_EQ(error_of("x + * y"), "expression: unexpected '*' at position 5");
   EXPECT_EQ(error_of("x + (y"), "expression: expected ')', found the end at position 7");

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
+#include <map>
 #include <limits>
 #include <new>
 #include <numbers>
@@ -147,6 +149,71 @@ struct Definitions {
   std::map<std::string, Entry> entries;
   std::vector<Instruction> code;  // the definitions used, each followed by its Store
   int slots = 0;
+};
+
+// Emits a tree's code with each subtree written more than once computed once: the first copy
+// is stored into a slot (and loaded back), the others load it. A smooth union written out by
+// hand repeats its clamp at each of its three uses, and mod repeats its dividend: as copies,
+// each min, max and abs of them would be a branch point of its own, which Field::branch_kinds
+// classifies and pieces() splits apart independently (the flat smooth union at factor 3 traced
+// 148 crease curves where two copies switch at different points of the same seam, then fell
+// back); shared, the copies are one branch point. The values are the same bits either way.
+// Slots beyond kMaxDefinitions (shared with the named sub-expressions) are not taken: the
+// copies are then emitted as written.
+class SharedEmitter {
+ public:
+  SharedEmitter(std::vector<Instruction>& code, int& slots) : code_(code), slots_(slots) {}
+
+  void emit(const Node& root) {
+    number(root);
+    count(root);
+    out(root);
+  }
+
+ private:
+  // Structurally equal subtrees get the same number (children first).
+  int number(const Node& n) {
+    std::vector<int> key{static_cast<int>(n.op)};
+    std::uint64_t bits;
+    static_assert(sizeof bits == sizeof n.constant);
+    std::memcpy(&bits, &n.constant, sizeof bits);
+    key.push_back(static_cast<int>(bits & 0xffffffffu));
+    key.push_back(static_cast<int>(bits >> 32));
+    for (const Node& a : n.args) key.push_back(number(a));
+    const auto [it, added] = numbers_.try_emplace(std::move(key), static_cast<int>(numbers_.size()));
+    id_[&n] = it->second;
+    return it->second;
+  }
+  // Uses of each subtree, a repeated copy's insides counted with its first copy only.
+  void count(const Node& n) {
+    if (uses_[id_[&n]]++ > 0) return;
+    for (const Node& a : n.args) count(a);
+  }
+  void out(const Node& n) {
+    const int id = id_[&n];
+    const bool shared = !n.args.empty() && uses_[id] > 1;
+    if (shared) {
+      if (const auto it = slot_.find(id); it != slot_.end()) {
+        code_.push_back({Op::Load, static_cast<double>(it->second)});
+        return;
+      }
+    }
+    for (const Node& a : n.args) out(a);
+    code_.push_back({n.op, n.constant});
+    if (shared && slots_ < kMaxDefinitions) {
+      const int slot = slots_++;
+      slot_[id] = slot;
+      code_.push_back({Op::Store, static_cast<double>(slot)});
+      code_.push_back({Op::Load, static_cast<double>(slot)});
+    }
+  }
+
+  std::vector<Instruction>& code_;
+  int& slots_;
+  std::map<std::vector<int>, int> numbers_;
+  std::map<const Node*, int> id_;
+  std::map<int, int> uses_;
+  std::map<int, int> slot_;
 };
 
 // Recursive-descent parser:
@@ -319,7 +386,9 @@ class Parser {
       } else {
         if (definitions_.slots >= kMaxDefinitions)
           error("more than " + std::to_string(kMaxDefinitions) + " definitions in use");
-        emit(n, definitions_.code);
+        SharedEmitter(definitions_.code, definitions_.slots).emit(n);
+        if (definitions_.slots >= kMaxDefinitions)
+          error("more than " + std::to_string(kMaxDefinitions) + " definitions in use");
         e.slot = definitions_.slots++;
         definitions_.code.push_back({Op::Store, static_cast<double>(e.slot)});
       }
@@ -433,8 +502,8 @@ Expression::Expression(const std::string& formula, const std::map<std::string, d
   detail::Parser parser(formula_, params, defs);
   const detail::Node root = parser.parse();
   program_->code = std::move(defs.code);
+  detail::SharedEmitter(program_->code, defs.slots).emit(root);
   program_->slots = defs.slots;
-  detail::Parser::emit(root, program_->code);
   for (const auto& in : program_->code)
     if (in.op == detail::Op::Min || in.op == detail::Op::Max || in.op == detail::Op::Abs) ++program_->branch_points;
   if (detail::stack_depth(program_->code) > detail::kMaxStack)
