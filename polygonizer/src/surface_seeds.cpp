@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace cdp {
@@ -58,10 +59,34 @@ SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options) {
     });
   else
     field.values(points.data(), g.values.data(), count);
-  for (std::size_t i = 0; i < count; ++i)
-    if (!std::isfinite(g.values[i]))
-      throw NoSurfaceError("seeding: the field is not finite (" + std::to_string(g.values[i]) + ") at " +
-                           format_point(points[i]));
+  // NaN counts as outside, so that a function undefined far from its surface (scikit-image's
+  // marching cubes meshes such a grid too) is meshed; but not next to the inside, where the
+  // surface may pass through the part where F is undefined.
+  constexpr double kFar = std::numeric_limits<double>::max();
+  std::vector<char> undefined;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (std::isfinite(g.values[i])) continue;
+    if (g.non_finite++ == 0) undefined.assign(count, 0);
+    if (std::isnan(g.values[i])) undefined[i] = 1;
+    g.values[i] = g.values[i] < 0 ? -kFar : kFar;
+  }
+  if (g.non_finite > 0)
+    for (int k = 0; k <= g.n[2]; ++k)
+      for (int j = 0; j <= g.n[1]; ++j)
+        for (int i = 0; i <= g.n[0]; ++i) {
+          if (!undefined[g.index(i, j, k)]) continue;
+          for (int axis = 0; axis < 3; ++axis)
+            for (const int step : {-1, 1}) {
+              std::array<int, 3> b{i, j, k};
+              b[axis] += step;
+              if (b[axis] < 0 || b[axis] > g.n[axis] || !(g.value(b[0], b[1], b[2]) < 0)) continue;
+              throw NoSurfaceError("seeding: the field is not finite (nan) at " + format_point(g.point(i, j, k)) +
+                                   ", next to the inside (F = " + std::to_string(g.value(b[0], b[1], b[2])) +
+                                   " at " + format_point(g.point(b[0], b[1], b[2])) +
+                                   "): the surface may pass where F is undefined; define F there or give "
+                                   "\"bounds\" that leave it out (NaN away from the surface counts as outside)");
+            }
+        }
   if (options.require_closed_in_box) {
     std::size_t boundary_nodes = 0, negative = 0;
     std::array<int, 3> first_negative{};

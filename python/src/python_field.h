@@ -35,6 +35,11 @@ class PythonField final : public Field {
   std::string type_name() const override { return "python"; }
   std::optional<double> lipschitz_bound() const override { return lipschitz_; }
   bool smooth() const override { return smooth_; }  // as its caller promised
+  // The Hessian's step: second differences of F, or first differences of the given gradient.
+  std::optional<double> derivative_step() const override {
+    if (has_hessian() && has_gradient()) return std::nullopt;
+    return has_gradient() || has_hessian() ? gradient_step_ : hessian_step_;
+  }
 
   double gradient_step() const { return gradient_step_; }
   double hessian_step() const { return hessian_step_; }

@@ -140,5 +140,33 @@ TEST(AdaptiveSeeding, SameMeshBitForBitWithTheSearch) {
   ASSERT_EQ(a.mesh.positions, b.mesh.positions);
 }
 
+TEST(AdaptiveSeeding, NaNAwayFromTheSurfaceCountsAsOutside) {
+  // sqrt(1.6 - x) is NaN beyond x = 1.6, far from the unit sphere: those nodes are outside (and
+  // counted); the sphere is meshed as if they were positive. Two spheres, one of them within
+  // reach of the undefined part, are both meshed.
+  const auto f = test::field_from_json(R"J({"type": "expression",
+      "value": "sqrt(x^2+y^2+z^2) - 1 + 0*sqrt(1.6 - x)", "bounds": [[-2,-2,-2],[2,2,2]]})J");
+  expect_components(*f, at_factor(3), 1, 0, "one sphere");
+  const PolygonizeResult r = polygonize_adaptive(*f, at_factor(3));
+  EXPECT_GT(r.stats.extra.at("non_finite_samples").get<std::size_t>(), 0u);
+  const auto g = test::field_from_json(R"J({"type": "expression",
+      "value": "min(sqrt(x^2+y^2+z^2) - 1, sqrt((x-1.6)^2+y^2+z^2) - 0.2) + 0*sqrt(1.95 - x)",
+      "bounds": [[-2,-2,-2],[2,2,2]]})J");
+  expect_components(*g, at_factor(3), 2, 0, "two spheres");
+}
+
+TEST(AdaptiveSeeding, NaNNextToTheInsideIsAnError) {
+  // The solid reaches where F is undefined: the surface may pass there.
+  const auto f = test::field_from_json(R"J({"type": "expression",
+      "value": "sqrt(x^2+y^2+z^2) - 1 + 0*sqrt(0.5 - x)", "bounds": [[-2,-2,-2],[2,2,2]]})J");
+  try {
+    polygonize_adaptive(*f, at_factor(3));
+    FAIL() << "no error";
+  } catch (const NoSurfaceError& e) {
+    EXPECT_NE(std::string(e.what()).find("not finite (nan) at"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("next to the inside"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace cdp

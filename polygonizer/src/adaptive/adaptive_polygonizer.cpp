@@ -333,6 +333,18 @@ bool remeshing_allowed(const AdaptiveOptions& o) {
 // caller's retry. `look_ahead`: Settings::look_ahead on every front (the run polygonize_adaptive
 // makes again when a mesh misses issue 18's bounds). `max_turn` > 0: Sizing::max_turn from the
 // start, the crease-aware patches included (polygonize_adaptive_once's last run in tolerance mode).
+// A run that fails having met a bend tighter than the step of a black box's central differences
+// (Field::derivative_step) met a crease or corner of the function that the field does not
+// describe: differences across it turn the normal within a step, a curvature no edge follows,
+// and no branch data say where the two faces are. Meshing it again (carefully, with finer turns,
+// with min_edge lowered) fails too, after several times as long (the issue's gyroid clipped by a
+// ball as a Python function: the first run failed at 3 s, the last at 17 s), so the run stops
+// at the first failure and says so.
+bool kink_in_black_box(const Field& field, const std::pair<double, Vec3>& bend) {
+  const std::optional<double> step = field.derivative_step();
+  return step && bend.first < *step;
+}
+
 PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases,
                            std::pair<double, Vec3>& bend, bool look_ahead = false, double max_turn = 0) {
   const auto start = std::chrono::steady_clock::now();
@@ -524,7 +536,18 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
     note_tightest();
     bend = tightest;
     std::string message = e.what();
-    if (tightest.first < s.sizing.min_edge) {
+    if (kink_in_black_box(field, tightest)) {
+      // The cause first: the tracker's own advice (a smaller min_edge) does not help here.
+      std::ostringstream kink;
+      kink << "adaptive: the normal turns within " << tightest.first << " near " << format_point(tightest.second)
+           << ", less than the step of the central differences that give this field's derivatives ("
+           << *field.derivative_step() << "): a crease or corner of the function (a min, max, abs or branch in "
+           << "it) that the field does not describe, which no mesh of it follows; a field that names its min, max "
+           << "and abs (an expression, or from Python a cdp.sdf model or a numpy function cdp.trace can follow) is "
+           << "meshed along its creases, and exact gradient and Hessian functions resolve a smooth bend this tight. "
+           << "Where the run stopped: " << message;
+      message = kink.str();
+    } else if (tightest.first < s.sizing.min_edge) {
       std::ostringstream bend;
       bend << "; the surface bends with a radius of curvature of " << tightest.first << " near "
            << format_point(tightest.second) << ", below min_edge (" << s.sizing.min_edge
@@ -777,12 +800,16 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
     return false;
   };
   try {
+    const auto hopeless = [&] {
+      note_tightest();
+      return kink_in_black_box(field, tightest);
+    };
     try {
       attempt();
     } catch (const NoSurfaceError&) {
-      if (!rerun_around_necks() && !retry_carefully() && !retry_finer()) throw;
+      if (hopeless() || (!rerun_around_necks() && !retry_carefully() && !retry_finer())) throw;
     } catch (const LimitExceededError&) {
-      if (!retry_carefully() && !retry_finer()) throw;
+      if (hopeless() || (!retry_carefully() && !retry_finer())) throw;
     }
   } catch (const NoSurfaceError& e) {
     throw NoSurfaceError(why(e));
@@ -817,6 +844,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
   st.extra["hessian_seconds"] = tracker->hessian_seconds();
   st.extra["failed_seeds"] = seeding.failed_seeds;
   st.extra["sign_changes"] = seeding.sign_changes;
+  st.extra["non_finite_samples"] = grid.non_finite;
   st.extra["covered_nearby"] = seeding.covered_nearby;
   st.extra["below_resolution"] = seeding.below_resolution;
   st.extra["uncovered_crossings"] = seeding.uncovered;
@@ -843,6 +871,9 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
   st.extra["necks.reruns"] = neck_reruns;
   note_tightest();
   st.extra["curvature.min_radius"] = std::isfinite(tightest.first) ? tightest.first : -1.0;
+  // A mesh made across a crease of a black box (see kink_in_black_box) that held together: the
+  // crease is cut across by chords, not followed.
+  st.extra["creases.across_black_box"] = kink_in_black_box(field, tightest);
   st.extra["min_angle_degrees"] = min_angle_degrees(mesh);
   st.extra["edge_length.min"] = s.sizing.min_edge;
   st.extra["edge_length.max"] = s.sizing.max_edge;
@@ -993,10 +1024,12 @@ PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOpti
   try {
     return mesh_once(field, options, phases, bend);
   } catch (const NoSurfaceError& e) {
+    if (kink_in_black_box(field, bend)) throw;
     lowered = lowered_min_edge(field, options, bend);
     if (!lowered && !may_limit_turn) throw;
     no_surface = e;
   } catch (const LimitExceededError& e) {
+    if (kink_in_black_box(field, bend)) throw;
     lowered = lowered_min_edge(field, options, bend);
     if (!lowered && !may_limit_turn) throw;
     limit = e;

@@ -177,6 +177,12 @@ class Field {
   // coordinates), and an expression too (sqrt(x^2) is |x|; a polynomial may have a node on its
   // zero set, x^2 + y^2 - z^2), which only the probes find.
   virtual bool smooth() const { return false; }
+  // The step of the central differences this model's derivatives come from (a black box, such
+  // as a Python function given without its derivatives: its curvature comes from differences
+  // of values this far apart), or none where they are exact. A bend tighter than that step is
+  // beyond what those derivatives resolve: where a run fails on one, the adaptive polygonizer
+  // reports a crease the field does not describe instead of meshing again (adaptive_polygonizer.cpp).
+  virtual std::optional<double> derivative_step() const { return std::nullopt; }
   // The piece with `branch` (from pieces()) at another point: the same smooth function, its
   // branches fixed, wherever p is. Throws InvalidInputError for a branch the model cannot have
   // made. Counted as one gradient_hessian.

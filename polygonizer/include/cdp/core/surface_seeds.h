@@ -32,6 +32,7 @@ struct SeedGrid {
   double h = 1;
   std::array<int, 3> n{1, 1, 1};
   std::vector<double> values;  // node (i, j, k) at index(i, j, k)
+  std::size_t non_finite = 0;  // nodes where F was NaN or infinite (sample_seed_grid's rule)
   std::size_t index(int i, int j, int k) const {
     return (static_cast<std::size_t>(k) * (n[1] + 1) + j) * (n[0] + 1) + i;
   }
@@ -53,9 +54,13 @@ struct SeedGrid {
   }
 };
 
-// Samples the grid (one batched evaluation). Throws InvalidInputError for a resolution below 2
-// or a grid of more than 2^31 nodes, NoSurfaceError when F is not finite at a node or (with
-// require_closed_in_box) negative on the box's boundary.
+// Samples the grid (one batched evaluation). A node where F is NaN or +infinity counts as
+// outside (its value becomes the largest double), one at -infinity as inside (the lowest), so
+// that a function undefined away from its surface (a NaN far out in the box) is meshed; the
+// count is in SeedGrid::non_finite. Throws InvalidInputError for a resolution below 2 or a grid
+// of more than 2^31 nodes, NoSurfaceError where a NaN node lies next to an inside node (the
+// surface may pass where F is undefined) or (with require_closed_in_box) F is negative on the
+// box's boundary.
 SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options = {});
 
 // Every grid edge with a sign change, its crossing point linearly interpolated (not on the
