@@ -295,7 +295,9 @@ BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 2)->UseManualTime
 
 // Models written as SDF code writes them, at factor 3: a rounded box, a smooth union of it with a
 // sphere (both C1 where their max and clamps switch: no crease), the union minus a cylinder (C1
-// seams and two sharp rims) and fogleman/sdf's README model (sharp creases only). Each
+// seams and two sharp rims), fogleman/sdf's README model (sharp creases only), a Menger sponge of
+// level 1 (creases meeting six at a corner) and two equal pipes crossing in a box (creases that
+// cross where their pieces are tangent). Each
 // iteration meshes the model with its creases followed (the defaults), then ignored, then a
 // smooth sphere (an expression of its own): `creases_cost_ratio` is the first time over the
 // second (the SDF-models issue: at most 1.5 where the model is C1), `per_triangle_vs_sphere`
@@ -309,13 +311,19 @@ void BM_AdaptiveSdf(benchmark::State& state) {
       {"u", "b+h*(a-b)-0.2*h*(1-h)"}};
   const Box box{Vec3::Constant(-1.2), Vec3::Constant(1.2)};
   const int which = static_cast<int>(state.range(0));
-  static const char* kNames[] = {"rounded_box", "smooth_union", "smooth_union_minus_cylinder", "fogleman_readme"};
-  const Expression field = which == 0   ? Expression(kRoundedBox, {}, box)
-                           : which == 1 ? Expression("u", {}, box, blend)
-                           : which == 2 ? Expression("max(u, 0.2-sqrt(x^2+y^2))", {}, box, blend)
-                                        : Expression("max(max(sqrt(x^2+y^2+z^2)-1, max(abs(x),abs(y),abs(z))-0.75), "
-                                                     "-min(hypot(y,z)-0.5, hypot(x,z)-0.5, hypot(x,y)-0.5))",
-                                                     {}, box);
+  static const char* kNames[] = {"rounded_box",     "smooth_union", "smooth_union_minus_cylinder",
+                                 "fogleman_readme", "menger_level1", "crossed_pipes"};
+  const Expression field =
+      which == 0   ? Expression(kRoundedBox, {}, box)
+      : which == 1 ? Expression("u", {}, box, blend)
+      : which == 2 ? Expression("max(u, 0.2-sqrt(x^2+y^2))", {}, box, blend)
+      : which == 3 ? Expression("max(max(sqrt(x^2+y^2+z^2)-1, max(abs(x),abs(y),abs(z))-0.75), "
+                                "-min(hypot(y,z)-0.5, hypot(x,z)-0.5, hypot(x,y)-0.5))",
+                                {}, box)
+      : which == 4 ? Expression("max(max(abs(x),abs(y),abs(z))-1, -min(max(abs(x),abs(y))-0.4, "
+                                "max(abs(y),abs(z))-0.4, max(abs(x),abs(z))-0.4))",
+                                {}, Box{Vec3::Constant(-1.3), Vec3::Constant(1.3)})
+                   : Expression("max(min(hypot(y,z)-0.5, hypot(x,z)-0.5), max(abs(x),abs(y),abs(z))-1)", {}, box);
   const Expression sphere("sqrt(x^2+y^2+z^2)-1", {}, box);
   AdaptiveOptions o;
   o.factor = 3;
@@ -339,7 +347,7 @@ void BM_AdaptiveSdf(benchmark::State& state) {
   state.counters["per_triangle_vs_sphere"] = follow_per_triangle / sphere_per_triangle;
   state.SetLabel(std::string(kNames[which]) + "/adaptive/factor3");
 }
-BENCHMARK(BM_AdaptiveSdf)->ArgName("model")->DenseRange(0, 3)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AdaptiveSdf)->ArgName("model")->DenseRange(0, 5)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // Components of very different scales: a torus tube of radius 0.003 beside a sphere of radius
 // 1.2 at factor 1, min_edge 1e-4 (the hashes sized by the tube's edges hold the sphere's

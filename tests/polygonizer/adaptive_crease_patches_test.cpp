@@ -184,12 +184,14 @@ TEST(AdaptiveCreases, SameMeshOnAnyThreadCount) {
 }
 
 TEST(AdaptiveCreases, ALayoutThatFailsFallsBackToSmoothMeshingAndSaysWhy) {
-  // A ball capped by the sheet z = -max(0, xy): the sheet's creases along the x and y axes fade
-  // out at the origin, where its two pieces (z and z + xy) become tangent, so a crease ends
-  // without a corner and the patch boundaries cannot be followed. The surface is meshed as a
-  // smooth one and the stats say why. (Two spheres on a bar were this test's case until the
-  // tracing found the corners 0.025 apart where their seam meets the bar: crease_test.cpp.)
-  const auto field = test::field_from_json(expression("max(max(z, z+x*y), sqrt(x^2+y^2+z^2)-1)", -1.5, 1.5));
+  // A ball capped by the sheet z = -max(0, x|y|): the sheet's crease along the y axis fades out
+  // at the origin from both sides, where its two pieces (z and z + x|y|) become tangent, so a
+  // crease ends without a corner and the patch boundaries cannot be followed. The surface is
+  // meshed as a smooth one and the stats say why. (Two spheres on a bar were this test's case
+  // until the tracing found the corners 0.025 apart where their seam meets the bar; then the
+  // sheet z = -max(0, xy), until creases crossing where their pieces are tangent met at a
+  // corner: below.)
+  const auto field = test::field_from_json(expression("max(max(z, z+x*abs(y)), sqrt(x^2+y^2+z^2)-1)", -1.5, 1.5));
   AdaptiveOptions o;
   o.factor = 1;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
@@ -197,6 +199,26 @@ TEST(AdaptiveCreases, ALayoutThatFailsFallsBackToSmoothMeshingAndSaysWhy) {
   EXPECT_NE(r.stats.extra.at("creases.fallback").get<std::string>().find("corner"), std::string::npos);
   EXPECT_EQ(r.stats.extra.at("creases.tracing_resolution").get<int>(), 64);  // tried twice
   EXPECT_TRUE(analyze_topology(r.mesh).watertight());
+}
+
+TEST(AdaptiveCreases, CreasesCrossingWhereTheirPiecesAreTangentAreFollowed) {
+  // The sheet z = -max(0, xy) capping a ball: its creases along the x and y axes fade out at the
+  // origin from four sides, a crossing of the creases of z and z + xy where the two are
+  // tangent. The four arcs end at a corner there, and each piece's patches (opposite quadrants
+  // touching at the corner) are meshed along them.
+  const auto field = test::field_from_json(expression("max(max(z, z+x*y), sqrt(x^2+y^2+z^2)-1)", -1.5, 1.5));
+  for (const double factor : {1.0, 3.0}) {
+    AdaptiveOptions o;
+    o.factor = factor;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    EXPECT_TRUE(r.stats.extra.at("creases.followed").get<bool>());
+    EXPECT_EQ(r.stats.extra.at("creases.fallback").get<std::string>(), "");
+    test::expect_sound(r.mesh, "sheet over a ball");
+    const MeshTopology t = analyze_topology(r.mesh);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.genus, 0);
+    EXPECT_GE(r.stats.extra.at("min_angle_degrees").get<double>(), 20.0);
+  }
 }
 
 TEST(AdaptiveCreases, IgnoredAcuteCreasesAreNamedWhereTheFrontStalls) {

@@ -77,6 +77,17 @@ std::vector<SdfModel> sdf_models() {
              1.2),
        -1, -1, true},
       {"drilled_sphere", model("max(sqrt(x^2+y^2+z^2)-1, 0.05-hypot(x,y))", 1.2), 1, 1, true},
+      // Two pipes of equal radius crossing at right angles, in a box: the two ellipses where the
+      // pipes meet cross at the top and bottom, where the pipes are tangent.
+      {"crossed_pipes", model("max(min(hypot(y,z)-0.5, hypot(x,z)-0.5), max(abs(x),abs(y),abs(z))-1)", 1.2), 1, 0,
+       true},
+      // A Menger sponge of level 1: creases meeting at the openings' corners and at the corners
+      // of the cavity, where six meet and each wall plane touches the corner from two quadrants.
+      {"menger_level1",
+       model("max(max(abs(x),abs(y),abs(z))-1, -min(max(abs(x),abs(y))-0.4, max(abs(y),abs(z))-0.4, "
+             "max(abs(x),abs(z))-0.4))",
+             1.3),
+       1, 5, true},
   };
   return v;
 }

@@ -203,6 +203,48 @@ TEST(CreaseCurves, ACubeHasTwelveEdgesBetweenEightCorners) {
   for (const Vec3& q : r.corners) EXPECT_LE((q.cwiseAbs() - Vec3::Ones()).norm(), tol) << q.transpose();
 }
 
+TEST(CreaseCurves, AMengerSpongeOfLevelOneHasItsSeventyTwoEdges) {
+  // A cube with three square holes crossing: 12 cube edges, 4 rim edges around each of the 6
+  // openings, 4 concave edges along each of the 6 half-tunnels and the 12 convex edges of the
+  // cavity where they cross; corners: the cube's 8, 4 at each opening, the cavity's 8. Where an
+  // opening's corner is, a hole's wall and a crossing hole's face are one plane from two
+  // branches: pairs of pieces that meet only at the corner are no crease (they were 5 curves of
+  // a single point, which the layout refused).
+  const Expression menger = expression(
+      "max(max(abs(x), abs(y), abs(z)) - 1, -min(max(abs(x), abs(y)) - 0.4, max(abs(y), abs(z)) - 0.4, "
+      "max(abs(x), abs(z)) - 0.4))",
+      1.3);
+  const CreaseTracingResult r = trace_creases(menger);
+  EXPECT_EQ(r.curves.size(), 72u);
+  EXPECT_EQ(r.corners.size(), 40u);
+  EXPECT_EQ(r.stops, 0u);
+  for (const CreaseCurve& c : r.curves) {
+    EXPECT_FALSE(c.closed);
+    EXPECT_TRUE(c.starts_at_corner && c.ends_at_corner);
+    const double length = (c.points.back() - c.points.front()).norm();
+    EXPECT_TRUE(std::abs(length - 2) < 1e-6 || std::abs(length - 0.8) < 1e-6 || std::abs(length - 0.6) < 1e-6)
+        << length;
+  }
+}
+
+TEST(CreaseCurves, CreasesThatCrossWhereTheirPiecesAreTangentMeetAtACorner) {
+  // Two equal pipes crossing: the ellipses where they meet (in the planes x = y and x = -y) cross
+  // at (0, 0, +-0.5), where the pipes are tangent. Four arcs, each from one crossing to the other.
+  const Expression pipes = expression("min(hypot(y, z) - 0.5, hypot(x, z) - 0.5)", 1);
+  const CreaseTracingResult r = trace_creases(pipes);
+  EXPECT_EQ(r.stops, 0u);
+  ASSERT_EQ(r.corners.size(), 2u);
+  for (const Vec3& c : r.corners) EXPECT_LT((c.cwiseAbs() - Vec3(0, 0, 0.5)).norm(), 1e-3) << c.transpose();
+  std::size_t arcs = 0;
+  for (const CreaseCurve& c : r.curves) {
+    if (c.closed) continue;  // the rims on the box's faces
+    ++arcs;
+    EXPECT_TRUE(c.starts_at_corner && c.ends_at_corner);
+    EXPECT_NEAR(std::abs(c.points.front().z() - c.points.back().z()), 1.0, 1e-3);
+  }
+  EXPECT_EQ(arcs, 4u);
+}
+
 TEST(CreaseCurves, LoopsOfACylindersRimsTwoSpheresAndABoxMinusASphere) {
   const Expression cylinder = expression("max(sqrt(x^2+y^2)-1, abs(z)-1)");
   const CreaseTracingResult rims = trace_creases(cylinder);

@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numbers>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -288,6 +290,8 @@ std::array<Dart, 2> orient_darts(const Field& field, const LaidCurve& c, int ind
   return out;
 }
 
+bool same_function(const Field& field, const Branch& a, const Branch& b);
+
 struct Cycle {
   Branch piece;
   std::vector<int> vertices;  // closed polygon, patch on the left
@@ -297,8 +301,14 @@ struct Cycle {
 // The boundary cycles of the pieces' patches: a loop's dart is a cycle by itself; a dart that
 // ends at a corner goes on with the dart of the same piece that leaves the corner (the pieces
 // compared by their gradients at the corner, since one piece may carry several branch codes).
+// Where one plane's patches touch at a corner from opposite quadrants (the corners of a Menger
+// sponge's central cavity, where each wall of a hole and the wall of a crossing hole are the
+// same plane), two darts of that plane leave it: the patch's own is the first met turning
+// clockwise (about the piece's normal) from the way the dart came, since the patch lies on
+// the left of both, inside the angle between them.
 std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>& curves,
-                                const std::vector<Dart>& darts, std::span<const Vec3> corners) {
+                                const std::vector<Dart>& darts, std::span<const Vec3> corners,
+                                std::span<const Vec3> points) {
   std::vector<Cycle> cycles;
   std::vector<char> used(darts.size(), 0);
   const auto piece_of = [&](const Dart& d) -> const Branch& {
@@ -323,13 +333,34 @@ std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>
       const Vec3& corner = corners[static_cast<std::size_t>(dart.to)];
       const Vec3 g = field.piece(corner, piece_of(dart)).gradient.normalized();
       std::size_t next = darts.size();
+      std::vector<std::size_t> candidates;
       for (std::size_t e = 0; e < darts.size(); ++e) {
         if (darts[e].from != dart.to || darts[e].curve == dart.curve) continue;
         if (field.piece(corner, piece_of(darts[e])).gradient.normalized().dot(g) <= kSamePieceCosine) continue;
-        if (next != darts.size())
-          throw CreaseLayoutError("adaptive: a piece meets the corner " + format_point(corner) +
-                                  " more than once; its patch boundary is ambiguous");
-        next = e;
+        candidates.push_back(e);
+      }
+      // Pieces tangent at the corner (where two creases of theirs cross) have the same
+      // gradient there: the piece's own darts, where it has some, are the ones to follow.
+      if (candidates.size() > 1) {
+        std::vector<std::size_t> own;
+        for (const std::size_t e : candidates)
+          if (same_function(field, piece_of(darts[e]), piece_of(dart))) own.push_back(e);
+        if (!own.empty()) candidates = std::move(own);
+      }
+      if (candidates.size() == 1) next = candidates.front();
+      if (candidates.size() > 1) {
+        const auto at = [&](int v) { return points[static_cast<std::size_t>(v)]; };
+        const Vec3 back = at(dart.vertices[dart.vertices.size() - 2]) - at(dart.vertices.back());
+        double best = std::numeric_limits<double>::infinity();
+        for (const std::size_t e : candidates) {
+          const Vec3 out = at(darts[e].vertices[1]) - at(darts[e].vertices.front());
+          double turn = std::atan2(g.dot(out.cross(back)), out.dot(back));  // counter-clockwise from out to back
+          if (turn <= 0) turn += 2 * std::numbers::pi;
+          if (turn < best) best = turn, next = e;
+          else if (turn == best)
+            throw CreaseLayoutError("adaptive: a piece meets the corner " + format_point(corner) +
+                                    " more than once, along the same direction; its patch boundary is ambiguous");
+        }
       }
       if (next == darts.size())
         throw CreaseLayoutError("adaptive: a patch boundary breaks off at the corner " + format_point(corner));
@@ -417,7 +448,7 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
   for (std::size_t i = 0; i < curves.size(); ++i)
     for (Dart& d : orient_darts(field, curves[i], static_cast<int>(i), cv, settings.sizing.min_edge))
       darts.push_back(std::move(d));
-  const std::vector<Cycle> cycles = trace_cycles(field, curves, darts, creases.corners);
+  const std::vector<Cycle> cycles = trace_cycles(field, curves, darts, creases.corners, cv.points);
 
   // Cycles grouped by piece: the patches of one piece are meshed by one tracker, so that the
   // boundaries of one patch (a face with a hole) meet and merge.
