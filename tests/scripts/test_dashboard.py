@@ -159,6 +159,16 @@ class InRunRatios(unittest.TestCase):
         page = make_dashboard.inrun_section([r])
         self.assertIn("SDF models", page)
         self.assertIn("1.100", page)
+        # A model whose run with creases ignored fails reports no ratio: the row stays, without it.
+        r["benchmarks"].append(bench("bench_adaptive", "BM_AdaptiveSdf/model:4/manual_time", [40 * x for x in NOISE],
+                                     label="menger_level1/adaptive/factor3", kind="real",
+                                     counters={"per_triangle_vs_sphere": [0.9] * 5, "triangles": [486] * 5}))
+        rows = bl.sdf_model_costs(r)
+        self.assertEqual([row["creases"] for row in rows], [1.1, None])
+        names = {e["name"] for e in bl.export(r)[0]}
+        self.assertNotIn("ratio creases follow/ignore bench_adaptive:BM_AdaptiveSdf/model:4/manual_time", names)
+        self.assertIn("ratio per triangle sdf/sphere bench_adaptive:BM_AdaptiveSdf/model:4/manual_time", names)
+        self.assertIn("menger_level1", make_dashboard.inrun_section([r]))
 
     def test_bookkeeping_by_phase(self):
         r = run("a" * 40, "2026-01-01T00:00:00+00:00")
