@@ -251,28 +251,33 @@ class _Points(_np.lib.mixins.NDArrayOperatorsMixin):
             raise TraceError(f"the function reduces along axis {axis}: tracing reduces along coordinates only")
         return axis - 1
 
-    def _reduce(self, op, axis):
-        a = _np.moveaxis(self.a, self._axis(axis), -1)
+    def _reduce(self, op, axis, keepdims=False, **kwargs):
+        if kwargs.get("out") is not None or kwargs.get("where", True) is not True or "initial" in kwargs:
+            raise TraceError("a reduction with out=, where= or initial= cannot be traced")
+        k = self._axis(axis)
+        a = _np.moveaxis(self.a, k, -1)
+        if a.shape[-1] == 0:
+            raise TraceError("the function reduces an empty axis")
         out = _np.empty(a.shape[:-1], dtype=object)
         for i in _np.ndindex(out.shape):
             out[i] = _functools.reduce(lambda u, v: _apply(op, u, v), a[i])
-        return _Points(out)
+        return _Points(_np.expand_dims(out, k) if keepdims else out)
 
     def sum(self, axis=None, **kwargs):
-        return self._reduce("+", axis)
+        return self._reduce("+", axis, **kwargs)
 
     def max(self, axis=None, **kwargs):
-        return self._reduce("max", axis)
+        return self._reduce("max", axis, **kwargs)
 
     def min(self, axis=None, **kwargs):
-        return self._reduce("min", axis)
+        return self._reduce("min", axis, **kwargs)
 
     def prod(self, axis=None, **kwargs):
-        return self._reduce("*", axis)
+        return self._reduce("*", axis, **kwargs)
 
     def mean(self, axis=None, **kwargs):
         n = self.a.shape[self._axis(axis)]
-        return self._reduce("+", axis) / float(n)
+        return self._reduce("+", axis, **kwargs) / float(n)
 
     def __array__(self, *args, **kwargs):
         raise TraceError("the function turns the points into a plain numpy array (np.asarray, np.array, a "
@@ -284,7 +289,8 @@ class _Points(_np.lib.mixins.NDArrayOperatorsMixin):
         if method == "reduce":
             if ufunc not in _REDUCE or not isinstance(inputs[0], _Points):
                 raise TraceError(f"np.{ufunc.__name__}.reduce cannot be traced")
-            return inputs[0]._reduce(_REDUCE[ufunc], kwargs.get("axis", 0))
+            kwargs.setdefault("axis", 0)
+            return inputs[0]._reduce(_REDUCE[ufunc], kwargs.pop("axis"), **kwargs)
         if method != "__call__":
             raise TraceError(f"np.{ufunc.__name__}.{method} cannot be traced")
         if ufunc is _np.matmul:
@@ -373,13 +379,13 @@ def _clip_array(a, a_min=None, a_max=None, **kwargs):
 
 _FUNCTIONS = {
     _np.linalg.norm: _norm,
-    _np.sum: lambda a, axis=None, **k: _points_only("sum")(a).sum(axis),
-    _np.max: lambda a, axis=None, **k: _points_only("max")(a).max(axis),
-    _np.min: lambda a, axis=None, **k: _points_only("min")(a).min(axis),
-    _np.amax: lambda a, axis=None, **k: _points_only("amax")(a).max(axis),
-    _np.amin: lambda a, axis=None, **k: _points_only("amin")(a).min(axis),
-    _np.mean: lambda a, axis=None, **k: _points_only("mean")(a).mean(axis),
-    _np.prod: lambda a, axis=None, **k: _points_only("prod")(a).prod(axis),
+    _np.sum: lambda a, axis=None, **k: _points_only("sum")(a).sum(axis, **k),
+    _np.max: lambda a, axis=None, **k: _points_only("max")(a).max(axis, **k),
+    _np.min: lambda a, axis=None, **k: _points_only("min")(a).min(axis, **k),
+    _np.amax: lambda a, axis=None, **k: _points_only("amax")(a).max(axis, **k),
+    _np.amin: lambda a, axis=None, **k: _points_only("amin")(a).min(axis, **k),
+    _np.mean: lambda a, axis=None, **k: _points_only("mean")(a).mean(axis, **k),
+    _np.prod: lambda a, axis=None, **k: _points_only("prod")(a).prod(axis, **k),
     _np.clip: _clip_array,
     _np.dot: lambda a, b: _matmul(a, b),
     _np.stack: _stack,
@@ -471,9 +477,9 @@ def trace_formula(f):
     except Exception as e:  # whatever the function raised on symbols: it cannot be traced
         raise TraceError(f"the function raised {type(e).__name__} on symbols: {e}") from None
     if isinstance(out, _Points):
-        if out.last or out.a.ndim != 0:
+        if out.last or out.a.size != 1 or out.a.ndim > 1:  # (N,) or (N, 1), as callable_field takes
             raise TraceError("the function returns more than one value per point: it must return an (N,) array")
-        out = out.a[()]
+        out = out.a.reshape(())[()]
     elif not isinstance(out, _Node):
         raise TraceError(f"the function returns {type(out).__name__}, not an array computed from the points")
     if _is_number(out):

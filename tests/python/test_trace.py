@@ -108,6 +108,8 @@ def _forms():
         "power_reciprocal": lambda p: (p[:, 0] ** 4 + np.power(np.abs(p[:, 1]), 3.0) + np.reciprocal(2 + p[:, 2])
                                        - np.float_power(2.0, p[:, 0]) + np.tan(p[:, 2] * 0.5)),
         "constants_1x3": lambda p: np.linalg.norm(p - np.array([[0.1, 0.2, 0.3]]), axis=1) - 0.5,
+        "keepdims_column": lambda p: (np.sqrt(np.sum(p * p, axis=1, keepdims=True)) - p[:, 0:1] * 0.5 - 0.7),
+        "reduce_keepdims": lambda p: np.maximum.reduce(np.abs(p), axis=-1, keepdims=True)[:, 0] - 0.8,
     }
 
 
@@ -116,7 +118,7 @@ def test_the_numpy_forms_people_write_trace(name):
     f = _forms()[name]
     field = cdp.trace(f, BOX)
     p = points()
-    assert np.allclose(field.values(p), f(p), rtol=1e-12, atol=1e-12)
+    assert np.allclose(field.values(p), f(p).reshape(-1), rtol=1e-12, atol=1e-12)
 
 
 def test_a_long_sum_built_in_a_loop_traces():
