@@ -30,3 +30,14 @@ def test_sdf_example_meshes_its_models(tmp_path):
         assert topology(V, F) == (1, genus, True)
         assert cdp.field_from_json(tmp_path / f"{name}.json").type == "expression"
         assert (tmp_path / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_numpy_creases_example_traces_and_follows_the_creases(tmp_path):
+    """examples/numpy_creases.py: the gyroid ball written in numpy, traced, meshed along its creases."""
+    render = program("render")
+    result = subprocess.run([sys.executable, ROOT / "examples" / "numpy_creases.py", "--out", tmp_path, "--render",
+                             render], check=True, capture_output=True, text=True, env=dict(os.environ))
+    assert "traced" in result.stdout and "crease curves followed" in result.stdout
+    V, F = cdp.read_mesh(tmp_path / "gyroid_ball.ply")
+    assert topology(V, F) == (1, 13, True)
+    assert (tmp_path / "gyroid_ball.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
