@@ -171,40 +171,71 @@ class SharedEmitter {
   }
 
  private:
+  // The three passes walk the tree with stacks of their own: a formula may be kMaxHeight
+  // operations deep, more than the call stack holds frames of these (under the sanitizers).
+  struct Frame {
+    const Node* node;
+    std::size_t next = 0;  // the next argument to visit
+  };
+
   // Structurally equal subtrees get the same number (children first).
-  int number(const Node& n) {
-    std::vector<int> key{static_cast<int>(n.op)};
-    std::uint64_t bits;
-    static_assert(sizeof bits == sizeof n.constant);
-    std::memcpy(&bits, &n.constant, sizeof bits);
-    key.push_back(static_cast<int>(bits & 0xffffffffu));
-    key.push_back(static_cast<int>(bits >> 32));
-    for (const Node& a : n.args) key.push_back(number(a));
-    const auto [it, added] = numbers_.try_emplace(std::move(key), static_cast<int>(numbers_.size()));
-    id_[&n] = it->second;
-    return it->second;
+  void number(const Node& root) {
+    std::vector<Frame> stack{{&root}};
+    while (!stack.empty()) {
+      Frame& f = stack.back();
+      const Node& n = *f.node;
+      if (f.next < n.args.size()) {
+        const Node* child = &n.args[f.next++];
+        stack.push_back({child});
+        continue;
+      }
+      std::uint64_t bits;
+      static_assert(sizeof bits == sizeof n.constant);
+      std::memcpy(&bits, &n.constant, sizeof bits);
+      std::vector<int> key{static_cast<int>(n.op), static_cast<int>(bits & 0xffffffffu), static_cast<int>(bits >> 32)};
+      for (const Node& a : n.args) key.push_back(id_.at(&a));
+      const auto [it, added] = numbers_.try_emplace(std::move(key), static_cast<int>(numbers_.size()));
+      id_[&n] = it->second;
+      stack.pop_back();
+    }
   }
   // Uses of each subtree, a repeated copy's insides counted with its first copy only.
-  void count(const Node& n) {
-    if (uses_[id_[&n]]++ > 0) return;
-    for (const Node& a : n.args) count(a);
-  }
-  void out(const Node& n) {
-    const int id = id_[&n];
-    const bool shared = !n.args.empty() && uses_[id] > 1;
-    if (shared) {
-      if (const auto it = slot_.find(id); it != slot_.end()) {
-        code_.push_back({Op::Load, static_cast<double>(it->second)});
-        return;
-      }
+  void count(const Node& root) {
+    std::vector<const Node*> stack{&root};
+    while (!stack.empty()) {
+      const Node* n = stack.back();
+      stack.pop_back();
+      if (uses_[id_.at(n)]++ > 0) continue;
+      for (auto it = n->args.rbegin(); it != n->args.rend(); ++it) stack.push_back(&*it);
     }
-    for (const Node& a : n.args) out(a);
-    code_.push_back({n.op, n.constant});
-    if (shared && slots_ < kMaxDefinitions) {
-      const int slot = slots_++;
-      slot_[id] = slot;
-      code_.push_back({Op::Store, static_cast<double>(slot)});
-      code_.push_back({Op::Load, static_cast<double>(slot)});
+  }
+  void out(const Node& root) {
+    std::vector<Frame> stack{{&root}};
+    while (!stack.empty()) {
+      Frame& f = stack.back();
+      const Node& n = *f.node;
+      const int id = id_.at(&n);
+      const bool shared = !n.args.empty() && uses_[id] > 1;
+      if (f.next == 0 && shared) {
+        if (const auto it = slot_.find(id); it != slot_.end()) {
+          code_.push_back({Op::Load, static_cast<double>(it->second)});
+          stack.pop_back();
+          continue;
+        }
+      }
+      if (f.next < n.args.size()) {
+        const Node* child = &n.args[f.next++];
+        stack.push_back({child});
+        continue;
+      }
+      code_.push_back({n.op, n.constant});
+      if (shared && slots_ < kMaxDefinitions) {
+        const int slot = slots_++;
+        slot_[id] = slot;
+        code_.push_back({Op::Store, static_cast<double>(slot)});
+        code_.push_back({Op::Load, static_cast<double>(slot)});
+      }
+      stack.pop_back();
     }
   }
 
