@@ -195,6 +195,8 @@ struct Tracer {
 // 0.002). Three or more stops within kCrossingReach min_spacing of each other are such a
 // crossing: a corner on the surface at their mean, each of those curves ending there. Fewer
 // stops stay stops (a crease that fades out where its pieces become tangent).
+namespace {
+
 constexpr double kCrossingReach = 4;
 constexpr std::size_t kCrossingStops = 3;
 
@@ -240,6 +242,8 @@ void join_crossings(const Field& field, double min_spacing, CreaseTracingResult&
     corners.push_back(at.point);
   }
 }
+
+}  // namespace
 
 CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions& options) {
   CreaseTracingResult result;

@@ -35,6 +35,8 @@ del _name
 from . import sdf  # noqa: E402  (after the names above, which sdf does not use)
 from .trace import TraceError, trace, trace_formula  # noqa: E402
 
+_trace = trace  # callable_field's keyword `trace` hides the function's name there
+
 __all__ += ["TraceError", "trace", "trace_formula"]
 
 
@@ -43,7 +45,7 @@ def callable_field(f, bounds, gradient=None, hessian=None, *, trace=True, **kwar
     black_box = _cdp.callable_field(f, bounds, gradient, hessian, **kwargs)  # checks every argument
     if trace and gradient is None and hessian is None:
         try:
-            return globals()["trace"](f, bounds)
+            return _trace(f, bounds)
         except TraceError:
             pass  # a black box after all: derivatives by central differences, creases unknown
     return black_box

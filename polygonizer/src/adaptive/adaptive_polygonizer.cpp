@@ -328,11 +328,6 @@ bool remeshing_allowed(const AdaptiveOptions& o) {
   return o.variant == Variant::Improved && o.max_triangles == 0 && o.max_steps == 0 && o.max_search_visits == 0;
 }
 
-// The surface meshed once with the options as given (polygonize_adaptive may call it more than
-// once, see there). `bend` receives the tightest bend the runs met when they fail, for the
-// caller's retry. `look_ahead`: Settings::look_ahead on every front (the run polygonize_adaptive
-// makes again when a mesh misses issue 18's bounds). `max_turn` > 0: Sizing::max_turn from the
-// start, the crease-aware patches included (polygonize_adaptive_once's last run in tolerance mode).
 // A run that fails having met a bend tighter than the step of a black box's central differences
 // (Field::derivative_step) met a crease or corner of the function that the field does not
 // describe: differences across it turn the normal within a step, a curvature no edge follows,
@@ -345,6 +340,11 @@ bool kink_in_black_box(const Field& field, const std::pair<double, Vec3>& bend) 
   return step && bend.first < *step;
 }
 
+// The surface meshed once with the options as given (polygonize_adaptive may call it more than
+// once, see there). `bend` receives the tightest bend the runs met when they fail, for the
+// caller's retry. `look_ahead`: Settings::look_ahead on every front (the run polygonize_adaptive
+// makes again when a mesh misses issue 18's bounds). `max_turn` > 0: Sizing::max_turn from the
+// start, the crease-aware patches included (polygonize_adaptive_once's last run in tolerance mode).
 PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases,
                            std::pair<double, Vec3>& bend, bool look_ahead = false, double max_turn = 0) {
   const auto start = std::chrono::steady_clock::now();
