@@ -25,7 +25,8 @@ numpy functions add, subtract, multiply, divide, negative, power, square, sqrt, 
 cos, tan, arctan, arctan2, hypot, abs (absolute, fabs), maximum, minimum (fmax, fmin), clip,
 floor, mod (remainder), floor_divide, reciprocal; sum, max, min (amax, amin), mean along a
 coordinate axis (axis=1 or -1 of an (N, 3) array) as functions, methods or ufunc.reduce;
-np.linalg.norm along a coordinate axis; np.dot, np.stack, np.column_stack; indexing that keeps
+np.linalg.norm along a coordinate axis; np.dot, np.stack, np.column_stack; np.zeros_like,
+np.ones_like and np.full_like (np.full_like(x, np.inf) starting a running np.minimum); indexing that keeps
 the points' axis whole (p[:, 0], p[..., 1:], p[:, [2, 0, 1]]); p.T and unpacking x, y, z = p.T;
 numpy constants of any shape that broadcasts against a point's (numbers, (3,), (1, 3), (3, 3)).
 """
@@ -113,10 +114,13 @@ def _apply(op, *args):
     if op == "/" and _is_number(args[1]) and args[1] == 1.0:
         return args[0]
     if op in ("min", "max"):  # min(min(a, b), c) is min(a, b, c): one branch point fewer
+        neutral = _math.inf if op == "min" else -_math.inf  # min(inf, a) is a
         flat = []
         for a in args:
             flat.extend(a.args if isinstance(a, _Node) and a.op == op else (a,))
-        args = tuple(flat)
+        args = tuple(a for a in flat if not (_is_number(a) and a == neutral))
+        if len(args) == 1:
+            return args[0]
     return _Node(op, args)
 
 
@@ -125,9 +129,9 @@ def _float(v):
         f = float(v)
     except (TypeError, ValueError):
         raise TraceError(f"the function combined the points with {type(v).__name__} {v!r}") from None
-    if not _math.isfinite(f):
-        raise TraceError(f"the function uses the constant {f!r}, which a formula cannot hold")
-    return f
+    if _math.isnan(f):
+        raise TraceError("the function uses the constant nan, which a formula cannot hold")
+    return f  # an infinity may start a running min or max (np.full_like(x, np.inf)); _number refuses the rest
 
 
 def _power(a, b):
@@ -377,6 +381,17 @@ def _clip_array(a, a_min=None, a_max=None, **kwargs):
                                   3, 1)(*arrays))
 
 
+def _like(fill):
+    def make(a, *args, **kwargs):
+        if not isinstance(a, _Points) or kwargs.get("shape") is not None:
+            raise TraceError("np.*_like of something other than the points' arrays, or with shape=")
+        value = fill if fill is not None else (args[0] if args else kwargs.get("fill_value"))
+        out = _np.empty(a.a.shape, dtype=object)
+        out.fill(_float(value))
+        return _Points(out, last=a.last)
+    return make
+
+
 _FUNCTIONS = {
     _np.linalg.norm: _norm,
     _np.sum: lambda a, axis=None, **k: _points_only("sum")(a).sum(axis, **k),
@@ -387,6 +402,9 @@ _FUNCTIONS = {
     _np.mean: lambda a, axis=None, **k: _points_only("mean")(a).mean(axis, **k),
     _np.prod: lambda a, axis=None, **k: _points_only("prod")(a).prod(axis, **k),
     _np.clip: _clip_array,
+    _np.zeros_like: _like(0.0),
+    _np.ones_like: _like(1.0),
+    _np.full_like: _like(None),
     _np.dot: lambda a, b: _matmul(a, b),
     _np.stack: _stack,
     _np.column_stack: lambda arrays: _stack(arrays, axis=1),
@@ -405,6 +423,8 @@ _MAX_DEFINITIONS = 256  # the expression model's limit (kMaxDefinitions in expre
 
 
 def _number(v):
+    if not _math.isfinite(v):
+        raise TraceError(f"the function's result uses the constant {v!r}, which a formula cannot hold")
     return repr(v) if v >= 0 else f"({v!r})"
 
 

@@ -89,6 +89,14 @@ def test_rounded_box_traced_is_smooth_and_exact():
     assert stats["min_angle_degrees"] >= 20
 
 
+def _running_min(p):
+    """A union written as a loop from an empty start, as people write it."""
+    d = np.full_like(p[:, 0], np.inf)
+    for c in ((0.3, 0, 0), (-0.3, 0, 0), (0, 0.4, 0)):
+        d = np.minimum(d, np.linalg.norm(p - np.array(c), axis=1) - 0.35)
+    return d
+
+
 def _forms():
     M = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 2.0]])
     return {
@@ -108,6 +116,8 @@ def _forms():
         "power_reciprocal": lambda p: (p[:, 0] ** 4 + np.power(np.abs(p[:, 1]), 3.0) + np.reciprocal(2 + p[:, 2])
                                        - np.float_power(2.0, p[:, 0]) + np.tan(p[:, 2] * 0.5)),
         "constants_1x3": lambda p: np.linalg.norm(p - np.array([[0.1, 0.2, 0.3]]), axis=1) - 0.5,
+        "running_min_from_inf": lambda p: _running_min(p),
+        "zeros_and_ones_like": lambda p: np.zeros_like(p[:, 0]) + np.ones_like(p[:, 1]) * p[:, 2] - 0.3,
         "keepdims_column": lambda p: (np.sqrt(np.sum(p * p, axis=1, keepdims=True)) - p[:, 0:1] * 0.5 - 0.7),
         "reduce_keepdims": lambda p: np.maximum.reduce(np.abs(p), axis=-1, keepdims=True)[:, 0] - 0.8,
     }
@@ -148,6 +158,8 @@ def test_a_long_sum_built_in_a_loop_traces():
     (lambda p: p, "more than one value per point"),
     (lambda p: 1.0, "returns float"),
     (lambda p: np.cbrt(p[:, 0]), "np.cbrt cannot be traced"),
+    (lambda p: p[:, 0] + np.inf, "uses the constant inf"),
+    (lambda p: p[:, 0] + np.nan, "uses the constant nan"),
     (lambda p: np.asarray(p)[:, 0], "plain numpy array"),
     (lambda p: np.linalg.norm(p, axis=1) - 1 if isinstance(p, np.ndarray) else p[:, 0], "where the function gives"),
 ])
