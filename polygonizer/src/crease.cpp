@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 namespace cdp {
 
@@ -69,6 +71,47 @@ CreaseProjection project_to_crease(const Field& field, const Vec3& start,
       return out;
     }
     // The smallest step that zeroes the linearised pieces: in their gradients' span.
+    Vec3 step = -J.transpose() * gram.ldlt().solve(F);
+    if (const double len = step.norm(); len > max_step) step *= max_step / len;
+    out.point += step;
+  }
+}
+
+CreaseProjection project_to_seam(const Field& field, const Vec3& start, const std::vector<std::uint8_t>& branch,
+                                 std::size_t k, const CreaseOptions& options) {
+  const double diag = field.bounds().diagonal();
+  const double tol = options.tolerance > 0 ? options.tolerance : 1e-10 * diag;
+  const double max_step = options.max_step > 0 ? options.max_step : 0.1 * diag;
+  CreaseProjection out;
+  out.point = start;
+  for (int it = 0;; ++it) {
+    const FieldPiece piece = field.piece(out.point, branch);
+    const std::optional<Field::BranchSwitch> sw = field.branch_switch(out.point, k);
+    const double g = piece.gradient.norm();
+    if (!sw || !std::isfinite(piece.value) || !piece.gradient.allFinite() || !std::isfinite(sw->distance)) {
+      out.status = CreaseStatus::NotFinite;
+      return out;
+    }
+    Eigen::Matrix<double, 2, 3> J;
+    J.row(0) = piece.gradient.transpose();
+    J.row(1) = sw->normal.transpose();
+    const Eigen::Vector2d F(piece.value, sw->distance);
+    out.residual = std::max(g > 0 ? std::abs(piece.value) / g : std::numeric_limits<double>::infinity(),
+                            std::abs(sw->distance));
+    out.iterations = it;
+    if (out.residual <= tol) {
+      out.status = CreaseStatus::Converged;
+      return out;
+    }
+    if (it >= options.max_iterations) {
+      out.status = CreaseStatus::MaxIterations;
+      return out;
+    }
+    const Eigen::Matrix2d gram = J * J.transpose();
+    if (!(gram.determinant() > kDependentGradients * g * g)) {
+      out.status = CreaseStatus::DependentGradients;
+      return out;
+    }
     Vec3 step = -J.transpose() * gram.ldlt().solve(F);
     if (const double len = step.norm(); len > max_step) step *= max_step / len;
     out.point += step;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <unordered_map>
 
 namespace cdp {
@@ -133,51 +134,134 @@ struct Tracer {
     return found;
   }
 
+  // The one branch point where a and b differ (neither free), or -1: the switch that separates
+  // them, followed where they become one function.
+  static int differing_branch(const Branch& a, const Branch& b) {
+    int k = -1;
+    for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) {
+      if (a[i] == b[i] || a[i] == Field::kFreeBranch || b[i] == Field::kFreeBranch) continue;
+      if (k >= 0) return -1;
+      k = static_cast<int>(i);
+    }
+    return k;
+  }
+
+  // Whether a and b are one function at p, to rounding: their switch is hidden there by another
+  // branch (a box's edge where a smooth union's blend has left the box: its clamp at 0 multiplies
+  // the box's difference from the ball by 0).
+  bool one_function(const Vec3& p, const Branch& a, const Branch& b) const {
+    const FieldPiece fa = piece(p, a), fb = piece(p, b);
+    const double scale = kOneFunction * (1 + std::abs(fa.value) + fa.gradient.norm());
+    return std::abs(fa.value - fb.value) <= scale && (fa.gradient - fb.gradient).norm() <= scale;
+  }
+  static constexpr double kOneFunction = 1e-12;
+  // Whether a and b are the same piece at p (kSamePieceCosine): no crease between them there.
+  bool same_piece(const Vec3& p, const Branch& a, const Branch& b) const {
+    return piece(p, a).gradient.normalized().dot(piece(p, b).gradient.normalized()) > kSamePieceCosine;
+  }
+
+  // One step from p along t: the longest of step, step / 2, ... (down to min_spacing) whose
+  // projection lies ahead and turns the tangent by less than max_turn (by less than a right
+  // angle at the last). On the crease of a and b, its tangent dir * ga x gb; or (seam) on the
+  // switch of branch point k where a and b are one function, its tangent along t. On success
+  // moves p, t and step there.
+  bool advance(Vec3& p, Vec3& t, double& step, double& dir, const Branch& a, const Branch& b, int k, bool seam) {
+    double s = step;
+    for (int h = 0; h <= kMaxHalvings && s >= min_spacing; ++h, s *= 0.5) {
+      const std::vector<Branch> two{a, b};
+      const CreaseProjection c = seam ? project_to_seam(field, p + s * t, a, static_cast<std::size_t>(k), o.newton)
+                                      : project_to_crease(field, p + s * t, two, o.newton);
+      if (!c.ok()) continue;
+      const Vec3 ga = piece(c.point, a).gradient, gb = piece(c.point, b).gradient;
+      Vec3 tn = dir * ga.cross(gb).normalized();
+      double new_dir = dir;
+      if (seam) {
+        if (!same_piece(c.point, a, b)) continue;
+        const std::optional<Field::BranchSwitch> sw = field.branch_switch(c.point, static_cast<std::size_t>(k));
+        if (!sw) continue;
+        tn = ga.cross(sw->normal).normalized();
+        if (tn.dot(t) < 0) tn = -tn;
+      } else if (dir == 0) {  // back on the crease after a seam: the way the walk goes
+        new_dir = tn.dot(t) < 0 ? -1.0 : 1.0;
+        tn = new_dir * ga.cross(gb).normalized();
+      }
+      // The turn bound sets the spacing, down to min_spacing: a crease that turns faster still
+      // is followed at min_spacing (less than a right angle a step).
+      const bool last = h == kMaxHalvings || 0.5 * s < min_spacing;
+      const double turn = last ? 0.0 : std::cos(o.max_turn);
+      if (!tn.allFinite() || tn.dot(t) <= turn || (c.point - p).dot(t) <= 0) continue;
+      if (!both_active(c.point, ga, gb)) continue;
+      p = c.point;
+      t = tn;
+      step = s;
+      dir = new_dir;
+      return true;
+    }
+    return false;
+  }
+
   // Walks from `start` along the crease of a and b in direction `dir` (+1 or -1 times the
   // tangent ga x gb) until a corner, back at `loop_to` (a loop), or a stop. Appends the points
-  // after `start`.
+  // after `start`; sets `on_seam` when it went along a seam (CreaseCurve::seam_branch).
+  //
+  // Where the crease fades (its pieces' normals closer than kSamePieceCosine: no crease by the
+  // pieces' own measure) the walk goes on along the switch of the branch point that separates
+  // them, as a seam, and back onto the crease where it comes back. A seam is kept only if the
+  // pieces are one function somewhere along it (one_function: the switch hidden, a crease that
+  // ended); pieces that are only tangent, where two creases cross, make a stop as before, which
+  // join_crossings turns into the corner it is.
   enum class End { Corner, Loop, Stop };
   End walk(const Vec3& start, const Branch& a, const Branch& b, double dir, const Vec3* loop_to,
-           std::vector<Vec3>& out) {
+           std::vector<Vec3>& out, bool& on_seam) {
+    const int k = differing_branch(a, b);
     Vec3 p = start;
     Vec3 t = dir * tangent(p, a, b);
     double step = max_spacing;
     double travelled = 0;
+    bool seam = false, hidden = false;
+    std::size_t seam_begin = 0;
+    Vec3 seam_from = p;
+    // The end of a seam: kept where the pieces were one function on it, else a stop where the seam began.
+    const auto end_seam = [&](End end) {
+      if (!seam || hidden) return end;
+      out.resize(seam_begin);
+      p = seam_from;
+      return End::Stop;
+    };
     for (;;) {
       if (++points > o.max_points)
         throw LimitExceededError("trace_creases: more than " + std::to_string(o.max_points) +
                                  " crease points (CreaseTracingOptions::max_points)");
       Vec3 corner;
       if (corner_near(p, t, a, b, step, corner)) {
+        if (end_seam(End::Corner) == End::Stop) return End::Stop;
         if ((corner - p).norm() <= kActiveRadius * tol) return End::Corner;  // p is the corner
         out.push_back(corner);
         return End::Corner;
       }
       // Predictor along the tangent, corrector onto the crease; shorter steps where the crease
       // turns fast or the projection fails.
-      bool moved = false;
-      for (int h = 0; h <= kMaxHalvings && step >= min_spacing; ++h, step *= 0.5) {
-        const std::vector<Branch> two{a, b};
-        const CreaseProjection c = project_to_crease(field, p + step * t, two, o.newton);
-        if (!c.ok()) continue;
-        const Vec3 ga = piece(c.point, a).gradient, gb = piece(c.point, b).gradient;
-        const Vec3 tn = dir * ga.cross(gb).normalized();
-        // The turn bound sets the spacing, down to min_spacing: a crease that turns faster still
-        // is followed at min_spacing (less than a right angle a step).
-        const bool last = h == kMaxHalvings || 0.5 * step < min_spacing;
-        const double turn = last ? 0.0 : std::cos(o.max_turn);
-        if (!tn.allFinite() || tn.dot(t) <= turn || (c.point - p).dot(t) <= 0) continue;
-        if (!both_active(c.point, ga, gb)) continue;
-        travelled += (c.point - p).norm();
-        p = c.point;
-        t = tn;
-        moved = true;
-        break;
+      const Vec3 from = p;
+      bool moved = advance(p, t, step, dir, a, b, k, seam);
+      if (!moved && k >= 0) {
+        if (end_seam(End::Loop) == End::Stop) return End::Stop;
+        seam = !seam;
+        if (seam) {
+          seam_begin = out.size();
+          seam_from = p;
+          hidden = false;
+        } else {
+          dir = 0;  // the crease's direction is taken again from the way the walk goes
+        }
+        moved = advance(p, t, step, dir, a, b, k, seam);
       }
-      if (!moved) return End::Stop;
+      if (!moved) return end_seam(End::Stop);
+      if (seam && !hidden && one_function(p, a, b)) hidden = on_seam = true;
+      travelled += (p - from).norm();
       step = std::min(max_spacing, 2 * step);
       // Back within a step of the start: the segment from p closes the loop.
       if (loop_to && travelled > 2 * max_spacing && (p - *loop_to).norm() < step) {
+        if (end_seam(End::Loop) == End::Stop) return End::Stop;
         if ((p - *loop_to).norm() > min_spacing) out.push_back(p);
         return End::Loop;
       }
@@ -297,13 +381,14 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
         CreaseCurve curve;
         curve.pieces = {two[0], two[1]};
         std::vector<Vec3> forward, backward;
-        const auto fe = tr.walk(c.point, two[0], two[1], 1, &c.point, forward);
+        bool on_seam = false;
+        const auto fe = tr.walk(c.point, two[0], two[1], 1, &c.point, forward, on_seam);
         if (fe == Tracer::End::Loop) {
           curve.closed = true;
           curve.points.push_back(c.point);
           curve.points.insert(curve.points.end(), forward.begin(), forward.end());
         } else {
-          const auto be = tr.walk(c.point, two[0], two[1], -1, nullptr, backward);
+          const auto be = tr.walk(c.point, two[0], two[1], -1, nullptr, backward, on_seam);
           curve.points.assign(backward.rbegin(), backward.rend());
           curve.points.push_back(c.point);
           curve.points.insert(curve.points.end(), forward.begin(), forward.end());
@@ -319,6 +404,7 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
           if (curve.starts_at_corner) corners.push_back(curve.points.front());
           if (curve.ends_at_corner) corners.push_back(curve.points.back());
         }
+        if (on_seam) curve.seam_branch = Tracer::differing_branch(two[0], two[1]);
         for (std::size_t i = 0; i < curve.points.size(); ++i) traced.insert(curve.points[i], result.curves.size(), i);
         result.curves.push_back(std::move(curve));
         return;

@@ -41,6 +41,17 @@ std::vector<FieldPiece> Field::eval_pieces(const Vec3& p, double radius) const {
   return pieces_near_branches(p, record, radius);
 }
 
+std::optional<Field::BranchSwitch> Field::branch_switch(const Vec3& p, std::size_t k) const {
+  n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+  BranchRecord record;
+  if (!eval_branch_record(p, record) || k >= record.taken.size()) return std::nullopt;
+  const Vec3& n = record.seam_normal[k];
+  if (!(n.squaredNorm() > 0)) return std::nullopt;
+  // seam_step is -(a - b) grad (a - b) / |grad (a - b)|^2, so minus its component along the
+  // normal is the signed distance (a - b) / |grad (a - b)|.
+  return BranchSwitch{-record.seam_step[k].dot(n), n};
+}
+
 bool Field::has_pieces() const {
   if (!has_branch_points()) return false;
   const auto& kinds = branch_kinds();

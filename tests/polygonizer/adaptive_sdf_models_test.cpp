@@ -11,7 +11,10 @@
 #include <cdp/core/mesh_topology.h>
 #include <cdp/io/field_factory.h>
 
+#include <algorithm>
+#include <cmath>
 #include <map>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -81,6 +84,10 @@ std::vector<SdfModel> sdf_models() {
       // pipes meet cross at the top and bottom, where the pipes are tangent.
       {"crossed_pipes", model("max(min(hypot(y,z)-0.5, hypot(x,z)-0.5), max(abs(x),abs(y),abs(z))-1)", 1.2), 1, 0,
        true},
+      // A box with a ball blended onto one edge: the edge's crease fades out inside the blend, from
+      // both ends, and its switch goes on over the ball as a seam between the two faces' patches.
+      {"box_blended_ball",
+       model("u", 1.4, smooth_min("max(abs(x),abs(y),abs(z))-0.75", "hypot(x-0.75,y-0.75,z)-0.5", 0.25)), 1, 0, true},
       // A Menger sponge of level 1: creases meeting at the openings' corners and at the corners
       // of the cavity, where six meet and each wall plane touches the corner from two quadrants.
       {"menger_level1",
@@ -111,6 +118,35 @@ std::string case_name(const testing::TestParamInfo<Case>& info) {
 
 class SdfModels : public testing::TestWithParam<Case> {};
 
+// The smallest angle of the triangles none of whose corners lies on a crease (where two pieces of
+// the field meet within 1e-6 of the diagonal): the quality bound away from creases, measured from
+// the field rather than from the mesher's own record of its crease vertices.
+struct AwayFromCreases {
+  double degrees = 180;
+  Vec3 where = Vec3::Zero();  // the centroid of that triangle
+};
+AwayFromCreases min_angle_away_from_creases(const Field& field, const Mesh& mesh) {
+  const double near = 1e-6 * field.bounds().diagonal();
+  std::vector<char> on_crease(mesh.positions.size());
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) on_crease[v] = field.pieces(mesh.positions[v], near).size() > 1;
+  AwayFromCreases best;
+  for (const auto& t : mesh.triangles) {
+    if (on_crease[static_cast<std::size_t>(t[0])] || on_crease[static_cast<std::size_t>(t[1])] ||
+        on_crease[static_cast<std::size_t>(t[2])])
+      continue;
+    for (int c = 0; c < 3; ++c) {
+      const Vec3& p = mesh.positions[static_cast<std::size_t>(t[c])];
+      const Vec3 u = mesh.positions[static_cast<std::size_t>(t[(c + 1) % 3])] - p;
+      const Vec3 w = mesh.positions[static_cast<std::size_t>(t[(c + 2) % 3])] - p;
+      const double a = std::atan2(u.cross(w).norm(), u.dot(w)) * 180 / std::numbers::pi;
+      if (a < best.degrees)
+        best = {a, (mesh.positions[static_cast<std::size_t>(t[0])] + mesh.positions[static_cast<std::size_t>(t[1])] +
+                    mesh.positions[static_cast<std::size_t>(t[2])]) / 3};
+    }
+  }
+  return best;
+}
+
 TEST_P(SdfModels, MeshWithTheirCreasesAndGoodTriangles) {
   const SdfModel m = sdf_models()[GetParam().model];
   const auto field = test::field_from_json(m.json);
@@ -139,9 +175,16 @@ TEST_P(SdfModels, MeshWithTheirCreasesAndGoodTriangles) {
     EXPECT_GT(r.stats.extra.at("creases.curves").get<double>(), 0) << m.name;
   }
   const double min_angle = r.stats.extra.at("min_angle_degrees").get<double>();
+  const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
   EXPECT_GE(min_angle, m.creased ? 5.0 : 20.0) << m.name;
+  // The one case below the 20 degrees away from creases, kept from getting worse: the
+  // drilled sphere at factor 3 has a triangle of 19.87 degrees a ring off the hole's rim
+  // ((0.056, 0.064, -0.996); the rim's radius is 0.05), where the edges grade from the rim's
+  // up to the sphere's.
+  const bool known_shortfall = m.name == "drilled_sphere" && GetParam().factor == 3 && GetParam().tolerance == 0;
+  EXPECT_GE(away.degrees, known_shortfall ? 19.8 : 20.0) << m.name << ": away from creases, near " << away.where.transpose();
   std::cout << "sdf-model " << m.name << " " << case_name({GetParam(), 0}) << ": " << t.triangles << " triangles, "
-            << r.stats.seconds << " s, min angle " << min_angle << "\n";
+            << r.stats.seconds << " s, min angle " << min_angle << ", away from creases " << away.degrees << "\n";
 }
 
 std::vector<Case> all_cases() {

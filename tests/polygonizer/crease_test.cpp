@@ -477,3 +477,71 @@ TEST(CompiledPieces, ACompiledCappedCylinderHasTheExpressionsPieces) {
 
 }  // namespace
 }  // namespace cdp
+
+namespace cdp {
+namespace {
+
+// A box with a ball blended onto its edge x = y = 0.75 (Inigo Quilez's polynomial smooth minimum,
+// radius 0.25): the edge's crease is scaled by the blend's weight h and fades out where h reaches
+// 0 near the ball, past which the box's max is hidden (the blend is the ball's distance alone)
+// and the two faces' pieces are one function. The crease goes on over the ball along the
+// switch of that max (the plane x = y), as a seam, to the crease's other half.
+Expression box_blended_ball() {
+  return Expression("b + h*(a-b) - 0.25*h*(1-h)", {}, Box{Vec3::Constant(-1.4), Vec3::Constant(1.4)},
+                    {{"a", "max(abs(x), abs(y), abs(z)) - 0.75"},
+                     {"b", "hypot(x-0.75, y-0.75, z) - 0.5"},
+                     {"h", "clamp(0.5 + 0.5*(b-a)/0.25, 0, 1)"}});
+}
+
+TEST(CreaseCurves, ACreaseThatFadesIntoASmoothBlendGoesOnAlongItsSwitchAsASeam) {
+  const Expression field = box_blended_ball();
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.curves.size(), 12u);
+  EXPECT_EQ(r.corners.size(), 8u);
+  EXPECT_EQ(r.stops, 0u);
+  std::size_t seams = 0;
+  for (const CreaseCurve& c : r.curves) {
+    EXPECT_FALSE(c.closed);
+    EXPECT_TRUE(c.starts_at_corner && c.ends_at_corner);
+    if (c.seam_branch < 0) continue;
+    ++seams;
+    // From corner to corner of the blended edge, on the surface and on the plane x = y
+    // throughout, and over the ball: 0.5 beyond the edge at the ball's top.
+    EXPECT_NEAR(std::abs(c.points.front().z() - c.points.back().z()), 1.5, 1e-6);
+    double farthest = 0;
+    std::size_t one_function = 0;
+    for (const Vec3& p : c.points) {
+      EXPECT_LE(std::abs(field.value(p)), 1e-9) << p.transpose();
+      EXPECT_LE(std::abs(p.x() - p.y()), 1e-9) << p.transpose();
+      farthest = std::max(farthest, std::hypot(p.x() - 0.75, p.y() - 0.75));
+      const FieldPiece a = field.piece(p, c.pieces[0]), b = field.piece(p, c.pieces[1]);
+      one_function += a.value == b.value && a.gradient == b.gradient;
+    }
+    EXPECT_NEAR(farthest, 0.5, 0.01);
+    EXPECT_GT(one_function, 0u);  // the seam part, where the box is hidden
+    EXPECT_LT(one_function, c.points.size());  // and the crease at both ends
+  }
+  EXPECT_EQ(seams, 1u);
+}
+
+TEST(CreaseProjection, ProjectToSeamLandsOnTheSwitchWhereThePiecesAreOneFunction) {
+  const Expression field = box_blended_ball();
+  const CreaseTracingResult r = trace_creases(field);
+  const auto seam = std::find_if(r.curves.begin(), r.curves.end(), [](const CreaseCurve& c) { return c.seam_branch >= 0; });
+  ASSERT_NE(seam, r.curves.end());
+  const auto k = static_cast<std::size_t>(seam->seam_branch);
+  // Over the ball, off the surface and off the plane x = y.
+  const CreaseProjection c = project_to_seam(field, Vec3(1.2, 1.05, 0.1), seam->pieces[0], k);
+  ASSERT_TRUE(c.ok()) << to_string(c.status);
+  EXPECT_LE(std::abs(field.value(c.point)), 1e-9);
+  EXPECT_LE(std::abs(c.point.x() - c.point.y()), 1e-9);
+  EXPECT_NEAR((c.point - Vec3(0.75, 0.75, 0)).norm(), 0.5, 1e-9);  // the blend is the ball's alone there
+  // There project_to_crease has two equal gradients.
+  const std::vector<std::vector<std::uint8_t>> two{seam->pieces[0], seam->pieces[1]};
+  EXPECT_EQ(project_to_crease(field, Vec3(1.2, 1.05, 0.1), two).status, CreaseStatus::DependentGradients);
+  // The switch of a branch point the model does not have: nothing to land on.
+  EXPECT_EQ(project_to_seam(field, Vec3(1.2, 1.05, 0.1), seam->pieces[0], 1000).status, CreaseStatus::NotFinite);
+}
+
+}  // namespace
+}  // namespace cdp

@@ -72,6 +72,7 @@ struct LaidCurve {
   bool closed = false;
   int start_corner = -1, end_corner = -1;  // indices into the corner list (open curves)
   std::array<Branch, 2> pieces;
+  int seam_branch = -1;  // CreaseCurve::seam_branch
   // The largest distance between an edge's midpoint and the crease (the chords' sagitta): how
   // far the patch's polygonal boundary strays from the patch.
   double sagitta = 0;
@@ -165,6 +166,7 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
   LaidCurve out;
   out.closed = curve.closed;
   out.pieces = curve.pieces;
+  out.seam_branch = curve.seam_branch;
   const std::vector<Vec3>& P = curve.points;
   const std::size_t n = P.size();
   if (n < 2) throw CreaseLayoutError("adaptive: a crease traced as a single point near " + format_point(P.at(0)));
@@ -212,6 +214,13 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
   const std::vector<Branch> two{curve.pieces[0], curve.pieces[1]};
   CreaseOptions co;
   co.tolerance = 1e-10 * diagonal;
+  // Onto the crease; where it has faded into a seam, onto the switch there.
+  const auto project = [&](const Vec3& guess) {
+    CreaseProjection c = project_to_crease(field, guess, two, co);
+    if (!c.ok() && curve.seam_branch >= 0)
+      c = project_to_seam(field, guess, curve.pieces[0], static_cast<std::size_t>(curve.seam_branch), co);
+    return c;
+  };
   std::size_t j = 0;
   const std::size_t first = curve.closed ? 0 : 1;
   if (!curve.closed) out.vertices.push_back(corner_vertex[static_cast<std::size_t>(out.start_corner)]);
@@ -225,7 +234,7 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
       out.vertices.push_back(cv.add(P[0]));  // a traced point: on the crease already
       continue;
     }
-    const CreaseProjection c = project_to_crease(field, guess, two, co);
+    const CreaseProjection c = project(guess);
     if (!c.ok() || (c.point - guess).norm() > 0.5 * std::max(h[j], h[(j + 1) % n]))
       throw CreaseLayoutError("adaptive: a crease vertex could not be put on its crease near " + format_point(guess) +
                               " (" + to_string(c.status) + ")");
@@ -236,7 +245,7 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
   for (std::size_t k = 0; k + (curve.closed ? 0 : 1) < m; ++k) {
     const Vec3 mid = 0.5 * (cv.points[static_cast<std::size_t>(out.vertices[k])] +
                             cv.points[static_cast<std::size_t>(out.vertices[(k + 1) % m])]);
-    const CreaseProjection c = project_to_crease(field, mid, two, co);
+    const CreaseProjection c = project(mid);
     if (c.ok()) out.sagitta = std::max(out.sagitta, (c.point - mid).norm());
   }
   return out;
@@ -249,7 +258,17 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
 std::array<Dart, 2> orient_darts(const Field& field, const LaidCurve& c, int index, const CreaseVertices& cv,
                                  double min_edge) {
   std::array<Dart, 2> out;
-  const std::size_t m = c.vertices.size() / 2;  // interior for open curves (at least three vertices)
+  std::size_t m = c.vertices.size() / 2;  // interior for open curves (at least three vertices)
+  // On a seam the two pieces are one function and either side could be either's: the interior
+  // vertex where they differ most instead.
+  if (c.seam_branch >= 0) {
+    double widest = -1;
+    for (std::size_t i = c.closed ? 0 : 1; i + (c.closed ? 0 : 1) < c.vertices.size(); ++i) {
+      const Vec3& q = cv.points[static_cast<std::size_t>(c.vertices[i])];
+      const double sine = field.piece(q, c.pieces[0]).gradient.normalized().cross(field.piece(q, c.pieces[1]).gradient.normalized()).norm();
+      if (sine > widest) widest = sine, m = i;
+    }
+  }
   const Vec3& p = cv.points[static_cast<std::size_t>(c.vertices[m])];
   const Vec3 along = cv.points[static_cast<std::size_t>(c.vertices[(m + 1) % c.vertices.size()])] -
                      cv.points[static_cast<std::size_t>(c.vertices[m - (m > 0 ? 1 : 0)])];

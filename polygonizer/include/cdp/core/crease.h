@@ -43,4 +43,13 @@ CreaseProjection project_to_crease(const Field& field, const Vec3& start,
                                    std::span<const std::vector<std::uint8_t>> branches,
                                    const CreaseOptions& options = {});
 
+// Moves `start` onto the curve where the piece `branch` is zero and branch point k switches
+// (Field::branch_switch): the crease between that piece and the one that differs from it at k
+// only, and its continuation where the two become one function (the switch hidden by another
+// branch: a box's edge entering a smooth union's blend), where project_to_crease has two equal
+// gradients. Minimum-norm Newton steps as project_to_crease's; NotFinite where the switch is
+// not defined.
+CreaseProjection project_to_seam(const Field& field, const Vec3& start, const std::vector<std::uint8_t>& branch,
+                                 std::size_t k, const CreaseOptions& options = {});
+
 }  // namespace cdp

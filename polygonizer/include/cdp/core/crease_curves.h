@@ -37,6 +37,12 @@ struct CreaseCurve {
   bool starts_at_corner = false, ends_at_corner = false;
   // The branches (Field::piece) of the two pieces that meet along it.
   std::array<std::vector<std::uint8_t>, 2> pieces;
+  // Where the crease fades into a switch that another branch hides (a box's edge entering a
+  // smooth union's blend: past it the two pieces are one function), the curve goes on along the
+  // switch of the one branch point where the pieces differ (project_to_seam), up to where the
+  // crease comes back or a corner: that branch point, or -1 for a curve that is a crease
+  // throughout. Such a seam bounds the two pieces' patches like a crease, without a bend.
+  int seam_branch = -1;
 };
 
 struct CreaseTracingResult {

@@ -183,6 +183,17 @@ class Field {
   // beyond what those derivatives resolve: where a run fails on one, the adaptive polygonizer
   // reports a crease the field does not describe instead of meshing again (adaptive_polygonizer.cpp).
   virtual std::optional<double> derivative_step() const { return std::nullopt; }
+  // Where branch point k (numbered as in FieldPiece::branch) switches near p, to first order:
+  // the signed distance to the surface where its two arguments are equal ((a - b) / |grad (a - b)|,
+  // u / |grad u| for abs) and that surface's unit normal, from one evaluation with the branches
+  // as taken at p. Nothing for a model without such a branch point or where the difference has no
+  // gradient. Crease tracing follows a switch past where the two pieces it separates become one
+  // (trace_creases). Counted as one value_gradient.
+  struct BranchSwitch {
+    double distance = 0;
+    Vec3 normal = Vec3::Zero();
+  };
+  std::optional<BranchSwitch> branch_switch(const Vec3& p, std::size_t k) const;
   // The piece with `branch` (from pieces()) at another point: the same smooth function, its
   // branches fixed, wherever p is. Throws InvalidInputError for a branch the model cannot have
   // made. Counted as one gradient_hessian.
