@@ -84,6 +84,13 @@ Field::BranchKind Field::switch_verdict(const Vec3& p, const BranchRecord& recor
     const double n0 = g0.norm();
     if (!g0.allFinite() || !(n0 > 0.0) || !(normal.squaredNorm() > 0.0)) return BranchKind::Unknown;
     if (std::abs(v0) <= tolerance * n0 && std::abs(gap) <= tolerance) {
+      // On the field's own surface, not only on the piece's: with the other branches fixed as
+      // the sample takes them, the piece's zero set may lie where the field takes another
+      // branch. A rounded box written as hypot(max(q, 0)) + min(max(q), 0): from a sample
+      // inside its core, where the min takes max(q), the piece's zero set is the core's
+      // sharp-edged box, whose edges the surface never meets; counted, they made max(q)
+      // Creased, the rounded box a CSG shape, and a patch of it an endless prism.
+      if (!(std::abs(at.value) <= tolerance * n0)) return BranchKind::Unknown;
       branch[b] = 1;
       const Vec3 g1 = eval_first_order(q, branch).second;
       ++evaluations;

@@ -59,6 +59,16 @@ std::map<std::string, std::string> smooth_min(const std::string& a, const std::s
 
 const std::string kRoundedBox = "sqrt(max(abs(x)-0.6,0)^2+max(abs(y)-0.4,0)^2+max(abs(z)-0.3,0)^2)-0.15";
 const std::string kSphere = "sqrt((x-0.5)^2+(y-0.3)^2+z^2)-0.45";
+// The rounded box as cdp.sdf writes it (Inigo Quilez's exact distance, length(max(q, 0)) +
+// min(max(q), 0) - r, in one hypot): its max(q) switches at the sharp edges of its core, inside
+// the surface, where the min hides it.
+const std::map<std::string, std::string> kSdfRoundedBox = {
+    {"q0", "abs(x)-0.7"}, {"q1", "abs(y)-0.4"}, {"q2", "abs(z)-0.3"}, {"m", "min(max(q0,q1,q2),0)"},
+    {"r", "hypot(max(q0,0),max(q1,0),max(q2,0),m)+2*m-0.1"}};
+std::map<std::string, std::string> with(std::map<std::string, std::string> a, const std::map<std::string, std::string>& b) {
+  a.insert(b.begin(), b.end());
+  return a;
+}
 
 std::vector<SdfModel> sdf_models() {
   std::vector<SdfModel> v = {
@@ -66,6 +76,12 @@ std::vector<SdfModel> sdf_models() {
       {"smooth_union", model("u", 1.2, smooth_min(kRoundedBox, kSphere, 0.2)), 1, 0},
       {"smooth_union_minus_cylinder", model("max(u, 0.2-sqrt(x^2+y^2))", 1.2, smooth_min(kRoundedBox, kSphere, 0.2)), 1,
        1, true},
+      {"sdf_rounded_box_minus_cylinder", model("max(r, 0.2-hypot(x,y))", 1.0, kSdfRoundedBox), 1, 1, true},
+      // A rounded block with a ball blended on and a hole through both (cdp.sdf: rounded_box((1.6,
+      // 1, 0.8), 0.1) | sphere(0.55, center=(0.6, 0.3, 0.3)).k(0.2) - cylinder(0.2)).
+      {"blended_block",
+       model("max(u, 0.2-hypot(x,y))", 1.3, with(kSdfRoundedBox, smooth_min("r", "hypot(x-0.6,y-0.3,z-0.3)-0.55", 0.2))),
+       1, 1, true},
       // A capsule chain: each capsule's clamp is C1 where its cylinder meets its caps.
       {"capsules",
        model("min(c1, c2)", 1.4,

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <set>
 #include <string>
@@ -385,6 +386,28 @@ TEST(BranchKinds, RoundedBoxesAndSmoothUnionsHaveNoCrease) {
   const Expression blend = smooth_union();
   for (const Kind k : blend.branch_kinds()) EXPECT_NE(k, Kind::Creased);
   EXPECT_FALSE(blend.has_pieces());
+}
+
+TEST(BranchKinds, ARoundedBoxWrittenWithItsCoreHasNoCreaseAndNoPieceThatLeavesIt) {
+  // The rounded box as cdp.sdf writes it (length(max(q, 0)) + min(max(q), 0) - r in one hypot).
+  // Its max(q) switches along the sharp edges of the core, where the min takes max(q), inside
+  // the surface; from a sample in the core, that branch fixed, the switch met the core's own
+  // zero set and looked creased. It is hidden wherever the surface is: with the cylinder taken
+  // out, the body's piece is the field itself on the rounded edges, not a prism through them.
+  const std::map<std::string, std::string> d = {{"q0", "abs(x)-0.7"}, {"q1", "abs(y)-0.4"}, {"q2", "abs(z)-0.3"},
+                                                {"m", "min(max(q0,q1,q2),0)"},
+                                                {"r", "hypot(max(q0,0),max(q1,0),max(q2,0),m)+2*m-0.1"}};
+  const Box box{Vec3::Constant(-1), Vec3::Constant(1)};
+  const Expression rounded("r", {}, box, d);
+  for (const Kind k : rounded.branch_kinds()) EXPECT_NE(k, Kind::Creased);
+  EXPECT_FALSE(rounded.has_pieces());
+  const Expression drilled("max(r, 0.2-hypot(x,y))", {}, box, d);
+  ASSERT_TRUE(drilled.has_pieces());
+  EXPECT_EQ(drilled.branch_kinds().back(), Kind::Creased);
+  const auto body = drilled.pieces(Vec3(0.5, 0.1, 0.4), 0.05);
+  ASSERT_EQ(body.size(), 1u);
+  for (const Vec3& q : {Vec3(-0.62, -0.51, -0.29), Vec3(0.75, 0.45, 0.35), Vec3(0.1, -0.5, -0.4)})
+    EXPECT_EQ(drilled.piece(q, body[0].branch).value, drilled.value(q)) << q.transpose();
 }
 
 TEST(BranchKinds, SharpBooleansStayCreasedBesideSmoothOnes) {

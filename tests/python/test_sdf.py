@@ -458,3 +458,27 @@ def test_meshing_foglemans_model():
     assert topology(V, F) == (1, 5, True)
     assert stats["components"] == 1 and stats["triangles"] == len(F)
     assert np.abs(model(V)).max() < 1e-6
+
+
+@pytest.mark.parametrize("name", ["drilled rounded box", "blended block", "ball blended on an edge"])
+def test_rounded_and_blended_parts_with_sharp_booleans_mesh_along_their_creases(name):
+    """Parts written the usual way: a rounded box drilled through, the same with a ball blended on
+    (smooth union) before drilling, and a box with a ball blended onto one edge, whose crease fades
+    out inside the blend. Each meshes along its creases (no fallback to meshing across them), with
+    the topology Marching Cubes finds, 20-degree triangles at factor 3 and its creases' vertices
+    on the surface."""
+    models = {
+        "drilled rounded box": rounded_box((1.6, 1.0, 0.8), 0.1) - cylinder(0.2),
+        "blended block": (rounded_box((1.6, 1.0, 0.8), 0.1) | sphere(0.55, center=(0.6, 0.3, 0.3)).k(0.2))
+        - cylinder(0.2),
+        "ball blended on an edge": box(1.5) | sphere(0.5, center=(0.75, 0.75, 0)).k(0.25),
+    }
+    model = models[name]
+    V, F, _ = cdp.marching_cubes(model, cell=0.03)
+    reference = topology(V, F)
+    V, F, stats = cdp.polygonize(model, factor=3)
+    assert topology(V, F) == reference
+    assert stats["creases"]["followed"] and stats["creases"]["fallback"] == ""
+    assert stats["creases"]["curves"] > 0
+    assert stats["min_angle_degrees"] >= 20
+    assert np.abs(model(V)).max() < 1e-6
