@@ -296,8 +296,10 @@ BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 2)->UseManualTime
 // Models written as SDF code writes them, at factor 3: a rounded box, a smooth union of it with a
 // sphere (both C1 where their max and clamps switch: no crease), the union minus a cylinder (C1
 // seams and two sharp rims), fogleman/sdf's README model (sharp creases only), a Menger sponge of
-// level 1 (creases meeting six at a corner) and two equal pipes crossing in a box (creases that
-// cross where their pieces are tangent). Each
+// level 1 (creases meeting six at a corner), two equal pipes crossing in a box (creases that
+// cross where their pieces are tangent), a box with a ball blended onto an edge (a crease that
+// fades out into a seam) and cdp.sdf's rounded block with a ball blended on and a hole through
+// both (its rounded box written as Inigo Quilez's exact distance). Each
 // iteration meshes the model with its creases followed (the defaults), then ignored, then a
 // smooth sphere (an expression of its own): `creases_cost_ratio` is the first time over the
 // second (not reported where the second fails) (the SDF-models issue: at most 1.5 where the model is C1), `per_triangle_vs_sphere`
@@ -311,8 +313,19 @@ void BM_AdaptiveSdf(benchmark::State& state) {
       {"u", "b+h*(a-b)-0.2*h*(1-h)"}};
   const Box box{Vec3::Constant(-1.2), Vec3::Constant(1.2)};
   const int which = static_cast<int>(state.range(0));
-  static const char* kNames[] = {"rounded_box",     "smooth_union", "smooth_union_minus_cylinder",
-                                 "fogleman_readme", "menger_level1", "crossed_pipes"};
+  static const char* kNames[] = {"rounded_box",   "smooth_union",  "smooth_union_minus_cylinder",
+                                 "fogleman_readme", "menger_level1", "crossed_pipes",
+                                 "box_blended_ball", "blended_block"};
+  // cdp.sdf's rounded_box((1.6, 1, 0.8), 0.1) | sphere(0.55, center=(0.6, 0.3, 0.3)).k(0.2).
+  const std::map<std::string, std::string> block = {
+      {"q0", "abs(x)-0.7"},
+      {"q1", "abs(y)-0.4"},
+      {"q2", "abs(z)-0.3"},
+      {"m", "min(max(q0,q1,q2),0)"},
+      {"a", "hypot(max(q0,0),max(q1,0),max(q2,0),m)+2*m-0.1"},
+      {"b", "hypot(x-0.6,y-0.3,z-0.3)-0.55"},
+      {"h", "clamp(0.5+0.5*(b-a)/0.2,0,1)"},
+      {"u", "b+h*(a-b)-0.2*h*(1-h)"}};
   const Expression field =
       which == 0   ? Expression(kRoundedBox, {}, box)
       : which == 1 ? Expression("u", {}, box, blend)
@@ -323,7 +336,12 @@ void BM_AdaptiveSdf(benchmark::State& state) {
       : which == 4 ? Expression("max(max(abs(x),abs(y),abs(z))-1, -min(max(abs(x),abs(y))-0.4, "
                                 "max(abs(y),abs(z))-0.4, max(abs(x),abs(z))-0.4))",
                                 {}, Box{Vec3::Constant(-1.3), Vec3::Constant(1.3)})
-                   : Expression("max(min(hypot(y,z)-0.5, hypot(x,z)-0.5), max(abs(x),abs(y),abs(z))-1)", {}, box);
+      : which == 5 ? Expression("max(min(hypot(y,z)-0.5, hypot(x,z)-0.5), max(abs(x),abs(y),abs(z))-1)", {}, box)
+      : which == 6 ? Expression("b+h*(a-b)-0.25*h*(1-h)", {}, Box{Vec3::Constant(-1.4), Vec3::Constant(1.4)},
+                                {{"a", "max(abs(x),abs(y),abs(z))-0.75"},
+                                 {"b", "hypot(x-0.75,y-0.75,z)-0.5"},
+                                 {"h", "clamp(0.5+0.5*(b-a)/0.25,0,1)"}})
+                   : Expression("max(u, 0.2-hypot(x,y))", {}, Box{Vec3::Constant(-1.3), Vec3::Constant(1.3)}, block);
   const Expression sphere("sqrt(x^2+y^2+z^2)-1", {}, box);
   AdaptiveOptions o;
   o.factor = 3;
@@ -353,7 +371,7 @@ void BM_AdaptiveSdf(benchmark::State& state) {
   state.counters["per_triangle_vs_sphere"] = follow_per_triangle / sphere_per_triangle;
   state.SetLabel(std::string(kNames[which]) + "/adaptive/factor3");
 }
-BENCHMARK(BM_AdaptiveSdf)->ArgName("model")->DenseRange(0, 5)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AdaptiveSdf)->ArgName("model")->DenseRange(0, 7)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // Components of very different scales: a torus tube of radius 0.003 beside a sphere of radius
 // 1.2 at factor 1, min_edge 1e-4 (the hashes sized by the tube's edges hold the sphere's
