@@ -52,6 +52,24 @@ std::optional<Field::BranchSwitch> Field::branch_switch(const Vec3& p, std::size
   return BranchSwitch{-record.seam_step[k].dot(n), n};
 }
 
+std::vector<Field::SmoothSide> Field::eval_smooth_sides(const Vec3& p, double radius) const {
+  std::vector<SmoothSide> out;
+  if (!has_branch_points()) return out;
+  const std::vector<BranchKind>& kinds = branch_kinds();
+  if (!any_smooth_) return out;
+  BranchRecord record;
+  n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+  if (!eval_branch_record(p, record)) return out;
+  for (std::size_t k = 0; k < std::min(kinds.size(), record.taken.size()); ++k) {
+    if (kinds[k] != BranchKind::Smooth || !(record.distance[k] <= radius)) continue;
+    std::vector<std::uint8_t> branch = record.taken;
+    branch[k] ^= 1u;
+    n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
+    out.push_back({record.distance[k], eval_piece(p, branch)});
+  }
+  return out;
+}
+
 bool Field::has_pieces() const {
   if (!has_branch_points()) return false;
   const auto& kinds = branch_kinds();
@@ -154,6 +172,7 @@ const std::vector<Field::BranchKind>& Field::branch_kinds() const {
     // piece fixed to z > 0 there would go on flat where the box rounds below. In a field without
     // Smooth branch points a Hidden one stays hidden, and is split as it always was.
     const bool any_smooth = std::find(kinds.begin(), kinds.end(), BranchKind::Smooth) != kinds.end();
+    any_smooth_ = any_smooth;
     free_.assign(kinds.size(), false);
     for (std::size_t b = 0; b < kinds.size(); ++b)
       free_[b] = kinds[b] == BranchKind::Smooth || (any_smooth && kinds[b] == BranchKind::Hidden);

@@ -211,7 +211,7 @@ std::vector<Case> all_cases() {
     continue;
 #endif
     for (double k : {1.0, 3.0, 10.0}) out.push_back({s, k});
-    for (double t : {1e-1, 1e-2, 1e-3}) out.push_back({s, 0, t});
+    for (double t : {1e-1, 1e-2, 1e-3, 1e-4}) out.push_back({s, 0, t});
   }
   return out;
 }

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cdp/core/crease.h>
+#include <cdp/core/curvature.h>
 #include <cdp/core/crease_curves.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/models/analytic.h>
@@ -408,6 +409,27 @@ TEST(BranchKinds, ARoundedBoxWrittenWithItsCoreHasNoCreaseAndNoPieceThatLeavesIt
   ASSERT_EQ(body.size(), 1u);
   for (const Vec3& q : {Vec3(-0.62, -0.51, -0.29), Vec3(0.75, 0.45, 0.35), Vec3(0.1, -0.5, -0.4)})
     EXPECT_EQ(drilled.piece(q, body[0].branch).value, drilled.value(q)) << q.transpose();
+}
+
+TEST(BranchKinds, TheFarSideOfAC1SeamIsTheSurfaceBeyondItContinuedToThePoint) {
+  // On the rounded box's face y = 0.55, 0.05 from where max(|z| - 0.3, 0) switches and the face
+  // rounds into the edge of radius 0.15 around the line y = 0.4, z = 0.3: beyond the seam the
+  // field is the distance from that line minus 0.15, continued to the point a cylinder of radius
+  // hypot(0.15, 0.05) there.
+  const Expression box(kRoundedBox, {}, Box{Vec3::Constant(-1.1), Vec3::Constant(1.1)});
+  const Vec3 p(0, 0.55, 0.25);
+  const auto sides = box.smooth_sides(p, 0.1);
+  ASSERT_EQ(sides.size(), 1u);
+  EXPECT_NEAR(sides[0].distance, 0.05, 1e-12);
+  const Curvature c = curvature_from_derivatives(sides[0].piece.gradient, sides[0].piece.hessian);
+  EXPECT_NEAR(c.min_radius, std::hypot(0.15, 0.05), 1e-9);
+  EXPECT_NEAR(sides[0].piece.value, std::hypot(0.15, 0.05) - 0.15, 1e-12);
+  // The seam is beyond reach at 0.04, and from the face's middle (0.3 away; the switch of
+  // max(|y| - 0.4, 0) lies 0.15 inside the solid there).
+  EXPECT_TRUE(box.smooth_sides(p, 0.04).empty());
+  EXPECT_TRUE(box.smooth_sides(Vec3(0, 0.55, 0), 0.12).empty());
+  // Sharp booleans have no C1 seam.
+  EXPECT_TRUE(expression(kCube).smooth_sides(Vec3(1, 0.99, 0), 1).empty());
 }
 
 TEST(BranchKinds, SharpBooleansStayCreasedBesideSmoothOnes) {

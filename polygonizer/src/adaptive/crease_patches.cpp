@@ -52,6 +52,9 @@ class PieceField final : public Field {
     hessian = q.hessian;
     return q.value;
   }
+  std::vector<SmoothSide> eval_smooth_sides(const Vec3& p, double radius) const override {
+    return field_.smooth_sides(p, radius);
+  }
 
  private:
   const Field& field_;
@@ -193,6 +196,7 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
   for (std::size_t i = 0; i < n; ++i) {
     double len = std::min(piece_edge_length(field, sizing, P[i], curve.pieces[0]),
                           piece_edge_length(field, sizing, P[i], curve.pieces[1]));
+    len = std::min(len, seam_edge_length(field, sizing, P[i], len));  // as the patches' fronts will (Tracker::Placed)
     const bool interior = curve.closed || (i > 0 && i + 1 < n);
     if (interior) {
       const Vec3 a = P[i] - at(i + n - 1), b = at(i + 1) - P[i];

@@ -1,7 +1,11 @@
 #include "edge_length.h"
 
+#include <cdp/core/curvature.h>
+#include <cdp/core/errors.h>
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace cdp::adaptive {
 
@@ -18,6 +22,19 @@ double edge_length(const Sizing& s, double min_radius) {
     if (s.max_turn > 0) l = std::min(l, min_radius * s.max_turn);
   }
   return std::clamp(l, s.min_edge, s.max_edge);
+}
+
+double seam_edge_length(const Field& field, const Sizing& sizing, const Vec3& p, double own) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Field::SmoothSide& side : field.smooth_sides(p, own / kSeamGradation)) {
+    try {
+      const Curvature c = curvature_from_derivatives(side.piece.gradient, side.piece.hessian);
+      best = std::min(best, edge_length(sizing, c.min_radius) + kSeamGradation * side.distance);
+    } catch (const NoSurfaceError&) {
+      // No gradient beyond the seam: nothing to anticipate.
+    }
+  }
+  return best;
 }
 
 }  // namespace cdp::adaptive

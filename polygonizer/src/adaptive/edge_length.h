@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/field.h>
 
 namespace cdp::adaptive {
 
@@ -22,6 +23,19 @@ struct Sizing {
 
 // r_min may be +infinity (flat point): the result is then max_edge.
 double edge_length(const Sizing& sizing, double min_radius);
+
+// The edges may grow by this share of the distance from a C1 seam whose other side curves more
+// (a rounded box's flat face meeting its rounded edge, where the curvature jumps from 0 to
+// 1 / radius), so that edges coming over the flat side shorten before they reach the seam, as
+// the tracker's look-ahead grades them towards a finer front (kLookAheadGradation).
+inline constexpr double kSeamGradation = 0.4;
+
+// The target edge length at p (on the surface of `field`) that the C1 seams near it ask for
+// (Field::smooth_sides): for each, the length the curvature beyond it asks for, plus
+// kSeamGradation times its distance; the smallest, and infinity where none is nearer than
+// `own` / kSeamGradation (`own`: the length p's own curvature asks for, which a seam farther away
+// cannot undercut).
+double seam_edge_length(const Field& field, const Sizing& sizing, const Vec3& p, double own);
 
 // Longest chord of a circle of radius r whose sagitta (r - sqrt(r^2 - l^2/4)) is at most eps.
 double chord_for_deviation(double r, double eps);

@@ -187,7 +187,7 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     // is wide jumps it. Placed again at half the length, down to min_edge.
     if (!s_.anticipate || 0.5 * d < s_.sizing.min_edge) break;
     const bool too_long = std::any_of(placed.begin(), placed.end(), [&](const Placed& x) {
-      return zone_capped(x.point, edge_length(s_.sizing, x.curvature.min_radius)) < kAnticipate * d;
+      return placed_target(x) < kAnticipate * d;
     });
     if (!too_long) break;
     ++anticipations_;

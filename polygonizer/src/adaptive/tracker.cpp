@@ -78,6 +78,9 @@ void Tracker::measure(std::span<const Vec3> points, std::vector<std::optional<Pl
       out[i] = Placed{points[i], curvature_from_derivatives(g, h), step_to_critical_point(g, h)};
     } catch (const NoSurfaceError&) {
     }
+    if (out[i] && s_.grading)
+      out[i]->seam_target =
+          seam_edge_length(field_, s_.sizing, points[i], edge_length(s_.sizing, out[i]->curvature.min_radius));
     if (out[i] && !out[i]->curvature.normal.allFinite()) out[i].reset();
   }
   const auto done = Clock::now();
@@ -90,7 +93,7 @@ int Tracker::add_vertex(const Placed& placed) {
   const int v = static_cast<int>(mesh_.positions.size());
   mesh_.positions.push_back(placed.point);
   mesh_.normals.push_back(c.normal);
-  target_.push_back(zone_capped(placed.point, edge_length(s_.sizing, c.min_radius)));
+  target_.push_back(placed_target(placed));
   if (c.min_radius < tightest_.first) tightest_ = {c.min_radius, placed.point};
   if (placed.to_critical && placed.to_critical->norm() <= kCriticalReach * target_.back())
     critical_starts_.push_back({placed.point, *placed.to_critical, target_.back()});

@@ -153,6 +153,9 @@ class Tracker {
     // (missed_necks.h): vertices close to a critical point start the search for necks the
     // fronts stepped over.
     std::optional<Vec3> to_critical = std::nullopt;
+    // The target edge length the C1 seams near the point ask for (seam_edge_length;
+    // Settings::grading only): infinite where there is none.
+    double seam_target = std::numeric_limits<double>::infinity();
   };
 
   Tracker(const Field& field, const Settings& settings, Mesh& mesh);
@@ -416,6 +419,10 @@ class Tracker {
   std::vector<FinerZone> finer_zones_;
   std::vector<double> rollback_place_targets_;  // per rollback place: its first longest target
   std::pair<double, Vec3> tightest_{std::numeric_limits<double>::infinity(), Vec3::Zero()};
+  // A placed point's target edge length: its curvature's, capped by a seam ahead and by the finer zones.
+  double placed_target(const Placed& x) const {
+    return zone_capped(x.point, std::min(edge_length(s_.sizing, x.curvature.min_radius), x.seam_target));
+  }
   // The target edge length at p: `target`, capped by the finer zones p is in.
   double zone_capped(const Vec3& p, double target) const {
     for (const FinerZone& z : finer_zones_)

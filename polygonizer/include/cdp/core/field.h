@@ -194,6 +194,18 @@ class Field {
     Vec3 normal = Vec3::Zero();
   };
   std::optional<BranchSwitch> branch_switch(const Vec3& p, std::size_t k) const;
+  // The far side of each C1 seam near p: for every Smooth branch point (branch_kinds) whose
+  // switch lies within `radius` of p (to first order), that distance and the piece with its
+  // branch flipped (the others as taken at p), evaluated at p: the surface beyond the seam,
+  // continued to p. Where the curvature jumps across a seam (a rounded box's flat face meeting
+  // its rounded edge, a smooth union's blend meeting the shapes it joins), the adaptive
+  // polygonizer's sizing sees the curved side before its fronts reach it. Empty for a model
+  // without Smooth branch points. Counted as one value_gradient and a gradient_hessian per side.
+  struct SmoothSide {
+    double distance = 0;
+    FieldPiece piece;
+  };
+  std::vector<SmoothSide> smooth_sides(const Vec3& p, double radius) const { return eval_smooth_sides(p, radius); }
   // The piece with `branch` (from pieces()) at another point: the same smooth function, its
   // branches fixed, wherever p is. Throws InvalidInputError for a branch the model cannot have
   // made. Counted as one gradient_hessian.
@@ -290,6 +302,9 @@ class Field {
   // eval_first_order and eval_piece instead (models/expression.h and models/autodiff_field.h).
   virtual std::vector<FieldPiece> eval_pieces(const Vec3& p, double radius) const;
   virtual FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const;
+  // smooth_sides: from the record at p and the kinds (a field that stands for another, such as
+  // one piece of it, passes the call on).
+  virtual std::vector<SmoothSide> eval_smooth_sides(const Vec3& p, double radius) const;
 
   // Whether the model has branch points at all (cheap; the default: none).
   virtual bool has_branch_points() const { return false; }
@@ -323,6 +338,7 @@ class Field {
   mutable std::once_flag kinds_once_;
   mutable std::vector<BranchKind> kinds_;
   mutable std::vector<bool> free_;  // kFreeBranch in every piece (branch_kinds)
+  mutable bool any_smooth_ = false;  // a Smooth branch point among them
 };
 
 }  // namespace cdp
