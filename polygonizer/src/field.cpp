@@ -202,23 +202,6 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
       base[k] = kFreeBranch;
       any_free = true;
     }
-  // Beside a free branch point, a fixed one may matter where the piece is evaluated away from p
-  // even though it does not at p: a rounded box's abs(x) under max(abs(x) - a, 0), which the
-  // max hides near x = 0 and shows past |x| = a. So where the field has free branch points, a
-  // choice that changes nothing at p is free too: the piece is then the field's own continuation
-  // there. (Without free branch points a hidden choice stays hidden, and the pieces are as
-  // they always were.)
-  if (any_free) {
-    std::uint64_t evaluations = 0;
-    for (std::size_t k = 0; k < base.size(); ++k) {
-      if (base[k] == kFreeBranch || std::binary_search(split.begin(), split.end(), static_cast<int>(k))) continue;
-      base[k] ^= 1u;
-      const auto [v, g] = eval_first_order(p, base);
-      ++evaluations;
-      base[k] = v == record.value && g == record.gradient ? kFreeBranch : taken[k];
-    }
-    n_value_gradient_.fetch_add(evaluations, std::memory_order_relaxed);
-  }
   const std::size_t combinations = std::size_t{1} << split.size();
   std::vector<FieldPiece> all;
   std::vector<std::size_t> kept;
@@ -237,16 +220,38 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
     if (std::none_of(kept.begin(), kept.end(), same)) kept.push_back(mask);
   }
   std::vector<FieldPiece> out;
+  // Beside a free branch point, a fixed one may matter where the piece is evaluated away from p
+  // even though it does not at p: a rounded box's abs(x) under max(abs(x) - a, 0), which the
+  // max hides near x = 0 and shows past |x| = a. So where the field has free branch points, a
+  // choice that changes nothing at p is free too: the piece is then the field's own continuation
+  // there. (Without free branch points a hidden choice stays hidden, and the pieces are as
+  // they always were.) Each piece is asked for itself: a choice the field's own branches hide
+  // may show in a piece that flips another. A tetrahedron written max(|x + y| - z, |x - y| + z)
+  // hides |x - y| where the max takes its first argument, not in the piece that takes the
+  // second; made free there, that piece held two faces and the crease between them, and the
+  // patches of a tetrahedron with a ball blended in crossed at its corners.
+  std::uint64_t evaluations = 0;
   for (const std::size_t mask : kept) {
     FieldPiece piece = all[mask];
-    if (any_free)  // likewise a split choice this piece does not depend on at p
+    if (any_free) {
+      for (std::size_t k = 0; k < piece.branch.size(); ++k) {
+        if (base[k] == kFreeBranch || std::binary_search(split.begin(), split.end(), static_cast<int>(k))) continue;
+        std::vector<std::uint8_t> flipped = piece.branch;
+        flipped[k] ^= 1u;
+        const auto [v, g] = eval_first_order(p, flipped);
+        ++evaluations;
+        if (v == piece.value && g == piece.gradient) piece.branch[k] = kFreeBranch;
+      }
+      // Likewise a split choice this piece does not depend on at p.
       for (std::size_t j = 0; j < split.size(); ++j) {
-        const FieldPiece& flipped = all[mask ^ (std::size_t{1} << j)];
-        if (flipped.value == piece.value && flipped.gradient == piece.gradient && flipped.hessian == piece.hessian)
+        const FieldPiece& other = all[mask ^ (std::size_t{1} << j)];
+        if (other.value == piece.value && other.gradient == piece.gradient && other.hessian == piece.hessian)
           piece.branch[static_cast<std::size_t>(split[j])] = kFreeBranch;
       }
+    }
     out.push_back(std::move(piece));
   }
+  n_value_gradient_.fetch_add(evaluations, std::memory_order_relaxed);
   return out;
 }
 

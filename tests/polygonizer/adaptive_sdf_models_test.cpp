@@ -104,6 +104,18 @@ std::vector<SdfModel> sdf_models() {
       // both ends, and its switch goes on over the ball as a seam between the two faces' patches.
       {"box_blended_ball",
        model("u", 1.4, smooth_min("max(abs(x),abs(y),abs(z))-0.75", "hypot(x-0.75,y-0.75,z)-0.5", 0.25)), 1, 0, true},
+      // fogleman/sdf's tetrahedron (max(|x + y| - z, |x - y| + z)) with a ball blended in from
+      // inside, which bulges its faces: each abs hides behind the max on two faces and shows on
+      // the others, so a piece that flips the max must not leave it free.
+      {"tetrahedron_blended_ball",
+       model("u", 1.5, smooth_min("(max(abs(x+y)-z, abs(x-y)+z)-1)*0.5773502691896258", "hypot(x,y,z)-0.5", 0.2)), 1, 0,
+       true},
+      // A box smoothly intersected with a ball (the polynomial smooth maximum, radius 0.2): the
+      // box's corners are rounded off by the ball, its edges fade into the blend.
+      {"box_smooth_intersection_ball",
+       model("b+h*(a-b)+0.2*h*(1-h)", 1.0,
+             {{"a", "max(abs(x),abs(y),abs(z))-0.75"}, {"b", "hypot(x,y,z)-1"}, {"h", "clamp(0.5-0.5*(b-a)/0.2,0,1)"}}),
+       1, 0, true},
       // A Menger sponge of level 1: creases meeting at the openings' corners and at the corners
       // of the cavity, where six meet and each wall plane touches the corner from two quadrants.
       {"menger_level1",
