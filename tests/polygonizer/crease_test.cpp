@@ -590,3 +590,37 @@ TEST(CreaseProjection, ProjectToSeamLandsOnTheSwitchWhereThePiecesAreOneFunction
 
 }  // namespace
 }  // namespace cdp
+
+namespace cdp {
+namespace {
+
+TEST(CreaseCurves, PiecesThatDifferOnlyInRoundingStartNoCrease) {
+  // fogleman/sdf's model with its holes cut by a smooth difference (cdp.sdf: (sphere(1) &
+  // box(1.5)).difference(three cylinders, k=0.1)). On the holes' walls the blend is d0 - (d1 + d0)
+  // h with h = 1: the two sides of d0's max differ there in their last bits only, and the
+  // tracer started 227 curves of 1 to 21 points from them (402 stops). The creases are the six
+  // circles where the ball meets the box's faces and the twelve edges where the tunnels cross,
+  // between eight corners.
+  const Expression field("d0 - (d1 + d0)*h + 0.1*h*(1 - h)", {}, Box{Vec3::Constant(-0.9), Vec3::Constant(0.9)},
+                         {{"d0", "max(hypot(x, y, z) - 1, max(abs(x) - 0.75, abs(y) - 0.75, abs(z) - 0.75))"},
+                          {"d1", "min(hypot(z, y) - 0.5, hypot(x, z) - 0.5, hypot(x, y) - 0.5)"},
+                          {"h", "clamp(0.5 - (d1 + d0)*5, 0, 1)"}});
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.stops, 0u);
+  EXPECT_EQ(r.corners.size(), 8u);
+  std::size_t loops = 0, edges = 0;
+  for (const CreaseCurve& c : r.curves) {
+    if (c.closed) {
+      ++loops;
+      for (const Vec3& p : c.points) EXPECT_NEAR(p.norm(), 1, 1e-8);
+    } else {
+      ++edges;
+      EXPECT_TRUE(c.starts_at_corner && c.ends_at_corner);
+    }
+  }
+  EXPECT_EQ(loops, 6u);
+  EXPECT_EQ(edges, 12u);
+}
+
+}  // namespace
+}  // namespace cdp
