@@ -116,6 +116,12 @@ std::vector<SdfModel> sdf_models() {
        model("b+h*(a-b)+0.2*h*(1-h)", 1.0,
              {{"a", "max(abs(x),abs(y),abs(z))-0.75"}, {"b", "hypot(x,y,z)-1"}, {"h", "clamp(0.5-0.5*(b-a)/0.2,0,1)"}}),
        1, 0, true},
+      // A box with a hole cut by a smooth difference (a fillet of 0.1 round the hole): inside the
+      // hole the blend hides the box, where the pieces of its faces are all one function.
+      {"box_filleted_hole",
+       model("d0-(d1+d0)*h+0.1*h*(1-h)", 0.9,
+             {{"d0", "max(abs(x)-0.75,abs(y)-0.75,abs(z)-0.75)"}, {"d1", "hypot(x,y)-0.5"}, {"h", "clamp(0.5-(d1+d0)*5,0,1)"}}),
+       1, 1, true},
       // A Menger sponge of level 1: creases meeting at the openings' corners and at the corners
       // of the cavity, where six meet and each wall plane touches the corner from two quadrants.
       {"menger_level1",

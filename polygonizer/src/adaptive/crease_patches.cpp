@@ -396,14 +396,29 @@ std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>
   return cycles;
 }
 
-// Whether branch codes a and b give the same function: equal values and gradients at three
-// fixed points of the box (codes that differ only at branch points the piece does not pass
-// through name one piece).
+// Points spread over the box (the Halton sequence in bases 2, 3 and 5) where same_function
+// compares two pieces. Three points on the box's diagonal all lay in the hole of a box minus a
+// cylinder cut by a smooth difference, where the blend hides the box: its x and y faces were
+// taken for one piece, meshed by one tracker, and their patches did not mesh.
+constexpr int kSameFunctionPoints = 16;
+
+double halton(int i, int base) {
+  double f = 1, r = 0;
+  for (; i > 0; i /= base) {
+    f /= base;
+    r += f * (i % base);
+  }
+  return r;
+}
+
+// Whether branch codes a and b give the same function: equal values and gradients at
+// kSameFunctionPoints fixed points of the box (codes that differ only at branch points the
+// piece does not pass through name one piece).
 bool same_function(const Field& field, const Branch& a, const Branch& b) {
   if (a == b) return true;
   const Box& box = field.bounds();
-  for (const double s : {0.5, 0.31, 0.73}) {
-    const Vec3 p = box.min + Vec3(s, 1 - s, s * s).cwiseProduct(box.size());
+  for (int i = 1; i <= kSameFunctionPoints; ++i) {
+    const Vec3 p = box.min + Vec3(halton(i, 2), halton(i, 3), halton(i, 5)).cwiseProduct(box.size());
     const FieldPiece fa = field.piece(p, a), fb = field.piece(p, b);
     const double scale = 1 + std::abs(fa.value) + fa.gradient.norm();
     if (std::abs(fa.value - fb.value) > 1e-12 * scale || (fa.gradient - fb.gradient).norm() > 1e-12 * scale)
