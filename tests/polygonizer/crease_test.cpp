@@ -624,3 +624,32 @@ TEST(CreaseCurves, PiecesThatDifferOnlyInRoundingStartNoCrease) {
 
 }  // namespace
 }  // namespace cdp
+
+namespace cdp {
+namespace {
+
+TEST(FieldPieces, AChoiceHiddenBehindABlendIsFreeThoughItChangesTheLastBits) {
+  // A box with two crossing holes cut by a smooth difference (cdp.sdf: box(1.5).difference(
+  // cylinder(0.5).orient(X) | cylinder(0.5).orient(Y), k=0.1)). In the tunnels the blend is
+  // d0 - (d1 + d0) h at h = 1: the box's max changes the field in its last bits only. Compared
+  // bit for bit it was fixed in one tunnel's pieces at some points and free at others, two
+  // codes for one wall. The four arcs where the tunnels meet carry one code per tunnel.
+  const Expression field("d0 - (d1 + d0)*h + 0.1*h*(1 - h)", {}, Box{Vec3::Constant(-0.9), Vec3::Constant(0.9)},
+                         {{"d0", "max(abs(x) - 0.75, abs(y) - 0.75, abs(z) - 0.75)"},
+                          {"d1", "min(hypot(z, y) - 0.5, hypot(x, z) - 0.5)"},
+                          {"h", "clamp(0.5 - (d1 + d0)*5, 0, 1)"}});
+  const CreaseTracingResult r = trace_creases(field);
+  std::set<std::vector<std::uint8_t>> tunnels;
+  std::size_t arcs = 0;
+  for (const CreaseCurve& c : r.curves) {
+    if (c.points.front().head<2>().norm() > 1e-3) continue;  // a box's edge, not from (0, 0, +-0.5)
+    ++arcs;
+    tunnels.insert(c.pieces[0]);
+    tunnels.insert(c.pieces[1]);
+  }
+  EXPECT_EQ(arcs, 4u);
+  EXPECT_EQ(tunnels.size(), 2u);
+}
+
+}  // namespace
+}  // namespace cdp
