@@ -122,6 +122,24 @@ std::vector<SdfModel> sdf_models() {
        model("d0-(d1+d0)*h+0.1*h*(1-h)", 0.9,
              {{"d0", "max(abs(x)-0.75,abs(y)-0.75,abs(z)-0.75)"}, {"d1", "hypot(x,y)-0.5"}, {"h", "clamp(0.5-(d1+d0)*5,0,1)"}}),
        1, 1, true},
+      // Two crossing holes cut by one smooth difference: each face, its fillet and its hole's
+      // wall are one smooth patch, bounded outside by the face's edges (coded by the box's
+      // choice, the holes' hidden) and inside where the holes cross (coded by the holes' choice,
+      // the box's hidden); a box with four mouths joined inside, genus 3.
+      {"box_crossing_filleted_holes",
+       model("d0-(d1+d0)*h+0.1*h*(1-h)", 0.9,
+             {{"d0", "max(abs(x)-0.75,abs(y)-0.75,abs(z)-0.75)"},
+              {"d1", "min(hypot(y,z)-0.5, hypot(x,z)-0.5)"},
+              {"h", "clamp(0.5-(d1+d0)*5,0,1)"}}),
+       1, 3, true},
+      // fogleman/sdf's README model with its holes cut by a smooth difference (k = 0.1): six
+      // mouths joined inside, genus 5.
+      {"fogleman_filleted_holes",
+       model("d0-(d1+d0)*h+0.1*h*(1-h)", 0.9,
+             {{"d0", "max(hypot(x,y,z)-1, max(abs(x),abs(y),abs(z))-0.75)"},
+              {"d1", "min(hypot(y,z)-0.5, hypot(x,z)-0.5, hypot(x,y)-0.5)"},
+              {"h", "clamp(0.5-(d1+d0)*5,0,1)"}}),
+       1, 5, true},
       // A Menger sponge of level 1: creases meeting at the openings' corners and at the corners
       // of the cavity, where six meet and each wall plane touches the corner from two quadrants.
       {"menger_level1",

@@ -1,5 +1,6 @@
 #include "crease_patches.h"
 #include "spatial_hash.h"
+#include "../union_find.h"
 
 #include <cdp/core/crease.h>
 #include <cdp/core/curvature.h>
@@ -9,6 +10,8 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <numeric>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -320,6 +323,12 @@ struct Cycle {
   double sagitta = 0;         // the largest of its curves' (LaidCurve::sagitta)
 };
 
+// The cycles that one tracker meshes, on one piece.
+struct PatchGroup {
+  std::vector<std::size_t> cycles;
+  Branch piece;
+};
+
 // The boundary cycles of the pieces' patches: a loop's dart is a cycle by itself; a dart that
 // ends at a corner goes on with the dart of the same piece that leaves the corner (the pieces
 // compared by their gradients at the corner, since one piece may carry several branch codes).
@@ -411,20 +420,246 @@ double halton(int i, int base) {
   return r;
 }
 
+// Whether pieces a and b agree at p: equal values and gradients, to rounding.
+bool same_at(const Field& field, const Branch& a, const Branch& b, const Vec3& p) {
+  const FieldPiece fa = field.piece(p, a), fb = field.piece(p, b);
+  const double scale = 1 + std::abs(fa.value) + fa.gradient.norm();
+  return std::abs(fa.value - fb.value) <= 1e-12 * scale && (fa.gradient - fb.gradient).norm() <= 1e-12 * scale;
+}
+
 // Whether branch codes a and b give the same function: equal values and gradients at
 // kSameFunctionPoints fixed points of the box (codes that differ only at branch points the
 // piece does not pass through name one piece).
 bool same_function(const Field& field, const Branch& a, const Branch& b) {
   if (a == b) return true;
   const Box& box = field.bounds();
-  for (int i = 1; i <= kSameFunctionPoints; ++i) {
-    const Vec3 p = box.min + Vec3(halton(i, 2), halton(i, 3), halton(i, 5)).cwiseProduct(box.size());
-    const FieldPiece fa = field.piece(p, a), fb = field.piece(p, b);
-    const double scale = 1 + std::abs(fa.value) + fa.gradient.norm();
-    if (std::abs(fa.value - fb.value) > 1e-12 * scale || (fa.gradient - fb.gradient).norm() > 1e-12 * scale)
+  for (int i = 1; i <= kSameFunctionPoints; ++i)
+    if (!same_at(field, a, b, box.min + Vec3(halton(i, 2), halton(i, 3), halton(i, 5)).cwiseProduct(box.size())))
       return false;
-  }
   return true;
+}
+
+// A share of each boundary edge's length: how far inside_points lie from it.
+constexpr double kInsideStep = 0.25;
+
+// Points just inside a cycle's patch: each boundary edge's midpoint moved `share` of the edge to
+// its left (the patch's side) in the piece's tangent plane; a negative share, just outside.
+std::vector<Vec3> inside_points(const Field& field, const Cycle& cycle, std::span<const Vec3> points, double share) {
+  std::vector<Vec3> out;
+  const std::size_t n = cycle.vertices.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3& a = points[static_cast<std::size_t>(cycle.vertices[k])];
+    const Vec3& b = points[static_cast<std::size_t>(cycle.vertices[(k + 1) % n])];
+    const Vec3 m = 0.5 * (a + b);
+    const Vec3 g = field.piece(m, cycle.piece).gradient;
+    if (!(g.squaredNorm() > 0)) continue;
+    out.push_back(m + share * g.normalized().cross(b - a));
+  }
+  return out;
+}
+
+bool same_near(const Field& field, const Branch& a, const Branch& b, std::span<const Vec3> at) {
+  return std::all_of(at.begin(), at.end(), [&](const Vec3& p) { return same_at(field, a, b, p); });
+}
+
+// One code for two pieces that are one function near their boundaries: a choice either fixes is
+// fixed, a choice they fix differently is left free (a smooth difference hides the box along a
+// tunnel's wall, whose two mouths' faces fix the box's abs differently).
+Branch merge_codes(const Branch& a, const Branch& b) {
+  Branch out = a;
+  for (std::size_t k = 0; k < out.size() && k < b.size(); ++k) {
+    if (out[k] == Field::kFreeBranch) out[k] = b[k];
+    else if (b[k] != Field::kFreeBranch && b[k] != out[k]) out[k] = Field::kFreeBranch;
+  }
+  return out;
+}
+
+// Whether no branch point is fixed one way in a and the other in b.
+bool compatible(const Branch& a, const Branch& b) {
+  for (std::size_t k = 0; k < a.size() && k < b.size(); ++k)
+    if (a[k] != Field::kFreeBranch && b[k] != Field::kFreeBranch && a[k] != b[k]) return false;
+  return true;
+}
+
+// The region growth's step, as a share of the median crease edge: a smaller step than the
+// patches' boundaries have, so that a step does not jump a patch as narrow as a crease edge.
+// Between the box's diagonal over kRegionStepsMax and over kRegionStepsMin: a patch's width does
+// not shrink with the tolerance (at 1e-4 the crease edges' half made 200,000 samples and more).
+constexpr double kRegionStep = 0.5;
+constexpr double kRegionStepsMin = 40, kRegionStepsMax = 100;
+// Bounds of the region growth below: samples in all, and Newton steps onto the surface for one.
+constexpr std::size_t kMaxRegionSamples = 200000;
+constexpr int kRegionNewtonSteps = 8;
+
+// Which cycles bound one smooth region of the surface: regions grown from just inside every
+// cycle, in steps of `step` over the surface (six ways in the tangent plane, each point moved
+// onto F by Newton), a step kept where the field's own code there (Field::pieces, its hidden
+// choices free) fixes no branch point otherwise than the code it came from: a step across a
+// crease changes a visible choice. Where the growth of two cycles meets (samples within half a
+// step, compatible codes), the cycles bound one region. Empty if the growth would exceed
+// kMaxRegionSamples: the cycles are then grouped by function only.
+std::vector<int> cycle_regions(const Field& field, const std::vector<Cycle>& cycles,
+                               const std::vector<std::vector<Vec3>>& inside, double step) {
+  UnionFind regions(cycles.size());
+  struct Sample {
+    Vec3 p, normal;
+    Branch code;
+    int cycle;
+  };
+  std::vector<Sample> samples;
+  SpatialHash hash(step);
+  std::vector<std::size_t> queue;
+  const auto onto_surface = [&](Vec3 q) -> std::optional<std::pair<Vec3, Vec3>> {
+    for (int it = 0; it < kRegionNewtonSteps; ++it) {
+      Vec3 g;
+      const double v = field.value_gradient(q, g);
+      if (!std::isfinite(v) || !(g.squaredNorm() > 0)) return std::nullopt;
+      const double d = v / g.norm();
+      q -= d * g.normalized();
+      if (std::abs(d) <= 1e-3 * step) return std::pair{q, g};
+    }
+    return std::nullopt;
+  };
+  // Adds a sample unless one within half a step has a compatible code (then their cycles meet).
+  const auto add = [&](const Vec3& p, const Vec3& gradient, Branch code, int cycle) {
+    bool near = false;
+    hash.for_each_near(p, 0.5 * step, [&](int id) {
+      const Sample& s = samples[static_cast<std::size_t>(id)];
+      if ((s.p - p).norm() <= 0.5 * step && compatible(s.code, code)) {
+        regions.unite(s.cycle, cycle);
+        near = true;
+      }
+    });
+    if (near) return;
+    hash.insert(static_cast<int>(samples.size()), p);
+    queue.push_back(samples.size());
+    samples.push_back({p, gradient.normalized(), std::move(code), cycle});
+  };
+  const auto code_at = [&](const Vec3& p) {
+    const std::vector<FieldPiece> at = field.pieces(p, 0);
+    return at.empty() ? Branch{} : at.front().branch;
+  };
+  for (std::size_t i = 0; i < cycles.size(); ++i)
+    for (const Vec3& x : inside[i])
+      if (const auto q = onto_surface(x)) {
+        Branch code = code_at(q->first);
+        if (compatible(code, cycles[i].piece)) add(q->first, q->second, std::move(code), static_cast<int>(i));
+      }
+  // Whether the region of `cycle` has a sample within half a step of c: then nothing there is
+  // evaluated (most of a sample's six steps land beside samples already grown).
+  const auto covered = [&](const Vec3& c, int cycle) {
+    bool found = false;
+    const int root = regions.find(cycle);
+    hash.for_each_near(c, 0.5 * step, [&](int id) {
+      const Sample& o = samples[static_cast<std::size_t>(id)];
+      found = found || ((o.p - c).norm() <= 0.5 * step && regions.find(o.cycle) == root);
+    });
+    return found;
+  };
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    if (samples.size() > kMaxRegionSamples) return {};
+    const Sample s = samples[queue[head]];
+    const Vec3 t1 = s.normal.unitOrthogonal(), t2 = s.normal.cross(t1);
+    for (int k = 0; k < 6; ++k) {
+      const double angle = k * std::numbers::pi / 3;
+      const Vec3 c = s.p + step * (std::cos(angle) * t1 + std::sin(angle) * t2);
+      if (covered(c, s.cycle)) continue;
+      const auto q = onto_surface(c);
+      if (!q || (q->first - s.p).norm() > 2 * step || !field.bounds().contains(q->first)) continue;
+      Branch code = code_at(q->first);
+      if (compatible(code, s.code)) add(q->first, q->second, std::move(code), s.cycle);
+    }
+  }
+  std::vector<int> out(cycles.size());
+  for (std::size_t i = 0; i < cycles.size(); ++i) out[i] = regions.find(static_cast<int>(i));
+  return out;
+}
+
+// The cycles grouped by function: one group per piece (same_function), on the first's code.
+std::vector<PatchGroup> group_by_function(const Field& field, const std::vector<Cycle>& cycles,
+                                          std::span<const std::size_t> which) {
+  std::vector<PatchGroup> groups;
+  for (const std::size_t i : which) {
+    const auto g = std::find_if(groups.begin(), groups.end(), [&](const PatchGroup& g) {
+      return same_function(field, cycles[g.cycles.front()].piece, cycles[i].piece);
+    });
+    if (g != groups.end()) g->cycles.push_back(i);
+    else groups.push_back({{i}, cycles[i].piece});
+  }
+  return groups;
+}
+
+// The cycles of one smooth region belong together: the boundaries of one patch (a face with a
+// hole) must meet and merge. Without hidden choices a region is one function, and its cycles are
+// grouped by function. With them (behind a smooth blend, Field::pieces leaves a hidden choice
+// free), one region may be coded differently along its boundaries: behind a smooth difference, a
+// face, its fillet and a tunnel's wall are one patch, its outer boundary (the face's edges)
+// coded by the box's choice with the tunnels' hidden, its inner one (where two tunnels cross)
+// by the tunnels' choice with the box's hidden. Grouped by function, two trackers meshed that
+// wall from both sides, and their fronts stalled where they met. So the cycles are grouped by
+// region (cycle_regions), each region on one code (merge_codes) where that code is the same
+// function as each cycle's piece on both sides of its boundary (where the tracker evaluates
+// it), and otherwise by function within the region; groups of one function are then joined.
+std::vector<PatchGroup> group_cycles(const Field& field, const std::vector<Cycle>& cycles, std::span<const Vec3> points) {
+  std::vector<std::size_t> all(cycles.size());
+  std::iota(all.begin(), all.end(), std::size_t{0});
+  std::vector<PatchGroup> by_function = group_by_function(field, cycles, all);
+  const auto has_free = [](const PatchGroup& g) {
+    return std::count(g.piece.begin(), g.piece.end(), Field::kFreeBranch) > 0;
+  };
+  if (by_function.size() < 2 || std::none_of(by_function.begin(), by_function.end(), has_free)) return by_function;
+  std::vector<std::vector<Vec3>> inside, outside;
+  std::vector<double> edges;
+  for (const Cycle& c : cycles) {
+    inside.push_back(inside_points(field, c, points, kInsideStep));
+    outside.push_back(inside_points(field, c, points, -kInsideStep));
+    for (std::size_t k = 0; k < c.vertices.size(); ++k)
+      edges.push_back((points[static_cast<std::size_t>(c.vertices[k])] -
+                       points[static_cast<std::size_t>(c.vertices[(k + 1) % c.vertices.size()])]).norm());
+  }
+  // Only where two cycles of different functions could share a piece can a region hold both.
+  const auto valid_for = [&](const Branch& code, std::size_t k) {
+    return same_near(field, code, cycles[k].piece, inside[k]) && same_near(field, code, cycles[k].piece, outside[k]);
+  };
+  bool any_pair = false;
+  for (std::size_t a = 0; a < by_function.size() && !any_pair; ++a)
+    for (std::size_t b = a + 1; b < by_function.size() && !any_pair; ++b)
+      for (const std::size_t i : by_function[a].cycles)
+        for (const std::size_t j : by_function[b].cycles) {
+          const Branch code = merge_codes(cycles[i].piece, cycles[j].piece);
+          if (valid_for(code, i) && valid_for(code, j)) any_pair = true;
+        }
+  if (!any_pair) return by_function;
+  std::nth_element(edges.begin(), edges.begin() + static_cast<std::ptrdiff_t>(edges.size() / 2), edges.end());
+  const double diagonal = field.bounds().size().norm();
+  const double step = std::clamp(kRegionStep * edges[edges.size() / 2], diagonal / kRegionStepsMax, diagonal / kRegionStepsMin);
+  const std::vector<int> region = cycle_regions(field, cycles, inside, step);
+  if (region.empty()) return by_function;
+  std::vector<PatchGroup> groups;
+  for (std::size_t i = 0; i < cycles.size(); ++i) {
+    if (region[i] != static_cast<int>(i)) continue;  // each region once, at its first cycle
+    PatchGroup g;
+    for (std::size_t j = i; j < cycles.size(); ++j)
+      if (region[j] == static_cast<int>(i)) g.cycles.push_back(j);
+    g.piece = cycles[i].piece;
+    for (const std::size_t j : g.cycles) g.piece = merge_codes(g.piece, cycles[j].piece);
+    const bool valid = std::all_of(g.cycles.begin(), g.cycles.end(), [&](std::size_t k) { return valid_for(g.piece, k); });
+    if (valid) groups.push_back(std::move(g));
+    else
+      for (PatchGroup& h : group_by_function(field, cycles, g.cycles)) groups.push_back(std::move(h));
+  }
+  // Regions of one function in one tracker, as without hidden choices.
+  std::vector<PatchGroup> out;
+  for (PatchGroup& g : groups) {
+    const auto h = std::find_if(out.begin(), out.end(), [&](const PatchGroup& h) { return same_function(field, h.piece, g.piece); });
+    if (h == out.end()) {
+      out.push_back(std::move(g));
+      continue;
+    }
+    h->cycles.insert(h->cycles.end(), g.cycles.begin(), g.cycles.end());
+    std::sort(h->cycles.begin(), h->cycles.end());
+  }
+  return out;
 }
 
 // The patch tests' margin, as a share of an edge's length or a placement's step (see below).
@@ -487,20 +722,7 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
       darts.push_back(std::move(d));
   const std::vector<Cycle> cycles = trace_cycles(field, curves, darts, creases.corners, cv.points);
 
-  // Cycles grouped by piece: the patches of one piece are meshed by one tracker, so that the
-  // boundaries of one patch (a face with a hole) meet and merge.
-  std::vector<std::vector<std::size_t>> groups;
-  for (std::size_t i = 0; i < cycles.size(); ++i) {
-    bool placed = false;
-    for (auto& g : groups)
-      if (same_function(field, cycles[g.front()].piece, cycles[i].piece)) {
-        g.push_back(i);
-        placed = true;
-        break;
-      }
-    if (!placed) groups.push_back({i});
-  }
-
+  const std::vector<PatchGroup> groups = group_cycles(field, cycles, cv.points);
   const std::size_t nc = cv.points.size();
   Mesh& mesh = out.mesh;
   mesh.positions = cv.points;
@@ -508,8 +730,9 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
   out.target.assign(nc, std::numeric_limits<double>::infinity());
   out.mac.assign(nc, 0.0);
   out.shape_index.assign(nc, 0.0);
-  for (const auto& group : groups) {
-    const Branch& branch = cycles[group.front()].piece;
+  for (const PatchGroup& patch : groups) {
+    const std::vector<std::size_t>& group = patch.cycles;
+    const Branch& branch = patch.piece;
     const PieceField piece(field, branch);
     std::vector<std::vector<Tracker::Placed>> loops;
     for (const std::size_t i : group) {

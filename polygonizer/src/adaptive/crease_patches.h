@@ -13,7 +13,10 @@
 //                    patch on the left seen from outside (the fronts' orientation, front.h)
 //   trace_cycles     the boundary cycles of each piece's patches: at a corner a boundary goes on
 //                    along the other crease of the same piece
-//   mesh_pieces      one tracker per piece, its fronts the piece's cycles, then one mesh
+//   group_cycles     the cycles of one smooth region together (by function, or where hidden
+//                    choices code one region differently along its boundaries, by growing the
+//                    regions over the surface), on one code
+//   mesh_crease_patches  one tracker per group, its fronts the group's cycles, then one mesh
 #pragma once
 
 #include "tracker.h"
