@@ -17,11 +17,14 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <map>
 #include <memory>
 #include <string>
+#include <thread>
 
 namespace {
 
@@ -439,3 +442,50 @@ BENCHMARK(BM_MeshTopology)->ArgName("factor_x10")->Arg(50)->Arg(200)->Unit(bench
 }  // namespace
 
 BENCHMARK_MAIN();
+
+// How soon a cancelled run stops (AdaptiveOptions::cancel, cdp/core/cancel.h): the run is
+// made once uncancelled, then cancelled from another thread at each tenth of its time (the
+// seed grid, the tracking, the repair, the checks); the latency is the time from cancel() to
+// CancelledError reaching the caller. Counters: the largest and the median latency in
+// seconds, and the uncancelled run's time. Shape 0: the torus at factor 20 (100k triangles),
+// 1: the bunny VIS-800 at factor 5 (sizes bench-short can afford). Manual time = the largest
+// latency.
+void BM_CancelLatency(benchmark::State& state) {
+  const int shape = static_cast<int>(state.range(0));
+  const auto torus = make_shape(kTorus);
+  const Field& field = shape == 0 ? *torus : bunny();
+  AdaptiveOptions o;
+  o.factor = shape == 0 ? 20 : 5;
+  const double seconds = polygonize_adaptive(field, o).stats.seconds;
+  std::vector<double> latencies;
+  for (auto _ : state) {
+    double worst = 0;
+    for (int k = 1; k <= 9; ++k) {
+      o.cancel.reset();
+      const auto clock = [] { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); };
+      std::atomic<double> cancelled_at{0};
+      std::thread canceller([&] {
+        std::this_thread::sleep_for(std::chrono::duration<double>(k * seconds / 10));
+        cancelled_at.store(clock());
+        o.cancel.cancel();
+      });
+      try {
+        polygonize_adaptive(field, o);
+      } catch (const CancelledError&) {
+      }
+      const double now = clock();
+      canceller.join();
+      // A run that ended before its token was cancelled: no latency (0).
+      const double latency = cancelled_at.load() > 0 ? std::max(0.0, now - cancelled_at.load()) : 0;
+      latencies.push_back(latency);
+      worst = std::max(worst, latency);
+    }
+    state.SetIterationTime(worst);
+  }
+  std::sort(latencies.begin(), latencies.end());
+  state.counters["latency_max_seconds"] = latencies.back();
+  state.counters["latency_median_seconds"] = latencies[latencies.size() / 2];
+  state.counters["run_seconds"] = seconds;
+  state.SetLabel(shape == 0 ? "torus/adaptive/factor20/cancel" : "bunny_vis800/adaptive/factor5/cancel");
+}
+BENCHMARK(BM_CancelLatency)->ArgName("shape")->DenseRange(0, 1)->Iterations(1)->UseManualTime()->Unit(benchmark::kMillisecond);

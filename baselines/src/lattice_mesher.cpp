@@ -344,6 +344,7 @@ void LatticeMesher::run_grid() {
         mesh_cube(c, f);
       }
     std::swap(lower, upper);
+    options_.cancel.check("marching");
     if (options_.progress) options_.progress(static_cast<double>(k + 1) / static_cast<double>(n_[2]));
   }
   cubes_visited = static_cast<std::size_t>(total);
@@ -400,7 +401,8 @@ bool LatticeMesher::follow(const Cell& start, std::size_t cluster, std::size_t c
         nb[face / 2] += face % 2 == 0 ? -1 : 1;
         if (in_lattice(nb) && visited_.emplace(cell_key(nb), 0).second) queue.push_back(nb);
       }
-      if (options_.progress && ++done % 4096 == 0) {
+      if (++done % 1024 == 0) options_.cancel.check("marching");
+      if (options_.progress && done % 4096 == 0) {
         const double local = static_cast<double>(done) / static_cast<double>(done + queue.size());
         progress_reported_ = std::max(progress_reported_, (static_cast<double>(cluster) + local) / clusters);
         options_.progress(progress_reported_);

@@ -517,7 +517,8 @@ std::uint64_t cell_hash(int x, int y, int z) {
 // overlapping pair is tested exactly once, even when distinct cells share a bucket. Large
 // triangles are tested against all others (two large ones from the lower index): at most about
 // (16 + sqrt n) n box comparisons.
-void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollector& out, int threads) {
+void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollector& out, int threads,
+                     const CancelToken* cancel) {
   std::vector<int> live;
   for (std::size_t f = 0; f < boxes.size(); ++f)
     if ((boxes[f].min.array() <= boxes[f].max.array()).all()) live.push_back(static_cast<int>(f));
@@ -640,6 +641,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   detail::parallel_blocks(buckets, block, workers, [&](std::size_t begin, std::size_t end, unsigned worker) {
     PairCollector& mine = found[worker];
     std::vector<Member>& list = lists[worker];
+    if (cancel) cancel->check("self-intersections");
     for (std::size_t b = begin; b < end; ++b) {
       if (start[b + 1] - start[b] < 2) continue;
       // A triangle with several cells in the bucket appears several times, consecutively.
@@ -750,17 +752,18 @@ std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* 
   return boxes;
 }
 
-std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs, int threads) {
+std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs, int threads,
+                                                         const CancelToken* cancel) {
   const std::vector<Box> boxes = triangle_boxes_for_intersection(mesh, nullptr, "self_intersecting_pairs");
   PairCollector out(max_pairs);
-  hash_grid_pairs(mesh, boxes, out, threads);
+  hash_grid_pairs(mesh, boxes, out, threads, cancel);
   return out.sorted_pairs();
 }
 
 std::size_t count_self_intersecting_pairs(const Mesh& mesh, int threads) {
   const std::vector<Box> boxes = triangle_boxes_for_intersection(mesh, nullptr, "count_self_intersecting_pairs");
   PairCollector out(0);
-  hash_grid_pairs(mesh, boxes, out, threads);
+  hash_grid_pairs(mesh, boxes, out, threads, nullptr);
   return out.count();
 }
 

@@ -5,10 +5,13 @@
 //                                    IsADirectoryError, PermissionError), errno set
 //   NoSurfaceError                -> cdp.NoSurfaceError(RuntimeError)
 //   LimitExceededError            -> cdp.LimitExceededError(RuntimeError)
+//   CancelledError                -> cdp.CancelledError(RuntimeError) (cdp.CancelToken.cancel();
+//                                    Ctrl-C during a run raises KeyboardInterrupt instead)
 // Python exceptions raised inside callbacks (a callable field, a progress callable, Ctrl-C)
 // travel through the C++ code as py::error_already_set and come out as themselves.
 #include "bindings.h"
 
+#include <cdp/core/cancel.h>
 #include <cdp/core/errors.h>
 
 #include <cerrno>
@@ -32,6 +35,7 @@ PyObject* os_error_type(int error_number) {
 // time static destructors run).
 PyObject* g_no_surface = nullptr;
 PyObject* g_limit_exceeded = nullptr;
+PyObject* g_cancelled = nullptr;
 
 // A Python object shared by copies of a std::function: the C++ algorithms copy their callbacks
 // while the GIL is released, and copying a py::object would touch its reference count without
@@ -73,7 +77,11 @@ void bind_errors(py::module_& m) {
       "An algorithm hit one of its bounds (steps, triangles, cubes, area) before finishing "
       "(cdp::LimitExceededError).",
       PyExc_RuntimeError, nullptr);
-  if (!g_no_surface || !g_limit_exceeded) throw py::error_already_set();
+  g_cancelled = PyErr_NewExceptionWithDoc(
+      "cdp.CancelledError", "The run was cancelled through its cdp.CancelToken (cdp::CancelledError).",
+      PyExc_RuntimeError, nullptr);
+  if (!g_no_surface || !g_limit_exceeded || !g_cancelled) throw py::error_already_set();
+  m.add_object("CancelledError", py::handle(g_cancelled));
   m.add_object("NoSurfaceError", py::handle(g_no_surface));
   m.add_object("LimitExceededError", py::handle(g_limit_exceeded));
 
@@ -92,6 +100,8 @@ void bind_errors(py::module_& m) {
       PyErr_SetString(g_no_surface, e.what());
     } catch (const LimitExceededError& e) {
       PyErr_SetString(g_limit_exceeded, e.what());
+    } catch (const CancelledError& e) {
+      PyErr_SetString(g_cancelled, e.what());
     }
   });
 }

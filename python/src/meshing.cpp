@@ -7,14 +7,17 @@
 #include <cdp/baselines/marching_cubes.h>
 #include <cdp/baselines/marching_tetrahedra.h>
 #include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/cancel.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_angles.h>
 #include <cdp/io/polygonize_stats_json.h>
 
 #include <pybind11/stl.h>
 
+#include <atomic>
 #include <climits>
 #include <cmath>
+#include <csignal>
 #include <optional>
 
 namespace cdp::python {
@@ -29,6 +32,52 @@ struct Options {
   std::optional<bool> check_self_intersections;
   std::optional<long long> threads;
   std::optional<std::string> creases;
+  std::optional<CancelToken> cancel;
+};
+
+// Ctrl-C during a run on the main thread: for the run's length SIGINT cancels its token (an
+// atomic store, safe in a signal handler), so the run stops at its next poll wherever it is (the
+// progress callback, which also looks for Ctrl-C, is not called during the repair or the
+// checks); the binding then raises KeyboardInterrupt through Python's own handler. Python's
+// handler is put back when the run ends. Elsewhere (another thread, a run inside a callback of
+// a run) nothing is installed.
+std::atomic<const CancelToken*> g_sigint_token{nullptr};
+std::atomic<bool> g_sigint_fired{false};
+
+extern "C" void cancel_on_sigint(int) {
+  if (const CancelToken* t = g_sigint_token.load()) t->cancel();
+  g_sigint_fired.store(true);
+}
+
+class SigintCancels {
+ public:
+  explicit SigintCancels(const CancelToken& token) {
+    const py::module_ threading = py::module_::import("threading");
+    if (!threading.attr("current_thread")().is(threading.attr("main_thread")())) return;
+    const CancelToken* none = nullptr;
+    if (!g_sigint_token.compare_exchange_strong(none, &token)) return;
+    g_sigint_fired.store(false);
+    struct sigaction sa {};
+    sa.sa_handler = cancel_on_sigint;
+    sigemptyset(&sa.sa_mask);
+    installed_ = sigaction(SIGINT, &sa, &previous_) == 0;
+    if (!installed_) g_sigint_token.store(nullptr);
+  }
+  // Puts Python's handler back; true if SIGINT came during the run.
+  bool restore() {
+    if (!installed_) return false;
+    sigaction(SIGINT, &previous_, nullptr);
+    installed_ = false;
+    g_sigint_token.store(nullptr);
+    return g_sigint_fired.exchange(false);
+  }
+  ~SigintCancels() { restore(); }
+  SigintCancels(const SigintCancels&) = delete;
+  SigintCancels& operator=(const SigintCancels&) = delete;
+
+ private:
+  bool installed_ = false;
+  struct sigaction previous_ {};
 };
 
 std::string number_text(double v) { return py::str(py::float_(v)); }
@@ -132,20 +181,33 @@ py::tuple run(const Field& field, const Options& o, bool return_normals, py::obj
     throw InvalidInputError("method must be \"adaptive\", \"mc\" or \"mt\", not \"" + o.method + "\"");
   check_applies(o);
   PolygonizeResult result;
-  if (o.method == "adaptive") {
-    AdaptiveOptions a = adaptive_options(o);
-    a.progress = interruptible_progress(progress);
-    a.phase = interruptible_phase(phase);
-    py::gil_scoped_release release;
-    result = polygonize_adaptive(field, a);
-  } else {
-    MarchingOptions m = marching_options(o);
-    m.progress = interruptible_progress(progress);
-    // The marching methods have one phase; it is announced as the program announces it.
-    interruptible_phase(phase)("meshing");
-    py::gil_scoped_release release;
-    result = o.method == "mc" ? marching_cubes(field, m) : marching_tetrahedra(field, m);
+  const CancelToken token = o.cancel ? *o.cancel : CancelToken();
+  SigintCancels sigint(token);
+  try {
+    if (o.method == "adaptive") {
+      AdaptiveOptions a = adaptive_options(o);
+      a.progress = interruptible_progress(progress);
+      a.phase = interruptible_phase(phase);
+      a.cancel = token;
+      py::gil_scoped_release release;
+      result = polygonize_adaptive(field, a);
+    } else {
+      MarchingOptions m = marching_options(o);
+      m.progress = interruptible_progress(progress);
+      m.cancel = token;
+      // The marching methods have one phase; it is announced as the program announces it.
+      interruptible_phase(phase)("meshing");
+      py::gil_scoped_release release;
+      result = o.method == "mc" ? marching_cubes(field, m) : marching_tetrahedra(field, m);
+    }
+  } catch (const CancelledError&) {
+    if (!sigint.restore()) throw;
+    // Ctrl-C: Python's handler decides (KeyboardInterrupt by default).
+    PyErr_SetInterrupt();
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    throw;
   }
+  sigint.restore();
   // The program's STATS.json entries (apps/polygonize.cpp), so that the dicts stay equal.
   add_angle_statistics(result.mesh, result.stats);
   py::object stats = from_json(to_json(result.stats));
@@ -174,11 +236,21 @@ method "mc" or "mt" (Marching Cubes / Tetrahedra): cell or precision (0..5, data
 traversal ("continuation" or "grid"), face_ambiguity (mc: "asymptotic_decider", "join_inside",
 "separate_inside"), seed_resolution, max_triangles.
 A keyword the method does not use is a ValueError. progress(fraction) and phase(name) are called
-from the run with the GIL held; Ctrl-C interrupts it with KeyboardInterrupt.)";
+from the run with the GIL held; Ctrl-C interrupts it with KeyboardInterrupt. cancel (a
+cdp.CancelToken): its cancel(), from another thread, ends the run with cdp.CancelledError.)";
 
 }  // namespace
 
 void bind_meshing(py::module_& m) {
+  py::class_<CancelToken>(m, "CancelToken", R"(Cancels a run from another thread (cdp::CancelToken).
+
+Pass it as cancel= to polygonize, marching_cubes or marching_tetrahedra (which release the GIL while
+they run) and call cancel() from another thread: the run ends with cdp.CancelledError at its next
+poll. reset() makes the token usable again. Ctrl-C needs no token: it raises KeyboardInterrupt.)")
+      .def(py::init<>())
+      .def("cancel", &CancelToken::cancel, "Ends every run holding this token with cdp.CancelledError.")
+      .def("reset", &CancelToken::reset, "Makes the token usable for another run.")
+      .def_property_readonly("cancelled", &CancelToken::cancelled);
   m.def(
       "polygonize",
       [](const Field& field, std::string method, std::optional<double> factor, std::optional<double> tolerance,
@@ -187,10 +259,10 @@ void bind_meshing(py::module_& m) {
          std::optional<std::string> triangle_count, std::optional<long long> seed_resolution,
          std::optional<long long> max_triangles, std::optional<bool> check_self_intersections,
          std::optional<long long> threads, std::optional<std::string> creases, bool return_normals, py::object progress,
-         py::object phase) {
+         py::object phase, std::optional<CancelToken> cancel) {
         Options o{method,        factor,         tolerance,      chord,          min_edge,       max_edge,
                   cell,          precision,      seed_resolution, max_triangles, triangle_count,
-                  traversal,     face_ambiguity, check_self_intersections, threads, creases};
+                  traversal,     face_ambiguity, check_self_intersections, threads, creases, cancel};
         return run(field, o, return_normals, progress, phase);
       },
       py::arg("field"), py::arg("method") = "adaptive", py::kw_only(), py::arg("factor") = py::none(),
@@ -200,13 +272,13 @@ void bind_meshing(py::module_& m) {
       py::arg("seed_resolution") = py::none(), py::arg("max_triangles") = py::none(),
       py::arg("check_self_intersections") = py::none(), py::arg("threads") = py::none(),
       py::arg("creases") = py::none(), py::arg("return_normals") = false,
-      py::arg("progress") = py::none(), py::arg("phase") = py::none(), kPolygonizeDoc);
+      py::arg("progress") = py::none(), py::arg("phase") = py::none(), py::arg("cancel") = py::none(), kPolygonizeDoc);
 
   const auto marching = [](const char* method) {
     return [method](const Field& field, std::optional<double> cell, std::optional<long long> precision,
                     std::optional<std::string> traversal, std::optional<std::string> face_ambiguity,
                     std::optional<long long> seed_resolution, std::optional<long long> max_triangles, bool return_normals,
-                    py::object progress) {
+                    py::object progress, std::optional<CancelToken> cancel) {
       Options o;
       o.method = method;
       o.cell = cell;
@@ -215,17 +287,18 @@ void bind_meshing(py::module_& m) {
       o.face_ambiguity = face_ambiguity;
       o.seed_resolution = seed_resolution;
       o.max_triangles = max_triangles;
+      o.cancel = cancel;
       return run(field, o, return_normals, progress, py::none());
     };
   };
   m.def("marching_cubes", marching("mc"), py::arg("field"), py::kw_only(), py::arg("cell") = py::none(),
         py::arg("precision") = py::none(), py::arg("traversal") = py::none(), py::arg("face_ambiguity") = py::none(),
         py::arg("seed_resolution") = py::none(), py::arg("max_triangles") = py::none(), py::arg("return_normals") = false,
-        py::arg("progress") = py::none(), "polygonize(field, \"mc\", ...): Marching Cubes; see polygonize.");
+        py::arg("progress") = py::none(), py::arg("cancel") = py::none(), "polygonize(field, \"mc\", ...): Marching Cubes; see polygonize.");
   m.def("marching_tetrahedra", marching("mt"), py::arg("field"), py::kw_only(), py::arg("cell") = py::none(),
         py::arg("precision") = py::none(), py::arg("traversal") = py::none(), py::arg("face_ambiguity") = py::none(),
         py::arg("seed_resolution") = py::none(), py::arg("max_triangles") = py::none(), py::arg("return_normals") = false,
-        py::arg("progress") = py::none(),
+        py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
         "polygonize(field, \"mt\", ...): Marching Tetrahedra, the paper's baseline; see polygonize.");
 }
 

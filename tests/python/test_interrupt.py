@@ -1,6 +1,7 @@
 """Ctrl-C: a real SIGINT during a long polygonization ends it with KeyboardInterrupt within a
-moment, through the progress callback (C++ fields) or the Python function (callable fields),
-and the module works as before afterwards."""
+moment (for the run's length SIGINT cancels the run's cdp.CancelToken, which every phase polls),
+and the module works as before afterwards, Python's own handler back in place. A token cancelled
+from another thread ends a run with cdp.CancelledError."""
 import os
 import signal
 import threading
@@ -89,4 +90,34 @@ def test_keyboard_interrupt_raised_by_the_function(reference):
         cdp.polygonize(field, factor=3)
     still_works(reference)
     V, F, _ = cdp.polygonize(field, factor=3)  # the field itself is fine too
+    assert len(F) > 0
+
+
+def test_sigint_after_a_run_is_pythons_again(reference):
+    still_works(reference)
+    with pytest.raises(KeyboardInterrupt):
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(2)
+
+
+@pytest.mark.parametrize("run", [
+    lambda token: cdp.polygonize(cdp.torus(major_radius=1, minor_radius=0.3), factor=60, min_edge=1e-4, cancel=token),
+    lambda token: cdp.marching_cubes(cdp.sphere(radius=1), cell=0.003, cancel=token),
+], ids=["adaptive", "mc"])
+def test_a_token_cancelled_from_another_thread_ends_the_run(reference, run):
+    token = cdp.CancelToken()
+    assert not token.cancelled
+    timer = threading.Timer(DELAY, token.cancel)
+    start = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(cdp.CancelledError, match="cancelled"):
+            run(token)
+    finally:
+        timer.cancel()
+    assert token.cancelled
+    assert time.monotonic() - start < DELAY + 2.0
+    still_works(reference)
+    token.reset()
+    V, F, _ = cdp.polygonize(cdp.sphere(radius=1), factor=2, cancel=token)  # a reset token lets a run finish
     assert len(F) > 0

@@ -224,6 +224,7 @@ adaptive::Settings resolve(const Field& field, const AdaptiveOptions& o) {
   s.max_steps = o.max_steps > 0 ? o.max_steps : 4 * s.max_triangles + 10000;
   s.search_visits_per_step = o.max_search_visits > 0 ? o.max_search_visits : adaptive::kSearchVisitsPerStep;
   s.callers_search_bound = o.max_search_visits > 0;
+  s.cancel = o.cancel;
   return s;
 }
 
@@ -245,7 +246,8 @@ std::string format_point(const Vec3& p) {
 // NoSurfaceError naming the place otherwise. (A test of triangles against the vertex normals
 // was tried and dropped: the MPU models' correct meshes have triangles whose face turns more
 // than 120 degrees from a noisy vertex normal.)
-std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersections, int threads) {
+std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersections, int threads,
+                       const CancelToken& cancel) {
   // With several threads the topology check runs on one of its own beside the intersection
   // check, whose blocks the other threads share: it is the serial part of the two (the paper
   // variant's torus at factor 5: about 8.5M instructions against the intersections' 31.5M).
@@ -264,7 +266,7 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
       }
     });
     try {
-      pairs = self_intersecting_pairs(mesh, 1, threads);
+      pairs = self_intersecting_pairs(mesh, 1, threads, &cancel);
     } catch (...) {
       topology.join();
       throw;
@@ -287,7 +289,7 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
     fail("with " + std::to_string(t.components) + " components from " + std::to_string(seeds) + " seeds",
          mesh.positions.front());
   if (check_intersections) {
-    if (!side_by_side) pairs = self_intersecting_pairs(mesh, 1, threads);
+    if (!side_by_side) pairs = self_intersecting_pairs(mesh, 1, threads, &cancel);
     if (!pairs.empty())
       fail("intersecting itself (" + std::to_string(count_self_intersecting_pairs(mesh, threads)) + " pairs of triangles)",
            mesh.positions[mesh.triangles[pairs.front().first][0]]);
@@ -353,6 +355,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
   const PhaseCloser closer{phases};
   // `name`: the ledger's (kAdaptivePhases); `text`: what AdaptiveOptions::phase is told.
   const auto enter = [&](std::string_view name, const char* text) {
+    options.cancel.check("adaptive");
     phases.enter(name);
     if (options.phase) options.phase(text);
   };
@@ -417,6 +420,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
   CreaseTracingResult traced;
   int crease_tracing_resolution = 0;
   if (options.creases == CreaseHandling::Follow && options.variant == Variant::Improved) {
+    options.cancel.check("adaptive");
     phases.enter("creases");  // the tracing too; AdaptiveOptions::phase hears of it where it finds creases
     CreaseTracingOptions co;
     co.resolution = options.seed_resolution;
@@ -498,8 +502,11 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
         remeshed = true;
         mesh_surface(true);
         if (seeding.uncovered > 0) throw NoSurfaceError("uncovered sign changes");
+        options.cancel.check("adaptive");
         phases.enter("checks");
-        check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+        check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads, options.cancel);
+      } catch (const CancelledError&) {
+        throw;
       } catch (const std::exception&) {
         throw stalled;
       }
@@ -574,6 +581,8 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
                  << "meshes along them";
           message += crease.str();
         }
+      } catch (const CancelledError&) {
+        throw;
       } catch (const std::exception&) {
         // no layout to name (a tracing bound or a field that fails there): the message as it is
       }
@@ -607,8 +616,9 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
         seen += 0.5 * n.cwiseAbs().sum() / kMeanCrossings;
       }
       if (seen > kOverlapArea * estimated_area) {
+        options.cancel.check("adaptive");
         phases.enter("checks");
-        check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+        check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads, options.cancel);
       }
     }
     if (repair) {
@@ -623,6 +633,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
       // the caller set holds for every split.
       qo.last_resort_min_edge = options.min_edge > 0 ? s.sizing.min_edge : kLastResortEdgeShare * s.sizing.min_edge;
       qo.threads = options.threads;
+      qo.cancel = options.cancel;
       // Neither the search nor the dense measurement before a split where a field with branch
       // points (min, max, abs) is meshed without following its creases (CreaseHandling::Ignore,
       // or a crease layout that failed; see QualityOptions): the triangles across a crease stay
@@ -656,7 +667,7 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
       }
     }
     enter("checks", "checking the mesh");
-    return check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads);
+    return check_mesh(mesh, seeding.seeds + crease_components, options.check_self_intersections, options.threads, options.cancel);
   };
   std::size_t components = 0;
   adaptive::NeckSearch necks;
@@ -667,8 +678,9 @@ PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, P
       // The patches' topology before the repair works on it; intersections after (the repair
       // removes some that chords on the two faces of an acute crease make).
       if (creased) {
+        options.cancel.check("adaptive");
         phases.enter("checks");
-        check_mesh(mesh, seeding.seeds + crease_components, false, options.threads);
+        check_mesh(mesh, seeding.seeds + crease_components, false, options.threads, options.cancel);
       }
       components = repair_and_check();
     } catch (const NoSurfaceError& e) {

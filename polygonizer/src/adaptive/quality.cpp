@@ -188,10 +188,17 @@ class Improver {
     // Nothing reads its visits, and intersecting_turn queries it on several threads at once.
     hash_.set_counting(false);
     for (int t = 0; t < static_cast<int>(m_.triangles.size()); ++t) {
+      poll(static_cast<std::size_t>(t));
       for (int v : m_.triangles[t]) vt_[v].push_back(t);
       hash_box(t);
     }
     stamp_.assign(m_.triangles.size(), 0);
+  }
+
+  // The cancel poll of the loops below: an atomic load every kPollEvery items.
+  static constexpr std::size_t kPollEvery = 256;
+  void poll(std::size_t i = 0) const {
+    if (i % kPollEvery == 0) o_.cancel.check("adaptive: repair");
   }
 
   QualityReport run() {
@@ -1176,7 +1183,9 @@ class Improver {
       std::sort(order.begin(), order.end());
       touched_.clear();
       bool changed = false;
-      for (const auto& [angle, t] : order) {
+      for (std::size_t i = 0; i < order.size(); ++i) {
+        poll(i);
+        const int t = order[i].second;
         if (!alive_[t] || !(tri_min_angle(m_.triangles[t]) < o_.improve_below)) continue;
         changed = repair_triangle(t) || changed;
       }
@@ -1327,6 +1336,7 @@ class Improver {
       // First the flips (try_flip's for_ratio): each stretched triangle's edges, longest first.
       flipped_.assign(m_.positions.size(), 0);
       for (int t = 0; t < tri_count(); ++t) {
+        poll(static_cast<std::size_t>(t));
         if (!alive_[t] || !(tri_ratio(m_.triangles[t]) > kRelaxRatio)) continue;
         const Tri T = m_.triangles[t];
         int k = 0;
@@ -1362,6 +1372,7 @@ class Improver {
       std::vector<double> reach(eligible.size(), 0);
       std::vector<char> moves(eligible.size(), 0);
       detail::parallel_blocks(eligible.size(), kRelaxBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned) {
+        poll();
         for (std::size_t i = begin; i < end; ++i) {
           const int v = eligible[i];
           Vec3 step = equilateral_step(v);
@@ -1405,6 +1416,7 @@ class Improver {
       const bool shared = field_.thread_safe();
       detail::parallel_blocks(moving.size(), shared ? kRelaxBlock : moving.size(), shared ? workers_ : 1u,
                               [&](std::size_t begin, std::size_t end, unsigned) {
+                                poll();
                                 const std::vector<ProjectionResult> part = project_to_surface(
                                     field_, std::span(starts).subspan(begin, end - begin),
                                     std::span(opts).subspan(begin, end - begin));
@@ -1465,13 +1477,16 @@ class Improver {
         changed = true;
       };
       if (workers_ <= 1 && !(o_.tolerance > 0)) {
-        for (std::size_t i = 0; i < moving.size(); ++i)
+        for (std::size_t i = 0; i < moving.size(); ++i) {
+          poll(i);
           if (const std::optional<Turn> turn = judge(i, true)) keep(*turn);
+        }
       } else {
         TurnScratch scratch(m_.positions.size(), workers_);
         std::vector<Turn> turns;
         std::size_t chunk = kRelaxBlock;
         for (std::size_t i = 0; i < moving.size();) {
+          poll();
           turns.clear();
           for (const std::size_t stop = std::min(moving.size(), i + chunk); i < stop; ++i)
             if (const std::optional<Turn> turn = judge(i, false)) turns.push_back(*turn);
@@ -1619,28 +1634,36 @@ class Improver {
         if (estimates_.size() < m_.triangles.size()) estimates_.resize(m_.triangles.size());
         std::vector<int> todo;
         EdgeTable table;
-        for (int t : work)
+        for (std::size_t w = 0; w < work.size(); ++w) {
+          poll(w);
+          const int t = work[w];
           if (alive_[t] && !remembered(t)) {
             todo.push_back(t);
             const Tri& T = m_.triangles[t];
             for (int i = 0; i < 3; ++i) table.keys.push_back(edge_key(T[i], T[(i + 1) % 3]));
           }
+        }
+        poll();
         std::sort(table.keys.begin(), table.keys.end());
         table.keys.erase(std::unique(table.keys.begin(), table.keys.end()), table.keys.end());
         table.d.resize(table.keys.size());
         detail::parallel_blocks(table.keys.size(), kRelaxBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned) {
+          poll();
           for (std::size_t i = begin; i < end; ++i) {
             const int x = static_cast<int>(table.keys[i] >> 32), y = static_cast<int>(table.keys[i] & 0xffffffffu);
             table.d[i] = signed_distance(0.5 * (P(x) + P(y)));
           }
         });
         detail::parallel_blocks(todo.size(), kRelaxBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned) {
+          poll();
           MidpointMemo memo;
           memo.table = &table;
           for (std::size_t i = begin; i < end; ++i) estimate_distance(m_.triangles[todo[i]], todo[i], &memo);
         });
       }
-      for (int t : work) {
+      for (std::size_t i = 0; i < work.size(); ++i) {
+        poll(i);
+        const int t = work[i];
         if (!alive_[t]) continue;
         const Tri T = m_.triangles[t];
         const double estimate = estimate_distance(T, t);

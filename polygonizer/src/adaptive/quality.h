@@ -17,6 +17,7 @@
 // shrinking work list, kRelaxSweeps sweeps and at most kRelaxSearchSweeps more).
 #pragma once
 
+#include <cdp/core/cancel.h>
 #include <cdp/core/field.h>
 #include <cdp/core/mesh.h>
 
@@ -91,6 +92,7 @@ struct QualityOptions {
   // 8), 1 the caller's only. The mesh and the evaluation counts are the same, bit for bit, on
   // any number.
   int threads = 0;
+  CancelToken cancel;  // polled in every round and sweep (cancel.h)
 };
 
 // Repairs `mesh` in place (positions, normals, triangles; vertices and triangles that

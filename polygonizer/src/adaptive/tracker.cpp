@@ -459,6 +459,7 @@ void Tracker::adopt_finished(std::span<const double> target, std::span<const dou
 }
 
 void Tracker::check_limits() {
+  s_.cancel.check("adaptive");
   if (++steps_ > s_.max_steps)
     throw LimitExceededError("adaptive: more than " + std::to_string(s_.max_steps) +
                              " front steps (AdaptiveOptions::max_steps) without closing the surface");

@@ -93,6 +93,7 @@ struct Settings {
   // Cell size of the spatial hashes: about a typical edge, so that a query visits a few cells
   // holding a few points each whatever the density.
   double hash_cell = 1;
+  CancelToken cancel;  // AdaptiveOptions::cancel
 };
 
 // The error of a front that cannot advance even at a quarter of min_edge, or whose searches

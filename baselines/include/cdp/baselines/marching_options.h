@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cdp/core/field.h>
+#include <cdp/core/cancel.h>
 #include <cdp/core/progress.h>
 
 #include <array>
@@ -60,6 +61,8 @@ struct MarchingOptions {
   std::size_t max_triangles = 50'000'000;
   // Called now and then with an estimate of the fraction done.
   ProgressCallback progress;
+  // Cancels the run from outside (cdp/core/cancel.h): it ends with CancelledError.
+  CancelToken cancel;
 };
 
 // s(P) of the paper's precision convention; InvalidInputError outside 0..5.

@@ -13,6 +13,7 @@
 
 #include <cdp/core/field.h>
 #include <cdp/core/polygonize_result.h>
+#include <cdp/core/cancel.h>
 #include <cdp/core/progress.h>
 
 #include <array>
@@ -140,6 +141,9 @@ struct AdaptiveOptions {
   std::size_t max_search_visits = 0;
   // Called now and then with an estimate of the fraction of the meshing done.
   ProgressCallback progress;
+  // Cancels the run from outside (cancel.h): polled in every phase's loops, it ends the run
+  // with CancelledError.
+  CancelToken cancel;
   // Called on entering each phase: "sampling the seed grid", "meshing along creases" (a field
   // with creases, CreaseHandling::Follow), "meshing", "repairing triangles", "checking the mesh".
   PhaseCallback phase;

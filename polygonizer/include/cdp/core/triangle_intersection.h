@@ -4,6 +4,7 @@
 // behind Embree's rtcCollide; the rules and limits are in raytrace/README.md.
 #pragma once
 
+#include <cdp/core/cancel.h>
 #include <cdp/core/mesh.h>
 
 #include <array>
@@ -41,8 +42,9 @@ bool triangles_intersect(const Mesh& mesh, int f, int g);
 // linear for triangles of similar sizes. Throws InvalidInputError on out-of-range indices or
 // non-finite positions (of vertices that triangles use); LimitExceededError when the grid would
 // hold 2^32 entries (beyond 67 million triangles).
+// `cancel`, when given, is polled in every block of the search (\throw CancelledError).
 std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs = 16,
-                                                         int threads = 0);
+                                                         int threads = 0, const CancelToken* cancel = nullptr);
 // The number of such pairs (the same search).
 std::size_t count_self_intersecting_pairs(const Mesh& mesh, int threads = 0);
 
