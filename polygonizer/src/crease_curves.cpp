@@ -151,10 +151,8 @@ struct Tracer {
   // the box's difference from the ball by 0).
   bool one_function(const Vec3& p, const Branch& a, const Branch& b) const {
     const FieldPiece fa = piece(p, a), fb = piece(p, b);
-    const double scale = kOneFunction * (1 + std::abs(fa.value) + fa.gradient.norm());
-    return std::abs(fa.value - fb.value) <= scale && (fa.gradient - fb.gradient).norm() <= scale;
+    return same_to_rounding(fa.value, fa.gradient, fb.value, fb.gradient);
   }
-  static constexpr double kOneFunction = 1e-12;
   // Whether a and b are the same piece at p (kSamePieceCosine): no crease between them there.
   bool same_piece(const Vec3& p, const Branch& a, const Branch& b) const {
     return piece(p, a).gradient.normalized().dot(piece(p, b).gradient.normalized()) > kSamePieceCosine;

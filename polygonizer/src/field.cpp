@@ -183,19 +183,6 @@ const std::vector<Field::BranchKind>& Field::branch_kinds() const {
 
 namespace {
 
-// A choice hidden behind a blend changes the field in its last bits only: a smooth difference
-// d0 - (d1 + d0) h at h = 1 leaves d0 in the sum, so each side of d0's max gives other
-// roundings. Within this share of the values' and gradients' size the choice changes nothing.
-// (Bit for bit, the choice of the box's max in a box with two crossing holes cut smoothly was
-// fixed in the pieces of one tunnel's wall at some points and free at others: two codes for one
-// piece, whose patch boundaries crossed.)
-constexpr double kSameToRounding = 1e-12;
-
-bool same_to_rounding(double v, const Vec3& g, double w, const Vec3& h) {
-  const double scale = kSameToRounding * (1 + std::abs(w) + h.norm());
-  return std::abs(v - w) <= scale && (g - h).norm() <= scale;
-}
-
 }  // namespace
 
 std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchRecord& record, double radius) const {
@@ -257,7 +244,7 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
         flipped[k] ^= 1u;
         const auto [v, g] = eval_first_order(p, flipped);
         ++evaluations;
-        if (same_to_rounding(v, g, piece.value, piece.gradient)) piece.branch[k] = kFreeBranch;
+        if (same_to_rounding(piece.value, piece.gradient, v, g)) piece.branch[k] = kFreeBranch;
       }
       // Likewise a split choice this piece does not depend on at p.
       for (std::size_t j = 0; j < split.size(); ++j) {

@@ -127,12 +127,12 @@ std::optional<std::pair<double, Vec3>> sharpest_crease(const Field& field, const
   return best;
 }
 
-// Variant::Improved repairs triangles whose smallest angle is under 30 degrees: the issue's
-// goal is every triangle at 20 degrees or more and 99% at 30 or more, and aiming the repair at
-// the higher bound leaves the lower one a margin.
+// Variant::Improved repairs triangles whose smallest angle is under 30 degrees: the quality
+// bounds below ask for every triangle at 20 degrees or more and 99% at 30 or more, and aiming
+// the repair at the higher bound leaves the lower one a margin.
 constexpr double kRepairBelowDegrees = 30;
 
-// Issue 18's bounds on a smooth surface's mesh (see missed_bounds): a smallest angle of at least
+// The quality bounds on a smooth surface's mesh (see missed_bounds): a smallest angle of at least
 // kBoundMinDegrees, at most kBoundShareUnder30 of the triangles with one under 30 degrees, a
 // mean longest/shortest edge of at most kBoundMeanEdgeRatio. The last is also the repair's aim
 // (QualityOptions::aim_mean_edge_ratio): its relaxation searches its moves where its plain
@@ -163,7 +163,7 @@ constexpr int kCreaseTracings = 2;
 // 1e-4 83.3k / 78.7k / 77.6k triangles, 12.7k / 8.1k / 4.9k splits, ratios 1.289 / 1.237 / 1.199;
 // the torus at 1e-3 19.5k / 20.5k / 21.9k, 1.168 / 1.157 / 1.145; the bunny VIS-800 at 3e-5
 // 74.0k / 77.2k / 82.5k, 1.180 / 1.169 / 1.161. 0.65 is the largest share that keeps every
-// measured case under the mean ratio of 1.25 (issue 18), at -6 % to +5 % triangles.
+// measured case under the mean ratio of 1.25 (the quality bounds), at -6 % to +5 % triangles.
 constexpr double kToleranceSizingShare = 0.65;
 // SizingMode::Chord's edges turn the normal by at most this many radians (Sizing::max_turn): the
 // paper's factor 1 where the chord sizing asks for longer edges. Without it blobs19 of the
@@ -334,7 +334,7 @@ bool remeshing_allowed(const AdaptiveOptions& o) {
 // (Field::derivative_step) met a crease or corner of the function that the field does not
 // describe: differences across it turn the normal within a step, a curvature no edge follows,
 // and no branch data say where the two faces are. Meshing it again (carefully, with finer turns,
-// with min_edge lowered) fails too, after several times as long (the issue's gyroid clipped by a
+// with min_edge lowered) fails too, after several times as long (a gyroid clipped by a
 // ball as a Python function: the first run failed at 3 s, the last at 17 s), so the run stops
 // at the first failure and says so.
 bool kink_in_black_box(const Field& field, const std::pair<double, Vec3>& bend) {
@@ -345,7 +345,7 @@ bool kink_in_black_box(const Field& field, const std::pair<double, Vec3>& bend) 
 // The surface meshed once with the options as given (polygonize_adaptive may call it more than
 // once, see there). `bend` receives the tightest bend the runs met when they fail, for the
 // caller's retry. `look_ahead`: Settings::look_ahead on every front (the run polygonize_adaptive
-// makes again when a mesh misses issue 18's bounds). `max_turn` > 0: Sizing::max_turn from the
+// makes again when a mesh misses the quality bounds). `max_turn` > 0: Sizing::max_turn from the
 // start, the crease-aware patches included (polygonize_adaptive_once's last run in tolerance mode).
 PolygonizeResult mesh_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases,
                            std::pair<double, Vec3>& bend, bool look_ahead = false, double max_turn = 0) {
@@ -955,7 +955,7 @@ std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions
   return std::max(kBendEdgeShare * bend.first, lowest);
 }
 
-// How many of issue 18's bounds `mesh` misses (see kBoundMinDegrees): a smallest angle under
+// How many of the quality bounds `mesh` misses (see kBoundMinDegrees): a smallest angle under
 // kBoundMinDegrees, more than kBoundShareUnder30 of the triangles with one under 30 degrees, a
 // mean longest/shortest edge over kBoundMeanEdgeRatio, triangles farther from the surface than
 // the tolerance (`over_tolerance`, the repair's dense measurement).
@@ -985,7 +985,7 @@ int missed_bounds(const Mesh& mesh, std::size_t over_tolerance) {
   return under20 + (share_under_30 > kBoundShareUnder30) + (mean_ratio > kBoundMeanEdgeRatio) + (over_tolerance > 0);
 }
 
-// A mesh of a smooth surface (no crease followed) that misses issue 18's bounds is made once more
+// A mesh of a smooth surface (no crease followed) that misses the quality bounds is made once more
 // with the front look-ahead (Settings::look_ahead: an expansion's edges no longer than a nearby
 // front point's target plus kLookAheadGradation times its distance), and the run that misses
 // fewer bounds is kept, the first on a tie. Where the first run's slivers come from (a front
@@ -1020,7 +1020,7 @@ std::size_t over_tolerance(const PolygonizeResult& r) {
 // 850 triangles, 3,020 with the bound on every run). The stats say so (`turn_limited`).
 constexpr double kTurnLimit = 1;
 
-// polygonize_adaptive without the re-run for issue 18's bounds: the first mesh, or the one made
+// polygonize_adaptive without the re-run for the quality bounds: the first mesh, or the one made
 // with min_edge lowered, or (tolerance mode) the turn-limited one.
 PolygonizeResult polygonize_adaptive_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases) {
   const auto start = std::chrono::steady_clock::now();

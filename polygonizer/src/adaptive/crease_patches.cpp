@@ -423,8 +423,7 @@ double halton(int i, int base) {
 // Whether pieces a and b agree at p: equal values and gradients, to rounding.
 bool same_at(const Field& field, const Branch& a, const Branch& b, const Vec3& p) {
   const FieldPiece fa = field.piece(p, a), fb = field.piece(p, b);
-  const double scale = 1 + std::abs(fa.value) + fa.gradient.norm();
-  return std::abs(fa.value - fb.value) <= 1e-12 * scale && (fa.gradient - fb.gradient).norm() <= 1e-12 * scale;
+  return same_to_rounding(fa.value, fa.gradient, fb.value, fb.gradient);
 }
 
 // Whether branch codes a and b give the same function: equal values and gradients at

@@ -169,7 +169,7 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   };
   std::vector<Placed> placed, complete;
   double placed_at = 0, complete_at = 0;  // the lengths they were placed at
-  for (double d = delta; d >= 0.24 * s_.sizing.min_edge; d *= 0.5) {
+  for (double d = delta; d >= kShortestEdgeLoop * s_.sizing.min_edge; d *= 0.5) {
     placed = place_at(d);
     placed_at = d;
     if (placed.empty()) {

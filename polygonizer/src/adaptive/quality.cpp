@@ -1,5 +1,6 @@
 #include "quality.h"
 
+#include "crease_probe.h"
 #include "spatial_hash.h"
 #include "../parallel.h"
 
@@ -32,10 +33,7 @@ constexpr int kQualityRounds = 24;
 // operations cannot undo each other on floating-point ties, and a vertex cannot creep by tiny
 // moves round after round while the stronger operations further down the list wait.
 constexpr double kMinGain = 0.25 * 3.14159265358979323846 / 180;
-// Same crease test as the tracker's (tracker.cpp): gradients more than 10 degrees apart across a
-// probe 1e-7 of the diagonal long mean a crease, not curvature.
-constexpr double kCreaseProbe = 1e-7;
-constexpr double kCreaseCosine = 0.985;
+// The crease test is the tracker's (crease_probe.h).
 // A vertex whose stored normal (the tracker's mean of both sides on a crease) is this far from
 // its own gradient lies on a crease too.
 constexpr double kCreaseNormalCosine = 0.985;
@@ -89,7 +87,7 @@ constexpr int kLastResortRounds = 4;
 constexpr double kRelaxRatio = 1.15;
 // Plain sweeps of the relaxation, each flips then moves; where they leave the mesh's mean ratio
 // over the aim, the search sweeps below take over. One, because the later ones buy little for
-// what they cost. Over issue 18's 343-run bounds sweep (the 9 experiment fields and the 40
+// what they cost. Over a 343-run sweep of the quality bounds (the 9 experiment fields and the 40
 // topology-sweep fields, factors 1-5 and tolerances 5e-2-1e-3), against 4:
 // - every run within every bound; the same triangle counts but in 25 tolerance runs (up to 8
 //   triangles either way: the tolerance's refinement sees other positions);
@@ -117,7 +115,7 @@ constexpr double kFlipRatioSlack = 1.1;
 constexpr double kRelaxMinGain = 1e-3;
 // At most this many sweeps of the relaxation's search (see relax and searched_step), each made
 // only while the mesh's mean edge ratio is over QualityOptions::aim_mean_edge_ratio. The four
-// runs of issue 18's bounds sweep that four plain sweeps left over 1.25 (bunny VIS-800 at 1e-2,
+// runs of that sweep that four plain sweeps left over 1.25 (bunny VIS-800 at 1e-2,
 // Igea MPU at 5e-2 and 1e-2, Igea VIS-4004 at 5e-2: 1.253-1.258; ten plain sweeps reach only
 // 1.2545 on Igea MPU at 1e-2) ended at 1.239-1.245 after the first. After one plain sweep, 43 of
 // the 343 runs are over 1.25 and all end under it.
@@ -1426,7 +1424,7 @@ class Improver {
       // applied. On several threads the intersection test (star_intersects, the costliest
       // check) is left out of that loop: after every chunk of candidates judged, the moves they
       // made are tested on all cores, each at the positions of its turn (intersecting_turn). The
-      // first refused there (1 in about 1250 moves kept over issue 18's bounds sweep, the runs
+      // first refused there (1 in about 1250 moves kept over the 343-run sweep of kRelaxSweeps, the runs
       // made again included) and the moves after it are taken back, and the judging goes on
       // after it. So the moves kept are those of the loop with the test inside, which one thread
       // runs without a tolerance. With a tolerance, judging a move evaluates the field (its

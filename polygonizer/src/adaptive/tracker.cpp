@@ -1,4 +1,5 @@
 #include "tracker.h"
+#include "crease_probe.h"
 
 #include <cdp/core/crease.h>
 #include <cdp/core/errors.h>
@@ -14,11 +15,6 @@
 namespace cdp::adaptive {
 
 namespace {
-// Newton leaves points within 1e-10 of the diagonal from the surface, hence from a crease they
-// landed on; a probe this far away is clear of that and still on the crease's two pieces.
-constexpr double kCreaseProbe = 1e-7;
-// Gradients more than 10 degrees apart across such a probe mean a crease, not curvature.
-constexpr double kCreaseCosine = 0.985;
 // A placement walks on when Newton lands less than this share of the step from where it
 // started, in up to kWalkLegs legs (a cube's crease takes three: onto the crease, off it, on).
 constexpr double kShortLanding = 0.75;
@@ -381,7 +377,7 @@ bool Tracker::mesh_from_seed(const Vec3& seed) {
     dirs[k] = std::cos(t) * e0 + std::sin(t) * e1;
   }
   std::vector<Placed> corners;
-  for (double d = target_[c]; d >= 0.24 * s_.sizing.min_edge && corners.size() < 6; d *= 0.5)
+  for (double d = target_[c]; d >= kShortestEdgeLoop * s_.sizing.min_edge && corners.size() < 6; d *= 0.5)
     corners = place_points(c, dirs, d);
   if (corners.size() < 6) {
     // Keep the mesh free of an isolated vertex: the seed vertex is the last one added.
@@ -671,7 +667,7 @@ void Tracker::step(int& f) {
   double delta = local_edge_length(node);
   if (rounds > 0) {
     const double shrunk = delta * std::ldexp(1.0, -rounds);
-    if (shrunk < 0.25 * s_.sizing.min_edge && rounds > 1) {
+    if (shrunk < kShortestEdge * s_.sizing.min_edge && rounds > 1) {
       if (rollback(f, node, false)) return;  // undo the region and mesh it again (rollback.cpp)
       const Vec3& p = mesh_.positions[fs_.nodes[node].vertex];
       std::string message = "adaptive: a front of " + std::to_string(fs_.fronts[f].size) + " points near " + format_point(p) +
@@ -709,7 +705,7 @@ void Tracker::step(int& f) {
       }
       throw StalledFrontError(message);
     }
-    delta = std::max(shrunk, 0.25 * s_.sizing.min_edge);
+    delta = std::max(shrunk, kShortestEdge * s_.sizing.min_edge);
   }
   int q = find_collision(node, delta);
   if (q < 0) {

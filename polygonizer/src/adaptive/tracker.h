@@ -38,6 +38,13 @@ struct FinerZone {
   double radius, edge;
 };
 
+// The shortest edge a front tries: a quarter of min_edge. A front that cannot advance even
+// there is stalled (StalledFrontError). The loops that halve a placement's length from its
+// target stop below kShortestEdgeLoop of min_edge instead, a little under the quarter, so that
+// a length halved down to a quarter of min_edge is still tried whatever its last bits.
+inline constexpr double kShortestEdge = 0.25;
+inline constexpr double kShortestEdgeLoop = 0.24;
+
 // The bound on the cost of the neighbour searches: points looked at per front step, averaged
 // over windows of kSearchWindow steps (the default of AdaptiveOptions::max_search_visits).
 // Surfaces the method meshes take 40-130 over a whole run (bunny VIS-800, torus, tanglecube,

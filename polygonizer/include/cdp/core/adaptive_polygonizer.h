@@ -30,14 +30,8 @@ enum class SizingMode {
   // refined, so the mesh's distance to the surface is not bounded (a triangle sags about 4/3
   // of its edges' eps, more where the curvature changes along it); in Variant::Improved no edge
   // longer than min_edge turns the normal by more than a radian. In Variant::Paper it is the
-  // tolerance, the same mesh. Tolerance sizes for 0.65 eps and then measures every triangle: the
-  // Igea VIS-4004 at eps = 1.9e-4 of the diagonal, 41.2k triangles, 485k evaluations, 2.6 s on
-  // one thread; Chord at 0.65 of that eps, 39.9k, 129k and 0.89 s, with mean Phong and depth
-  // errors of 0.445 degrees and 9.6e-5 of the diagonal against 0.437 and 9.5e-5. On the
-  // time-to-accuracy benchmark's bunny VIS-800, Igea VIS-4004 and tanglecube it reaches a mean
-  // Phong or depth error with fewer triangles than Factor (the Igea: 37k triangles for 0.48
-  // degrees, factor 5.66 53k for 0.50); on its random blobs it needs more (37.5k against 29.5k
-  // to 1e-4 of the diagonal in depth).
+  // tolerance, the same mesh. What it costs and gains against Tolerance and Factor:
+  // bench/README.md, "Measurements behind the options".
   Chord,
 };
 
@@ -57,7 +51,7 @@ enum class Variant {
   // smallest angle is under 30 degrees (edge flips, tangential vertex moves back onto the surface,
   // collapses of needles' short edges; src/adaptive/quality.h), and with SizingMode::Tolerance a
   // sizing margin plus splits of triangles sampled beyond the tolerance, so that it bounds the
-  // distance between mesh and surface. A smooth surface's mesh that still misses issue 18's
+  // distance between mesh and surface. A smooth surface's mesh that still misses the quality
   // bounds (a triangle under 20 degrees, more than 1% under 30, a mean longest/shortest edge
   // over 1.25, a triangle beyond the tolerance) is made once more with the fronts looking
   // ahead at the targets of front points nearby, and the mesh that misses fewer is kept (stats

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>  // cross products, used with Vec3 everywhere
 
 #include <atomic>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -72,6 +73,22 @@ struct FieldPiece {
 // crease-aware meshing compare pieces so, since one piece may carry several branch codes; a
 // branch point whose two branches agree so where they switch is no crease, Field::pieces).
 inline constexpr double kSamePieceCosine = 0.999;
+
+// Evaluations that differ in their last bits only: value and gradient within kSameToRounding of
+// the reference's size (1 + |value| + |gradient|). Two pieces equal so at a point are one
+// function there. A choice hidden behind a blend changes the field in its last bits only: a
+// smooth difference d0 - (d1 + d0) h at h = 1 leaves d0 in the sum, so each side of d0's max
+// gives other roundings. (Bit for bit, the choice of the box's max in a box with two crossing
+// holes cut smoothly was fixed in the pieces of one tunnel's wall at some points and free at
+// others: two codes for one piece, whose patch boundaries crossed.) Used by Field::pieces (a
+// hidden choice is free), the crease tracer (a crease that fades into a seam) and crease-aware
+// meshing (pieces of one function, cycles of one region).
+inline constexpr double kSameToRounding = 1e-12;
+inline bool same_to_rounding(double reference_value, const Eigen::Vector3d& reference_gradient, double value,
+                             const Eigen::Vector3d& gradient) {
+  const double scale = kSameToRounding * (1 + std::abs(reference_value) + reference_gradient.norm());
+  return std::abs(value - reference_value) <= scale && (gradient - reference_gradient).norm() <= scale;
+}
 
 class Field {
  public:
