@@ -82,7 +82,7 @@ TEST(AdaptiveSeeding, FiftyTinyBlobsComeOutWholeEachOnce) {
 TEST(AdaptiveSeeding, ThinTorusAndNeedleAreFound) {
   // No grid node lies inside either: every sample is positive.
   // (At factor 1 the tracker itself, not the seeding, still runs away on this torus; see the
-  // known limits in polygonizer/README.md.)
+  // known limits in docs/adaptive_polygonizer.md.)
   Torus thin(Vec3::Zero(), 1.0, 0.01);
   for (double k : {2.0, 3.0}) expect_components(thin, at_factor(k), 1, 1, "thin torus, factor " + std::to_string(k));
   // The needle's tips are finer than min_edge: the mesh stops short of them, and the sign

@@ -3,7 +3,7 @@
 // scans' topology; the bunny's holes close) with every method, at a coarse resolution: no stray
 // sheets inside their boxes, no surface leaving them. The adaptive polygonizer on the horse MPU at
 // factor 1 stalls in its first run and meshes in the second, with rollbacks (see Known limits in
-// polygonizer/README.md): the test checks that this path is the one taken.
+// docs/adaptive_polygonizer.md): the test checks that this path is the one taken.
 #include <gtest/gtest.h>
 
 #include <cdp/baselines/marching_cubes.h>
