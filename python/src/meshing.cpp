@@ -80,6 +80,15 @@ class SigintCancels {
   struct sigaction previous_ {};
 };
 
+// After a run: Python's handler back, and if SIGINT came during the run, handed to it as if it
+// had come now (KeyboardInterrupt by default), whatever the run ended with (CancelledError at its
+// next poll, or a result or another error when the signal came after its last one).
+void reraise_sigint(SigintCancels& sigint) {
+  if (!sigint.restore()) return;
+  PyErr_SetInterrupt();
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+}
+
 std::string number_text(double v) { return py::str(py::float_(v)); }
 
 double positive(const std::optional<double>& v, const char* name) {
@@ -200,14 +209,11 @@ py::tuple run(const Field& field, const Options& o, bool return_normals, py::obj
       py::gil_scoped_release release;
       result = o.method == "mc" ? marching_cubes(field, m) : marching_tetrahedra(field, m);
     }
-  } catch (const CancelledError&) {
-    if (!sigint.restore()) throw;
-    // Ctrl-C: Python's handler decides (KeyboardInterrupt by default).
-    PyErr_SetInterrupt();
-    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  } catch (...) {
+    reraise_sigint(sigint);
     throw;
   }
-  sigint.restore();
+  reraise_sigint(sigint);
   // The program's STATS.json entries (apps/polygonize.cpp), so that the dicts stay equal.
   add_angle_statistics(result.mesh, result.stats);
   py::object stats = from_json(to_json(result.stats));
