@@ -44,15 +44,15 @@ CreaseProjection project_to_crease(const Field& field, const Vec3& start,
   for (int it = 0;; ++it) {
     double residual = 0, product = 1;
     for (int i = 0; i < n; ++i) {
-      const FieldPiece piece = field.piece(out.point, branches[static_cast<std::size_t>(i)]);
-      const double g = piece.gradient.norm();
-      if (!std::isfinite(piece.value) || !piece.gradient.allFinite()) {
+      const auto [value, gradient] = field.piece_first_order(out.point, branches[static_cast<std::size_t>(i)]);
+      const double g = gradient.norm();
+      if (!std::isfinite(value) || !gradient.allFinite()) {
         out.status = CreaseStatus::NotFinite;
         return out;
       }
-      J.row(i) = piece.gradient.transpose();
-      F(i) = piece.value;
-      residual = std::max(residual, g > 0 ? std::abs(piece.value) / g : std::numeric_limits<double>::infinity());
+      J.row(i) = gradient.transpose();
+      F(i) = value;
+      residual = std::max(residual, g > 0 ? std::abs(value) / g : std::numeric_limits<double>::infinity());
       product *= g * g;
     }
     out.residual = residual;
@@ -85,18 +85,18 @@ CreaseProjection project_to_seam(const Field& field, const Vec3& start, const st
   CreaseProjection out;
   out.point = start;
   for (int it = 0;; ++it) {
-    const FieldPiece piece = field.piece(out.point, branch);
+    const auto [value, gradient] = field.piece_first_order(out.point, branch);
     const std::optional<Field::BranchSwitch> sw = field.branch_switch(out.point, k);
-    const double g = piece.gradient.norm();
-    if (!sw || !std::isfinite(piece.value) || !piece.gradient.allFinite() || !std::isfinite(sw->distance)) {
+    const double g = gradient.norm();
+    if (!sw || !std::isfinite(value) || !gradient.allFinite() || !std::isfinite(sw->distance)) {
       out.status = CreaseStatus::NotFinite;
       return out;
     }
     Eigen::Matrix<double, 2, 3> J;
-    J.row(0) = piece.gradient.transpose();
+    J.row(0) = gradient.transpose();
     J.row(1) = sw->normal.transpose();
-    const Eigen::Vector2d F(piece.value, sw->distance);
-    out.residual = std::max(g > 0 ? std::abs(piece.value) / g : std::numeric_limits<double>::infinity(),
+    const Eigen::Vector2d F(value, sw->distance);
+    out.residual = std::max(g > 0 ? std::abs(value) / g : std::numeric_limits<double>::infinity(),
                             std::abs(sw->distance));
     out.iterations = it;
     if (out.residual <= tol) {

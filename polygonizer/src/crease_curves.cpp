@@ -93,7 +93,15 @@ struct Tracer {
     return f1 && f2;
   }
 
-  FieldPiece piece(const Vec3& p, const Branch& b) const { return field.piece(p, b); }
+  // A piece's value and gradient: the walk needs no Hessian.
+  struct FirstOrder {
+    double value;
+    Vec3 gradient;
+  };
+  FirstOrder piece(const Vec3& p, const Branch& b) const {
+    const auto [value, gradient] = field.piece_first_order(p, b);
+    return {value, gradient};
+  }
 
   Vec3 tangent(const Vec3& p, const Branch& a, const Branch& b) const {
     return piece(p, a).gradient.cross(piece(p, b).gradient).normalized();
@@ -150,7 +158,7 @@ struct Tracer {
   // branch (a box's edge where a smooth union's blend has left the box: its clamp at 0 multiplies
   // the box's difference from the ball by 0).
   bool one_function(const Vec3& p, const Branch& a, const Branch& b) const {
-    const FieldPiece fa = piece(p, a), fb = piece(p, b);
+    const FirstOrder fa = piece(p, a), fb = piece(p, b);
     return same_to_rounding(fa.value, fa.gradient, fb.value, fb.gradient);
   }
   // Whether a and b are the same piece at p (kSamePieceCosine): no crease between them there.

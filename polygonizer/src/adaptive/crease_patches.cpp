@@ -422,8 +422,9 @@ double halton(int i, int base) {
 
 // Whether pieces a and b agree at p: equal values and gradients, to rounding.
 bool same_at(const Field& field, const Branch& a, const Branch& b, const Vec3& p) {
-  const FieldPiece fa = field.piece(p, a), fb = field.piece(p, b);
-  return same_to_rounding(fa.value, fa.gradient, fb.value, fb.gradient);
+  const auto [va, ga] = field.piece_first_order(p, a);
+  const auto [vb, gb] = field.piece_first_order(p, b);
+  return same_to_rounding(va, ga, vb, gb);
 }
 
 // Whether branch codes a and b give the same function: equal values and gradients at
@@ -450,7 +451,7 @@ std::vector<Vec3> inside_points(const Field& field, const Cycle& cycle, std::spa
     const Vec3& a = points[static_cast<std::size_t>(cycle.vertices[k])];
     const Vec3& b = points[static_cast<std::size_t>(cycle.vertices[(k + 1) % n])];
     const Vec3 m = 0.5 * (a + b);
-    const Vec3 g = field.piece(m, cycle.piece).gradient;
+    const Vec3 g = field.piece_first_order(m, cycle.piece).second;
     if (!(g.squaredNorm() > 0)) continue;
     out.push_back(m + share * g.normalized().cross(b - a));
   }
@@ -671,14 +672,13 @@ constexpr double kOutsidePatch = 0.1;
 // the crease (a chord of a curved crease leaves the patch by its sagitta only).
 bool inside_patch(const Field& field, const Branch& branch, const Vec3& a, const Vec3& b) {
   Vec3 m = 0.5 * (a + b);
-  FieldPiece q;
   for (int it = 0; it < 3; ++it) {
-    q = field.piece(m, branch);
-    if (!(q.gradient.squaredNorm() > 0)) return false;
-    m -= q.value / q.gradient.squaredNorm() * q.gradient;
+    const auto [value, gradient] = field.piece_first_order(m, branch);
+    if (!(gradient.squaredNorm() > 0)) return false;
+    m -= value / gradient.squaredNorm() * gradient;
   }
-  q = field.piece(m, branch);
-  return std::abs(field.value(m) - q.value) <= kOutsidePatch * (a - b).norm() * q.gradient.norm();
+  const auto [value, gradient] = field.piece_first_order(m, branch);
+  return std::abs(field.value(m) - value) <= kOutsidePatch * (a - b).norm() * gradient.norm();
 }
 
 // Whether x, a point of the piece `branch` placed with step d, lies in the piece's patches: the
@@ -686,8 +686,8 @@ bool inside_patch(const Field& field, const Branch& branch, const Vec3& a, const
 // The boundary polygon's chords stray from the crease by up to `sagitta`, into the neighbouring
 // patch where the crease bends away from this one, and points next to them may too.
 bool in_patch(const Field& field, const Branch& branch, const Vec3& x, double d, double sagitta) {
-  const FieldPiece q = field.piece(x, branch);
-  return std::abs(field.value(x) - q.value) <= (kOutsidePatch * d + 2 * sagitta) * q.gradient.norm();
+  const auto [value, gradient] = field.piece_first_order(x, branch);
+  return std::abs(field.value(x) - value) <= (kOutsidePatch * d + 2 * sagitta) * gradient.norm();
 }
 
 }  // namespace

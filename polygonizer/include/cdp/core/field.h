@@ -230,6 +230,13 @@ class Field {
     n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
     return eval_piece(p, branch);
   }
+  // The value and gradient of piece(p, branch), the same numbers bit for bit, without its
+  // Hessian (what crease tracing, the projections onto creases and the patch tests need).
+  // Throws as piece(). Counted as one value_gradient.
+  std::pair<double, Vec3> piece_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+    n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+    return eval_first_order(p, branch);
+  }
 
   // A box that contains the surface (the model's own, or the "bounds" given in its JSON).
   const Box& bounds() const { return bounds_; }
