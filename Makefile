@@ -20,7 +20,8 @@ build: deps
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
-# The same tests under AddressSanitizer and UndefinedBehaviorSanitizer (CI runs this too).
+# The same tests under AddressSanitizer and UndefinedBehaviorSanitizer (CI runs this too), but
+# for those labelled slow_under_sanitizers (tests/CMakeLists.txt).
 # -O1 -g1 (line tables, enough for the sanitizers' stack traces): the instrumented build was
 # the longest step of CI (23 of its 46 minutes at -O2 -g); these halve the compile time of a
 # heavy file (quality.cpp 45 -> 24 s, adaptive_polygonizer_test.cpp 36 -> 20 s).
@@ -28,7 +29,8 @@ test-sanitize: deps
 	@cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" \
 	    -DCDP_SANITIZE=ON -DCDP_BUILD_BENCHMARKS=OFF > /dev/null
 	@cmake --build $(ASAN_BUILD) -j $(JOBS)
-	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
+	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS) \
+	    -LE slow_under_sanitizers
 
 reproduce: build
 	$(PYTHON) scripts/reproduce.py --build $(BUILD) --jobs $(JOBS)
