@@ -508,7 +508,6 @@ std::vector<int> cycle_regions(const Field& field, const std::vector<Cycle>& cyc
   };
   std::vector<Sample> samples;
   SpatialHash hash(step);
-  std::vector<std::size_t> queue;
   const auto onto_surface = [&](Vec3 q) -> std::optional<std::pair<Vec3, Vec3>> {
     for (int it = 0; it < kRegionNewtonSteps; ++it) {
       Vec3 g;
@@ -532,7 +531,6 @@ std::vector<int> cycle_regions(const Field& field, const std::vector<Cycle>& cyc
     });
     if (near) return;
     hash.insert(static_cast<int>(samples.size()), p);
-    queue.push_back(samples.size());
     samples.push_back({p, gradient.normalized(), std::move(code), cycle});
   };
   const auto code_at = [&](const Vec3& p) {
@@ -556,9 +554,10 @@ std::vector<int> cycle_regions(const Field& field, const std::vector<Cycle>& cyc
     });
     return found;
   };
-  for (std::size_t head = 0; head < queue.size(); ++head) {
+  // Breadth first: the samples in the order they were added. A copy, since adding reallocates.
+  for (std::size_t head = 0; head < samples.size(); ++head) {
     if (samples.size() > kMaxRegionSamples) return {};
-    const Sample s = samples[queue[head]];
+    const Sample s = samples[head];
     const Vec3 t1 = s.normal.unitOrthogonal(), t2 = s.normal.cross(t1);
     for (int k = 0; k < 6; ++k) {
       const double angle = k * std::numbers::pi / 3;
