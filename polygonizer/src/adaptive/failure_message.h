@@ -1,0 +1,32 @@
+// What a failed run's error says: the tracker's own message, with the cause where the run can
+// name it (a kink of a black box, a bend tighter than min_edge, creases meshed across by choice,
+// a crease layout that failed first).
+#pragma once
+
+#include "resolve_settings.h"
+#include "stage_tracking.h"
+
+#include <cdp/core/adaptive_polygonizer.h>
+
+#include <string>
+
+namespace cdp::adaptive {
+
+// A run that fails having met a bend tighter than the step of a black box's central differences
+// (Field::derivative_step) met a crease or corner of the function that the field does not
+// describe: differences across it turn the normal within a step, a curvature no edge follows,
+// and no branch data say where the two faces are. Meshing it again (carefully, with finer turns,
+// with min_edge lowered) fails too, after several times as long (a gyroid clipped by a
+// ball as a Python function: the first run failed at 3 s, the last at 17 s), so the run stops
+// at the first failure and says so.
+bool kink_in_black_box(const Field& field, const Bend& tightest);
+
+// The error message of a run that failed with `message`: the cause first where it is a black
+// box's kink, else `message` with the tightest bend where it is under min_edge, the field's
+// sharpest crease where the run meshed across creases by choice, and `crease_fallback` (why
+// the crease-aware meshing failed) where it did.
+// \throw CancelledError (naming the sharpest crease traces the creases).
+std::string explain_failure(const Field& field, const AdaptiveOptions& options, const Settings& resolved,
+                            std::string message, const Bend& tightest, const std::string& crease_fallback);
+
+}  // namespace cdp::adaptive

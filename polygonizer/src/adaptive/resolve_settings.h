@@ -1,0 +1,28 @@
+// The first step of every run: the caller's options with every default resolved.
+#pragma once
+
+#include "tracker.h"
+
+#include <cdp/core/adaptive_polygonizer.h>
+
+namespace cdp::adaptive {
+
+// The options with every default resolved: the sizing (the tolerance's share, the edge bounds
+// that follow the diagonal and the tolerance), the bounds on triangles, steps and searches.
+// \pre field.bounds() is the box to mesh.
+// \throw NoSurfaceError when the field has no valid bounding box.
+// \throw InvalidInputError for a NaN or non-finite tolerance or edge length, min_edge above
+//        max_edge, a factor that is not a positive number, collision_factor outside [0.5, 3],
+//        seed_resolution below 2, negative threads.
+Settings resolve_settings(const Field& field, const AdaptiveOptions& options);
+
+// The tolerance the caller asked for (the sizing may use a share of it): 1e-3 of the diagonal
+// where none is given.
+double requested_tolerance(const AdaptiveOptions& options, const Settings& settings);
+
+// Whether a run may be made again after it failed or missed a bound: not after a run stopped
+// by the caller's own bounds (max_triangles, max_steps, max_search_visits: a run made again with
+// shorter edges would pass them sooner), nor in paper mode (the algorithm as printed, whatever it gives).
+bool remeshing_allowed(const AdaptiveOptions& options);
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,231 @@
+// run_once: one run of the adaptive polygonizer, as a short driver over the stages, and the
+// recoveries it makes when an attempt fails (kRecoveries).
+#include "run.h"
+
+#include "failure_message.h"
+#include "resolve_settings.h"
+#include "run_state.h"
+#include "stage_checks.h"
+#include "surface_gaps.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+
+namespace cdp::adaptive {
+
+// A recovery: the attempt made again with something changed, up to `runs` times.
+enum class RecoveryKind { AroundNecks, Carefully, FinerTurns };
+struct Recovery {
+  RecoveryKind kind;
+  const char* name;
+  int runs;
+  bool after_limit;  // tried after a LimitExceededError too, not only after a NoSurfaceError
+  bool zones_necks;  // each run first zones the necks the attempt before it stepped over (Run::zone_missed_necks)
+  bool strict;       // the mesh must pass a stricter test too: no two components facing across the solid
+  // A further run after any failure; otherwise only after a NoSurfaceError that found necks stepped over.
+  bool after_any_failure;
+};
+
+namespace {
+
+// A neck or tunnel a run stepped over is approached with edges as short as its radius (not
+// below min_edge) from kNeckZoneEdges of that run's edges around it, so that the fronts reach
+// it with edges that cannot jump it: a front outside the ball places points at most about an
+// edge into it, and the grading lets the edges grow back only by kGrowth per edge. (3 edges
+// meshed the 11 runs of the topology sweep as well, with 1.1-2.9 times the triangles.)
+constexpr double kNeckZoneEdges = 1.5;
+// The careful run's edges turn the normal by at most one radian (Sizing::max_turn).
+constexpr double kCarefulMaxTurn = 1;
+// The finer runs' turns; in factor mode shares of the factor's own, 1 / factor (a turn of 0.5 at
+// the default factor 2 would repeat the careful run): the sizing of twice and four times the
+// factor where the surface bends most.
+constexpr std::array<double, 2> kFinerTurns{0.5, 0.25};
+
+// The recoveries, in the order they are tried after a run's first attempt fails. The first that
+// meshes ends the run; when all fail, the first attempt's error stands. None where
+// remeshing_allowed says no, nor after a black box's kink (kink_in_black_box), nor for a field
+// whose seeding found no sign change; only the polygonizer's own errors are recovered from (an
+// exception from a callable field or a cancellation goes on unchanged). Only after a failure,
+// so that every surface that meshes at the first attempt comes out as it always has.
+constexpr std::array<Recovery, 3> kRecoveries{{
+    // The mesh stepped over necks (check_against_field): made again as it was, with balls of
+    // short edges around them (kNeckZoneEdges). The rest of its mesh passed every check, and the
+    // careful run's sizing is finer everywhere and fails more often (blobs38 of the topology
+    // sweep at factor 1: its careful mesh intersected itself far from the neck). Again while a
+    // run steps over more necks.
+    {RecoveryKind::AroundNecks, "around_necks", 3, false, true, false, false},
+    // Settings::anticipate and the rollbacks on from the start, every edge turning the normal by
+    // at most kCarefulMaxTurn, the necks' balls so far: where a front with long edges met a neck
+    // narrower than them (the fifty blobs at factor 2 capped one off, and a second seed then
+    // meshed the whole blob again over the first mesh), the new points are placed closer. Again
+    // with a ball at each further neck it steps over (blobs30 of the topology sweep at factors 1
+    // and 2: the careful run, its curvature sizing finer everywhere, met a second neck). The
+    // surface is meshed as smooth when the crease-aware meshing failed (Run::fall_back).
+    {RecoveryKind::Carefully, "carefully", 3, true, true, true, false},
+    // After the careful runs: edges that turn the normal by half as much, then a quarter
+    // (kFinerTurns). A front of edges as long as the radius of curvature that met a fillet or neck
+    // tighter than min_edge (the dense blob fields of the topology sweep at factor 1 and at
+    // coarse tolerances, which mesh at factor 3) reaches it with edges short enough to close
+    // there. The mesh is then finer than asked where the surface bends (stats careful_max_turn).
+    {RecoveryKind::FinerTurns, "finer_turns", static_cast<int>(kFinerTurns.size()), true, false, true, true},
+}};
+
+}  // namespace
+
+Run::Run(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases, const RunRequest& request)
+    : ctx{field, options, phases}, request(request) {}
+
+void Run::prepare() {
+  ctx.enter("seed_grid", "sampling the seed grid");
+  // Within the seed grid's phase: resolving asks has_pieces, whose first call samples a grid of
+  // its own to classify the field's branch points (Field::branch_kinds, once per field).
+  resolved = resolve_settings(ctx.field, ctx.options);
+  seeds = sample_seed_grid_stage(ctx.field, ctx.options, resolved);
+  settings = resolved;
+  settings.look_ahead = request.look_ahead;
+  if (request.max_turn > 0) settings.sizing.max_turn = request.max_turn;
+  settings.hash_cell = seeds.hash_cell;
+  // The seed grid and the hash cell's curvature sample: the fixed cost before any triangle.
+  seed_grid_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // Creases first (CreaseHandling::Follow): the patches they bound are meshed from them, and the
+  // seeding meets that mesh as finished surface, so only components without creases are left to it.
+  if (follows_creases(ctx.options)) {
+    ctx.enter("creases");  // the tracing too; AdaptiveOptions::phase hears of it where it finds creases
+    creases = lay_out_creases(ctx.field, ctx.options, settings, seeds.estimated_area);
+  }
+}
+
+bool Run::fall_back(const std::exception& e) {
+  if (!creases.mesh) return false;
+  creases.fallback = e.what();
+  creases.mesh.reset();
+  creases.components = 0;
+  track_surface(ctx, seeds, creases, settings, mesh(), tracking);
+  return true;
+}
+
+std::size_t Run::repair_and_check() {
+  quality = {};
+  quality = repair_mesh(ctx, resolved, seeds, creases, tracking, mesh());
+  if (resolved.curvature_properties) {
+    if (ctx.options.variant != Variant::Improved) ctx.phases.enter("quality");
+    add_curvature_properties(ctx.field, *tracking.tracker, quality, mesh());
+  }
+  ctx.enter("checks", "checking the mesh");
+  return check_mesh(mesh(), expected_components(), ctx.options.check_self_intersections, ctx.options.threads,
+                    ctx.options.cancel);
+}
+
+void Run::attempt() {
+  necks = {};
+  // A crease-aware mesh that fails on the way (a component left to the seeds that then stalls,
+  // patches that intersect) is not the end: the surface is meshed again as a smooth one
+  // (fall_back), and the stats say why.
+  try {
+    track_surface(ctx, seeds, creases, settings, mesh(), tracking);
+    // The patches' topology before the repair works on it; intersections after (the repair
+    // removes some that chords on the two faces of an acute crease make).
+    if (creases.mesh) {
+      ctx.enter("checks");
+      check_mesh(mesh(), expected_components(), false, ctx.options.threads, ctx.options.cancel);
+    }
+    components = repair_and_check();
+  } catch (const NoSurfaceError& e) {
+    if (!fall_back(e)) throw;
+    components = repair_and_check();
+  } catch (const LimitExceededError& e) {
+    if (!fall_back(e)) throw;
+    components = repair_and_check();
+  }
+  check_against_field(ctx.field, mesh(), components, tracking.tracker->critical_starts(), resolved.sizing.min_edge,
+                      necks);
+}
+
+void Run::zone_missed_necks() {
+  for (const MissedNeck& m : necks.missed)
+    settings.finer_zones.push_back(
+        {m.point, 0.5 * m.width + kNeckZoneEdges * m.edge, std::max(resolved.sizing.min_edge, 0.5 * m.width)});
+}
+
+bool Run::recover(const Recovery& r, bool after_limit) {
+  if (after_limit && !r.after_limit) return false;
+  const bool may_mesh_again = remeshing_allowed(ctx.options);
+  switch (r.kind) {
+    case RecoveryKind::AroundNecks:
+      if (!may_mesh_again || necks.missed.empty()) return false;
+      break;
+    case RecoveryKind::Carefully:
+      if (!may_mesh_again || tracking.no_crossing) return false;
+      settings.anticipate = careful = true;
+      settings.sizing.max_turn = kCarefulMaxTurn;
+      break;
+    case RecoveryKind::FinerTurns:
+      if (!careful) return false;
+      break;
+  }
+  for (int run = 0; run < r.runs; ++run) {
+    if (r.kind == RecoveryKind::AroundNecks) ++neck_reruns;
+    if (r.kind == RecoveryKind::FinerTurns)
+      settings.sizing.max_turn =
+          resolved.sizing.mode == SizingMode::Factor ? kFinerTurns[run] / resolved.sizing.factor : kFinerTurns[run];
+    if (r.zones_necks) zone_missed_necks();
+    bool no_surface = false;
+    try {
+      attempt();
+      // A run made again strictly must pass a test stricter than attempt's own: no two components
+      // may face each other across the solid at all, joined or not (a shell thinner than two
+      // edges keeps its first error).
+      if (!r.strict || facing_across_solid(ctx.field, mesh(), 1).empty()) return true;
+    } catch (const NoSurfaceError&) {
+      no_surface = true;
+    } catch (const LimitExceededError&) {
+      // the neighbour searches' bound: shorter edges at the fillet may not crowd it
+    }
+    if (!r.after_any_failure && !(no_surface && !necks.missed.empty())) return false;
+  }
+  return false;
+}
+
+PolygonizeResult Run::mesh_with_recoveries(Bend& bend) {
+  const PhaseCloser closer{ctx.phases};
+  prepare();
+  const auto hopeless = [&] {
+    tracking.note_tightest();
+    return kink_in_black_box(ctx.field, tracking.tightest);
+  };
+  const auto recover_all = [&](bool after_limit) {
+    return std::any_of(kRecoveries.begin(), kRecoveries.end(), [&](const Recovery& r) { return recover(r, after_limit); });
+  };
+  // An error of the run says what the crease-aware meshing ran into first (failure_message.h).
+  const auto why = [&](const std::exception& e) {
+    tracking.note_tightest();
+    bend = tracking.tightest;
+    return explain_failure(ctx.field, ctx.options, resolved, e.what(), tracking.tightest, creases.fallback);
+  };
+  try {
+    try {
+      attempt();
+    } catch (const NoSurfaceError&) {
+      if (hopeless() || !recover_all(false)) throw;
+    } catch (const LimitExceededError&) {
+      if (hopeless() || !recover_all(true)) throw;
+    }
+  } catch (const NoSurfaceError& e) {
+    throw NoSurfaceError(why(e));
+  } catch (const LimitExceededError& e) {
+    throw LimitExceededError(why(e));
+  }
+  ctx.phases.close();  // the run's time ends here, the ledger's with it
+  write_stats();
+  if (ctx.options.progress) ctx.options.progress(1.0);
+  return std::move(result);
+}
+
+PolygonizeResult run_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases,
+                          const RunRequest& request, Bend& bend) {
+  Run run(field, options, phases, request);
+  return run.mesh_with_recoveries(bend);
+}
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,34 @@
+// One run of the adaptive polygonizer with one sizing: the stages in order (resolve_settings,
+// stage_seed_grid, stage_creases, stage_tracking, stage_repair, stage_checks), and, when an
+// attempt fails, the recoveries of kRecoveries (run.cpp), each an attempt made again with
+// something changed. polygonize_adaptive (adaptive_polygonizer.cpp) makes the runs of kRuns.
+#pragma once
+
+#include "phase_ledger.h"
+#include "stage_tracking.h"
+
+#include <cdp/core/adaptive_polygonizer.h>
+
+namespace cdp::adaptive {
+
+// What a run changes from the options as given (the runs of kRuns).
+struct RunRequest {
+  // Settings::look_ahead on every front (the run made again when a mesh misses the quality bounds).
+  bool look_ahead = false;
+  // Positive: Sizing::max_turn from the start, the crease-aware patches included (the last run
+  // in tolerance mode); stats "turn_limited".
+  double max_turn = 0;
+};
+
+// Meshes the surface with `options` as `request` changes them, the recoveries included.
+// `bend` receives the tightest bend the run met when it fails (kRuns' lowered min_edge
+// follows it).
+// \return the mesh, closed, oriented, manifold, without self-intersections (unless the options
+//         turn that check off), with its stats; the phases' times go to `phases`.
+// \throw NoSurfaceError, LimitExceededError (the first attempt's error, its cause named:
+//        failure_message.h), InvalidInputError (resolve_settings), CancelledError, and what
+//        the field throws.
+PolygonizeResult run_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases,
+                          const RunRequest& request, Bend& bend);
+
+}  // namespace cdp::adaptive

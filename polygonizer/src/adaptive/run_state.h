@@ -1,0 +1,66 @@
+// The state of one run (run.h) across its attempts: what its stages made, and what its
+// recoveries changed. Private to run.cpp and run_report.cpp.
+#pragma once
+
+#include "missed_necks.h"
+#include "quality.h"
+#include "run.h"
+#include "run_context.h"
+#include "stage_creases.h"
+#include "stage_repair.h"
+#include "stage_seed_grid.h"
+#include "stage_tracking.h"
+
+#include <chrono>
+#include <cstddef>
+#include <exception>
+
+namespace cdp::adaptive {
+
+struct Recovery;
+
+class Run {
+ public:
+  Run(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases, const RunRequest& request);
+  PolygonizeResult mesh_with_recoveries(Bend& bend);
+
+ private:
+  // The stages before the first triangle: settings, seed grid, crease layout.
+  void prepare();
+  // One attempt: tracking, repair, checks (throws their errors).
+  void attempt();
+  // Drops a crease layout whose meshing failed with `e` and meshes the surface as smooth;
+  // false where there was none.
+  bool fall_back(const std::exception& e);
+  std::size_t repair_and_check();
+  // Adds a ball of finer edges around each neck the last attempt stepped over.
+  void zone_missed_necks();
+  // Tries one recovery of kRecoveries; true when it meshed.
+  bool recover(const Recovery& r, bool after_limit);
+  // The stats of the run's mesh (run_report.cpp).
+  void write_stats();
+
+  Mesh& mesh() { return result.mesh; }
+  // The components the checks expect: one per seed, and the crease patches'.
+  std::size_t expected_components() const { return tracking.seeding.seeds + creases.components; }
+
+  RunContext ctx;
+  RunRequest request;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  EvaluationCounts before = ctx.field.counts();
+
+  Settings resolved;  // as the options resolve
+  Settings settings;  // as the request and the recoveries change them
+  SeedGridStage seeds;
+  double seed_grid_seconds = 0;
+  CreaseLayout creases;
+  PolygonizeResult result;
+  Tracking tracking;
+  QualityReport quality;
+  std::size_t components = 0;
+  NeckSearch necks;  // of the last attempt
+  bool careful = false;  // the careful recovery ran
+  std::size_t neck_reruns = 0;
+};
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,161 @@
+// The checks stage: what a run's mesh must pass before it is returned (check_mesh,
+// check_against_field), and the quality bounds a mesh of a smooth surface is held to.
+#include "stage_checks.h"
+
+#include "../parallel.h"
+
+#include <cdp/core/errors.h>
+#include <cdp/core/mesh_topology.h>
+#include <cdp/core/triangle_intersection.h>
+
+#include "surface_gaps.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <exception>
+#include <numbers>
+#include <sstream>
+#include <thread>
+#include <utility>
+#include <vector>
+
+namespace cdp::adaptive {
+
+std::string describe_point(const Vec3& p) {
+  std::ostringstream s;
+  s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return s.str();
+}
+
+std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersections, int threads,
+                       const CancelToken& cancel) {
+  // With several threads the topology check runs on one of its own beside the intersection
+  // check, whose blocks the other threads share: it is the serial part of the two (the paper
+  // variant's torus at factor 5: about 8.5M instructions against the intersections' 31.5M).
+  // Both are pure functions of the mesh, and their failures are reported in the order below
+  // either way.
+  const bool side_by_side = check_intersections && detail::worker_count(threads) > 1;
+  MeshTopology t;
+  std::vector<std::pair<int, int>> pairs;
+  if (side_by_side) {
+    std::exception_ptr error;
+    std::thread topology([&] {
+      try {
+        t = analyze_topology(mesh);
+      } catch (...) {
+        error = std::current_exception();
+      }
+    });
+    try {
+      pairs = self_intersecting_pairs(mesh, 1, threads, &cancel);
+    } catch (...) {
+      topology.join();
+      throw;
+    }
+    topology.join();
+    if (error) std::rethrow_exception(error);
+  } else {
+    t = analyze_topology(mesh);
+  }
+  const auto fail = [](const std::string& what, const Vec3& where) {
+    throw NoSurfaceError("adaptive: the mesh came out " + what + " near " + describe_point(where) +
+                         "; the surface may have a feature thinner than min_edge there");
+  };
+  if (!t.closed() || !t.edge_manifold() || !t.vertex_manifold() || !t.oriented())
+    fail("with " + std::to_string(t.boundary_edges) + " boundary, " + std::to_string(t.nonmanifold_edges) +
+             " non-manifold and " + std::to_string(t.misoriented_edges) + " misoriented edges, " +
+             std::to_string(t.nonmanifold_vertices) + " non-manifold vertices",
+         mesh.positions.empty() ? Vec3::Zero() : mesh.positions.front());
+  if (t.components != seeds)
+    fail("with " + std::to_string(t.components) + " components from " + std::to_string(seeds) + " seeds",
+         mesh.positions.front());
+  if (check_intersections) {
+    if (!side_by_side) pairs = self_intersecting_pairs(mesh, 1, threads, &cancel);
+    if (!pairs.empty())
+      fail("intersecting itself (" + std::to_string(count_self_intersecting_pairs(mesh, threads)) + " pairs of triangles)",
+           mesh.positions[mesh.triangles[pairs.front().first][0]]);
+  }
+  return t.components;
+}
+
+namespace {
+
+// A triangle's smallest angle is the one opposite its shortest edge: at that corner, the sine
+// and cosine of the angle times the product of its sides (|u x v|, u . v), and the squared
+// lengths of the shortest and the longest edge.
+struct SmallestCorner {
+  double sine, cosine, shortest2, longest2;
+};
+
+SmallestCorner smallest_corner(const Mesh& mesh, const std::array<int, 3>& t) {
+  std::array<double, 3> l2;  // l2[c]: squared length of the edge opposite corner c
+  for (int c = 0; c < 3; ++c) l2[c] = (mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[(c + 2) % 3]]).squaredNorm();
+  const int k = static_cast<int>(std::min_element(l2.begin(), l2.end()) - l2.begin());
+  const Vec3& p = mesh.positions[t[k]];
+  const Vec3 u = mesh.positions[t[(k + 1) % 3]] - p, v = mesh.positions[t[(k + 2) % 3]] - p;
+  return {u.cross(v).norm(), u.dot(v), l2[k], *std::max_element(l2.begin(), l2.end())};
+}
+
+}  // namespace
+
+// One atan2 per triangle.
+double min_angle_degrees(const Mesh& mesh) {
+  double best = 180;
+  for (const auto& t : mesh.triangles) {
+    const SmallestCorner c = smallest_corner(mesh, t);
+    best = std::min(best, std::atan2(c.sine, c.cosine) * 180 / std::numbers::pi);
+  }
+  return best;
+}
+
+// Without an arctangent: a triangle's smallest angle is under a bound b when its corner's cross
+// and dot products (|u x v|, u . v) satisfy |u x v| < tan(b) u . v (angle_statistics' atan2 for
+// each corner cost 1.7% of a torus run at factor 5, where this costs a fifth of that, 0.3%). The
+// figures agree with angle_statistics but for rounding at the bounds themselves.
+int missed_bounds(const Mesh& mesh, std::size_t over_tolerance) {
+  const double tan20 = std::tan(kBoundMinDegrees * std::numbers::pi / 180), tan30 = std::tan(std::numbers::pi / 6);
+  bool under20 = false;
+  std::size_t under30 = 0, counted = 0;
+  double ratio_sum = 0;
+  for (const auto& t : mesh.triangles) {
+    const SmallestCorner c = smallest_corner(mesh, t);
+    if (!(c.sine > 0)) {  // zero area: no angles (angle_statistics counts it apart); a sliver all the same
+      under20 = true;
+      continue;
+    }
+    ++counted;
+    if (c.sine < tan30 * c.cosine) ++under30;
+    if (c.sine < tan20 * c.cosine) under20 = true;
+    ratio_sum += std::sqrt(c.longest2 / c.shortest2);
+  }
+  const double share_under_30 = counted ? static_cast<double>(under30) / counted : 0;
+  const double mean_ratio = counted ? ratio_sum / counted : 0;
+  return under20 + (share_under_30 > kBoundShareUnder30) + (mean_ratio > kBoundMeanEdgeRatio) + (over_tolerance > 0);
+}
+
+void check_against_field(const Field& field, const Mesh& mesh, std::size_t components,
+                         std::span<const CriticalStart> critical_starts, double min_edge, NeckSearch& necks) {
+  // check_mesh passes a front that crossed a neck narrower than its edges and closed on each
+  // side of it: two closed components where the surface has one (surface_gaps.h).
+  if (components > 1)
+    if (const auto at = uncovered_between_components(field, mesh))
+      throw NoSurfaceError("adaptive: two components of the mesh face each other across the solid near " +
+                           describe_point(*at) +
+                           ", where the surface joins them: a front closed on each side of a neck narrower "
+                           "than its edges");
+  // It passes a mesh that stepped over a neck or a tunnel narrower than its edges, too: a
+  // handle too few, each component whole (missed_necks.h).
+  necks = find_missed_necks(field, mesh, critical_starts);
+  if (!necks.missed.empty()) {
+    const MissedNeck& m = necks.missed.front();
+    std::ostringstream msg;
+    msg << "adaptive: the mesh " << (m.value < 0 ? "cuts a neck of the solid" : "closes a tunnel") << " about "
+        << m.width << " wide near " << describe_point(m.point) << " (F has a saddle there, F = " << m.value
+        << ", and it lies " << (m.value < 0 ? "outside" : "inside") << " the mesh)"
+        << (m.width < min_edge ? ", narrower than min_edge" : "") << ": a front stepped over it";
+    throw NoSurfaceError(msg.str());
+  }
+}
+
+}  // namespace cdp::adaptive

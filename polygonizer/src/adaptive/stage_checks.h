@@ -1,0 +1,60 @@
+// The checks stage of a run: the last line of defence against a wrong mesh returned without an
+// error, and the quality bounds polygonize_adaptive holds a smooth surface's mesh to.
+#pragma once
+
+#include "missed_necks.h"
+
+#include <cdp/core/cancel.h>
+#include <cdp/core/field.h>
+#include <cdp/core/mesh.h>
+
+#include <cstddef>
+#include <span>
+#include <string>
+
+namespace cdp::adaptive {
+
+// The quality bounds on a smooth surface's mesh (see missed_bounds): a smallest angle of at least
+// kBoundMinDegrees, at most kBoundShareUnder30 of the triangles with one under 30 degrees, a
+// mean longest/shortest edge of at most kBoundMeanEdgeRatio. The last is also the repair's aim
+// (QualityOptions::aim_mean_edge_ratio): its relaxation searches its moves where its plain
+// sweeps leave the mean over it.
+inline constexpr double kBoundMinDegrees = 20;
+inline constexpr double kBoundShareUnder30 = 0.01;
+inline constexpr double kBoundMeanEdgeRatio = 1.25;
+
+// A point in the polygonizer's error messages: "(x, y, z)", six significant digits.
+std::string describe_point(const Vec3& p);
+
+// The tracker's own output must be closed, oriented and manifold, each seed must have grown one
+// component of its own (a front that merged across a gap into another sheet joins two), and
+// (unless `check_intersections` is off) no two triangles may intersect (fronts that crossed each
+// other). (A test of triangles against the vertex normals was tried and dropped: the MPU
+// models' correct meshes have triangles whose face turns more than 120 degrees from a noisy
+// vertex normal.) `threads` as AdaptiveOptions::threads.
+// \return the mesh's components (== seeds).
+// \throw NoSurfaceError naming the place of the first failure.
+// \throw CancelledError when `cancel` is set during the intersection test.
+std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersections, int threads,
+                       const CancelToken& cancel);
+
+// The checks of a mesh against its field, which check_mesh passes: two of its `components` that
+// face each other across the solid where the surface joins them (surface_gaps.h), a neck or
+// tunnel a front stepped over (missed_necks.h, from the tracker's `critical_starts`).
+// `necks` receives the neck search, before the error when there is one (the recoveries zone
+// the necks it names). `min_edge` only words the message.
+// \throw NoSurfaceError naming the place.
+void check_against_field(const Field& field, const Mesh& mesh, std::size_t components,
+                         std::span<const CriticalStart> critical_starts, double min_edge, NeckSearch& necks);
+
+// The smallest angle of the mesh's triangles, in degrees (180 for no triangle).
+double min_angle_degrees(const Mesh& mesh);
+
+// How many of the quality bounds `mesh` misses (see kBoundMinDegrees): a smallest angle under
+// kBoundMinDegrees, more than kBoundShareUnder30 of the triangles with one under 30 degrees, a
+// mean longest/shortest edge over kBoundMeanEdgeRatio, triangles farther from the surface than
+// the tolerance (`over_tolerance`, the repair's dense measurement). A zero-area triangle counts
+// as one under kBoundMinDegrees.
+int missed_bounds(const Mesh& mesh, std::size_t over_tolerance);
+
+}  // namespace cdp::adaptive

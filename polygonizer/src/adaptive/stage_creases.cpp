@@ -1,0 +1,37 @@
+#include "stage_creases.h"
+
+#include <cdp/core/mesh_topology.h>
+
+namespace cdp::adaptive {
+
+CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options, const Settings& settings,
+                             double estimated_area) {
+  CreaseLayout out;
+  if (!follows_creases(options)) return out;
+  CreaseTracingOptions co;
+  co.resolution = options.seed_resolution;
+  for (int attempt = 0; attempt < kCreaseTracings; ++attempt, co.resolution *= 2) {
+    try {
+      out.tracing_resolution = co.resolution;
+      out.traced = trace_creases(field, co);  // no work for a field without pieces
+      if (!out.traced.curves.empty()) {
+        if (attempt == 0 && options.phase) options.phase("meshing along creases");
+        out.mesh = mesh_crease_patches(field, out.traced, settings, estimated_area);
+        out.components = analyze_topology(out.mesh->mesh).components;
+        out.fallback.clear();
+      }
+      break;
+    } catch (const CreaseLayoutError& e) {
+      out.fallback = e.what();  // a crease the grid missed? A finer one may find it
+    } catch (const NoSurfaceError& e) {
+      out.fallback = e.what();
+      break;
+    } catch (const LimitExceededError& e) {
+      out.fallback = e.what();
+      break;
+    }
+  }
+  return out;
+}
+
+}  // namespace cdp::adaptive

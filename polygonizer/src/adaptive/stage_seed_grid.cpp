@@ -1,0 +1,42 @@
+#include "stage_seed_grid.h"
+
+#include <cdp/core/curvature.h>
+#include <cdp/core/errors.h>
+
+#include <algorithm>
+#include <array>
+#include <vector>
+
+namespace cdp::adaptive {
+
+SeedGridStage sample_seed_grid_stage(const Field& field, const AdaptiveOptions& options, const Settings& settings) {
+  SeedOptions seed_options;
+  seed_options.resolution = options.seed_resolution;
+  seed_options.threads = options.threads;
+  SeedGridStage out{sample_seed_grid(field, seed_options)};
+  const SeedGrid& grid = out.grid;
+  std::vector<Vec3> points;
+  grid.for_each_sign_change([&](const std::array<int, 3>& a, const std::array<int, 3>& b) {
+    const double fa = grid.value(a[0], a[1], a[2]), fb = grid.value(b[0], b[1], b[2]);
+    const Vec3 pa = grid.point(a[0], a[1], a[2]);
+    points.push_back(pa + fa / (fa - fb) * (grid.point(b[0], b[1], b[2]) - pa));
+  });
+  out.crossings = points.size();
+  out.estimated_area = out.crossings >= kMeasuredCrossings ? out.crossings * grid.h * grid.h / kMeanCrossings : 0.0;
+  std::vector<double> lengths;
+  const std::size_t stride = std::max<std::size_t>(1, points.size() / 64);
+  for (std::size_t i = 0; i < points.size(); i += stride) {
+    try {
+      lengths.push_back(edge_length(settings.sizing, curvature_at(field, points[i]).min_radius));
+    } catch (const NoSurfaceError&) {
+    }
+  }
+  out.hash_cell = settings.hash_cell;
+  if (!lengths.empty()) {
+    std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+    out.hash_cell = 2 * lengths[lengths.size() / 2];
+  }
+  return out;
+}
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,90 @@
+#include "stage_tracking.h"
+
+#include "../helper_thread.h"
+#include "stage_checks.h"
+
+#include <exception>
+#include <sstream>
+#include <string>
+
+namespace cdp::adaptive {
+namespace {
+
+// One meshing: the crease patches' mesh adopted as finished surface, then every component the
+// seeding finds uncovered.
+void mesh_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseLayout& creases, Settings& settings,
+                  bool rollback, Mesh& mesh, Tracking& tracking) {
+  mesh = Mesh{};
+  settings.rollback = rollback;
+  tracking.note_tightest();  // of the meshing this one replaces
+  Tracker& tracker = tracking.tracker.emplace(run.field, settings, mesh);
+  if (seeds.estimated_area > 0) tracker.set_estimated_area(seeds.estimated_area);
+  if (run.options.progress) tracker.set_progress(run.options.progress);
+  if (creases.mesh) {
+    mesh.positions = creases.mesh->mesh.positions;
+    mesh.normals = creases.mesh->mesh.normals;
+    mesh.triangles = creases.mesh->mesh.triangles;
+    tracker.adopt_finished(creases.mesh->target, creases.mesh->mac, creases.mesh->shape_index);
+  }
+  {
+    // The tracker's field calls come one or two points at a time: a costly field may run half
+    // of each on a second core, with the same bits (helper_thread.h). Lent for the tracking
+    // only, which runs no parallel pass beside it.
+    const detail::LendHelper helper(run.options.threads);
+    struct Count {  // the splits of a run that throws count too, as its phases do
+      PhaseLedger& phases;
+      const detail::LendHelper& helper;
+      ~Count() { phases.add_split_evaluations(helper.tasks_run()); }
+    } count{run.phases, helper};
+    tracking.seeding =
+        seed_every_component(run.field, seeds.grid, settings.sizing.min_edge, settings.hash_cell, tracker, mesh);
+  }
+  tracker.compact();
+}
+
+}  // namespace
+
+void track_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseLayout& creases,
+                   Settings& settings, Mesh& mesh, Tracking& tracking) {
+  run.enter("tracking", "meshing");
+  tracking.remeshed = false;
+  try {
+    mesh_surface(run, seeds, creases, settings, settings.anticipate, mesh, tracking);  // careful runs roll back from the start
+  } catch (const StalledFrontError& stalled) {
+    if (settings.anticipate) throw;
+    // The rollbacks undo such places where they begin. Surfaces that mesh without them are
+    // never meshed with them, so they come out exactly as before. When the second run fails
+    // too, or its mesh fails the checks (a rollback has been seen to leave a non-manifold edge:
+    // the printed triangle count on the bunny VIS-800 at factor 1), the first run's error stands.
+    try {
+      tracking.remeshed = true;
+      mesh_surface(run, seeds, creases, settings, true, mesh, tracking);
+      if (tracking.seeding.uncovered > 0) throw NoSurfaceError("uncovered sign changes");
+      run.enter("checks");
+      check_mesh(mesh, tracking.seeding.seeds + creases.components, run.options.check_self_intersections,
+                 run.options.threads, run.options.cancel);
+    } catch (const CancelledError&) {
+      throw;
+    } catch (const std::exception&) {
+      throw stalled;
+    }
+  }
+  const SeedingReport& seeding = tracking.seeding;
+  if (mesh.triangles.empty() && seeding.sign_changes == 0) {
+    tracking.no_crossing = true;
+    std::ostringstream msg;
+    msg << "adaptive: no zero crossing of the field in its box " << describe_point(run.field.bounds().min) << " - "
+        << describe_point(run.field.bounds().max) << " at seed resolution " << run.options.seed_resolution
+        << " (F is " << (seeds.grid.values[0] < 0 ? "negative" : "positive") << " everywhere sampled)";
+    throw NoSurfaceError(msg.str());
+  }
+  if (mesh.triangles.empty())
+    throw NoSurfaceError("adaptive: the field changes sign but no seed could be meshed (vanishing gradient)");
+  if (seeding.uncovered > 0)
+    throw NoSurfaceError("adaptive: " + std::to_string(seeding.uncovered) +
+                         " sign changes of the field are not covered by the mesh, the first near " +
+                         describe_point(seeding.first_uncovered) +
+                         " (a singular point or a feature thinner than min_edge?)");
+}
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,45 @@
+// The tracking stage of a run: the paper's surface tracker grows the mesh from a seed on every
+// component not yet covered (seeding.h), after the crease patches' mesh where there is one.
+#pragma once
+
+#include "run_context.h"
+#include "seeding.h"
+#include "stage_creases.h"
+#include "stage_seed_grid.h"
+#include "tracker.h"
+
+#include <limits>
+#include <optional>
+#include <utility>
+
+namespace cdp::adaptive {
+
+// The radius of curvature at a tracker's tightest bend, and where.
+using Bend = std::pair<double, Vec3>;
+inline Bend no_bend() { return {std::numeric_limits<double>::infinity(), Vec3::Zero()}; }
+
+struct Tracking {
+  std::optional<Tracker> tracker;  // of the last meshing (its counters go into the stats)
+  SeedingReport seeding;
+  bool remeshed = false;     // meshed again with the rollbacks on after a stalled front
+  bool no_crossing = false;  // the seeding found no sign change at all
+  // The tightest bend every tracker of the run met so far (note_tightest): below min_edge the
+  // surface has detail that edges of min_edge cannot follow (the perturbed Barth sextic's necks
+  // bend with a radius of 0.0083, min_edge is 0.0145), and a failure is reported as such.
+  Bend tightest = no_bend();
+  void note_tightest() {
+    if (tracker && tracker->tightest_bend().first < tightest.first) tightest = tracker->tightest_bend();
+  }
+};
+
+// Meshes the whole surface into `mesh` (emptied first): the crease patches' mesh, then the
+// tracker from the seeds. A stalled front (StalledFrontError) is where a front that ran over
+// finished mesh ends, thousands of steps later (the MPU models at some factors): the surface is
+// then meshed again from the start with the rollbacks on (`remeshed`).
+// \throw NoSurfaceError when the field has no sign change, when no seed could be meshed, when
+//        sign changes are left uncovered; the first run's StalledFrontError when the second
+//        fails; LimitExceededError for the tracker's bounds; CancelledError.
+void track_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseLayout& creases,
+                   Settings& settings, Mesh& mesh, Tracking& tracking);
+
+}  // namespace cdp::adaptive
