@@ -114,8 +114,7 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   const FrontNode n = fs_.nodes[node];
   const int va = fs_.nodes[n.prev].vertex, vb = fs_.nodes[n.next].vertex;
   const Vec3& p = mesh_.positions[n.vertex];
-  const double theta = n.angle;
-  int count = triangle_count(s_.rule, theta, (mesh_.positions[va] - mesh_.positions[vb]).norm(), delta);
+  int count = triangle_count(s_.rule, n.angle, (mesh_.positions[va] - mesh_.positions[vb]).norm(), delta);
   if (count <= 1 && mesh_.normals[va].dot(mesh_.normals[vb]) < kFoldCosine) count = 2;
   if (count <= 1 && leaves_patch(va, vb)) count = 2;
 
@@ -130,12 +129,27 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     close_angle(node);
     return {true, -1};
   }
+  double placed_at = 0;
+  std::vector<Placed> placed = place_fan(n, count, delta, placed_at);
+  if (placed.empty()) return {false, -1};
+  // The fan's own first and last points, before any side points join them.
+  const Fan fan{placed.front().point, placed.back().point, placed.size()};
+  if (s_.side_points) add_side_points(n.vertex, vb, va, placed_at, placed);
+  if (const std::optional<ExpandOutcome> refused = refuse_fan(node, placed, fan, delta)) return *refused;
+  side_points_ += placed.size() - fan.size;
+  emit_fan(node, placed, delta);
+  return {true, -1};
+}
 
+std::vector<Tracker::Placed> Tracker::place_fan(const FrontNode& n, int count, double delta, double& placed_at) {
+  const int va = fs_.nodes[n.prev].vertex, vb = fs_.nodes[n.next].vertex;
+  const Vec3& p = mesh_.positions[n.vertex];
+  const double theta = n.angle;
   // Tangent frame: e0 towards next, e1 a quarter turn counter-clockwise (towards the unmeshed side).
   const Vec3& N = mesh_.normals[n.vertex];
   Vec3 e0 = mesh_.positions[vb] - p;
   e0 -= N * N.dot(e0);
-  if (e0.squaredNorm() == 0) return {false, -1};
+  if (e0.squaredNorm() == 0) return {};
   e0.normalize();
   const Vec3 e1 = N.cross(e0);
 
@@ -168,7 +182,7 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     return std::vector<Placed>{};
   };
   std::vector<Placed> placed, complete;
-  double placed_at = 0, complete_at = 0;  // the lengths they were placed at
+  double complete_at = 0;  // the lengths they were placed at (and placed_at)
   for (double d = delta; d >= kShortestEdgeLoop * s_.sizing.min_edge; d *= 0.5) {
     placed = place_at(d);
     placed_at = d;
@@ -194,12 +208,15 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     complete = placed;
     complete_at = d;
   }
-  if (placed.empty()) return {false, -1};
-  // The fan's own first and last points, before any side points join them.
-  const Vec3 fan_first = placed.front().point, fan_last = placed.back().point;
-  const std::size_t fan_size = placed.size();
-  if (s_.side_points) add_side_points(n.vertex, vb, va, placed_at, placed);
+  return placed;
+}
 
+std::optional<Tracker::ExpandOutcome> Tracker::refuse_fan(int node, const std::vector<Placed>& placed, const Fan& fan,
+                                                          double delta) {
+  const FrontNode n = fs_.nodes[node];
+  const int va = fs_.nodes[n.prev].vertex, vb = fs_.nodes[n.next].vertex;
+  const Vec3& p = mesh_.positions[n.vertex];
+  const Vec3& N = mesh_.normals[n.vertex];
   // The front cells around the checks below, looked up once: they ask the front hash about
   // boxes close together (each new point, and each new edge with the longest front edge
   // around it), and nothing changes the front before they are done.
@@ -216,8 +233,8 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
     }
     cover(front_edge_search_box(mesh_.positions[vb], placed.front().point, longest));
     cover(front_edge_search_box(mesh_.positions[va], placed.back().point, longest));
-    cover(front_edge_search_box(mesh_.positions[vb], fan_first, longest));
-    cover(front_edge_search_box(mesh_.positions[va], fan_last, longest));
+    cover(front_edge_search_box(mesh_.positions[vb], fan.first, longest));
+    cover(front_edge_search_box(mesh_.positions[va], fan.last, longest));
     front_hash_.gather(lo, hi, near_front_);
   }
   // A new point landing close to a front point the collision test did not see (beyond
@@ -233,9 +250,9 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
       const double d = (mesh_.positions[vq] - x.point).norm();
       if (d < hit_d || (d == hit_d && q < hit)) hit = q, hit_d = d;
     });
-    if (hit >= 0) return {false, find_bridge(node, 1.05 * (mesh_.positions[fs_.nodes[hit].vertex] - p).norm())};
+    if (hit >= 0) return ExpandOutcome{false, find_bridge(node, 1.05 * (mesh_.positions[fs_.nodes[hit].vertex] - p).norm())};
     if (const int r = crossed_front_edge(n.vertex, -1, x.point, n.vertex, &near_front_); r >= 0)
-      return {false, bridge_around(node, r)};
+      return ExpandOutcome{false, bridge_around(node, r)};
   }
   // The new front edges next -> x1 and x_last -> prev must leave next and prev into their own
   // unmeshed sectors. The points were rotated in the tangent plane of the expanded point; where
@@ -243,19 +260,23 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   // triangles already made around it, and no front edge is crossed there (the ones bounding
   // those triangles all end at the neighbour). A random blob field at factor 1 folded over so.
   // The point waits instead; the neighbour's own expansion usually closes the gap first.
-  if (!in_sector(n.next, placed.front().point, 0) || !in_sector(n.prev, placed.back().point, 0)) return {false, -1};
+  if (!in_sector(n.next, placed.front().point, 0) || !in_sector(n.prev, placed.back().point, 0)) return ExpandOutcome{false, -1};
   // The new front edges must not cross the front either. With side points, the chords they
   // stand in for too (next -> the fan's first point, its last -> prev): the side points lie
   // along them, and only the first piece of each chain is a segment tested here.
   for (const auto& [from, to] : {std::pair{vb, placed.front().point}, std::pair{va, placed.back().point}})
     if (const int r = crossed_front_edge(from, -1, to, n.vertex, &near_front_); r >= 0)
-      return {false, bridge_around(node, r)};
-  if (placed.size() != fan_size)
-    for (const auto& [from, to] : {std::pair{vb, fan_first}, std::pair{va, fan_last}})
+      return ExpandOutcome{false, bridge_around(node, r)};
+  if (placed.size() != fan.size)
+    for (const auto& [from, to] : {std::pair{vb, fan.first}, std::pair{va, fan.last}})
       if (const int r = crossed_front_edge(from, -1, to, n.vertex, &near_front_); r >= 0)
-        return {false, bridge_around(node, r)};
-  side_points_ += placed.size() - fan_size;
+        return ExpandOutcome{false, bridge_around(node, r)};
+  return std::nullopt;
+}
 
+void Tracker::emit_fan(int node, const std::vector<Placed>& placed, double delta) {
+  const FrontNode n = fs_.nodes[node];
+  const int va = fs_.nodes[n.prev].vertex, vb = fs_.nodes[n.next].vertex;
   // Triangles (p, next, x1), (p, x1, x2), ..., (p, x_{n-1}, prev): counter-clockwise from
   // outside; the new points run from prev's side to next's side on the front.
   std::vector<int> vs;
@@ -286,7 +307,6 @@ Tracker::ExpandOutcome Tracker::expand(int node, double delta) {
   refresh(n.prev);
   refresh(n.next);
   for (int m : fresh) refresh(m);
-  return {true, -1};
 }
 
 }  // namespace cdp::adaptive

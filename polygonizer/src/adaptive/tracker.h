@@ -339,6 +339,12 @@ class Tracker {
   // every front touching them, and re-derives the hole's boundary as new fronts. Returns false
   // when the bounds are spent or the hole's boundary cannot be traced (nothing changed then).
   bool rollback(int f, int node, bool at_node);
+  // The vertices of the component being meshed within `radius` of a stuck point, on its side.
+  std::vector<char> rollback_region(const std::vector<int>& stuck, double radius) const;
+  // Removes a traced hole: the `absorbed` fronts, the `removed` triangles (by index from the
+  // component's first), the vertices `had` one of them and no other, and makes its `loops` fronts.
+  void cut_hole(const std::vector<int>& absorbed, const std::vector<char>& removed, const std::vector<char>& had,
+                const std::vector<std::vector<int>>& loops);
 
   // --- front_angle.cpp
   double front_angle(int node) const;
@@ -389,6 +395,17 @@ class Tracker {
   // Expands node with edge length delta into new triangles (Figure 6, expand), or reports the
   // front node in the way.
   ExpandOutcome expand(int node, double delta);
+  // expand's steps. The fan's count - 1 new points at length delta, halved where they cannot be
+  // placed (`placed_at` the length they were placed at); empty when none could be.
+  std::vector<Placed> place_fan(const FrontNode& n, int count, double delta, double& placed_at);
+  struct Fan {  // the fan's own first and last points and count, before any side points join them
+    Vec3 first, last;
+    std::size_t size;
+  };
+  // What to do instead of the expansion where its new points or edges meet the front, if anything.
+  std::optional<ExpandOutcome> refuse_fan(int node, const std::vector<Placed>& placed, const Fan& fan, double delta);
+  // The fan's triangles, and its points as front points in node's place.
+  void emit_fan(int node, const std::vector<Placed>& placed, double delta);
   void close_angle(int node);
   bool folds_across(int vb, const std::vector<Placed>& placed, int va) const;
   // Adds to `placed` (the new points of expanding vertex v between its front neighbours vb
