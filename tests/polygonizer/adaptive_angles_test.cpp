@@ -120,7 +120,7 @@ TEST_P(SmoothAngles, EveryTriangleAtLeast20Degrees) {
   expect_on_surface(*field, r.mesh, what);
   const AngleStatistics a = expect_smooth_angles(r.mesh, what);
   EXPECT_EQ(a.degenerate, 0u) << what;
-  // The relaxation's mean edge ratio (quality.cpp, relax), at every factor: factors 1 and 2
+  // The relaxation's mean edge ratio (repair_relax.cpp, relax), at every factor: factors 1 and 2
   // were above on the graded surfaces (blobs_103 at factor 1: 1.28, chmutov4 at 2: 1.2501)
   // before its flips towards valence 6.
   EXPECT_LE(a.mean_edge_ratio, kMeanEdgeRatio) << what;

@@ -1,0 +1,296 @@
+// The context the repair's algorithms share (repair_context.h): geometry, distance estimates,
+// crease vertices, adjacency, and the intersection tests against the triangles nearby.
+#include "repair_context.h"
+
+namespace cdp::adaptive::repair_detail {
+
+double Improver::cell_size(const Mesh& m) {
+  // About two typical edges, so that a query box around a new triangle touches a few cells.
+  std::vector<double> lengths;
+  const std::size_t stride = std::max<std::size_t>(1, m.triangles.size() / 256);
+  for (std::size_t t = 0; t < m.triangles.size(); t += stride)
+    lengths.push_back((m.positions[m.triangles[t][0]] - m.positions[m.triangles[t][1]]).norm());
+  if (lengths.empty()) return 1;
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+  return std::max(2 * lengths[lengths.size() / 2], 1e-12);
+}
+
+bool Improver::tri_below(const Tri& t, double limit) const {
+  constexpr double kSurelyAbove = 1e-9;  // radians
+  int k = 0;
+  double shortest = (P(t[2]) - P(t[1])).squaredNorm();  // faces t[0]
+  for (int i = 1; i < 3; ++i) {
+    const double l = (P(t[(i + 2) % 3]) - P(t[(i + 1) % 3])).squaredNorm();
+    if (l < shortest) shortest = l, k = i;
+  }
+  if (angle_at(P(t[k]), P(t[(k + 1) % 3]), P(t[(k + 2) % 3])) > limit + kSurelyAbove) return false;
+  return tri_min_angle(t) < limit;
+}
+
+double Improver::midpoint_distance(int x, int y, MidpointMemo* memo) const {
+  const std::pair<int, int> key = std::minmax(x, y);
+  if (memo && memo->table) {
+    const auto& keys = memo->table->keys;
+    const std::uint64_t k = edge_key(x, y);
+    const auto it = std::lower_bound(keys.begin(), keys.end(), k);
+    if (it != keys.end() && *it == k) return memo->table->d[static_cast<std::size_t>(it - keys.begin())];
+  }
+  if (memo)
+    for (const auto& [k, d] : memo->known)
+      if (k == key) return d;
+  const double d = signed_distance(0.5 * (P(x) + P(y)));
+  if (memo) memo->known.push_back({key, d});
+  return d;
+}
+
+double Improver::estimate_distance(const Tri& t, int slot, MidpointMemo* memo) const {
+  if (static_cast<std::size_t>(slot) >= estimates_.size()) estimates_.resize(static_cast<std::size_t>(slot) + 1);
+  EstimateEntry& e = estimates_[static_cast<std::size_t>(slot)];
+  const std::array<bool, 3> kept = kept_corners(e, t);
+  if (kept[0] && kept[1] && kept[2]) return e.d;
+  const std::array<Vec3, 3> p{P(t[0]), P(t[1]), P(t[2])};
+  std::array<double, 3> mid;
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    if (kept[i] && kept[j]) {
+      mid[i] = e.mid[i];
+      if (memo) memo->known.push_back({std::minmax(t[i], t[j]), mid[i]});
+    } else {
+      mid[i] = midpoint_distance(t[i], t[j], memo);
+    }
+  }
+  e = {t, p, mid, estimate_from(p[0], p[1], p[2], mid[0], mid[1], mid[2])};
+  return e.d;
+}
+
+double Improver::estimate_from(const Vec3& a, const Vec3& b, const Vec3& c, double mab, double mbc, double mca) const {
+  const double centroid = signed_distance((a + b + c) / 3);
+  if (!std::isfinite(mab + mbc + mca + centroid)) return std::numeric_limits<double>::infinity();
+  // The quadratic through 0 at the corners and these at the midpoints, sampled on a grid of
+  // step 1/12 (its maximum lies within 1% of a grid point's), from a table of the grid's
+  // barycentric coordinates, all points at once: a loop computing them took two divisions a
+  // point and was 15 % of the instructions of tanglecube at tolerance 1e-3.
+  // Each point's value is the scalar expression's, (m_ab l_a) l_b + ..., bit for bit; the
+  // maximum of finite values is the same in any order.
+  const BarycentricGrid& g = barycentric_grid();
+  const double q_max = (4 * (mab * g.a * g.b + mbc * g.b * g.c + mca * g.c * g.a)).abs().maxCoeff();
+  const double predicted = std::abs(4.0 / 9.0 * (mab + mbc + mca));
+  const double scale = predicted > 0 ? std::max(1.0, std::abs(centroid) / predicted) : 1.0;
+  return std::max({q_max * scale, std::abs(centroid), std::abs(mab), std::abs(mbc), std::abs(mca)});
+}
+
+double Improver::sampled_distance(const Tri& t, double fallback, ProjectionResult* worst_at) const {
+  constexpr int kDenseGrid = 6;
+  const std::array<Vec3, 3> p{P(t[0]), P(t[1]), P(t[2])};
+  ProjectionOptions po;
+  po.tolerance = 1e-10 * o_.diagonal;
+  po.max_travel = std::sqrt(std::max({(p[1] - p[0]).squaredNorm(), (p[2] - p[1]).squaredNorm(), (p[0] - p[2]).squaredNorm()}));
+  double worst = 0;
+  for (int i = 0; i <= kDenseGrid; ++i)
+    for (int j = 0; i + j <= kDenseGrid; ++j) {
+      const double a = double(i) / kDenseGrid, b = double(j) / kDenseGrid;
+      const Vec3 x = a * p[0] + b * p[1] + (1 - a - b) * p[2];
+      const ProjectionResult r = project_to_surface(field_, x, po);
+      if (!r.ok()) return fallback;
+      const double d = (r.point - x).norm();
+      if (d > worst) {
+        worst = d;
+        if (worst_at) *worst_at = r;
+      }
+    }
+  return worst;
+}
+
+double Improver::worst_distance(const std::vector<Tri>& ts) const {
+  double worst = 0;
+  if (o_.tolerance > 0) {
+    MidpointMemo memo;
+    for (const Tri& t : ts) worst = std::max(worst, estimate_distance(t, &memo));
+  }
+  return worst;
+}
+
+double Improver::worst_star_distance(int v) const {
+  double worst = 0;
+  if (o_.tolerance > 0) {
+    MidpointMemo memo;
+    for (int u : vt_[v]) worst = std::max(worst, estimate_distance(m_.triangles[u], u, &memo));
+  }
+  return worst;
+}
+
+bool Improver::may_replace(double worst_new, const std::vector<int>& removed) const {
+  if (!(o_.tolerance > 0) || worst_new <= kToleranceMargin * o_.tolerance) return true;
+  double worst_old = 0;
+  MidpointMemo memo;
+  for (int t : removed) worst_old = std::max(worst_old, estimate_distance(m_.triangles[t], t, &memo));
+  return worst_new <= worst_old;
+}
+
+bool Improver::on_crease(int v) {
+  if (smooth_) return false;  // no crease to find (Field::smooth): no probes
+  if (crease_[v] >= 0) return crease_[v];
+  const Vec3& x = P(v);
+  Vec3 g0;
+  field_.value_gradient(x, g0);
+  bool crease = !(g0.squaredNorm() > 0) || !(g0.normalized().dot(m_.normals[v]) > kCreaseNormalCosine);
+  if (!crease) {
+    const double eps = kCreaseProbe * o_.diagonal;
+    const Vec3 n = g0.normalized();
+    const Vec3 g1 = field_.gradient(x + eps * n), g2 = field_.gradient(x - eps * n);
+    crease = !(g1.squaredNorm() > 0 && g2.squaredNorm() > 0) ||
+             !(g1.normalized().dot(g2.normalized()) > kCreaseCosine);
+  }
+  crease_[v] = crease;
+  if (crease) ++r_.crease_vertices;
+  return crease;
+}
+
+int Improver::across(int t, int a, int b) const {
+  int found = -1;
+  for (int u : vt_[a]) {
+    if (u == t || !alive_[u]) continue;
+    const Tri& x = m_.triangles[u];
+    if (x[0] == b || x[1] == b || x[2] == b) {
+      if (found >= 0) return -1;  // not manifold here: leave it alone
+      found = u;
+    }
+  }
+  return found;
+}
+
+bool Improver::has_edge(int a, int b) const {
+  for (int u : vt_[a]) {
+    const Tri& x = m_.triangles[u];
+    if (alive_[u] && (x[0] == b || x[1] == b || x[2] == b)) return true;
+  }
+  return false;
+}
+
+std::vector<int> Improver::neighbours(int v) const {
+  std::vector<int> out;
+  for (int u : vt_[v])
+    for (int w : m_.triangles[u])
+      if (w != v) out.push_back(w);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+void Improver::hash_cover(int t, const Vec3& lo, const Vec3& hi) {
+  // Stale entries of earlier shapes stay and are filtered. A triangle is stored with its box
+  // grown by kHashSlack cells, and not again while its box stays inside that: the small moves
+  // of the relaxation would otherwise add a copy of each triangle around v at every move.
+  if (static_cast<std::size_t>(t) < hashed_lo_.size() && (lo.array() >= hashed_lo_[t].array()).all() &&
+      (hi.array() <= hashed_hi_[t].array()).all())
+    return;
+  const double slack = kHashSlack * hash_.cell_size();
+  const Vec3 glo = lo.array() - slack, ghi = hi.array() + slack;
+  if (hashed_lo_.size() <= static_cast<std::size_t>(t)) {
+    hashed_lo_.resize(t + 1);
+    hashed_hi_.resize(t + 1);
+  }
+  hashed_lo_[t] = glo;
+  hashed_hi_[t] = ghi;
+  hash_.insert_box(t, glo, ghi);
+}
+
+bool Improver::intersects(const std::vector<Tri>& added, const std::vector<int>& ignored, int mv, const Vec3& moved) {
+  const auto pos = [&](int v) -> const Vec3& { return v == mv ? moved : P(v); };
+  for (const Tri& a : added) {
+    const std::array<Vec3, 3> pa{pos(a[0]), pos(a[1]), pos(a[2])};
+    if (triangle_is_degenerate(pa[0], pa[1], pa[2])) return true;
+    const Vec3 lo = pa[0].cwiseMin(pa[1]).cwiseMin(pa[2]), hi = pa[0].cwiseMax(pa[1]).cwiseMax(pa[2]);
+    ++stamp_id_;
+    for (int t : ignored) stamp_[t] = stamp_id_;
+    const bool hit = hash_.any_in(lo, hi, [&](int u) {
+      if (stamp_[u] == stamp_id_ || !alive_[u]) return false;
+      stamp_[u] = stamp_id_;
+      const Tri& x = m_.triangles[u];
+      const std::array<Vec3, 3> pb{pos(x[0]), pos(x[1]), pos(x[2])};
+      const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
+      if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
+      return exact_intersect(pa, pb);
+    });
+    if (hit) return true;
+  }
+  return false;
+}
+
+bool Improver::apart_by_plane(const std::array<Vec3, 3>& a, const Tri& ia, const Vec3& n, const std::array<Vec3, 3>& b,
+                              const Tri& ib, double bound) {
+  int side = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (ib[k] == ia[0] || ib[k] == ia[1] || ib[k] == ia[2]) continue;
+    const double s = n.dot(b[k] - a[0]);
+    const int q_side = s > bound ? 1 : s < -bound ? -1 : 0;
+    if (q_side == 0 || (side != 0 && q_side != side)) return false;
+    side = q_side;
+  }
+  return side != 0;
+}
+
+bool Improver::apart_at_shared_corner(const std::array<Vec3, 3>& a, const Tri& ia, const std::array<Vec3, 3>& b,
+                                      const Tri& ib) {
+  int i = -1, j = -1;
+  for (int p = 0; p < 3; ++p)
+    for (int q = 0; q < 3; ++q)
+      if (ia[p] == ib[q]) {
+        if (i >= 0) return false;  // an edge shared: apart_by_plane's case
+        i = p, j = q;
+      }
+  return i >= 0 && apart_at_shared_vertex(a[i], a[(i + 1) % 3], a[(i + 2) % 3], b[(j + 1) % 3], b[(j + 2) % 3]);
+}
+
+bool Improver::meets_star(const std::vector<StarTriangle>& star, const Vec3& lo, const Vec3& hi, double magnitude,
+                          const Tri& x, const std::array<Vec3, 3>& pb) {
+  const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
+  if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
+  const Vec3 nb = (pb[1] - pb[0]).cross(pb[2] - pb[0]);
+  // One rounding bound for x against every star triangle, from the whole star's box and
+  // magnitude: at least each pair's own (plane_bound grows with both), so as safe, and the
+  // exact test decides whatever it leaves unsure.
+  const double bound = plane_bound(std::max(std::max(blo.cwiseAbs().maxCoeff(), bhi.cwiseAbs().maxCoeff()), magnitude),
+                                   (hi.cwiseMax(bhi) - lo.cwiseMin(blo)).norm());
+  for (const StarTriangle& a : star) {
+    if ((blo.array() > a.hi.array()).any() || (bhi.array() < a.lo.array()).any()) continue;
+    if (apart_by_plane(a.p, a.ids, a.normal, pb, x, bound) || apart_by_plane(pb, x, nb, a.p, a.ids, bound)) continue;
+    if (apart_at_shared_corner(a.p, a.ids, pb, x)) continue;
+    if (exact_intersect(a.p, pb)) return true;  // the star's triangles are not degenerate (star_hits)
+  }
+  return false;
+}
+
+std::size_t Improver::intersecting_turn(const std::vector<Turn>& turns, TurnScratch& scratch) {
+  if (turns.empty()) return 0;
+  constexpr std::size_t kNone = TurnScratch::kNone;
+  for (std::size_t k = 0; k < turns.size(); ++k) scratch.turn_of[static_cast<std::size_t>(turns[k].v)] = k;
+  for (const Turn& turn : turns)
+    for (int u : vt_[turn.v]) {
+      Vec3 lo = P(m_.triangles[u][0]), hi = lo;
+      for (int w : m_.triangles[u]) {
+        lo = lo.cwiseMin(P(w)), hi = hi.cwiseMax(P(w));
+        if (const std::size_t j = scratch.turn_of[static_cast<std::size_t>(w)]; j != kNone)
+          lo = lo.cwiseMin(turns[j].from), hi = hi.cwiseMax(turns[j].from);
+      }
+      hash_cover(u, lo, hi);
+    }
+  scratch.hit.assign(turns.size(), 0);
+  detail::parallel_blocks(turns.size(), kTurnBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned w) {
+    std::vector<std::uint32_t>& stamp = scratch.stamps[w];
+    if (stamp.empty()) stamp.assign(m_.triangles.size(), 0);
+    std::uint32_t& id = scratch.ids[w];  // a worker's stamps outlive its blocks and calls
+    for (std::size_t k = begin; k < end; ++k) {
+      if (id == std::numeric_limits<std::uint32_t>::max()) std::fill(stamp.begin(), stamp.end(), 0), id = 0;
+      const auto at = [&](int q) -> const Vec3& {
+        const std::size_t j = scratch.turn_of[static_cast<std::size_t>(q)];
+        return j != kNone && j > k ? turns[j].from : P(q);
+      };
+      scratch.hit[k] = star_hits(turns[k].v, P(turns[k].v), at, stamp.data(), ++id, scratch.stars[w]);
+    }
+  });
+  for (const Turn& turn : turns) scratch.turn_of[static_cast<std::size_t>(turn.v)] = kNone;
+  return static_cast<std::size_t>(std::find(scratch.hit.begin(), scratch.hit.end(), 1) - scratch.hit.begin());
+}
+
+}  // namespace cdp::adaptive::repair_detail
