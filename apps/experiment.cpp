@@ -11,6 +11,7 @@
 #include <cdp/io/atomic_write.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/io/json_reader.h>
+#include <cdp/io/polygonize_options.h>
 
 #include <csignal>
 #include <spawn.h>
@@ -138,9 +139,14 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
 
   for (auto& run : r.objects("runs")) {
     const std::string method = run.choice("method", {"adaptive", "mc", "mt"});
-    if (method == "adaptive")
-      run.check_keys({"method", "label", "factor", "tolerance", "chord", "min_edge", "max_edge", "variant", "creases"});
-    else run.check_keys({"method", "label", "cell", "precision", "traversal"});
+    // The keys are the options of the polygonize program (cdp/io/polygonize_options.h, the
+    // table Python's keywords come from too), its flags without their "--" and with '_' for '-'.
+    std::vector<std::string> options{"method", "label"};
+    for (const cdp::OptionSpec& spec : cdp::polygonize_options()) options.emplace_back(spec.name);
+    run.check_keys(options);
+    for (const cdp::OptionSpec& spec : cdp::polygonize_options())
+      if (run.has(std::string(spec.name)) && !cdp::applies_to(spec, method))
+        run.fail(std::string(spec.name), "does not apply to method \"" + method + "\"");
     std::vector<std::string> sweep_keys =
         method == "adaptive" ? std::vector<std::string>{"factor", "tolerance", "chord"} : std::vector<std::string>{"cell", "precision"};
     std::string key;
@@ -157,30 +163,30 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
     }
     const std::vector<double> values = numbers_or_number(run, key);
     std::vector<std::string> fixed{"--method", method};
-    std::vector<std::string> known{"method"};
-    known.insert(known.end(), sweep_keys.begin(), sweep_keys.end());
-    std::string variant, creases;
-    if (method == "adaptive") {
-      known.push_back("variant");
-      variant = run.choice("variant", {"improved", "paper"}, "improved");
-      fixed.insert(fixed.end(), {"--variant", variant});
-      known.push_back("creases");
-      creases = run.choice("creases", {"follow", "ignore"}, "follow");
-      fixed.insert(fixed.end(), {"--creases", creases});
-      for (const char* k : {"min_edge", "max_edge"}) {
-        known.push_back(k);
-        if (run.has(k)) {
-          std::string flag = std::string("--") + k;
-          flag[flag.find('_')] = '-';
-          fixed.insert(fixed.end(), {flag, format_number(run.positive_number(k))});
-        }
+    std::vector<std::string> known(options.begin(), options.end());
+    // variant and creases are written out at their defaults too: the summary names them.
+    std::string variant = method == "adaptive" ? "improved" : "", creases = method == "adaptive" ? "follow" : "";
+    for (const cdp::OptionSpec& spec : cdp::polygonize_options()) {
+      const std::string name(spec.name);
+      if (!run.has(name) || name == key) continue;
+      const nlohmann::json value = run.raw(name);
+      try {
+        cdp::polygonize_request(method, nlohmann::json{{name, value}});  // the same checks as the program's and Python's
+      } catch (const cdp::InvalidInputError& e) {
+        run.fail(name, e.what());
       }
-    } else {
-      known.push_back("traversal");
-      if (run.has("traversal"))
-        fixed.insert(fixed.end(), {"--traversal", run.choice("traversal", {"continuation", "grid"})});
+      if (name == "variant") variant = value.get<std::string>();
+      else if (name == "creases") creases = value.get<std::string>();
+      else if (spec.kind == cdp::OptionKind::Flag) {
+        if (value.get<bool>()) fixed.push_back(cdp::option_flag(spec));
+      } else {
+        fixed.push_back(cdp::option_flag(spec));
+        fixed.push_back(value.is_string()    ? value.get<std::string>()
+                        : value.is_boolean() ? std::string(value.get<bool>() ? "true" : "false")
+                                             : format_number(value.get<double>()));
+      }
     }
-    known.push_back("label");
+    if (method == "adaptive") fixed.insert(fixed.end(), {"--variant", variant, "--creases", creases});
     const std::string label = run.string("label", "");
     // The label becomes part of file and folder names under --out: letters, digits, '_', '-'
     // and inner dots only, so that no label can name a path elsewhere ("../x", "/tmp/x").

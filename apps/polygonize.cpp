@@ -4,6 +4,7 @@
 // the same STATS.json, so that experiments compare like with like.
 #include "support/app_support.h"
 #include "support/command_line.h"
+#include "support/polygonize_flags.h"
 
 #include <cdp/baselines/marching_cubes.h>
 #include <cdp/baselines/marching_tetrahedra.h>
@@ -13,6 +14,7 @@
 #include <cdp/io/atomic_write.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/io/mesh_io.h>
+#include <cdp/io/polygonize_options.h>
 #include <cdp/io/polygonize_stats_json.h>
 
 #include <algorithm>
@@ -25,9 +27,6 @@
 
 namespace {
 
-// Integer options are ints in the libraries; larger values are refused here with their range
-// rather than wrapping around.
-constexpr long long kIntMax = 2147483647;
 // --repeat is for timing a run, not for a benchmark loop (bench/ has those).
 constexpr long long kMaxRepeat = 100;
 
@@ -79,22 +78,7 @@ int main(int argc, char** argv) {
     CLI::Option* quiet_flag = app.add_flag("--quiet", quiet, "no progress bar");
     app.add_flag("--progress", progress_lines, "progress as lines, one per phase and one every 5 s (for logs)")
         ->excludes(quiet_flag);
-    int seed_resolution = 32;
-    int threads = 0;
     int repeat = 1;
-    long long max_triangles = 0;
-    CLI::Option* seed_option = app.add_option("--seed-resolution", seed_resolution,
-                                              "cells along the longest side of the seed grid")
-                                   ->capture_default_str()
-                                   ->type_name("N")
-                                   ->transform(cdp::app::integer_in(2, kIntMax));
-    app.add_option("--threads", threads,
-                   "threads of the seed grid (thread-safe fields), the adaptive method's relaxation and final check, "
-                   "and a second for half of each costly evaluation while it tracks (a VIS from 1024 centres) "
-                   "(0: all cores this process may use, at most 8); the mesh is the same on any number")
-        ->capture_default_str()
-        ->type_name("N")
-        ->transform(cdp::app::integer_in(0, kIntMax));
     app.add_option("--repeat", repeat,
                    "run the method N times (1-100) for a steadier time: STATS.json gives the run of median time "
                    "(the lower middle one for an even N) "
@@ -102,98 +86,14 @@ int main(int argc, char** argv) {
         ->capture_default_str()
         ->type_name("N")
         ->transform(cdp::app::integer_in(1, kMaxRepeat));
-    CLI::Option* max_triangles_option =
-        app.add_option("--max-triangles", max_triangles, "stop with an error beyond N triangles")
-            ->type_name("N")
-            ->transform(cdp::app::integer_in(1, kIntMax));
-
-    // Each method's options in their own group, so that the help sorts them and an option of
-    // the other method is found below: it would be silently ignored.
-    cdp::AdaptiveOptions adaptive_options;
-    std::string triangle_count = "hartmann";
-    CLI::Option_group* adaptive_group = app.add_option_group("adaptive method");
-    CLI::Option* factor = adaptive_group
-                              ->add_option("--factor", adaptive_options.factor,
-                                           "edge = minimum radius of curvature / K (the paper's heuristic)")
-                              ->capture_default_str()
-                              ->type_name("K")
-                              ->transform(cdp::app::positive_number());
-    CLI::Option* tolerance = adaptive_group
-                                 ->add_option("--tolerance", adaptive_options.tolerance,
-                                              "edges for a chord deviation of EPS instead of --factor, and (variant "
-                                              "improved) every triangle measured and split until it lies within EPS "
-                                              "of the surface where it can (a warning names the rest)")
-                                 ->type_name("EPS")
-                                 ->transform(cdp::app::positive_number())
-                                 ->excludes(factor);
-    CLI::Option* chord = adaptive_group
-                             ->add_option("--chord", adaptive_options.tolerance,
-                                          "edges for a chord deviation of EPS at each point's smallest radius of "
-                                          "curvature, without --tolerance's bound: nothing measured or refined (the "
-                                          "Igea VIS-4004 at the same sizing: 129k field evaluations against 485k), the "
-                                          "distance not bounded; with --variant paper the same as --tolerance")
-                             ->type_name("EPS")
-                             ->transform(cdp::app::positive_number())
-                             ->excludes(factor)
-                             ->excludes(tolerance);
-    adaptive_group
-        ->add_option("--min-edge", adaptive_options.min_edge, "shortest edge (default 2e-3 of the box diagonal; a default run that fails where the surface bends more tightly is made once more with a quarter of that radius, not below 2e-4 of the diagonal)")
-        ->type_name("L")
-        ->transform(cdp::app::positive_number());
-    adaptive_group
-        ->add_option("--max-edge", adaptive_options.max_edge, "longest edge (default 0.1 of the box diagonal)")
-        ->type_name("L")
-        ->transform(cdp::app::positive_number());
-    adaptive_group->add_option("--triangle-count", triangle_count, "triangles per expansion: hartmann or paper")
-        ->capture_default_str()
-        ->type_name("RULE")
-        ->check(CLI::IsMember({"hartmann", "paper"}));
-    std::string variant = "improved";
-    adaptive_group
-        ->add_option("--variant", variant,
-                     "improved (the paper plus grading, local repair of triangles under 30 degrees, a "
-                     "--tolerance that bounds the distance, and a second run looking ahead where a mesh misses the "
-                     "angle, edge-ratio or distance bounds) or paper (the algorithm as printed)")
-        ->capture_default_str()
-        ->type_name("NAME")
-        ->check(CLI::IsMember({"improved", "paper"}));
-    std::string creases = "follow";
-    adaptive_group
-        ->add_option("--creases", creases,
-                     "follow (trace the creases of a min/max/abs field first and mesh along them) or ignore "
-                     "(mesh across them as across curvature)")
-        ->capture_default_str()
-        ->type_name("HOW")
-        ->check(CLI::IsMember({"follow", "ignore"}));
-    adaptive_group->add_flag("--curvature", adaptive_options.curvature_properties,
-                             "write mac and shape_index per vertex (PLY)");
-
-    cdp::MarchingOptions marching_options;
-    std::string traversal = "continuation";
-    CLI::Option_group* marching_group = app.add_option_group("mc and mt methods");
-    // 0 means "the default" inside the library; on the command line it is a mistake.
-    CLI::Option* cell = marching_group
-                            ->add_option("--cell", marching_options.cell_size,
-                                         "cell edge (default 1/64 of the box's longest side)")
-                            ->type_name("H")
-                            ->transform(cdp::app::positive_number());
-    marching_group
-        ->add_option("--precision", marching_options.precision,
-                     "the paper's precision for data-driven models, an integer in [0, 5], instead of --cell")
-        ->type_name("P")
-        ->transform(cdp::app::integer_in(0, 5))
-        ->excludes(cell);
-    marching_group->add_option("--traversal", traversal, "continuation or grid")
-        ->capture_default_str()
-        ->type_name("HOW")
-        ->check(CLI::IsMember({"continuation", "grid"}));
+    // The methods' options, from the table Python's keywords and the experiment keys share.
+    const cdp::app::PolygonizeFlags flags(app);
 
     if (const auto status = cdp::app::parse(app, argc, argv)) return *status;
 
     const bool adaptive = method == "adaptive";
-    const CLI::Option_group* other_method = adaptive ? marching_group : adaptive_group;
-    for (const CLI::Option* o : other_method->get_options())
-      if (o->count() > 0) throw cdp::InvalidInputError(o->get_name() + " does not apply to --method " + method);
+    if (const std::string flag = flags.not_applying(method); !flag.empty())
+      throw cdp::InvalidInputError(flag + " does not apply to --method " + method);
     const std::string ext = std::filesystem::path(out_path).extension().string();
     if (ext != ".ply" && ext != ".obj" && ext != ".off")
       throw cdp::InvalidInputError("output " + out_path + ": the extension must be .ply, .obj or .off");
@@ -211,26 +111,11 @@ int main(int argc, char** argv) {
     const cdp::ProgressCallback progress = reporter.callback();
 
     // The options once; each repetition (--repeat) then runs the method again with them.
-    if (adaptive) {
-      cdp::AdaptiveOptions& o = adaptive_options;
-      if (tolerance->count() > 0) o.sizing = cdp::SizingMode::Tolerance;
-      if (chord->count() > 0) o.sizing = cdp::SizingMode::Chord;
-      o.variant = variant == "paper" ? cdp::Variant::Paper : cdp::Variant::Improved;
-      o.creases = creases == "ignore" ? cdp::CreaseHandling::Ignore : cdp::CreaseHandling::Follow;
-      o.triangle_count = triangle_count == "paper" ? cdp::TriangleCountRule::PaperFloor : cdp::TriangleCountRule::Hartmann;
-      if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
-      if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
-      o.threads = threads;
-      o.progress = progress;
-      o.phase = reporter.phase_callback();
-    } else {
-      cdp::MarchingOptions& o = marching_options;
-      o.traversal = traversal == "grid" ? cdp::Traversal::Grid : cdp::Traversal::Continuation;
-      if (seed_option->count() > 0) o.seed_resolution = seed_resolution;
-      if (max_triangles_option->count() > 0) o.max_triangles = static_cast<std::size_t>(max_triangles);
-      o.threads = threads;
-      o.progress = progress;
-    }
+    cdp::PolygonizeRequest request = cdp::polygonize_request(method, flags.given());
+    cdp::AdaptiveOptions& adaptive_options = request.adaptive;
+    cdp::MarchingOptions& marching_options = request.marching;
+    adaptive_options.progress = marching_options.progress = progress;
+    adaptive_options.phase = reporter.phase_callback();
     const auto run_once = [&]() -> cdp::PolygonizeResult {
       if (adaptive) return name_field(field_path, [&] { return cdp::polygonize_adaptive(*field, adaptive_options); });
       reporter.phase("meshing");

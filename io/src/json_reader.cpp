@@ -38,6 +38,16 @@ std::string type_name_of(const nlohmann::json& j) {
 
 }  // namespace
 
+std::optional<std::string> nearest_spelling(const std::string& word, const std::vector<std::string>& known) {
+  std::optional<std::string> best;
+  std::size_t best_d = 3;  // suggest only close spellings
+  for (const auto& k : known) {
+    const std::size_t d = edit_distance(word, k);
+    if (d < best_d) best_d = d, best = k;
+  }
+  return best;
+}
+
 JsonReader::JsonReader(const nlohmann::json& object, std::string source, std::string path,
                        std::filesystem::path base_dir)
     : object_(&object), source_(std::move(source)), path_(std::move(path)), base_dir_(std::move(base_dir)) {
@@ -187,28 +197,18 @@ void JsonReader::check_keys(const std::vector<std::string>& allowed) const {
   const std::set<std::string> ok(allowed.begin(), allowed.end());
   for (const auto& [key, value] : object_->items()) {
     if (ok.count(key)) continue;
-    std::string best;
-    std::size_t best_d = 3;
-    for (const auto& k : allowed) {
-      const std::size_t d = edit_distance(key, k);
-      if (d < best_d) best_d = d, best = k;
-    }
-    fail(key, best.empty() ? "unknown key" : "unknown key (did you mean \"" + best + "\"?)");
+    const std::optional<std::string> best = nearest_spelling(key, allowed);
+    fail(key, best ? "unknown key (did you mean \"" + *best + "\"?)" : "unknown key");
   }
 }
 
 void JsonReader::finish(const std::vector<std::string>& known) const {
   for (const auto& [key, value] : object_->items()) {
     if (used_.count(key)) continue;
-    std::string best;
-    std::size_t best_d = 3;  // suggest only close spellings
-    auto consider = [&](const std::string& k) {
-      const std::size_t d = edit_distance(key, k);
-      if (d < best_d) best_d = d, best = k;
-    };
-    for (const auto& k : asked_) consider(k);
-    for (const auto& k : known) consider(k);
-    fail(key, best.empty() ? "unknown key" : "unknown key (did you mean \"" + best + "\"?)");
+    std::vector<std::string> candidates(asked_.begin(), asked_.end());
+    candidates.insert(candidates.end(), known.begin(), known.end());
+    const std::optional<std::string> best = nearest_spelling(key, candidates);
+    fail(key, best ? "unknown key (did you mean \"" + *best + "\"?)" : "unknown key");
   }
 }
 

@@ -10,6 +10,7 @@
 #include <cdp/core/cancel.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_angles.h>
+#include <cdp/io/polygonize_options.h>
 #include <cdp/io/polygonize_stats_json.h>
 
 #include <pybind11/stl.h>
@@ -23,17 +24,6 @@
 namespace cdp::python {
 
 namespace {
-
-struct Options {
-  std::string method = "adaptive";
-  std::optional<double> factor, tolerance, chord, min_edge, max_edge, cell;
-  std::optional<long long> precision, seed_resolution, max_triangles;
-  std::optional<std::string> triangle_count, traversal, face_ambiguity;
-  std::optional<bool> check_self_intersections;
-  std::optional<long long> threads;
-  std::optional<std::string> creases;
-  std::optional<CancelToken> cancel;
-};
 
 // Ctrl-C during a run on the main thread: for the run's length SIGINT cancels its token (an
 // atomic store, safe in a signal handler), so the run stops at its next poll wherever it is (the
@@ -89,125 +79,62 @@ void reraise_sigint(SigintCancels& sigint) {
   if (PyErr_CheckSignals() != 0) throw py::error_already_set();
 }
 
-std::string number_text(double v) { return py::str(py::float_(v)); }
-
-double positive(const std::optional<double>& v, const char* name) {
-  if (!(std::isfinite(*v) && *v > 0)) throw InvalidInputError(std::string(name) + " must be a positive number, not " + number_text(*v));
-  return *v;
+// A keyword's value as the options table takes it (cdp/io/polygonize_options.h): a bool, an
+// integer, a float (numpy's too) or a str; None for the default.
+nlohmann::json option_value(const std::string& name, py::handle v) {
+  if (v.is_none()) return nullptr;
+  if (py::isinstance<py::bool_>(v)) return v.cast<bool>();
+  if (py::isinstance<py::str>(v)) return v.cast<std::string>();
+  if (PyIndex_Check(v.ptr())) {
+    try {
+      return py::int_(py::reinterpret_borrow<py::object>(v)).cast<long long>();
+    } catch (const py::cast_error&) {
+      return py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();  // beyond long long: out of every range
+    }
+  }
+  if (py::hasattr(v, "__float__")) return py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();
+  throw InvalidInputError(name + " must be a number, a string or a bool, not a " +
+                          py::str(py::type::of(v).attr("__name__")).cast<std::string>());
 }
 
-long long integer_in(const std::optional<long long>& v, const char* name, long long lo, long long hi) {
-  if (*v < lo || *v > hi)
-    throw InvalidInputError(std::string(name) + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                            "], not " + std::to_string(*v));
-  return *v;
+// The keywords as the options table takes them; a keyword the table does not know is a
+// TypeError, as Python's own for a function's keywords, with the nearest known name.
+nlohmann::json options_json(const char* function, const py::kwargs& kwargs) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [key, value] : kwargs) {
+    const std::string name = py::str(key);
+    if (!find_polygonize_option(name)) {
+      const auto near = nearest_polygonize_option(name);
+      throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" + name + "'" +
+                           (near ? " (did you mean '" + std::string(*near) + "'?)" : std::string()));
+    }
+    j[name] = option_value(name, value);
+  }
+  return j;
 }
 
-// A keyword the chosen method would ignore is an error, as the program's flags are.
-void check_applies(const Options& o) {
-  const bool adaptive = o.method == "adaptive";
-  const auto refuse = [&](bool given, const char* name) {
-    if (given) throw InvalidInputError(std::string(name) + " does not apply to method \"" + o.method + "\"");
-  };
-  if (adaptive) {
-    refuse(o.cell.has_value(), "cell");
-    refuse(o.precision.has_value(), "precision");
-    refuse(o.traversal.has_value(), "traversal");
-    refuse(o.face_ambiguity.has_value(), "face_ambiguity");
-  } else {
-    refuse(o.factor.has_value(), "factor");
-    refuse(o.tolerance.has_value(), "tolerance");
-    refuse(o.chord.has_value(), "chord");
-    refuse(o.min_edge.has_value(), "min_edge");
-    refuse(o.max_edge.has_value(), "max_edge");
-    refuse(o.triangle_count.has_value(), "triangle_count");
-    refuse(o.creases.has_value(), "creases");
-    refuse(o.check_self_intersections.has_value(), "check_self_intersections");
-    if (o.method == "mt") refuse(o.face_ambiguity.has_value(), "face_ambiguity");
-  }
-}
-
-AdaptiveOptions adaptive_options(const Options& o) {
-  AdaptiveOptions a;
-  if (int(o.factor.has_value()) + int(o.tolerance.has_value()) + int(o.chord.has_value()) > 1)
-    throw InvalidInputError("give one of factor, tolerance and chord, not several");
-  // The Python default is the paper's bunny example, factor 3 (the library's and the program's
-  // is 2): pass factor explicitly to compare with a program run without --factor.
-  a.factor = o.factor ? positive(o.factor, "factor") : 3.0;
-  if (o.tolerance) {
-    a.sizing = SizingMode::Tolerance;
-    a.tolerance = positive(o.tolerance, "tolerance");
-  }
-  if (o.chord) {
-    a.sizing = SizingMode::Chord;
-    a.tolerance = positive(o.chord, "chord");
-  }
-  if (o.min_edge) a.min_edge = positive(o.min_edge, "min_edge");
-  if (o.max_edge) a.max_edge = positive(o.max_edge, "max_edge");
-  if (o.triangle_count) {
-    if (*o.triangle_count == "hartmann") a.triangle_count = TriangleCountRule::Hartmann;
-    else if (*o.triangle_count == "paper") a.triangle_count = TriangleCountRule::PaperFloor;
-    else throw InvalidInputError("triangle_count must be \"hartmann\" or \"paper\", not \"" + *o.triangle_count + "\"");
-  }
-  if (o.creases) {
-    if (*o.creases == "follow") a.creases = CreaseHandling::Follow;
-    else if (*o.creases == "ignore") a.creases = CreaseHandling::Ignore;
-    else throw InvalidInputError("creases must be \"follow\" or \"ignore\", not \"" + *o.creases + "\"");
-  }
-  if (o.seed_resolution) a.seed_resolution = static_cast<int>(integer_in(o.seed_resolution, "seed_resolution", 2, INT_MAX));
-  if (o.max_triangles) a.max_triangles = static_cast<std::size_t>(integer_in(o.max_triangles, "max_triangles", 1, INT_MAX));
-  if (o.check_self_intersections) a.check_self_intersections = *o.check_self_intersections;
-  if (o.threads) a.threads = static_cast<int>(integer_in(o.threads, "threads", 0, INT_MAX));
-  return a;
-}
-
-MarchingOptions marching_options(const Options& o) {
-  MarchingOptions m;
-  // 0 means "the default" inside the library; given here it is a mistake.
-  if (o.cell) m.cell_size = positive(o.cell, "cell");
-  if (o.precision) m.precision = static_cast<int>(integer_in(o.precision, "precision", 0, 5));
-  if (o.traversal) {
-    if (*o.traversal == "continuation") m.traversal = Traversal::Continuation;
-    else if (*o.traversal == "grid") m.traversal = Traversal::Grid;
-    else throw InvalidInputError("traversal must be \"continuation\" or \"grid\", not \"" + *o.traversal + "\"");
-  }
-  if (o.face_ambiguity) {
-    if (*o.face_ambiguity == "asymptotic_decider") m.face_ambiguity = FaceAmbiguity::AsymptoticDecider;
-    else if (*o.face_ambiguity == "join_inside") m.face_ambiguity = FaceAmbiguity::JoinInside;
-    else if (*o.face_ambiguity == "separate_inside") m.face_ambiguity = FaceAmbiguity::SeparateInside;
-    else
-      throw InvalidInputError("face_ambiguity must be \"asymptotic_decider\", \"join_inside\" or \"separate_inside\", not \"" +
-                              *o.face_ambiguity + "\"");
-  }
-  if (o.seed_resolution) m.seed_resolution = static_cast<int>(integer_in(o.seed_resolution, "seed_resolution", 2, INT_MAX));
-  if (o.max_triangles) m.max_triangles = static_cast<std::size_t>(integer_in(o.max_triangles, "max_triangles", 1, INT_MAX));
-  if (o.threads) m.threads = static_cast<int>(integer_in(o.threads, "threads", 0, INT_MAX));
-  return m;
-}
-
-py::tuple run(const Field& field, const Options& o, bool return_normals, py::object progress, py::object phase) {
-  if (o.method != "adaptive" && o.method != "mc" && o.method != "mt")
-    throw InvalidInputError("method must be \"adaptive\", \"mc\" or \"mt\", not \"" + o.method + "\"");
-  check_applies(o);
+py::tuple run(const Field& field, const std::string& method, const nlohmann::json& options, bool return_normals,
+              py::object progress, py::object phase, const std::optional<CancelToken>& cancel) {
+  PolygonizeRequest request = polygonize_request(method, options);
   PolygonizeResult result;
-  const CancelToken token = o.cancel ? *o.cancel : CancelToken();
+  const CancelToken token = cancel ? *cancel : CancelToken();
   SigintCancels sigint(token);
   try {
-    if (o.method == "adaptive") {
-      AdaptiveOptions a = adaptive_options(o);
+    if (method == "adaptive") {
+      AdaptiveOptions& a = request.adaptive;
       a.progress = interruptible_progress(progress);
       a.phase = interruptible_phase(phase);
       a.cancel = token;
       py::gil_scoped_release release;
       result = polygonize_adaptive(field, a);
     } else {
-      MarchingOptions m = marching_options(o);
+      MarchingOptions& m = request.marching;
       m.progress = interruptible_progress(progress);
       m.cancel = token;
       // The marching methods have one phase; it is announced as the program announces it.
       interruptible_phase(phase)("meshing");
       py::gil_scoped_release release;
-      result = o.method == "mc" ? marching_cubes(field, m) : marching_tetrahedra(field, m);
+      result = method == "mc" ? marching_cubes(field, m) : marching_tetrahedra(field, m);
     }
   } catch (...) {
     reraise_sigint(sigint);
@@ -231,19 +158,53 @@ Returns (vertices (N, 3) float64, faces (M, 3) int32, stats dict), or with retur
 (vertices, faces, normals (N, 3) float64, stats). Faces are counter-clockwise seen from outside.
 stats is build/bin/polygonize's STATS.json as a dict (without "field").
 
-method "adaptive" (the paper's tracker): factor (default 3: edge = minimum radius of curvature /
-factor), tolerance (chord deviation, and every triangle measured and split until it lies within
-it of the surface where it can) or chord (the same sizing without the bound: nothing measured),
-min_edge, max_edge, triangle_count ("hartmann" or "paper"), creases ("follow", the default: mesh edges along the creases of a min/max/abs field, or
-"ignore"), seed_resolution, max_triangles, check_self_intersections.
-Both: threads (0, the default, all cores, at most 8; 1 the calling thread only) for the seed grid of
-a thread-safe field and the adaptive method's final check; the mesh is the same on any number.
-method "mc" or "mt" (Marching Cubes / Tetrahedra): cell or precision (0..5, data-driven models),
-traversal ("continuation" or "grid"), face_ambiguity (mc: "asymptotic_decider", "join_inside",
-"separate_inside"), seed_resolution, max_triangles.
-A keyword the method does not use is a ValueError. progress(fraction) and phase(name) are called
-from the run with the GIL held; Ctrl-C interrupts it with KeyboardInterrupt. cancel (a
-cdp.CancelToken): its cancel(), from another thread, ends the run with cdp.CancelledError.)";
+method: "adaptive" (the paper's tracker, the default), "mc" or "mt" (Marching Cubes / Tetrahedra).
+The options are the polygonize program's (the same names, defaults and choices: --min-edge is
+min_edge; cdp.polygonize_options() lists them); None means the default. An option the method
+does not use, or a bad value, is a ValueError; an unknown keyword a TypeError naming the nearest
+option. progress(fraction) and phase(name) are called from the run with the GIL held; Ctrl-C
+interrupts it with KeyboardInterrupt. cancel (a cdp.CancelToken): its cancel(), from another
+thread, ends the run with cdp.CancelledError.
+
+Options:
+)";
+
+// The docstring: kPolygonizeDoc and a line for each option of the table.
+std::string polygonize_doc() {
+  std::string doc = kPolygonizeDoc;
+  for (const OptionSpec& spec : polygonize_options()) {
+    const char* methods = spec.methods == OptionMethods::All        ? "all methods"
+                          : spec.methods == OptionMethods::Adaptive ? "adaptive"
+                          : spec.methods == OptionMethods::Marching ? "mc, mt"
+                                                                    : "mc";
+    doc += "  " + std::string(spec.name) + " (" + methods;
+    if (!spec.default_text.empty()) doc += "; default " + std::string(spec.default_text);
+    doc += "): " + std::string(spec.help) + "\n";
+  }
+  return doc;
+}
+
+py::list options_list() {
+  static const char* const kinds[] = {"number", "integer", "choice", "flag", "boolean"};
+  py::list out;
+  for (const OptionSpec& spec : polygonize_options()) {
+    py::dict d;
+    d["name"] = std::string(spec.name);
+    d["kind"] = kinds[static_cast<int>(spec.kind)];
+    py::list methods;
+    for (const char* m : {"adaptive", "mc", "mt"})
+      if (applies_to(spec, m)) methods.append(m);
+    d["methods"] = methods;
+    d["default"] = spec.default_text.empty() ? py::object(py::none()) : py::object(py::str(std::string(spec.default_text)));
+    py::list choices;
+    for (const auto& c : spec.choices) choices.append(std::string(c));
+    d["choices"] = choices;
+    d["flag"] = option_flag(spec);
+    d["help"] = std::string(spec.help);
+    out.append(d);
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -257,55 +218,30 @@ poll. reset() makes the token usable again. Ctrl-C needs no token: it raises Key
       .def("cancel", &CancelToken::cancel, "Ends every run holding this token with cdp.CancelledError.")
       .def("reset", &CancelToken::reset, "Makes the token usable for another run.")
       .def_property_readonly("cancelled", &CancelToken::cancelled);
+  static const std::string doc = polygonize_doc();
   m.def(
       "polygonize",
-      [](const Field& field, std::string method, std::optional<double> factor, std::optional<double> tolerance,
-         std::optional<double> chord, std::optional<double> min_edge, std::optional<double> max_edge, std::optional<double> cell,
-         std::optional<long long> precision, std::optional<std::string> traversal, std::optional<std::string> face_ambiguity,
-         std::optional<std::string> triangle_count, std::optional<long long> seed_resolution,
-         std::optional<long long> max_triangles, std::optional<bool> check_self_intersections,
-         std::optional<long long> threads, std::optional<std::string> creases, bool return_normals, py::object progress,
-         py::object phase, std::optional<CancelToken> cancel) {
-        Options o{method,        factor,         tolerance,      chord,          min_edge,       max_edge,
-                  cell,          precision,      seed_resolution, max_triangles, triangle_count,
-                  traversal,     face_ambiguity, check_self_intersections, threads, creases, cancel};
-        return run(field, o, return_normals, progress, phase);
+      [](const Field& field, const std::string& method, bool return_normals, py::object progress, py::object phase,
+         std::optional<CancelToken> cancel, const py::kwargs& options) {
+        return run(field, method, options_json("polygonize", options), return_normals, progress, phase, cancel);
       },
-      py::arg("field"), py::arg("method") = "adaptive", py::kw_only(), py::arg("factor") = py::none(),
-      py::arg("tolerance") = py::none(), py::arg("chord") = py::none(), py::arg("min_edge") = py::none(), py::arg("max_edge") = py::none(),
-      py::arg("cell") = py::none(), py::arg("precision") = py::none(), py::arg("traversal") = py::none(),
-      py::arg("face_ambiguity") = py::none(), py::arg("triangle_count") = py::none(),
-      py::arg("seed_resolution") = py::none(), py::arg("max_triangles") = py::none(),
-      py::arg("check_self_intersections") = py::none(), py::arg("threads") = py::none(),
-      py::arg("creases") = py::none(), py::arg("return_normals") = false,
-      py::arg("progress") = py::none(), py::arg("phase") = py::none(), py::arg("cancel") = py::none(), kPolygonizeDoc);
-
-  const auto marching = [](const char* method) {
-    return [method](const Field& field, std::optional<double> cell, std::optional<long long> precision,
-                    std::optional<std::string> traversal, std::optional<std::string> face_ambiguity,
-                    std::optional<long long> seed_resolution, std::optional<long long> max_triangles, bool return_normals,
-                    py::object progress, std::optional<CancelToken> cancel) {
-      Options o;
-      o.method = method;
-      o.cell = cell;
-      o.precision = precision;
-      o.traversal = traversal;
-      o.face_ambiguity = face_ambiguity;
-      o.seed_resolution = seed_resolution;
-      o.max_triangles = max_triangles;
-      o.cancel = cancel;
-      return run(field, o, return_normals, progress, py::none());
+      py::arg("field"), py::arg("method") = "adaptive", py::kw_only(), py::arg("return_normals") = false,
+      py::arg("progress") = py::none(), py::arg("phase") = py::none(), py::arg("cancel") = py::none(), doc.c_str());
+  const auto marching = [](const char* method, const char* name) {
+    return [method, name](const Field& field, bool return_normals, py::object progress, std::optional<CancelToken> cancel,
+                          const py::kwargs& options) {
+      return run(field, method, options_json(name, options), return_normals, progress, py::none(), cancel);
     };
   };
-  m.def("marching_cubes", marching("mc"), py::arg("field"), py::kw_only(), py::arg("cell") = py::none(),
-        py::arg("precision") = py::none(), py::arg("traversal") = py::none(), py::arg("face_ambiguity") = py::none(),
-        py::arg("seed_resolution") = py::none(), py::arg("max_triangles") = py::none(), py::arg("return_normals") = false,
-        py::arg("progress") = py::none(), py::arg("cancel") = py::none(), "polygonize(field, \"mc\", ...): Marching Cubes; see polygonize.");
-  m.def("marching_tetrahedra", marching("mt"), py::arg("field"), py::kw_only(), py::arg("cell") = py::none(),
-        py::arg("precision") = py::none(), py::arg("traversal") = py::none(), py::arg("face_ambiguity") = py::none(),
-        py::arg("seed_resolution") = py::none(), py::arg("max_triangles") = py::none(), py::arg("return_normals") = false,
-        py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
+  m.def("marching_cubes", marching("mc", "marching_cubes"), py::arg("field"), py::kw_only(),
+        py::arg("return_normals") = false, py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
+        "polygonize(field, \"mc\", ...): Marching Cubes; see polygonize.");
+  m.def("marching_tetrahedra", marching("mt", "marching_tetrahedra"), py::arg("field"), py::kw_only(),
+        py::arg("return_normals") = false, py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
         "polygonize(field, \"mt\", ...): Marching Tetrahedra, the paper's baseline; see polygonize.");
+  m.def("polygonize_options", &options_list,
+        "The options of polygonize, marching_cubes and marching_tetrahedra: one dict each (name, kind, methods, "
+        "default, choices, the program's flag, help), the table the polygonize program and experiment files share.");
 }
 
 }  // namespace cdp::python

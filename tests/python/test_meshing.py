@@ -73,7 +73,9 @@ def test_progress_and_phase_callbacks(sphere):
     (lambda s: cdp.polygonize(s, factor=-1), "factor must be a positive number, not -1.0"),
     (lambda s: cdp.polygonize(s, min_edge=float("nan")), "min_edge must be a positive number, not nan"),
     (lambda s: cdp.polygonize(s, "marching"), 'method must be "adaptive", "mc" or "mt", not "marching"'),
-    (lambda s: cdp.polygonize(s, triangle_count="floor"), 'triangle_count must be "hartmann" or "paper", not "floor"'),
+    (lambda s: cdp.polygonize(s, triangle_count="floor"), 'triangle_count must be "hartmann" or "paper_floor", not "floor"'),
+    (lambda s: cdp.polygonize(s, curvature="yes"), 'curvature must be true or false, not "yes"'),
+    (lambda s: cdp.marching_tetrahedra(s, cell=0.1, precision=1), "give one of cell and precision, not several"),
     (lambda s: cdp.polygonize(s, creases="sharp"), 'creases must be "follow" or "ignore", not "sharp"'),
     (lambda s: cdp.polygonize(s, "mc", creases="follow"), 'creases does not apply to method "mc"'),
     (lambda s: cdp.polygonize(s, seed_resolution=1), "seed_resolution must be an integer in [2, 2147483647], not 1"),
@@ -112,6 +114,11 @@ def test_algorithm_errors_are_runtime_error_subclasses():
     ("adaptive", ["--chord", "0.002"], {"chord": 0.002}),
     ("mc", ["--cell", "0.05"], {"cell": 0.05}),
     ("mt", ["--cell", "0.08", "--traversal", "grid"], {"cell": 0.08, "traversal": "grid"}),
+    # Nothing given: the defaults are the same (one table, cdp/io/polygonize_options.h).
+    ("adaptive", [], {}),
+    ("adaptive", ["--variant", "paper", "--triangle-count", "paper_floor", "--check-self-intersections", "false"],
+     {"variant": "paper", "triangle_count": "paper_floor", "check_self_intersections": False}),
+    ("mc", ["--cell", "0.08", "--face-ambiguity", "separate_inside"], {"cell": 0.08, "face_ambiguity": "separate_inside"}),
     # Different thread counts on the two sides: the same arrays.
     ("adaptive", ["--factor", "3", "--threads", "1"], {"factor": 3, "threads": 2}),
     ("mc", ["--cell", "0.05", "--threads", "2"], {"cell": 0.05, "threads": 1}),
@@ -152,3 +159,70 @@ def test_creases_are_followed_or_ignored():
     assert on_two_faces.sum() == stats["creases"]["vertices"]
     V, F, stats = cdp.polygonize(cube, factor=3, creases="ignore")
     assert not stats["creases"]["followed"] and stats["creases"]["handling"] == "ignore"
+
+
+def test_an_unknown_keyword_is_a_type_error_naming_the_nearest_option(sphere):
+    with pytest.raises(TypeError) as e:
+        cdp.polygonize(sphere, factr=2)
+    assert str(e.value) == "polygonize() got an unexpected keyword argument 'factr' (did you mean 'factor'?)"
+    with pytest.raises(TypeError) as e:
+        cdp.marching_cubes(sphere, cel=0.1)
+    assert str(e.value) == "marching_cubes() got an unexpected keyword argument 'cel' (did you mean 'cell'?)"
+    with pytest.raises(TypeError) as e:
+        cdp.polygonize(sphere, colour="red")
+    assert str(e.value) == "polygonize() got an unexpected keyword argument 'colour'"
+
+
+def test_the_program_python_and_experiment_files_share_one_table_of_options(tmp_path):
+    """Every option of cdp.polygonize_options() is a flag of the polygonize program with its default
+    in the help, a keyword polygonize takes, and a key an experiment file's run takes (turned into
+    that flag): the three cannot drift apart."""
+    options = cdp.polygonize_options()
+    names = [o["name"] for o in options]
+    assert len(set(names)) == len(names)
+    assert {"factor", "tolerance", "chord", "min_edge", "max_edge", "triangle_count", "variant", "creases",
+            "curvature", "check_self_intersections", "cell", "precision", "traversal", "face_ambiguity",
+            "seed_resolution", "max_triangles", "threads"} <= set(names)
+    help_text = subprocess.run([program("polygonize"), "--help"], capture_output=True, text=True, check=True).stdout
+    for o in options:
+        assert o["flag"] == "--" + o["name"].replace("_", "-")
+        assert o["flag"] in help_text, o["name"]
+        if o["default"] is not None and o["kind"] != "flag":
+            line = next(l for l in help_text.splitlines() if o["flag"] + " " in l + " ")
+            assert "=" + o["default"] + " " in line + " ", (o["name"], line)
+        if o["kind"] == "choice":
+            assert o["default"] == o["choices"][0]
+    # Python takes each with its default value (or, without one, a valid one) for each method it applies to.
+    sphere = cdp.sphere(radius=1)
+    example = {"number": 0.2, "integer": 8, "boolean": True, "flag": False}
+    for method in ("adaptive", "mc", "mt"):
+        given = {}
+        for o in options:
+            if method not in o["methods"] or o["name"] in ("tolerance", "chord", "precision", "max_triangles"):
+                continue
+            given[o["name"]] = o["choices"][0] if o["kind"] == "choice" else example[o["kind"]]
+        given["seed_resolution"] = 16
+        V, F, stats = cdp.polygonize(sphere, method, **given)
+        assert topology(V, F) == (1, 0, True), method
+    # An experiment run with every option of its method runs the program with them: its mesh is
+    # polygonize's with the same keywords, bit for bit.
+    run = {"method": "adaptive", "factor": 2, "min_edge": 0.01, "max_edge": 0.5, "triangle_count": "paper_floor",
+           "variant": "improved", "creases": "follow", "curvature": True, "check_self_intersections": True,
+           "seed_resolution": 16, "max_triangles": 100000, "threads": 1}
+    marching = {"method": "mc", "cell": 0.1, "traversal": "grid", "face_ambiguity": "join_inside", "seed_resolution": 16,
+                "threads": 1}
+    experiment = tmp_path / "e.json"
+    experiment.write_text(json.dumps({"field": {"type": "sphere", "radius": 1}, "runs": [run, marching],
+                                      "evaluation": {"views": 1, "resolution": 8}}))
+    out = tmp_path / "out"
+    subprocess.run([program("experiment"), experiment, "--out", out, "--jobs", "1"], check=True, capture_output=True)
+    for options, mesh in ((run, "adaptive_factor2"), (marching, "mc_cell0.1")):
+        V_file, F_file = cdp.read_mesh(out / "meshes" / (mesh + ".ply"))
+        keywords = {k: v for k, v in options.items() if k != "method"}
+        V, F, _ = cdp.polygonize(sphere, options["method"], **keywords)
+        assert bits(V) == bits(V_file) and bits(F) == bits(F_file), mesh
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "mc", "cell": 0.1,
+                                                                                   "curvature": True}]}))
+    r = subprocess.run([program("experiment"), bad, "--commands"], capture_output=True, text=True)
+    assert r.returncode != 0 and 'does not apply to method "mc"' in r.stderr

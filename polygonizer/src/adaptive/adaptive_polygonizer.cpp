@@ -141,6 +141,17 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   std::optional<double> lowered;
   std::string lowered_error;
   int missed = 0;
+  // A run's NoSurfaceError or LimitExceededError (`limit`): whether it ends polygonize_adaptive.
+  // The first run's error stands unless a run made again meshes; the lowered run's is quoted.
+  const auto failed = [&](const RunRow& row, const Bend& bend, bool limit, const std::exception& e) {
+    if (row.kind == RunKind::LoweredMinEdge) lowered_error = e.what();
+    if (row.kind != RunKind::AsGiven) return false;
+    if (adaptive::kink_in_black_box(field, bend)) return true;
+    lowered = lowered_min_edge(field, options, bend);
+    if (!lowered && !may_limit_turn) return true;
+    first_error = FirstError{limit, e.what()};
+    return false;
+  };
   for (const RunRow& row : kRuns) {
     AdaptiveOptions again = options;
     adaptive::RunRequest request;
@@ -179,23 +190,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
         kept_from = row.kind;
       }
     } catch (const NoSurfaceError& e) {
-      if (row.kind == RunKind::AsGiven) {
-        if (adaptive::kink_in_black_box(field, bend)) throw;
-        lowered = lowered_min_edge(field, options, bend);
-        if (!lowered && !may_limit_turn) throw;
-        first_error = FirstError{false, e.what()};
-      } else if (row.kind == RunKind::LoweredMinEdge) {
-        lowered_error = e.what();
-      }
+      if (failed(row, bend, false, e)) throw;
     } catch (const LimitExceededError& e) {
-      if (row.kind == RunKind::AsGiven) {
-        if (adaptive::kink_in_black_box(field, bend)) throw;
-        lowered = lowered_min_edge(field, options, bend);
-        if (!lowered && !may_limit_turn) throw;
-        first_error = FirstError{true, e.what()};
-      } else if (row.kind == RunKind::LoweredMinEdge) {
-        lowered_error = e.what();
-      }
+      if (failed(row, bend, true, e)) throw;
     }
   }
   if (!kept) {

@@ -15,6 +15,10 @@
 
 namespace cdp {
 
+// The spelling among `known` nearest to a misspelled `word` (fewer than three edits; the first
+// of a tie), or none: the suggestion of an "unknown key" message.
+std::optional<std::string> nearest_spelling(const std::string& word, const std::vector<std::string>& known);
+
 class JsonReader {
  public:
   // `source` names the file in messages; `path` is the object's place inside it ("" for the root);
