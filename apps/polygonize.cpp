@@ -115,8 +115,12 @@ int main(int argc, char** argv) {
     cdp::AdaptiveOptions& adaptive_options = request.adaptive;
     cdp::MarchingOptions& marching_options = request.marching;
     adaptive_options.progress = marching_options.progress = progress;
+    // A signal during a run cancels it (app_support.h): it ends within the polls' bound, and the
+    // program then by that signal.
+    adaptive_options.cancel = marching_options.cancel = cdp::app::run_token();
     adaptive_options.phase = reporter.phase_callback();
     const auto run_once = [&]() -> cdp::PolygonizeResult {
+      const cdp::app::CancellableRun cancellable;
       if (adaptive) return name_field(field_path, [&] { return cdp::polygonize_adaptive(*field, adaptive_options); });
       reporter.phase("meshing");
       return name_field(field_path, [&] {
@@ -174,6 +178,10 @@ int main(int argc, char** argv) {
       }
     }
     return 0;
+  } catch (const cdp::CancelledError& e) {
+    cdp::app::end_if_interrupted();
+    std::fprintf(stderr, "polygonize: %s\n", e.what());
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "polygonize: %s\n", e.what());
     return 1;

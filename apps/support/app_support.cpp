@@ -37,7 +37,25 @@ constexpr long kChildWaitNanoseconds = 100'000'000;  // 50 x 0.1 s = 5 s
 // thread, between its start and its registration) is passed the signal too.
 std::atomic<int> g_interrupted{0};
 
+// The run token (run_token), whether a CancellableRun is alive, and the signal that cancelled it.
+const CancelToken g_run_token;
+std::atomic<bool> g_run_armed{false};
+std::atomic<int> g_cancelled_by{0};
+
+void end_by(int sig);
+
 void on_signal(int sig) {
+  if (g_run_armed.load()) {
+    int none = 0;
+    if (g_cancelled_by.compare_exchange_strong(none, sig)) {
+      g_run_token.cancel();  // the run ends at its next poll, then the program by end_if_interrupted
+      return;
+    }
+  }
+  end_by(sig);
+}
+
+void end_by(int sig) {
   g_interrupted.store(sig);
   remove_pending_temporary_file();
   bool any = false;
@@ -70,6 +88,21 @@ void on_signal(int sig) {
 }
 
 }  // namespace
+
+const CancelToken& run_token() { return g_run_token; }
+
+CancellableRun::CancellableRun() { g_run_armed.store(true); }
+
+// A signal that came after the run's last poll (the run finished all the same) ends the program
+// here, before anything is written.
+CancellableRun::~CancellableRun() {
+  g_run_armed.store(false);
+  end_if_interrupted();
+}
+
+void end_if_interrupted() {
+  if (const int sig = g_cancelled_by.load(); sig != 0) end_by(sig);
+}
 
 void install_signal_handling() {
   struct sigaction sa {};

@@ -3,6 +3,7 @@
 // command_line.h). Programs only; the libraries stay free of terminal output and process control.
 #pragma once
 
+#include <cdp/core/cancel.h>
 #include <cdp/core/progress.h>
 
 #include <sys/types.h>
@@ -20,6 +21,23 @@ namespace cdp::app {
 // 128 + N in a shell). SIGXFSZ (a file size limit) is ignored, so that the write that exceeds
 // the limit fails with EFBIG and is reported like a full disk rather than killing the program.
 void install_signal_handling();
+
+// The token of the program's run (AdaptiveOptions::cancel, MarchingOptions::cancel). While a
+// CancellableRun is alive, the first of those signals cancels it instead of ending the program
+// at once: the run stops at its next poll (cancel.h) with CancelledError, its memory freed and
+// nothing written, and the program then ends by that signal (end_if_interrupted). A second
+// signal, or one outside a CancellableRun, ends the program at once as above.
+const CancelToken& run_token();
+class CancellableRun {
+ public:
+  CancellableRun();
+  ~CancellableRun();
+  CancellableRun(const CancellableRun&) = delete;
+  CancellableRun& operator=(const CancellableRun&) = delete;
+};
+// After a CancelledError: ends the program by the signal that cancelled its run, as an
+// uncancellable one would have ended; returns where no signal did (a caller's own token).
+void end_if_interrupted();
 
 // Keeps the memory a program frees for its own reuse instead of handing it back to the system
 // (glibc's trim and mmap thresholds raised): a run frees and allocates again large tables (the

@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "common/run_command.h"
+#include "support/app_support.h"
 
 namespace cdp {
 namespace {
@@ -244,6 +245,52 @@ TEST(Faults, ASignalDuringTheWriteLeavesNoTemporaryAndEndsTheProgramByThatSignal
       EXPECT_GT(read_mesh(out).num_triangles(), 0u);
     }
     fs::remove(out);
+  }
+}
+
+TEST(Faults, ASignalDuringACancellableRunCancelsItsTokenAndEndsTheProgramAfterTheRun) {
+  // The programs' handler in a child process of its own: the first signal during a run only
+  // cancels the run's token (the run goes on to its next poll), and the program ends by that
+  // signal when the run is over.
+  test::TempDir dir("faults_cancellable_run");
+  const fs::path marker = dir.path / "after_the_signal";
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    cdp::app::install_signal_handling();
+    {
+      const cdp::app::CancellableRun run;
+      raise(SIGINT);
+      if (!cdp::app::run_token().cancelled()) _exit(3);
+      std::ofstream(marker) << "the run went on to its next poll\n";
+    }  // the program ends here, by SIGINT
+    _exit(4);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status;
+  EXPECT_TRUE(fs::exists(marker));
+}
+
+TEST(Faults, ASignalWhileTheAdaptiveMethodMeshesEndsTheProgramByThatSignalWithNothingWritten) {
+  test::TempDir dir("faults_signal_meshing");
+  const auto field = dir.write("torus.json", R"({"type": "torus", "major_radius": 1, "minor_radius": 0.3})");
+  for (const int sig : {SIGINT, SIGTERM}) {
+    const fs::path out = dir.path / "torus.ply", stats = dir.path / "stats.json";
+    // Factor 60: seconds of tracking, long enough to be interrupted while it meshes.
+    const Child c = start({test::bin("polygonize"), field.string(), "-o", out.string(), "--factor", "60", "--stats",
+                           stats.string(), "--progress"});
+    ASSERT_GT(c.pid, 0);
+    std::string seen;
+    ASSERT_TRUE(wait_for_line(c, "meshing", seen)) << seen;
+    kill(c.pid, sig);
+    int status = 0;
+    waitpid(c.pid, &status, 0);
+    close(c.err_fd);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << strsignal(sig) << " " << status;
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(stats));
+    EXPECT_TRUE(hidden_files(dir.path).empty()) << strsignal(sig);
   }
 }
 
