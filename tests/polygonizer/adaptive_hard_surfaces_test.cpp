@@ -494,9 +494,6 @@ TEST(AdaptiveScales, ASphereBesideAThinTubeMeshesWithTheTubesHashCells) {
 // along a crease loop on the ball, and its smooth run after it stalled too, after two minutes;
 // it meshes now in about 15 s: one component of genus 30, the slit among its forced closures.
 TEST(AdaptiveSlits, TheBarthBallsSlitAtFactorNineIsClosed) {
-#if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "about 15 s in the normal build, several times that under the sanitizers";
-#endif
   const auto field = test::field_from_json(R"J({"type": "expression",
     "value": "max(4*(2.618034*x^2-y^2)*(2.618034*y^2-z^2)*(2.618034*z^2-x^2)-4.236068*(x^2+y^2+z^2-1)^2+0.01, x^2+y^2+z^2-3.5)",
     "bounds": [[-2.1, -2.1, -2.1], [2.1, 2.1, 2.1]]})J");
@@ -516,9 +513,6 @@ TEST(AdaptiveSlits, TheBarthBallsSlitAtFactorNineIsClosed) {
 // rollbacks, as after a stall, and that run meshes them. (With the creases followed, the default,
 // they mesh at every factor: the next test.)
 TEST(AdaptiveSearchBound, TwoSpheresOnABarMeshSmoothAcrossTheirCreases) {
-#if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "about 5 s in the normal build, several times that under the sanitizers";
-#endif
   const auto field = test::field_from_json(expression(test::kSpheresOnABar, 1.7));
   for (const double factor : {5.0, 6.0}) {
     SCOPED_TRACE(factor);
