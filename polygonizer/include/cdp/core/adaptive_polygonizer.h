@@ -143,12 +143,19 @@ struct AdaptiveOptions {
   PhaseCallback phase;
 };
 
-// The result is closed, oriented, manifold and outward, one component per component of the
-// surface the seeding found, and (with check_self_intersections) free of intersections; a run
-// that cannot deliver that throws instead.
-// Throws NoSurfaceError when the field has no surface in its box (or it leaves the box), or when
-// the finished mesh fails the checks above (naming the place),
-// LimitExceededError when a bound is hit, InvalidInputError for invalid options.
+// Meshes the zero set of `field` in its box with the paper's surface tracker: the runs and
+// stages of polygonizer/README.md ("How a run goes").
+// \pre field.bounds() is valid and holds the surface; F < 0 inside.
+// \return a mesh closed, oriented, manifold and outward, one component per component of the
+//         surface the seeding found, and (with check_self_intersections) free of
+//         self-intersections, with its stats (below). The same field and options give the same
+//         mesh bit for bit, on any number of threads.
+// \throw NoSurfaceError when the field has no surface in its box (or it leaves the box), or when
+//        no run made a mesh that passes the checks (the message names the place and the cause).
+// \throw LimitExceededError when a bound is hit (max_triangles, max_steps, max_search_visits).
+// \throw InvalidInputError for invalid options (a NaN, min_edge above max_edge, ...).
+// \throw CancelledError when options.cancel is cancelled; the field is usable again.
+// \throw whatever the field's evaluations throw (a Python function's error), unchanged.
 // stats.extra holds "seeds" (seeds meshed from), "steps", "min_angle_degrees", "edge_length"
 // ({"min", "max"} after clamping), "triangle_count_rule", "sizing", "variant", the additions in
 // force ("grading", "quality_repair", "tolerance_refinement", "look_ahead": 0 or 1), the re-runs
