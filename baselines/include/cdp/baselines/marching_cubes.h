@@ -19,8 +19,14 @@ namespace cdp {
 // continuation "seeds", "unresolved_seeds", "starts", "sign_changes", "completion_starts",
 // "unreached_sign_changes" (0 unless the lattice is too coarse for some of the surface the seed
 // grid sees), "completion_evaluations".
-// Throws InvalidInputError for invalid options, NoSurfaceError when no cube is crossed or the
-// surface leaves the box (with require_closed_in_box), LimitExceededError at a bound.
+// \pre field.bounds() is valid; F < 0 inside.
+// \return the mesh and its stats (above).
+// \throw InvalidInputError for invalid options (both cell_size and precision, a precision on a
+//        field without constraint points, a lattice over the cell bound).
+// \throw NoSurfaceError when no cube is crossed or the surface leaves the box (with
+//        require_closed_in_box).
+// \throw LimitExceededError at max_cubes or max_triangles.
+// \throw CancelledError when options.cancel is cancelled; what the field's evaluations throw.
 PolygonizeResult marching_cubes(const Field& field, const MarchingOptions& options = {});
 
 }  // namespace cdp

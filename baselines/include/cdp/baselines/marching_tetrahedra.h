@@ -18,7 +18,9 @@ inline constexpr std::array<std::array<int, 4>, 6> kCubeTetrahedra = {{
     {0, 1, 3, 7}, {0, 3, 2, 7}, {0, 2, 6, 7}, {0, 6, 4, 7}, {0, 4, 5, 7}, {0, 5, 1, 7},
 }};
 
-// stats.method = "mt"; otherwise as marching_cubes() (options.face_ambiguity is unused).
+// Marching Tetrahedra, the paper's baseline: each cube split into kCubeTetrahedra. stats.method =
+// "mt"; otherwise as marching_cubes() (options.face_ambiguity is unused).
+// \pre, \return and \throw as marching_cubes().
 PolygonizeResult marching_tetrahedra(const Field& field, const MarchingOptions& options = {});
 
 }  // namespace cdp

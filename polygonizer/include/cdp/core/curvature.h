@@ -24,10 +24,14 @@ struct Curvature {
   double shape_index = 0;
 };
 
-// Throws NoSurfaceError when the gradient vanishes or is not finite.
+// The curvatures of the level set through a point from F's gradient and Hessian there (the
+// paper's matrix C: the Hessian projected on the tangent plane, over |grad F|).
+// \return the normal, principal curvatures and directions, Gaussian, mean, MAC, radius, shape index.
+// \throw NoSurfaceError when the gradient vanishes or is not finite.
 Curvature curvature_from_derivatives(const Vec3& gradient, const Mat3& hessian);
 
-// One gradient_hessian evaluation at p.
+// curvature_from_derivatives of `field` at p: one gradient_hessian evaluation.
+// \throw NoSurfaceError as curvature_from_derivatives; what the field's evaluation throws.
 Curvature curvature_at(const Field& field, const Vec3& p);
 
 }  // namespace cdp
