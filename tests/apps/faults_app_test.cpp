@@ -220,21 +220,31 @@ bool wait_for_line(const Child& c, const std::string& text, std::string& seen) {
   }
 }
 
+// Runs `argv`, sends `sig` once its stderr shows a line holding `line`, and returns its wait
+// status (a test failure, and -1, when it ends before that line).
+int signal_after_line(const std::vector<std::string>& argv, const std::string& line, int sig) {
+  const Child c = start(argv);
+  EXPECT_GT(c.pid, 0);
+  if (c.pid <= 0) return -1;
+  std::string seen;
+  const bool reached = wait_for_line(c, line, seen);
+  EXPECT_TRUE(reached) << seen;
+  if (reached) kill(c.pid, sig);
+  int status = 0;
+  waitpid(c.pid, &status, 0);
+  close(c.err_fd);
+  return reached ? status : -1;
+}
+
 TEST(Faults, ASignalDuringTheWriteLeavesNoTemporaryAndEndsTheProgramByThatSignal) {
   test::TempDir dir("faults_signal");
   const auto field = dir.write("sphere.json", kSphere);
   for (const int sig : {SIGINT, SIGTERM}) {
     const fs::path out = dir.path / "big.ply";
     // About 800k triangles: a write of some 40 MB, long enough to be interrupted in the middle.
-    const Child c = start({test::bin("polygonize"), field.string(), "-o", out.string(), "--method", "mc", "--cell",
-                           "0.007", "--progress"});
-    ASSERT_GT(c.pid, 0);
-    std::string seen;
-    ASSERT_TRUE(wait_for_line(c, "writing", seen)) << seen;
-    kill(c.pid, sig);
-    int status = 0;
-    waitpid(c.pid, &status, 0);
-    close(c.err_fd);
+    const int status = signal_after_line({test::bin("polygonize"), field.string(), "-o", out.string(), "--method", "mc",
+                                          "--cell", "0.007", "--progress"},
+                                         "writing", sig);
     EXPECT_TRUE(hidden_files(dir.path).empty()) << strsignal(sig);
     if (WIFSIGNALED(status)) {
       EXPECT_EQ(WTERMSIG(status), sig);
@@ -278,15 +288,9 @@ TEST(Faults, ASignalWhileTheAdaptiveMethodMeshesEndsTheProgramByThatSignalWithNo
   for (const int sig : {SIGINT, SIGTERM}) {
     const fs::path out = dir.path / "torus.ply", stats = dir.path / "stats.json";
     // Factor 60: seconds of tracking, long enough to be interrupted while it meshes.
-    const Child c = start({test::bin("polygonize"), field.string(), "-o", out.string(), "--factor", "60", "--stats",
-                           stats.string(), "--progress"});
-    ASSERT_GT(c.pid, 0);
-    std::string seen;
-    ASSERT_TRUE(wait_for_line(c, "meshing", seen)) << seen;
-    kill(c.pid, sig);
-    int status = 0;
-    waitpid(c.pid, &status, 0);
-    close(c.err_fd);
+    const int status = signal_after_line({test::bin("polygonize"), field.string(), "-o", out.string(), "--factor", "60",
+                                          "--stats", stats.string(), "--progress"},
+                                         "meshing", sig);
     EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << strsignal(sig) << " " << status;
     EXPECT_FALSE(fs::exists(out));
     EXPECT_FALSE(fs::exists(stats));

@@ -44,6 +44,13 @@ struct Stages {
         settings(resolve_settings(*field, options)) {}
 };
 
+// The tracking stage on `seeds`, without crease patches, at the hash cell the seed grid measured.
+void track(Stages& s, const SeedGridStage& seeds, Mesh& mesh, Tracking& tracking) {
+  Settings settings = s.settings;
+  settings.hash_cell = seeds.hash_cell;
+  track_surface(s.run, seeds, CreaseLayout{}, settings, mesh, tracking);
+}
+
 TEST(AdaptiveStages, SettingsResolveTheDefaultsFromTheBoxAndRefuseBadOptions) {
   const auto field = test::field_from_json(kSphere);
   const double diagonal = field->bounds().diagonal();
@@ -102,11 +109,9 @@ TEST(AdaptiveStages, TheCreaseStageMeshesACubesFacesFromItsTwelveEdges) {
 TEST(AdaptiveStages, TrackingMeshesEveryComponentOrNamesWhyNot) {
   Stages s(kSphere);
   const SeedGridStage seeds = sample_seed_grid_stage(*s.field, s.options, s.settings);
-  Settings settings = s.settings;
-  settings.hash_cell = seeds.hash_cell;
   Mesh mesh;
   Tracking tracking;
-  track_surface(s.run, seeds, CreaseLayout{}, settings, mesh, tracking);
+  track(s, seeds, mesh, tracking);
   EXPECT_EQ(tracking.seeding.seeds, 1u);
   EXPECT_EQ(tracking.seeding.uncovered, 0u);
   EXPECT_FALSE(tracking.remeshed);
@@ -131,11 +136,9 @@ TEST(AdaptiveStages, TheRepairRaisesTheSmallestAngleAndThePaperVariantSkipsIt) {
   coarse.factor = 1;
   Stages s(kTanglecube, coarse);
   const SeedGridStage seeds = sample_seed_grid_stage(*s.field, s.options, s.settings);
-  Settings settings = s.settings;
-  settings.hash_cell = seeds.hash_cell;
   Mesh mesh;
   Tracking tracking;
-  track_surface(s.run, seeds, CreaseLayout{}, settings, mesh, tracking);
+  track(s, seeds, mesh, tracking);
   const double before = min_angle_degrees(mesh);
   const QualityReport q = repair_mesh(s.run, s.settings, seeds, CreaseLayout{}, tracking, mesh);
   EXPECT_GT(q.bad_before, 0u);
