@@ -27,15 +27,16 @@ Mesh from_openmesh(const TriMesh& mesh);
 // Writes positions, normals (when present), triangles and, to PLY, the vertex scalars; the
 // format follows the extension. PLY is binary little-endian float64 (ASCII with binary =
 // false), OBJ and OFF are text with the shortest decimals that read back as the same doubles:
-// reading a written mesh gives it back bit for bit. Goes through write_file_atomically: a
-// failure (full disk, unwritable folder) throws InvalidInputError "PATH: cannot write mesh:
-// reason" and leaves no file behind.
+// reading a written mesh gives it back bit for bit. Goes through write_file_atomically.
+// \throw InvalidInputError (FileError) "PATH: cannot write mesh: reason" for a failure (full
+//        disk, unwritable folder), which leaves no file behind.
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, bool binary = true);
 // Reads positions, triangles (polygons become fans) and vertex normals (when the file has them
 // for every vertex); from PLY files also every other scalar vertex property, into
-// vertex_scalars under its name. Throws InvalidInputError "PATH: problem" for a missing file, a
-// directory, an unknown extension, a malformed or truncated file, a count the file cannot hold,
-// a non-finite coordinate, a face index out of range, and a mesh without faces.
+// vertex_scalars under its name.
+// \throw InvalidInputError "PATH: problem" for a missing file, a directory, an unknown
+//        extension, a malformed or truncated file, a count the file cannot hold, a non-finite
+//        coordinate, a face index out of range, and a mesh without faces.
 Mesh read_mesh(const std::filesystem::path& path);
 
 // Reads a mesh file (read_mesh) and takes its oriented points (oriented_points_from_mesh), the

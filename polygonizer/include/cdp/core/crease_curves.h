@@ -51,8 +51,11 @@ struct CreaseTracingResult {
   std::size_t stops = 0;      // curve ends that are not corners (tangent pieces, failed projections)
 };
 
-// Throws InvalidInputError for a resolution below 2, LimitExceededError past max_points. A field
-// that reports no pieces (a smooth model) has no creases.
+// Every crease of `field` as polylines on both pieces (see the top of this file).
+// \return the curves and corners; none for a field that reports no pieces (a smooth model).
+// \throw InvalidInputError for a resolution below 2.
+// \throw LimitExceededError past max_points.
+// \throw what the field's evaluations throw.
 CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions& options = {});
 
 }  // namespace cdp

@@ -40,12 +40,19 @@ struct ProjectionResult {
 
 const char* to_string(ProjectionStatus status);
 
+// The paper's Newton iteration from `start` onto F = 0, each step along the gradient and bounded
+// by options.max_step, the whole walk by options.max_travel.
+// \return the point and how the iteration ended (ProjectionStatus): no error is thrown for a
+//         point that cannot be projected; the status says why.
+// \throw what the field's evaluations throw.
 ProjectionResult project_to_surface(const Field& field, const Vec3& start, const ProjectionOptions& options = {});
 
 // Projects every start point, starts[i] with options[i], in lockstep: each Newton round evaluates
 // the points still iterating in one values_gradients call, so that a field whose calls cost more
 // than its arithmetic (a Python function) is called once a round rather than once a point. Each
 // result is the one project_to_surface gives, bit for bit, with the same evaluation count.
+// \pre starts.size() == options.size().
+// \throw std::invalid_argument when the sizes differ; what the field's evaluations throw.
 std::vector<ProjectionResult> project_to_surface(const Field& field, std::span<const Vec3> starts,
                                                  std::span<const ProjectionOptions> options);
 

@@ -56,21 +56,25 @@ struct SeedGrid {
 
 // Samples the grid (one batched evaluation). A node where F is NaN or +infinity counts as
 // outside (its value becomes the largest double), one at -infinity as inside (the lowest), so
-// that a function undefined away from its surface (a NaN far out in the box) is meshed; the
-// count is in SeedGrid::non_finite. Throws InvalidInputError for a resolution below 2 or a grid
-// of more than 2^31 nodes, NoSurfaceError where a NaN node lies next to an inside node (the
-// surface may pass where F is undefined) or (with require_closed_in_box) F is negative on the
-// box's boundary.
+// that a function undefined away from its surface (a NaN far out in the box) is meshed.
+// \pre field.bounds() is valid.
+// \return the grid; the count of non-finite nodes in SeedGrid::non_finite.
+// \throw InvalidInputError for a resolution below 2 or a grid of more than 2^31 nodes.
+// \throw NoSurfaceError where a NaN node lies next to an inside node (the surface may pass where
+//        F is undefined) or (with require_closed_in_box) F is negative on the box's boundary.
 SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options = {});
 
 // Every grid edge with a sign change, its crossing point linearly interpolated (not on the
-// surface: cheap, for coverage checks "is this crossing already meshed?"), in a deterministic
-// order, clusters numbered from 0 in order of first appearance. Throws NoSurfaceError when the
-// field is NaN on the grid, has no zero crossing, or (with require_closed_in_box) leaves the box.
+// surface: cheap, for coverage checks "is this crossing already meshed?").
+// \return the crossings in a deterministic order, clusters numbered from 0 in order of first
+//         appearance.
+// \throw NoSurfaceError when the field is NaN on the grid, has no zero crossing, or (with
+//        require_closed_in_box) leaves the box; InvalidInputError as sample_seed_grid.
 std::vector<SurfaceSeed> find_surface_crossings(const Field& field, const SeedOptions& options = {});
 
-// One seed per cluster, on the surface (bisected along its grid edge, then Newton-projected);
-// the first crossing of the cluster whose projection converges. Same errors as above.
+// One seed per cluster, on the surface (bisected along its grid edge, then Newton-projected).
+// \return for each cluster, the first crossing whose projection converges.
+// \throw as find_surface_crossings.
 std::vector<SurfaceSeed> find_surface_seeds(const Field& field, const SeedOptions& options = {});
 // The same from a grid already sampled (with `resolution`, named in errors), for callers that
 // also use the grid's values and should not pay for sampling it twice.
