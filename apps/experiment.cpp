@@ -163,7 +163,6 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
     }
     const std::vector<double> values = numbers_or_number(run, key);
     std::vector<std::string> fixed{"--method", method};
-    std::vector<std::string> known(options.begin(), options.end());
     // variant and creases are written out at their defaults too: the summary names them.
     std::string variant = method == "adaptive" ? "improved" : "", creases = method == "adaptive" ? "follow" : "";
     for (const cdp::OptionSpec& spec : cdp::polygonize_options()) {
@@ -194,7 +193,7 @@ Experiment read_experiment(const fs::path& file, const fs::path& out_dir) {
     if (label.size() > kMaxLabel || label.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.") != std::string::npos ||
         (!label.empty() && (label.front() == '.' || label.back() == '.')) || label.find("..") != std::string::npos)
       run.fail("label", "must be at most 64 letters, digits, '_', '-' or inner '.', not \"" + label + "\"");
-    run.finish(known);
+    run.finish(options);
     for (double v : values) {
       Run x;
       x.method = method;

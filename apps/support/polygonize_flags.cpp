@@ -2,8 +2,6 @@
 
 #include "command_line.h"
 
-#include <cdp/io/polygonize_options.h>
-
 namespace cdp::app {
 
 PolygonizeFlags::PolygonizeFlags(CLI::App& app) {
@@ -51,7 +49,7 @@ nlohmann::json PolygonizeFlags::given() const {
   nlohmann::json j = nlohmann::json::object();
   for (const Entry& e : entries_) {
     if (e.option->count() == 0) continue;
-    const OptionSpec& spec = *static_cast<const OptionSpec*>(e.spec);
+    const OptionSpec& spec = *e.spec;
     const std::string name(spec.name);
     switch (spec.kind) {
       case OptionKind::Number: j[name] = e.option->as<double>(); break;
@@ -66,7 +64,7 @@ nlohmann::json PolygonizeFlags::given() const {
 
 std::string PolygonizeFlags::not_applying(const std::string& method) const {
   for (const Entry& e : entries_)
-    if (e.option->count() > 0 && !applies_to(*static_cast<const OptionSpec*>(e.spec), method))
+    if (e.option->count() > 0 && !applies_to(*e.spec, method))
       return e.option->get_name();
   return "";
 }

@@ -2,6 +2,8 @@
 // (the Python keywords and the experiment keys come from the same table).
 #pragma once
 
+#include <cdp/io/polygonize_options.h>
+
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -26,7 +28,7 @@ class PolygonizeFlags {
 
  private:
   struct Entry {
-    const void* spec;  // const OptionSpec*
+    const OptionSpec* spec;
     CLI::Option* option;
   };
   std::vector<Entry> entries_;

@@ -16,8 +16,6 @@
 #include <pybind11/stl.h>
 
 #include <atomic>
-#include <climits>
-#include <cmath>
 #include <csignal>
 #include <optional>
 
