@@ -165,16 +165,14 @@ int main(int argc, char** argv) {
     // finer than min_edge) are named here, not only counted in the statistics. The mesh is still
     // written: it is closed and valid, and the rest of it keeps the bound.
     if (adaptive && adaptive_options.sizing == cdp::SizingMode::Tolerance) {
-      const auto& x = result.stats.extra;
-      const auto over = x.find("quality.over_tolerance");
-      if (over != x.end() && over->second.get<std::size_t>() > 0) {
+      const cdp::QualityReport& q = result.stats.adaptive->quality;
+      if (q.over_tolerance > 0) {
         std::fprintf(stderr,
                      "polygonize: %s: warning: %zu triangles lie farther from the surface than the tolerance %g (up to "
                      "%g, near (%g, %g, %g)); the refinement could not split them further (edges too short to halve, "
                      "or splits that would fold)\n",
-                     field_path.c_str(), over->second.get<std::size_t>(), adaptive_options.tolerance,
-                     x.at("quality.over_tolerance_worst").get<double>(), x.at("quality.over_tolerance_near_x").get<double>(),
-                     x.at("quality.over_tolerance_near_y").get<double>(), x.at("quality.over_tolerance_near_z").get<double>());
+                     field_path.c_str(), q.over_tolerance, adaptive_options.tolerance, q.over_tolerance_worst,
+                     q.over_tolerance_near.x(), q.over_tolerance_near.y(), q.over_tolerance_near.z());
       }
     }
     return 0;

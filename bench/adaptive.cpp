@@ -70,7 +70,7 @@ double run_adaptive(benchmark::State& state, const Field& field, const AdaptiveO
     benchmark::DoNotOptimize(r.mesh.positions.data());
     state.SetIterationTime(r.stats.seconds);
     seconds += r.stats.seconds;
-    grid_seconds += r.stats.extra.at("seed_grid_seconds").get<double>();
+    grid_seconds += r.stats.adaptive->seed_grid_seconds;
   }
   report(state, triangles, vertices, evaluations, seeds);
   // The share of the time spent before the first triangle: the seed grid (issue 14: at most 5%
@@ -231,11 +231,10 @@ void BM_AdaptiveBookkeeping(benchmark::State& state) {
                                    static_cast<double>(c.gradient_hessian));
     const double outside = std::max(0.0, r.stats.seconds - in_field);
     for (std::size_t i = 0; i < kAdaptivePhases.size(); ++i) {
-      const auto at = [&](const char* key) {
-        return r.stats.extra.at("phases." + std::string(kAdaptivePhases[i]) + "." + key).get<double>();
-      };
-      phase_outside[i] +=
-          std::max(0.0, at("seconds") - priced(at("value"), at("value_gradient"), at("gradient_hessian")));
+      const PhaseReport& p = r.stats.adaptive->phases[i];
+      phase_outside[i] += std::max(
+          0.0, p.seconds - priced(static_cast<double>(p.evaluations.value), static_cast<double>(p.evaluations.value_gradient),
+                                  static_cast<double>(p.evaluations.gradient_hessian)));
     }
     state.SetIterationTime(outside);
     vertices += static_cast<double>(r.stats.vertices);

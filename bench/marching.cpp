@@ -42,8 +42,8 @@ void BM_Marching(benchmark::State& state) {
     const PolygonizeResult r = method == kMC ? marching_cubes(*field, options) : marching_tetrahedra(*field, options);
     triangles += static_cast<double>(r.stats.triangles);
     evaluations += static_cast<double>(r.stats.field_evaluations.total());
-    corners += r.stats.extra.at("corner_evaluations").get<double>();
-    roots += r.stats.extra.at("root_evaluations").get<double>();
+    corners += static_cast<double>(r.stats.lattice->corner_evaluations);
+    roots += static_cast<double>(r.stats.lattice->root_evaluations);
     benchmark::DoNotOptimize(r.mesh.positions.data());
     state.SetIterationTime(r.stats.seconds);
   }

@@ -393,11 +393,10 @@ const FieldSweep& sweep(int field_index) {
 void report_overhead(benchmark::State& state, const Field& field, const PolygonizeResult& run, double seconds,
                      const Choice& mt, const Choice& mc) {
   const double vertices = static_cast<double>(run.stats.vertices);
-  const auto seed_grid = run.stats.extra.find("phases.seed_grid.seconds");
-  if (!(vertices > 0) || seed_grid == run.stats.extra.end()) return;
+  if (!(vertices > 0) || !run.stats.adaptive) return;
   const FieldCost cost = measure_field_cost(field, run.mesh);
   const double floor = vertices * (cost.gradient_hessian_seconds + 2 * cost.value_gradient_seconds);
-  const double grid = seed_grid->second.get<double>();
+  const double grid = run.stats.adaptive->phase("seed_grid").seconds;
   state.counters["field_floor_ms"] = 1e3 * floor;
   state.counters["seed_grid_ms"] = 1e3 * grid;
   state.counters["overhead_us_per_vertex"] = 1e6 * (seconds - floor - grid) / vertices;

@@ -525,7 +525,7 @@ void LatticeMesher::run_continuation() {
 }  // namespace
 
 PolygonizeResult run_marching(const Field& field, const MarchingOptions& options, const char* method,
-                              const CubeMesher& mesher, const std::map<std::string, StatValue>& extra) {
+                              const CubeMesher& mesher, const std::string& face_ambiguity) {
   const auto t0 = std::chrono::steady_clock::now();
   const EvaluationCounts before = field.counts();
   LatticeMesher lm(field, options, method, mesher);
@@ -559,32 +559,32 @@ PolygonizeResult run_marching(const Field& field, const MarchingOptions& options
   st.vertices = lm.mesh.num_vertices();
   st.components = analyze_topology(lm.mesh).components;
   st.field_evaluations = field.counts() - before;
-  st.extra = extra;
-  st.extra["traversal"] = to_string(options.traversal);
-  st.extra["cell_size"] = lm.h_;
-  if (options.precision >= 0) st.extra["precision"] = options.precision;
-  st.extra["lattice_cells"] = std::vector<long long>{lm.lattice_.cells[0], lm.lattice_.cells[1], lm.lattice_.cells[2]};
-  st.extra["root_tolerance"] = lm.tolerance_;
-  st.extra["cubes_visited"] = lm.cubes_visited;
-  st.extra["cubes_crossed"] = lm.cubes_crossed;
-  st.extra["corner_evaluations"] = lm.corner_evaluations;
-  st.extra["root_evaluations"] = lm.root_evaluations;
-  st.extra["centre_vertices"] = lm.centre_vertices;
-  st.extra["collapsed_edges"] = collapse.collapsed_edges;
-  st.extra["dropped_components"] = collapse.dropped_components;
-  st.extra["short_edges_left"] = collapse.short_edges_left;
-  if (options.traversal == Traversal::Continuation) {
-    st.extra["seed_resolution"] = options.seed_resolution;
-    st.extra["seeds"] = lm.seeds;
-    st.extra["unresolved_seeds"] = lm.unresolved_seeds;
-    st.extra["starts"] = lm.starts;
-    st.extra["seed_search_cubes"] = lm.seed_search_cubes;
-    st.extra["sign_changes"] = lm.sign_changes;
-    st.extra["completion_starts"] = lm.completion_starts;
-    st.extra["unreached_sign_changes"] = lm.unreached_sign_changes;
-    st.extra["completion_evaluations"] = lm.completion_evaluations;
-  }
-  if (!options.require_closed_in_box) st.extra["open_boundary_faces"] = lm.open_boundary_faces;
+  LatticeReport& r = st.lattice.emplace();
+  r.traversal = to_string(options.traversal);
+  r.face_ambiguity = face_ambiguity;
+  r.cell_size = lm.h_;
+  if (options.precision >= 0) r.precision = options.precision;
+  r.cells = {lm.lattice_.cells[0], lm.lattice_.cells[1], lm.lattice_.cells[2]};
+  r.root_tolerance = lm.tolerance_;
+  r.cubes_visited = lm.cubes_visited;
+  r.cubes_crossed = lm.cubes_crossed;
+  r.corner_evaluations = lm.corner_evaluations;
+  r.root_evaluations = lm.root_evaluations;
+  r.centre_vertices = lm.centre_vertices;
+  r.collapsed_edges = collapse.collapsed_edges;
+  r.dropped_components = collapse.dropped_components;
+  r.short_edges_left = collapse.short_edges_left;
+  if (options.traversal == Traversal::Continuation)
+    r.seeding = LatticeSeedingReport{.seed_resolution = options.seed_resolution,
+                                     .seeds = lm.seeds,
+                                     .unresolved_seeds = lm.unresolved_seeds,
+                                     .starts = lm.starts,
+                                     .seed_search_cubes = lm.seed_search_cubes,
+                                     .sign_changes = lm.sign_changes,
+                                     .completion_starts = lm.completion_starts,
+                                     .unreached_sign_changes = lm.unreached_sign_changes,
+                                     .completion_evaluations = lm.completion_evaluations};
+  if (!options.require_closed_in_box) r.open_boundary_faces = lm.open_boundary_faces;
   result.mesh = std::move(lm.mesh);
   // Like the adaptive polygonizer's: the polygonization, not the topology count for the stats.
   st.seconds = seconds;

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace cdp::marching {
@@ -37,8 +38,9 @@ struct CubeMesh {
 using CubeMesher = std::function<void(const std::array<double, 8>& f, CubeMesh& out)>;
 
 // Runs the traversal of the options over the lattice, meshing each visited cube with `mesher`.
-// `method` names the method in errors and statistics; `extra` is merged into stats.extra.
+// `method` names the method in errors and statistics; `face_ambiguity` is Marching Cubes' rule
+// for the report (empty for Marching Tetrahedra).
 PolygonizeResult run_marching(const Field& field, const MarchingOptions& options, const char* method,
-                              const CubeMesher& mesher, const std::map<std::string, StatValue>& extra);
+                              const CubeMesher& mesher, const std::string& face_ambiguity);
 
 }  // namespace cdp::marching

@@ -64,7 +64,7 @@ PolygonizeResult marching_cubes(const Field& field, const MarchingOptions& optio
         for (int e : poly) out.centres.back().push_back(local(e));
       }
   };
-  return marching::run_marching(field, options, "mc", mesher, {{"face_ambiguity", to_string(rule)}});
+  return marching::run_marching(field, options, "mc", mesher, to_string(rule));
 }
 
 }  // namespace cdp

@@ -67,7 +67,7 @@ PolygonizeResult marching_tetrahedra(const Field& field, const MarchingOptions& 
       for (const CubeTriangle& tri : table.cases[t][mask]) out.triangles.push_back(tri);
     }
   };
-  return marching::run_marching(field, options, "mt", mesher, {});
+  return marching::run_marching(field, options, "mt", mesher, "");
 }
 
 }  // namespace cdp

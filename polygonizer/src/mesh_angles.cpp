@@ -1,4 +1,5 @@
 #include <cdp/core/mesh_angles.h>
+#include <cdp/core/polygonize_stats.h>
 
 #include <algorithm>
 #include <cmath>
@@ -46,17 +47,6 @@ AngleStatistics angle_statistics(const Mesh& mesh) {
   return s;
 }
 
-void add_angle_statistics(const Mesh& mesh, PolygonizeStats& stats) {
-  const AngleStatistics a = angle_statistics(mesh);
-  auto& x = stats.extra;
-  x["angles.min_degrees"] = a.min_degrees;
-  x["angles.mean_min_degrees"] = a.mean_min_degrees;
-  x["angles.mean_edge_ratio"] = a.mean_edge_ratio;
-  x["angles.share_under_10"] = a.share_under_10;
-  x["angles.share_under_20"] = a.share_under_20;
-  x["angles.share_under_30"] = a.share_under_30;
-  x["angles.cumulative_below_degrees"] = a.below;
-  x["angles.degenerate"] = a.degenerate;
-}
+void add_angle_statistics(const Mesh& mesh, PolygonizeStats& stats) { stats.angles = angle_statistics(mesh); }
 
 }  // namespace cdp

@@ -144,9 +144,9 @@ inline void expect_topology_both_traversals(MarchingMethod method, const Field& 
   }
   EXPECT_EQ(triangle_set(cont.mesh), triangle_set(grid.mesh));
   // One seed per component, each found by the seeds alone; every grid sign change reached.
-  EXPECT_EQ(cont.stats.extra.at("completion_starts").get<std::size_t>(), 0u);
-  EXPECT_EQ(cont.stats.extra.at("unreached_sign_changes").get<std::size_t>(), 0u);
-  EXPECT_GT(cont.stats.extra.at("sign_changes").get<std::size_t>(), 0u);
+  EXPECT_EQ(cont.stats.lattice->seeding->completion_starts, 0u);
+  EXPECT_EQ(cont.stats.lattice->seeding->unreached_sign_changes, 0u);
+  EXPECT_GT(cont.stats.lattice->seeding->sign_changes, 0u);
 }
 
 // A spherical shell 0.2 thick: two sheets, 0.2 apart, inside one cluster of seed-grid cells.
@@ -210,9 +210,9 @@ inline void expect_no_degenerate_triangles(MarchingMethod method, const Field& f
     const TriangleShapes s = triangle_shapes(r.mesh);
     EXPECT_GT(s.min_area, kMinArea * cell * cell);
     EXPECT_LT(s.max_edge_ratio, kMaxEdgeRatio);
-    EXPECT_GT(r.stats.extra.at("collapsed_edges").get<std::size_t>(), 0u);
-    EXPECT_EQ(r.stats.extra.at("short_edges_left").get<std::size_t>(), 0u);
-    EXPECT_EQ(r.stats.extra.at("dropped_components").get<std::size_t>(), 0u);
+    EXPECT_GT(r.stats.lattice->collapsed_edges, 0u);
+    EXPECT_EQ(r.stats.lattice->short_edges_left, 0u);
+    EXPECT_EQ(r.stats.lattice->dropped_components, 0u);
   }
 }
 
@@ -226,11 +226,11 @@ inline void expect_continuation_finds_what_the_seeds_miss(MarchingMethod method,
   EXPECT_EQ(cont.stats.components, components);
   EXPECT_TRUE(triangle_set(cont.mesh) == triangle_set(grid.mesh))
       << cont.mesh.num_triangles() << " triangles from the continuation, " << grid.mesh.num_triangles() << " from the grid";
-  EXPECT_LT(cont.stats.extra.at("seeds").get<std::size_t>(), components);  // the case is what it claims
-  EXPECT_EQ(cont.stats.extra.at("starts").get<std::size_t>(), components);
-  EXPECT_EQ(cont.stats.extra.at("completion_starts").get<std::size_t>(),
-            components - cont.stats.extra.at("seeds").get<std::size_t>());
-  EXPECT_EQ(cont.stats.extra.at("unreached_sign_changes").get<std::size_t>(), 0u);
+  EXPECT_LT(cont.stats.lattice->seeding->seeds, components);  // the case is what it claims
+  EXPECT_EQ(cont.stats.lattice->seeding->starts, components);
+  EXPECT_EQ(cont.stats.lattice->seeding->completion_starts,
+            components - cont.stats.lattice->seeding->seeds);
+  EXPECT_EQ(cont.stats.lattice->seeding->unreached_sign_changes, 0u);
 }
 
 // Relative area errors at the given cells (continuation), for checking convergence.

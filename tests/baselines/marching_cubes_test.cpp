@@ -82,7 +82,7 @@ TEST(MarchingCubes, EveryCaseOfRandomFieldsClosesUpUnderEveryAmbiguityRule) {
       test::expect_closed_manifold(t);
       EXPECT_EQ(t.euler_characteristic, 2 * static_cast<int>(t.components) - 2 * t.genus);
       EXPECT_GT(t.components + t.genus, 5u);  // many pieces and handles: not a trivial test
-      centre_vertices += r.stats.extra.at("centre_vertices").get<std::size_t>();
+      centre_vertices += r.stats.lattice->centre_vertices;
     }
   EXPECT_GT(centre_vertices, 0u);  // the polygons fanned around a centre vertex occur too
 }
@@ -113,7 +113,7 @@ TEST(MarchingCubes, VerticesLieOnTheSurfaceWithinTheRootTolerance) {
       double worst = 0;
       for (const Vec3& p : r.mesh.positions) worst = std::max(worst, std::abs(f->value(p)));
       EXPECT_LE(worst, tol * (1 + 1e-6)) << f->type_name();
-      EXPECT_DOUBLE_EQ(r.stats.extra.at("root_tolerance").get<double>(), tol);
+      EXPECT_DOUBLE_EQ(r.stats.lattice->root_tolerance, tol);
     }
 }
 
@@ -130,14 +130,14 @@ TEST(MarchingCubes, ContinuationEvaluatesOnlyNearTheSurfaceAndIsDeterministic) {
   const PolygonizeResult grid = marching_cubes(sphere, test::marching_options(0.02, Traversal::Grid));
   // 111^3 lattice corners against a shell of cubes one cell thick: many times fewer.
   // Root searches cost the same in both (same crossed edges); the lattice corners do not.
-  const auto corners = [](const PolygonizeResult& r) { return r.stats.extra.at("corner_evaluations").get<std::size_t>(); };
+  const auto corners = [](const PolygonizeResult& r) { return r.stats.lattice->corner_evaluations; };
   EXPECT_LT(corners(cont) * 10, corners(grid));
   EXPECT_LT(cont.stats.field_evaluations.value, grid.stats.field_evaluations.value);
-  EXPECT_EQ(cont.stats.extra.at("root_evaluations"), grid.stats.extra.at("root_evaluations"));
+  EXPECT_EQ(cont.stats.lattice->root_evaluations, grid.stats.lattice->root_evaluations);
   EXPECT_GT(cont.stats.field_evaluations.value_gradient, 0u);  // normals
   EXPECT_EQ(cont.stats.method, "mc");
-  EXPECT_EQ(cont.stats.extra.at("traversal"), "continuation");
-  EXPECT_EQ(grid.stats.extra.at("traversal"), "grid");
+  EXPECT_EQ(cont.stats.lattice->traversal, "continuation");
+  EXPECT_EQ(grid.stats.lattice->traversal, "grid");
   const PolygonizeResult again = marching_cubes(sphere, test::marching_options(0.02, Traversal::Continuation));
   EXPECT_EQ(again.mesh.positions, cont.mesh.positions);
   EXPECT_EQ(again.mesh.triangles, cont.mesh.triangles);
@@ -152,8 +152,8 @@ TEST(MarchingCubes, ContinuationReportsSignChangesTheLatticeCannotReach) {
               "bounds": [[-2, -2, -2], [2, 2, 2]]})json");
   const PolygonizeResult r = marching_cubes(*field, test::marching_options(0.35, Traversal::Continuation));
   EXPECT_EQ(r.stats.components, 1u);
-  EXPECT_EQ(r.stats.extra.at("unreached_sign_changes").get<std::size_t>(), 6u);
-  EXPECT_EQ(r.stats.extra.at("completion_starts").get<std::size_t>(), 0u);
+  EXPECT_EQ(r.stats.lattice->seeding->unreached_sign_changes, 6u);
+  EXPECT_EQ(r.stats.lattice->seeding->completion_starts, 0u);
 }
 
 // A sphere of radius h/250 around a lattice corner: Marching Cubes cuts an octahedron with
@@ -170,7 +170,7 @@ TEST(MarchingCubes, PiecesBelowTheCollapseLengthAreDroppedAndCounted) {
     test::expect_closed_manifold(t);
     EXPECT_EQ(t.components, 1u);
     EXPECT_EQ(r.stats.components, 1u);
-    EXPECT_EQ(r.stats.extra.at("dropped_components").get<std::size_t>(), 1u);
+    EXPECT_EQ(r.stats.lattice->dropped_components, 1u);
   }
 }
 
@@ -196,7 +196,7 @@ TEST(MarchingCubes, SurfaceLeavingTheBoxIsAnErrorUnlessClippingIsAsked) {
   o.require_closed_in_box = false;
   const PolygonizeResult r = marching_cubes(sphere, o);
   EXPECT_GT(analyze_topology(r.mesh).boundary_edges, 0u);
-  EXPECT_GT(r.stats.extra.at("open_boundary_faces").get<std::size_t>(), 0u);
+  EXPECT_GT(r.stats.lattice->open_boundary_faces.value(), 0u);
 }
 
 TEST(MarchingCubes, ProgressRisesToOne) {

@@ -110,10 +110,10 @@ TEST(MarchingTetrahedra, ContinuationEvaluatesOnlyNearTheSurface) {
   const PolygonizeResult cont = marching_tetrahedra(sphere, test::marching_options(0.02, Traversal::Continuation));
   const PolygonizeResult grid = marching_tetrahedra(sphere, test::marching_options(0.02, Traversal::Grid));
   // Root searches cost the same in both (same crossed edges); the lattice corners do not.
-  const auto corners = [](const PolygonizeResult& r) { return r.stats.extra.at("corner_evaluations").get<std::size_t>(); };
+  const auto corners = [](const PolygonizeResult& r) { return r.stats.lattice->corner_evaluations; };
   EXPECT_LT(corners(cont) * 10, corners(grid));
   EXPECT_LT(cont.stats.field_evaluations.value, grid.stats.field_evaluations.value);
-  EXPECT_EQ(cont.stats.extra.at("root_evaluations"), grid.stats.extra.at("root_evaluations"));
+  EXPECT_EQ(cont.stats.lattice->root_evaluations, grid.stats.lattice->root_evaluations);
   EXPECT_EQ(cont.stats.method, "mt");
   // More triangles than Marching Cubes on the same lattice: each cube is cut six times.
   EXPECT_GT(cont.stats.triangles, 0u);

@@ -208,7 +208,7 @@ TEST(AdaptiveAngles, CreasedSurfacesAwayFromTheCreases) {
       const PolygonizeResult r = polygonize_adaptive(*field, o);
       const std::string what = name + (run == 0 ? " factor 3" : " eps 1e-2");
       expect_sound(r.mesh, what);
-      EXPECT_TRUE(r.stats.extra.at("creases.followed").get<bool>()) << what;
+      EXPECT_TRUE(r.stats.adaptive->creases.followed) << what;
       const Mesh away = away_from_creases(*field, r.mesh, 1);
       EXPECT_GT(away.num_triangles(), 0u) << what;
       const AngleStatistics a = angle_statistics(away);
@@ -323,8 +323,8 @@ TEST(AdaptiveTolerance, ReportsTheTrianglesFartherThanEpsMeasuredDensely) {
     if (d > o.tolerance) ++beyond;
     worst = std::max(worst, d);
   }
-  const std::size_t measured = r.stats.extra.at("quality.measured_densely").get<std::size_t>();
-  const std::size_t over = r.stats.extra.at("quality.over_tolerance").get<std::size_t>();
+  const std::size_t measured = r.stats.adaptive->quality.measured_densely;
+  const std::size_t over = r.stats.adaptive->quality.over_tolerance;
   std::cout << "sphere eps 4e-4: " << r.mesh.num_triangles() << " triangles, " << measured << " measured, " << over
             << " over, " << beyond << " beyond by the test, worst " << worst << "\n";
   EXPECT_GT(beyond, 0u);
@@ -333,7 +333,7 @@ TEST(AdaptiveTolerance, ReportsTheTrianglesFartherThanEpsMeasuredDensely) {
   // The same distance by two computations (the polygonizer's Newton path, the test's nearest of
   // the path's end and its foot steps; on a sphere both are radial): equal within the accuracy
   // both projections are asked for, not bit for bit (they differed by 48 ulps on one mesh).
-  EXPECT_NEAR(r.stats.extra.at("quality.over_tolerance_worst").get<double>(), worst,
+  EXPECT_NEAR(r.stats.adaptive->quality.over_tolerance_worst, worst,
               1e-10 * field->bounds().diagonal());
 }
 
@@ -351,13 +351,13 @@ TEST(AdaptiveTolerance, TrianglesNearTheBoundAreMeasuredBeforeTheyAreSplit) {
   const PolygonizeResult r = polygonize_adaptive(*field, o);
   const std::string what = "capped sphere eps 2e-3";
   expect_sound(r.mesh, what);
-  EXPECT_TRUE(r.stats.extra.at("creases.followed").get<bool>());
-  const auto& x = r.stats.extra;
-  EXPECT_GT(x.at("quality.refine_cleared").get<std::size_t>(), 0u);
-  EXPECT_LE(x.at("quality.refine_cleared").get<std::size_t>(), x.at("quality.refine_measured").get<std::size_t>());
-  EXPECT_EQ(x.at("quality.over_tolerance").get<std::size_t>(), 0u);
+  EXPECT_TRUE(r.stats.adaptive->creases.followed);
+  const AdaptiveReport& x = *r.stats.adaptive;
+  EXPECT_GT(x.quality.refine_cleared, 0u);
+  EXPECT_LE(x.quality.refine_cleared, x.quality.refine_measured);
+  EXPECT_EQ(x.quality.over_tolerance, 0u);
   const AngleStatistics a = angle_statistics(r.mesh);
-  std::cout << what << ": " << r.mesh.num_triangles() << " triangles, " << x.at("quality.splits").get<std::size_t>()
+  std::cout << what << ": " << r.mesh.num_triangles() << " triangles, " << x.quality.splits
             << " splits, mean edge ratio " << a.mean_edge_ratio << ", min angle " << a.min_degrees << "\n";
   EXPECT_LE(a.mean_edge_ratio, 1.2);
   EXPECT_GE(a.min_degrees, 20.0);
@@ -392,7 +392,7 @@ TEST_P(ToleranceBound, LargestDistanceAtMostEps) {
   // The tolerance's edge splits leave vertices of valence 4 and 8; the relaxation's flips
   // bring the ratio back under the bound (random blobs at 1e-3: 1.34 with its moves alone).
   EXPECT_LE(a.mean_edge_ratio, kMeanEdgeRatio) << what;
-  EXPECT_EQ(r.stats.extra.at("quality.over_tolerance").get<std::size_t>(), 0u);
+  EXPECT_EQ(r.stats.adaptive->quality.over_tolerance, 0u);
 }
 
 std::vector<ToleranceCase> tolerance_cases() {
@@ -440,7 +440,7 @@ TEST(AdaptiveTolerance, ACreaseMeshedAcrossIsNotSplitWithoutEnd) {
   const PolygonizeResult r = polygonize_adaptive(*field, o);
   expect_sound(r.mesh, "cube across its creases eps 5e-4");
   EXPECT_LT(r.mesh.num_triangles(), 1500u);
-  EXPECT_GT(r.stats.extra.at("quality.over_tolerance").get<std::size_t>(), 0u);
+  EXPECT_GT(r.stats.adaptive->quality.over_tolerance, 0u);
 }
 
 TEST(AdaptiveTolerance, ANarrowRidgeIsRefinedAcrossItsOtherEdges) {
@@ -455,7 +455,7 @@ TEST(AdaptiveTolerance, ANarrowRidgeIsRefinedAcrossItsOtherEdges) {
   o.tolerance = 0.0010351162319589128;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
   expect_sound(r.mesh, "bunny vis2000 eps 1.035e-3");
-  EXPECT_EQ(r.stats.extra.at("quality.over_tolerance").get<std::size_t>(), 0u);
+  EXPECT_EQ(r.stats.adaptive->quality.over_tolerance, 0u);
 #if defined(__SANITIZE_ADDRESS__)
   // Every triangle measured densely, 2000 centres a value: more than the ten minutes ctest
   // allows under the sanitizers (release: 5 s). There, the ridge's neighbourhood only.
@@ -503,8 +503,8 @@ TEST_P(LastResort, SplitsWhatTheRefinementLeftBeyondTheTolerance) {
   const PolygonizeResult r = polygonize_adaptive(*field, o);
   const std::string what = c.name + " eps " + std::to_string(c.eps);
   expect_sound(r.mesh, what);
-  EXPECT_GT(r.stats.extra.at("quality.last_resorts").get<std::size_t>(), 0u) << what;
-  EXPECT_EQ(r.stats.extra.at("quality.over_tolerance").get<std::size_t>(), 0u) << what;
+  EXPECT_GT(r.stats.adaptive->quality.last_resorts, 0u) << what;
+  EXPECT_EQ(r.stats.adaptive->quality.over_tolerance, 0u) << what;
   double worst = 0;
   std::size_t measured = 0;
   for (const auto& t : r.mesh.triangles) {
@@ -514,7 +514,7 @@ TEST_P(LastResort, SplitsWhatTheRefinementLeftBeyondTheTolerance) {
     ++measured;
   }
   std::cout << "last resort " << what << ": " << r.mesh.num_triangles() << " triangles, "
-            << r.stats.extra.at("quality.last_resorts").get<std::size_t>() << " last resorts, " << measured
+            << r.stats.adaptive->quality.last_resorts << " last resorts, " << measured
             << " measured, largest distance " << worst / c.eps << " eps\n";
   EXPECT_GT(measured, 0u);
   EXPECT_LE(worst, c.eps) << what;
@@ -549,8 +549,8 @@ TEST(AdaptiveTolerance, SidePointsKeepSliversFromHingingOnAFillet) {
   o.tolerance = 1e-2;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
   expect_sound(r.mesh, "blobs39 eps 1e-2");
-  EXPECT_GT(r.stats.extra.at("side_points").get<std::size_t>(), 0u);
-  EXPECT_EQ(r.stats.extra.at("quality.over_tolerance").get<std::size_t>(), 0u);
+  EXPECT_GT(r.stats.adaptive->tracker.side_points, 0u);
+  EXPECT_EQ(r.stats.adaptive->quality.over_tolerance, 0u);
   EXPECT_GE(angle_statistics(r.mesh).min_degrees, 20.0);
   const Vec3 fillet(0.96, -1.28, -0.38);
   double worst = 0;
@@ -594,12 +594,12 @@ TEST(AdaptiveAngles, AMeshMissingTheBoundsIsMadeAgainWithTheLookAhead) {
     const MeshTopology t = analyze_topology(r.mesh);
     EXPECT_EQ(t.components, c.components) << what;
     EXPECT_EQ(t.genus, c.genus) << what;
-    EXPECT_TRUE(r.stats.extra.at("quality_rerun").get<bool>()) << what;
-    EXPECT_TRUE(r.stats.extra.at("quality_rerun_kept").get<bool>()) << what;
-    EXPECT_TRUE(r.stats.extra.at("look_ahead").get<bool>()) << what;
+    EXPECT_TRUE(r.stats.adaptive->recoveries.quality_rerun) << what;
+    EXPECT_TRUE(r.stats.adaptive->recoveries.quality_rerun_kept) << what;
+    EXPECT_TRUE(r.stats.adaptive->recoveries.look_ahead) << what;
     const AngleStatistics a = expect_smooth_angles(r.mesh, what);
     EXPECT_LE(a.mean_edge_ratio, kMeanEdgeRatio) << what;
-    EXPECT_EQ(r.stats.extra.at("quality.over_tolerance").get<std::size_t>(), 0u) << what;
+    EXPECT_EQ(r.stats.adaptive->quality.over_tolerance, 0u) << what;
   }
 }
 
@@ -629,14 +629,14 @@ TEST(AdaptiveAngles, ARelaxationLeftOverTheMeanEdgeRatioSearchesItsMoves) {
     expect_sound(r.mesh, what);
     expect_on_surface(*field, r.mesh, what);
     EXPECT_EQ(analyze_topology(r.mesh).components, 1u) << what;
-    const auto& x = r.stats.extra;
-    EXPECT_GE(x.at("quality.relax_search_sweeps").get<std::size_t>(), 1u) << what;
-    EXPECT_GT(x.at("quality.relax_searched").get<std::size_t>(), 0u) << what;
-    EXPECT_LE(x.at("quality.relax_searched").get<std::size_t>(), x.at("quality.relaxed").get<std::size_t>()) << what;
-    EXPECT_FALSE(x.at("quality_rerun").get<bool>()) << what;
+    const AdaptiveReport& x = *r.stats.adaptive;
+    EXPECT_GE(x.quality.relax_search_sweeps, 1u) << what;
+    EXPECT_GT(x.quality.relax_searched, 0u) << what;
+    EXPECT_LE(x.quality.relax_searched, x.quality.relaxed) << what;
+    EXPECT_FALSE(x.recoveries.quality_rerun) << what;
     const AngleStatistics a = expect_smooth_angles(r.mesh, what);
     EXPECT_LE(a.mean_edge_ratio, kMeanEdgeRatio) << what;
-    EXPECT_EQ(x.at("quality.over_tolerance").get<std::size_t>(), 0u) << what;
+    EXPECT_EQ(x.quality.over_tolerance, 0u) << what;
   }
   // A field with creases (min, max, abs) meshed along them searches too (the cube at factor 3:
   // 1.343 -> 1.309; its crease vertices never move, so the mean stays over the aim there);
@@ -652,15 +652,15 @@ TEST(AdaptiveAngles, ARelaxationLeftOverTheMeanEdgeRatioSearchesItsMoves) {
     const bool follow = h == CreaseHandling::Follow;
     const std::string what = std::string("cube factor 3, creases ") + (follow ? "followed" : "ignored");
     expect_sound(r.mesh, what);
-    EXPECT_EQ(r.stats.extra.at("creases.followed").get<bool>(), follow) << what;
+    EXPECT_EQ(r.stats.adaptive->creases.followed, follow) << what;
     const AngleStatistics a = angle_statistics(r.mesh);
     std::cout << "angles " << what << ": min " << a.min_degrees << ", mean edge ratio " << a.mean_edge_ratio << "\n";
     if (follow) {
-      EXPECT_GE(r.stats.extra.at("quality.relax_search_sweeps").get<std::size_t>(), 1u) << what;
-      EXPECT_GT(r.stats.extra.at("quality.relax_searched").get<std::size_t>(), 0u) << what;
+      EXPECT_GE(r.stats.adaptive->quality.relax_search_sweeps, 1u) << what;
+      EXPECT_GT(r.stats.adaptive->quality.relax_searched, 0u) << what;
       EXPECT_GE(a.min_degrees, 20.0) << what;
     } else {
-      EXPECT_EQ(r.stats.extra.at("quality.relax_search_sweeps").get<std::size_t>(), 0u) << what;
+      EXPECT_EQ(r.stats.adaptive->quality.relax_search_sweeps, 0u) << what;
       EXPECT_GT(a.mean_edge_ratio, kMeanEdgeRatio) << what;
     }
   }
@@ -673,10 +673,10 @@ TEST(AdaptiveAngles, OnlyAnImprovedMeshMissingTheBoundsIsMadeAgain) {
     AdaptiveOptions o;
     o.factor = 3;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
-    EXPECT_FALSE(r.stats.extra.at("quality_rerun").get<bool>());
-    EXPECT_FALSE(r.stats.extra.at("look_ahead").get<bool>());
-    EXPECT_EQ(r.stats.extra.at("quality.relax_search_sweeps").get<std::size_t>(), 0u);
-    EXPECT_EQ(r.stats.extra.at("quality.relax_searched").get<std::size_t>(), 0u);
+    EXPECT_FALSE(r.stats.adaptive->recoveries.quality_rerun);
+    EXPECT_FALSE(r.stats.adaptive->recoveries.look_ahead);
+    EXPECT_EQ(r.stats.adaptive->quality.relax_search_sweeps, 0u);
+    EXPECT_EQ(r.stats.adaptive->quality.relax_searched, 0u);
   }
   // A run whose triangles the caller bounded is never made again (nor is paper mode's:
   // AdaptivePaperVariant.SwitchesOffEveryAddition).
@@ -687,8 +687,8 @@ TEST(AdaptiveAngles, OnlyAnImprovedMeshMissingTheBoundsIsMadeAgain) {
   o.max_triangles = 1000000;
   const PolygonizeResult bounded = polygonize_adaptive(*field, o);
   EXPECT_LT(angle_statistics(bounded.mesh).min_degrees, 20.0);
-  EXPECT_FALSE(bounded.stats.extra.at("quality_rerun").get<bool>());
-  EXPECT_FALSE(bounded.stats.extra.at("look_ahead").get<bool>());
+  EXPECT_FALSE(bounded.stats.adaptive->recoveries.quality_rerun);
+  EXPECT_FALSE(bounded.stats.adaptive->recoveries.look_ahead);
 }
 
 TEST(AdaptivePaperVariant, SwitchesOffEveryAddition) {
@@ -697,32 +697,41 @@ TEST(AdaptivePaperVariant, SwitchesOffEveryAddition) {
   o.factor = 3;
   o.variant = Variant::Paper;
   const PolygonizeResult p = polygonize_adaptive(*field, o);
-  const auto& x = p.stats.extra;
-  EXPECT_EQ(x.at("variant"), "paper");
-  EXPECT_EQ(x.at("triangle_count_rule"), "hartmann");
-  EXPECT_FALSE(x.at("grading").get<bool>());
-  EXPECT_FALSE(x.at("quality_repair").get<bool>());
-  EXPECT_FALSE(x.at("tolerance_refinement").get<bool>());
-  for (const char* k : {"quality.flips", "quality.moves", "quality.relaxed", "quality.relax_flips",
-                        "quality.relax_searched", "quality.relax_search_sweeps", "quality.collapses",
-                        "quality.splits", "quality.last_resorts", "side_points"})
-    EXPECT_EQ(x.at(k).get<std::size_t>(), 0u) << k;
+  const AdaptiveReport& x = *p.stats.adaptive;
+  EXPECT_EQ(x.settings.variant, Variant::Paper);
+  EXPECT_EQ(x.settings.triangle_count, TriangleCountRule::Hartmann);
+  EXPECT_FALSE(x.settings.grading);
+  EXPECT_FALSE(x.settings.quality_repair);
+  EXPECT_FALSE(x.settings.tolerance_refinement);
+  const QualityReport& q = x.quality;
+  const std::pair<const char*, std::size_t> repairs[] = {
+      {"flips", q.flips},
+      {"moves", q.moves},
+      {"relaxed", q.relaxed},
+      {"relax_flips", q.relax_flips},
+      {"relax_searched", q.relax_searched},
+      {"relax_search_sweeps", q.relax_search_sweeps},
+      {"collapses", q.collapses},
+      {"splits", q.splits},
+      {"last_resorts", q.last_resorts},
+      {"side_points", x.tracker.side_points}};
+  for (const auto& [name, n] : repairs) EXPECT_EQ(n, 0u) << name;
   expect_sound(p.mesh, "paper tanglecube");
   // Its slivers (issue 18's bounds are the improved variant's) do not make it mesh again with
   // the look-ahead.
   EXPECT_LT(angle_statistics(p.mesh).min_degrees, 20.0);
-  EXPECT_FALSE(x.at("quality_rerun").get<bool>());
-  EXPECT_FALSE(x.at("look_ahead").get<bool>());
+  EXPECT_FALSE(x.recoveries.quality_rerun);
+  EXPECT_FALSE(x.recoveries.look_ahead);
 
   // The default variant on the same surface has each addition on, and they act.
   o.variant = Variant::Improved;
   const PolygonizeResult d = polygonize_adaptive(*field, o);
-  EXPECT_EQ(d.stats.extra.at("variant"), "improved");
-  EXPECT_TRUE(d.stats.extra.at("grading").get<bool>());
-  EXPECT_TRUE(d.stats.extra.at("quality_repair").get<bool>());
-  EXPECT_GT(d.stats.extra.at("quality.flips").get<std::size_t>(), 0u);
-  EXPECT_GT(d.stats.extra.at("quality.relaxed").get<std::size_t>(), 0u);
-  EXPECT_GT(d.stats.extra.at("quality.relax_flips").get<std::size_t>(), 0u);
+  EXPECT_EQ(d.stats.adaptive->settings.variant, Variant::Improved);
+  EXPECT_TRUE(d.stats.adaptive->settings.grading);
+  EXPECT_TRUE(d.stats.adaptive->settings.quality_repair);
+  EXPECT_GT(d.stats.adaptive->quality.flips, 0u);
+  EXPECT_GT(d.stats.adaptive->quality.relaxed, 0u);
+  EXPECT_GT(d.stats.adaptive->quality.relax_flips, 0u);
   EXPECT_LT(angle_statistics(d.mesh).mean_edge_ratio, angle_statistics(p.mesh).mean_edge_ratio);
   EXPECT_GT(angle_statistics(d.mesh).min_degrees, angle_statistics(p.mesh).min_degrees);
 
@@ -732,11 +741,11 @@ TEST(AdaptivePaperVariant, SwitchesOffEveryAddition) {
   o.tolerance = 1e-2;
   o.variant = Variant::Paper;
   const PolygonizeResult pt = polygonize_adaptive(*field, o);
-  EXPECT_FALSE(pt.stats.extra.at("tolerance_refinement").get<bool>());
-  EXPECT_EQ(pt.stats.extra.at("quality.splits").get<std::size_t>(), 0u);
+  EXPECT_FALSE(pt.stats.adaptive->settings.tolerance_refinement);
+  EXPECT_EQ(pt.stats.adaptive->quality.splits, 0u);
   o.variant = Variant::Improved;
   const PolygonizeResult dt = polygonize_adaptive(*field, o);
-  EXPECT_TRUE(dt.stats.extra.at("tolerance_refinement").get<bool>());
+  EXPECT_TRUE(dt.stats.adaptive->settings.tolerance_refinement);
   // The improved sizing asks for shorter edges (a share of eps), so more triangles.
   EXPECT_GT(dt.mesh.num_triangles(), pt.mesh.num_triangles());
 }

@@ -57,7 +57,7 @@ void expect_valid(const PolygonizeResult& r, int genus) {
   EXPECT_EQ(t.components, 1u);
   EXPECT_EQ(t.genus, genus);
   EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
-  EXPECT_TRUE(r.stats.extra.at("creases.followed").get<bool>()) << r.stats.extra.at("creases.fallback").get<std::string>();
+  EXPECT_TRUE(r.stats.adaptive->creases.followed) << r.stats.adaptive->creases.fallback;
 }
 
 // A cube offset from the origin (so that no crease sits on a coordinate plane through 0).
@@ -73,8 +73,8 @@ TEST(AdaptiveCreases, CubeEdgesLieOnTheCreasesAndCoverThem) {
     o.factor = factor;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
     expect_valid(r, 0);
-    EXPECT_EQ(r.stats.extra.at("creases.curves").get<std::size_t>(), 12u);
-    EXPECT_EQ(r.stats.extra.at("creases.corners").get<std::size_t>(), 8u);
+    EXPECT_EQ(r.stats.adaptive->creases.curves, 12u);
+    EXPECT_EQ(r.stats.adaptive->creases.corners, 8u);
     // Every sharp edge runs along a cube edge: two of its coordinates (shifted) are +-1 at both
     // ends, to the Newton tolerance; together they are the 12 edges' whole length, 24.
     double length = 0;
@@ -99,8 +99,8 @@ TEST(AdaptiveCreases, IgnoringCreasesMeshesAsBefore) {
   o.factor = 3;
   o.creases = CreaseHandling::Ignore;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
-  EXPECT_FALSE(r.stats.extra.at("creases.followed").get<bool>());
-  EXPECT_EQ(r.stats.extra.at("creases.curves").get<std::size_t>(), 0u);  // not even traced
+  EXPECT_FALSE(r.stats.adaptive->creases.followed);
+  EXPECT_EQ(r.stats.adaptive->creases.curves, 0u);  // not even traced
   double on_crease = 0;
   for (const auto& [a, b] : sharp_edges(r.mesh)) {
     const Vec3 pa = r.mesh.positions[a].array() + kOffset, pb = r.mesh.positions[b].array() + kOffset;
@@ -124,7 +124,7 @@ TEST(AdaptiveCreases, CappedCylinderRimsAreMeshEdges) {
     o.factor = factor;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
     expect_valid(r, 0);
-    EXPECT_EQ(r.stats.extra.at("creases.curves").get<std::size_t>(), 2u) << json;
+    EXPECT_EQ(r.stats.adaptive->creases.curves, 2u) << json;
     double length = 0;
     for (const auto& [a, b] : sharp_edges(r.mesh)) {
       for (const Vec3& p : {r.mesh.positions[a], r.mesh.positions[b]}) {
@@ -149,7 +149,7 @@ TEST(AdaptiveCreases, BoxMinusBallMeshesWithItsHoles) {
     o.factor = factor;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
     expect_valid(r, 5);
-    EXPECT_EQ(r.stats.extra.at("creases.curves").get<std::size_t>(), 18u);
+    EXPECT_EQ(r.stats.adaptive->creases.curves, 18u);
   }
 }
 
@@ -195,9 +195,9 @@ TEST(AdaptiveCreases, ALayoutThatFailsFallsBackToSmoothMeshingAndSaysWhy) {
   AdaptiveOptions o;
   o.factor = 1;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
-  EXPECT_FALSE(r.stats.extra.at("creases.followed").get<bool>());
-  EXPECT_NE(r.stats.extra.at("creases.fallback").get<std::string>().find("corner"), std::string::npos);
-  EXPECT_EQ(r.stats.extra.at("creases.tracing_resolution").get<int>(), 64);  // tried twice
+  EXPECT_FALSE(r.stats.adaptive->creases.followed);
+  EXPECT_NE(r.stats.adaptive->creases.fallback.find("corner"), std::string::npos);
+  EXPECT_EQ(r.stats.adaptive->creases.tracing_resolution, 64);  // tried twice
   EXPECT_TRUE(analyze_topology(r.mesh).watertight());
 }
 
@@ -211,13 +211,13 @@ TEST(AdaptiveCreases, CreasesCrossingWhereTheirPiecesAreTangentAreFollowed) {
     AdaptiveOptions o;
     o.factor = factor;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
-    EXPECT_TRUE(r.stats.extra.at("creases.followed").get<bool>());
-    EXPECT_EQ(r.stats.extra.at("creases.fallback").get<std::string>(), "");
+    EXPECT_TRUE(r.stats.adaptive->creases.followed);
+    EXPECT_EQ(r.stats.adaptive->creases.fallback, "");
     test::expect_sound(r.mesh, "sheet over a ball");
     const MeshTopology t = analyze_topology(r.mesh);
     EXPECT_EQ(t.components, 1u);
     EXPECT_EQ(t.genus, 0);
-    EXPECT_GE(r.stats.extra.at("min_angle_degrees").get<double>(), 20.0);
+    EXPECT_GE(r.stats.adaptive->min_angle_degrees, 20.0);
   }
 }
 
@@ -287,7 +287,7 @@ TEST(AdaptiveCreases, GyroidBallHasOneGenusAtEveryFactor) {
     const MeshTopology t = analyze_topology(r.mesh);
     EXPECT_TRUE(t.watertight());
     EXPECT_EQ(t.components, 1u);
-    EXPECT_TRUE(r.stats.extra.at("creases.followed").get<bool>());
+    EXPECT_TRUE(r.stats.adaptive->creases.followed);
     EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
     genera.insert(t.genus);
   }

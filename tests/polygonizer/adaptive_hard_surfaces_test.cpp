@@ -210,20 +210,20 @@ TEST_P(HardSurfaces, CorrectMeshOrClearError) {
     EXPECT_EQ(static_cast<int>(t.components), components) << h.name;
     EXPECT_EQ(t.genus, genus) << h.name;
     EXPECT_EQ(test::count_self_intersections(r.mesh), 0u) << h.name;
-    EXPECT_EQ(r.stats.extra.at("uncovered_crossings").get<std::size_t>(), 0u);
+    EXPECT_EQ(r.stats.adaptive->seeding.uncovered, 0u);
     test::expect_phases_add_up(r, h.name);  // min_edge lowered and turn-limited runs among them
     // A chord deviation limits the turn from the start and makes no such last run.
     const bool turn_limited = tolerance > 0 && !chord &&
                               std::find(h.turn_limited_at.begin(), h.turn_limited_at.end(), tolerance) !=
                                   h.turn_limited_at.end();
-    EXPECT_EQ(r.stats.extra.at("turn_limited").get<bool>(), turn_limited) << h.name;
+    EXPECT_EQ(r.stats.adaptive->recoveries.turn_limited, turn_limited) << h.name;
     if (h.bends_below_min_edge && tolerance == 0) {
-      EXPECT_TRUE(r.stats.extra.at("min_edge_lowered").get<bool>());
-      EXPECT_LT(r.stats.extra.at("edge_length.min").get<double>(), 0.0083);  // the necks' radius (above)
+      EXPECT_TRUE(r.stats.adaptive->recoveries.min_edge_lowered);
+      EXPECT_LT(r.stats.adaptive->settings.min_edge, 0.0083);  // the necks' radius (above)
     }
     outcome = "meshed: " + std::to_string(t.triangles) + " triangles, " + std::to_string(t.components) +
               " components, genus " + std::to_string(t.genus) + ", min angle " +
-              std::to_string(r.stats.extra.at("min_angle_degrees").get<double>());
+              std::to_string(r.stats.adaptive->min_angle_degrees);
   } catch (const LimitExceededError& e) {
     outcome = std::string("error: ") + e.what();
   } catch (const NoSurfaceError& e) {
@@ -378,7 +378,7 @@ TEST(AdaptiveCarefulRun, ACoarseToleranceOnTheNeedleAndABlobFieldAtFactorOneMesh
   o.tolerance = 1e-2;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
   expect_topology(r.mesh, 1u, 0);
-  EXPECT_FALSE(r.stats.extra.at("remeshed_carefully").get<bool>());  // true without folds_across
+  EXPECT_FALSE(r.stats.adaptive->recoveries.remeshed_carefully);  // true without folds_across
 
   // blobs35 of the topology sweep (55 Wyvill blobs; blobs14, six blobs, was this case until the
   // grading became gentler, growth 1.25 per edge instead of 1.5, and its first run meshed it).
@@ -387,11 +387,11 @@ TEST(AdaptiveCarefulRun, ACoarseToleranceOnTheNeedleAndABlobFieldAtFactorOneMesh
   f1.factor = 1;
   const PolygonizeResult b = polygonize_adaptive(*blobs, f1);
   expect_topology(b.mesh, 7, 1);  // marching cubes at cells 0.048 and 0.036 agree
-  EXPECT_TRUE(b.stats.extra.at("remeshed_carefully").get<bool>());
-  EXPECT_EQ(b.stats.extra.at("careful_max_turn").get<double>(), 1.0);  // the careful run's own turn
+  EXPECT_TRUE(b.stats.adaptive->recoveries.remeshed_carefully);
+  EXPECT_EQ(b.stats.adaptive->recoveries.careful_max_turn, 1.0);  // the careful run's own turn
   // A surface that meshes the first time never gets the careful run.
   o.tolerance = 1e-3;
-  EXPECT_FALSE(polygonize_adaptive(*field, o).stats.extra.at("remeshed_carefully").get<bool>());
+  EXPECT_FALSE(polygonize_adaptive(*field, o).stats.adaptive->recoveries.remeshed_carefully);
 }
 
 }  // namespace
@@ -501,8 +501,8 @@ TEST(AdaptiveSlits, TheBarthBallsSlitAtFactorNineIsClosed) {
   o.factor = 9;
   o.min_edge = 0.0021;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
-  EXPECT_TRUE(r.stats.extra.at("creases.followed").get<bool>());
-  EXPECT_GT(r.stats.extra.at("forced_closures").get<std::size_t>(), 0u);
+  EXPECT_TRUE(r.stats.adaptive->creases.followed);
+  EXPECT_GT(r.stats.adaptive->tracker.forced_closures, 0u);
   expect_topology(r.mesh, 1, 30);
 }
 
@@ -520,7 +520,7 @@ TEST(AdaptiveSearchBound, TwoSpheresOnABarMeshSmoothAcrossTheirCreases) {
     o.factor = factor;
     o.creases = CreaseHandling::Ignore;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
-    EXPECT_TRUE(r.stats.extra.at("remeshed_with_rollbacks").get<bool>());
+    EXPECT_TRUE(r.stats.adaptive->recoveries.remeshed_with_rollbacks);
     expect_topology(r.mesh, 1, 0);
   }
 }
@@ -535,7 +535,7 @@ TEST(AdaptiveCreasePatches, TwoSpheresOnABarMeshAlongTheirCreasesAtEveryFactor) 
     AdaptiveOptions o;
     o.factor = factor;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
-    EXPECT_TRUE(r.stats.extra.at("creases.followed").get<bool>());
+    EXPECT_TRUE(r.stats.adaptive->creases.followed);
     expect_topology(r.mesh, 1, 0);
   }
 }
@@ -673,10 +673,10 @@ TEST(AdaptiveNecks, ANeckTheFrontsSteppedOverIsMeshedAgain) {
   o.tolerance = 1e-2;
   const PolygonizeResult r = polygonize_adaptive(*blobs30, o);
   expect_topology(r.mesh, 8u, 3);
-  EXPECT_EQ(r.stats.extra.at("necks.reruns").get<std::size_t>(), 1u);
-  EXPECT_FALSE(r.stats.extra.at("remeshed_carefully").get<bool>());
+  EXPECT_EQ(r.stats.adaptive->necks.reruns, 1u);
+  EXPECT_FALSE(r.stats.adaptive->recoveries.remeshed_carefully);
   // The second run's own mesh was tested too, and passed.
-  EXPECT_GT(r.stats.extra.at("necks.tested").get<std::size_t>(), 0u);
+  EXPECT_GT(r.stats.adaptive->necks.tested, 0u);
 }
 
 // The tanglecube has saddles of F near its six tunnels and at its centre: the search finds them,
@@ -689,8 +689,8 @@ TEST(AdaptiveNecks, TheSaddlesOfACorrectMeshLieOnTheirOwnSide) {
     o.factor = k;
     const PolygonizeResult r = polygonize_adaptive(*f, o);
     expect_topology(r.mesh, 1u, 5);
-    EXPECT_GE(r.stats.extra.at("necks.tested").get<std::size_t>(), 10u) << "factor " << k;
-    EXPECT_FALSE(r.stats.extra.at("remeshed_carefully").get<bool>()) << "factor " << k;
+    EXPECT_GE(r.stats.adaptive->necks.tested, 10u) << "factor " << k;
+    EXPECT_FALSE(r.stats.adaptive->recoveries.remeshed_carefully) << "factor " << k;
   }
 }
 
@@ -701,7 +701,7 @@ TEST(AdaptiveNeckCut, AShellIsNotACut) {
     o.factor = k;
     const PolygonizeResult r = polygonize_adaptive(*f, o);
     EXPECT_EQ(analyze_topology(r.mesh).components, 2u) << "factor " << k;
-    EXPECT_FALSE(r.stats.extra.at("remeshed_carefully").get<bool>()) << "factor " << k;
+    EXPECT_FALSE(r.stats.adaptive->recoveries.remeshed_carefully) << "factor " << k;
   }
 }
 
@@ -727,22 +727,22 @@ TEST(AdaptiveFinerRun, WhatTheCarefulRunCannotMeshIsMeshedWithShorterEdgesWhereI
   f1.tolerance = 5e-2;
   const PolygonizeResult r18 = polygonize_adaptive(*b18, f1);
   expect_topology(r18.mesh, 3, 0);
-  EXPECT_TRUE(r18.stats.extra.at("remeshed_carefully").get<bool>());
-  EXPECT_EQ(r18.stats.extra.at("careful_max_turn").get<double>(), 0.5);
+  EXPECT_TRUE(r18.stats.adaptive->recoveries.remeshed_carefully);
+  EXPECT_EQ(r18.stats.adaptive->recoveries.careful_max_turn, 0.5);
 
   const auto b19 = load_field(dir + "blobs19.json");
   AdaptiveOptions f2;
   f2.factor = 2;
   const PolygonizeResult r19 = polygonize_adaptive(*b19, f2);
   expect_topology(r19.mesh, 2, 0);
-  EXPECT_EQ(r19.stats.extra.at("careful_max_turn").get<double>(), 0.25);
+  EXPECT_EQ(r19.stats.adaptive->recoveries.careful_max_turn, 0.25);
 
   // A run that meshes the first time has no careful turn.
   AdaptiveOptions f3;
   f3.factor = 3;
   const PolygonizeResult plain = polygonize_adaptive(*b18, f3);
-  EXPECT_FALSE(plain.stats.extra.at("remeshed_carefully").get<bool>());
-  EXPECT_EQ(plain.stats.extra.at("careful_max_turn").get<double>(), 0.0);
+  EXPECT_FALSE(plain.stats.adaptive->recoveries.remeshed_carefully);
+  EXPECT_EQ(plain.stats.adaptive->recoveries.careful_max_turn, 0.0);
 }
 
 }  // namespace

@@ -59,7 +59,7 @@ MeshTopology expect_good_mesh(const Field& field, const PolygonizeResult& r, con
   if (e.max_thin == 0) EXPECT_GT(s.min_angle_degrees, e.min_angle);
   else EXPECT_GT(s.min_angle_degrees, 1.0);
   EXPECT_LE(s.thin_fraction, e.max_thin);
-  EXPECT_NEAR(r.stats.extra.at("min_angle_degrees").get<double>(), s.min_angle_degrees, 1e-9);
+  EXPECT_NEAR(r.stats.adaptive->min_angle_degrees, s.min_angle_degrees, 1e-9);
   // Normals: unit, from the field gradient, hence outward.
   EXPECT_EQ(m.normals.size(), m.positions.size());
   double worst = 1;
@@ -80,7 +80,7 @@ TEST(AdaptivePolygonizer, SphereIsAClosedOutwardGenusZeroMesh) {
   const auto r = polygonize_adaptive(sphere, coarse(3));
   expect_good_mesh(sphere, r, {}, "sphere");
   EXPECT_EQ(r.stats.method, "adaptive");
-  EXPECT_EQ(r.stats.extra.at("seeds").get<int>(), 1);
+  EXPECT_EQ(r.stats.adaptive->seeding.seeds, 1u);
   EXPECT_GT(r.stats.field_evaluations.gradient_hessian, 0u);
 }
 
@@ -108,7 +108,7 @@ TEST(AdaptivePolygonizer, SeparateBlobsGiveOneComponentEach) {
   const auto field = test::three_separate_blobs();
   const auto r = polygonize_adaptive(*field, coarse(2));
   expect_good_mesh(*field, r, {3, 0}, "three blobs");
-  EXPECT_EQ(r.stats.extra.at("seeds").get<int>(), 3);
+  EXPECT_EQ(r.stats.adaptive->seeding.seeds, 3u);
 }
 
 TEST(AdaptivePolygonizer, BlobsTouchingInARingFormAHandle) {
@@ -193,10 +193,10 @@ TEST(AdaptivePolygonizer, ChordModeSizesForTheDeviationWithoutMeasuring) {
     o.tolerance = eps;
     const auto r = polygonize_adaptive(sphere, o);
     expect_good_mesh(sphere, r, {}, what);
-    EXPECT_EQ(r.stats.extra.at("sizing").get<std::string>(), "chord") << what;
-    EXPECT_FALSE(r.stats.extra.at("tolerance_refinement").get<bool>()) << what;
-    EXPECT_EQ(r.stats.extra.at("quality.refine_measured").get<double>(), 0) << what;
-    EXPECT_EQ(r.stats.extra.at("quality.splits").get<double>(), 0) << what;
+    EXPECT_EQ(r.stats.adaptive->settings.sizing, SizingMode::Chord) << what;
+    EXPECT_FALSE(r.stats.adaptive->settings.tolerance_refinement) << what;
+    EXPECT_EQ(r.stats.adaptive->quality.refine_measured, 0u) << what;
+    EXPECT_EQ(r.stats.adaptive->quality.splits, 0u) << what;
     double sag = 0, worst = 0;
     for (const auto& t : r.mesh.triangles) {
       const double d = 1.0 - ((r.mesh.positions[t[0]] + r.mesh.positions[t[1]] + r.mesh.positions[t[2]]) / 3).norm();
@@ -296,7 +296,7 @@ TEST(AdaptivePolygonizer, SameMeshOnOneThreadOrSeveral) {
   o.threads = 1;
   const auto a = polygonize_adaptive(*field, o);
   ASSERT_GT(a.mesh.num_triangles(), 8192u);
-  ASSERT_GT(a.stats.extra.at("quality.relaxed").get<double>(), 4 * 256.0);
+  ASSERT_GT(a.stats.adaptive->quality.relaxed, 4 * 256u);
   for (int threads : {2, 3, 0}) {
     o.threads = threads;
     const auto b = polygonize_adaptive(*field, o);
@@ -319,7 +319,7 @@ TEST(AdaptivePolygonizer, ACostlyFieldsEvaluationsSplitOnTwoThreadsWithTheSameMe
   AdaptiveOptions o = coarse(2);
   o.threads = 1;
   const auto a = polygonize_adaptive(vis, o);
-  EXPECT_EQ(a.stats.extra.at("split_evaluations").get<double>(), 0.0);
+  EXPECT_EQ(a.stats.adaptive->split_evaluations, 0u);
   o.threads = 2;
   const auto b = polygonize_adaptive(vis, o);
   ASSERT_EQ(a.mesh.triangles, b.mesh.triangles);
@@ -327,14 +327,14 @@ TEST(AdaptivePolygonizer, ACostlyFieldsEvaluationsSplitOnTwoThreadsWithTheSameMe
   EXPECT_EQ(a.stats.field_evaluations.total(), b.stats.field_evaluations.total());
   if (detail::available_processors() >= 2) {
     // Every Hessian of the tracking, and nothing of the other phases'.
-    EXPECT_GT(b.stats.extra.at("split_evaluations").get<double>(), 0.0);
-    EXPECT_EQ(b.stats.extra.at("split_evaluations").get<double>(),
-              b.stats.extra.at("phases.tracking.gradient_hessian").get<double>());
+    EXPECT_GT(b.stats.adaptive->split_evaluations, 0u);
+    EXPECT_EQ(b.stats.adaptive->split_evaluations,
+              b.stats.adaptive->phase("tracking").evaluations.gradient_hessian);
   } else {  // none is lent on one processor (helper_thread.h)
-    EXPECT_EQ(b.stats.extra.at("split_evaluations").get<double>(), 0.0);
+    EXPECT_EQ(b.stats.adaptive->split_evaluations, 0u);
   }
   const Torus torus(Vec3::Zero(), 1.0, 0.35);
-  EXPECT_EQ(polygonize_adaptive(torus, o).stats.extra.at("split_evaluations").get<double>(), 0.0);
+  EXPECT_EQ(polygonize_adaptive(torus, o).stats.adaptive->split_evaluations, 0u);
 }
 
 // With a tolerance the refinement measures each round's triangles on all cores first: the same
@@ -349,7 +349,7 @@ TEST(AdaptivePolygonizer, SameToleranceMeshOnOneThreadOrSeveral) {
     o.tolerance = 1e-3;
     o.threads = 1;
     const auto a = polygonize_adaptive(torus, o);
-    ASSERT_GT(a.stats.extra.at("quality.relaxed").get<double>(), 4 * 256.0) << to_string(mode);
+    ASSERT_GT(a.stats.adaptive->quality.relaxed, 4 * 256u) << to_string(mode);
     o.threads = 2;
     const auto b = polygonize_adaptive(torus, o);
     EXPECT_EQ(a.mesh.triangles, b.mesh.triangles) << to_string(mode);
@@ -367,7 +367,7 @@ TEST(AdaptivePolygonizer, CurvaturePropertiesAreAttachedOnRequest) {
   ASSERT_EQ(r.mesh.vertex_scalars.at("mac").size(), r.mesh.num_vertices());
   for (double m : r.mesh.vertex_scalars.at("mac")) EXPECT_NEAR(m, 0.5, 1e-6);
   for (double s : r.mesh.vertex_scalars.at("shape_index")) EXPECT_NEAR(s, -1.0, 1e-6);
-  EXPECT_GE(r.stats.extra.at("curvature_seconds").get<double>(), 0.0);
+  EXPECT_GE(r.stats.adaptive->tracker.curvature_seconds, 0.0);
 }
 
 TEST(AdaptivePolygonizer, TriangleCapEndsWithAClearError) {
@@ -488,21 +488,19 @@ TEST(AdaptivePolygonizer, PhasesAddUpToTheRun) {
     o.variant = c.variant;
     const PolygonizeResult r = polygonize_adaptive(*c.field, o);
     test::expect_phases_add_up(r, c.name);
-    const auto calls = [&](const std::string& name, const std::string& key) {
-      return r.stats.extra.at("phases." + name + "." + key).get<std::uint64_t>();
-    };
+    const auto calls = [&](const char* name) { return r.stats.adaptive->phase(name).evaluations; };
     // The seed grid samples values; the relaxation projects its moves (the paper variant has none).
-    EXPECT_GT(calls("seed_grid", "value"), 0u);
-    EXPECT_EQ(calls("quality", "value_gradient") > 0, c.variant == Variant::Improved);
+    EXPECT_GT(calls("seed_grid").value, 0u);
+    EXPECT_EQ(calls("quality").value_gradient > 0, c.variant == Variant::Improved);
     const bool creases = std::string(c.name) == "cube";
-    EXPECT_EQ(r.stats.extra.at("creases.followed").get<bool>(), creases);
-    EXPECT_EQ(calls("creases", "value_gradient") > 0, creases);
+    EXPECT_EQ(r.stats.adaptive->creases.followed, creases);
+    EXPECT_EQ(calls("creases").value_gradient > 0, creases);
     if (!creases) {
-      EXPECT_GT(calls("tracking", "gradient_hessian"), 0u);
+      EXPECT_GT(calls("tracking").gradient_hessian, 0u);
     }
     if (std::string(c.name) == "blobs26") {
-      EXPECT_TRUE(r.stats.extra.at("quality_rerun").get<bool>());
-      EXPECT_TRUE(r.stats.extra.at("remeshed_carefully").get<bool>());
+      EXPECT_TRUE(r.stats.adaptive->recoveries.quality_rerun);
+      EXPECT_TRUE(r.stats.adaptive->recoveries.remeshed_carefully);
     }
   }
 }
@@ -518,7 +516,7 @@ TEST(AdaptivePolygonizer, ThreadSafeAndSequentialPassesGetTheSameMesh) {
     o.factor = 4;
     if (tolerance) o.sizing = SizingMode::Tolerance;
     const PolygonizeResult a = polygonize_adaptive(torus, o), b = polygonize_adaptive(unshared, o);
-    ASSERT_GT(a.stats.extra.at("quality.relaxed").get<double>(), 2 * 256.0) << tolerance;
+    ASSERT_GT(a.stats.adaptive->quality.relaxed, 2 * 256u) << tolerance;
     EXPECT_EQ(a.mesh.positions, b.mesh.positions) << tolerance;
     EXPECT_EQ(a.mesh.triangles, b.mesh.triangles) << tolerance;
     if (tolerance) {

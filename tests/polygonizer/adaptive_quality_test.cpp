@@ -108,7 +108,7 @@ TEST(AdaptiveQuality, FansOntoAFinelyDividedCreaseAreOpenedOnTheirFace) {
   q.diagonal = 2 * std::sqrt(3.0) * kCubeHalf;
   q.min_edge = 2e-3 * q.diagonal;
   q.threads = 1;
-  const adaptive::QualityReport report = adaptive::improve_mesh(*field, mesh, q);
+  const QualityReport report = adaptive::improve_mesh(*field, mesh, q);
   const double after = min_angle_degrees(mesh);
   std::cout << "after the repair: smallest angle " << after << ", " << report.inserts << " inserts, "
             << report.bad_after << " triangles under 30 degrees\n";
@@ -123,7 +123,7 @@ TEST(AdaptiveQuality, FansOntoAFinelyDividedCreaseAreOpenedOnTheirFace) {
 }
 
 // improve_mesh on a copy of `mesh` with `threads`, its report, and the field evaluations it made.
-Mesh improved(const Field& field, Mesh m, adaptive::QualityOptions q, int threads, adaptive::QualityReport& report,
+Mesh improved(const Field& field, Mesh m, adaptive::QualityOptions q, int threads, QualityReport& report,
               std::size_t& evaluations) {
   q.threads = threads;
   field.reset_counts();
@@ -144,7 +144,7 @@ struct PushedVertex {
   adaptive::QualityOptions q;  // the improvement's options (threads set per call)
   Mesh mesh;       // the sphere with v pushed aside, and the obstacle (vertices from `first` on)
   Mesh reference;  // the sphere without the obstacle, improved on one thread
-  adaptive::QualityReport plain;  // that improvement's report
+  QualityReport plain;  // that improvement's report
   Vec3 back;       // where v ends in `reference`
   double edge = 0;
   int first = 0;
@@ -203,7 +203,7 @@ TEST(AdaptiveQuality, ARelaxationMoveAcrossATriangleIsRefusedAndTheOthersStandOn
   const PushedVertex x = pushed_vertex(0);
   ASSERT_FALSE(HasFailure());
 
-  adaptive::QualityReport one, two;
+  QualityReport one, two;
   std::size_t evals_one = 0, evals_two = 0;
   const Mesh a = improved(*x.field, x.mesh, x.q, 1, one, evals_one), b = improved(*x.field, x.mesh, x.q, 2, two, evals_two);
   std::cout << "moves kept " << one.relaxed << " (" << x.plain.relaxed << " without the obstacle), refused for crossing "
@@ -235,7 +235,7 @@ TEST(AdaptiveQuality, ARefusedRelaxationMoveWithAToleranceCountsTheSameOnAnyThre
   const PushedVertex x = pushed_vertex(5e-3);
   ASSERT_FALSE(HasFailure());
 
-  adaptive::QualityReport one, two;
+  QualityReport one, two;
   std::size_t evals_one = 0, evals_two = 0;
   const Mesh a = improved(*x.field, x.mesh, x.q, 1, one, evals_one), b = improved(*x.field, x.mesh, x.q, 2, two, evals_two);
   std::cout << "moves kept " << one.relaxed << ", refused for crossing " << one.relax_crossings << ", evaluations "

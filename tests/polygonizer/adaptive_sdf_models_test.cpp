@@ -220,13 +220,13 @@ TEST_P(SdfModels, MeshWithTheirCreasesAndGoodTriangles) {
   test::expect_sound(r.mesh, m.name);
   EXPECT_EQ(static_cast<int>(t.components), components) << m.name;
   EXPECT_EQ(t.genus, genus) << m.name;
-  EXPECT_EQ(r.stats.extra.at("uncovered_crossings").get<std::size_t>(), 0u);
+  EXPECT_EQ(r.stats.adaptive->seeding.uncovered, 0u);
   // Creases followed, not meshed across after a failed layout.
-  EXPECT_EQ(r.stats.extra.at("creases.fallback").get<std::string>(), "") << m.name;
+  EXPECT_EQ(r.stats.adaptive->creases.fallback, "") << m.name;
   if (m.creased) {
-    EXPECT_GT(r.stats.extra.at("creases.curves").get<double>(), 0) << m.name;
+    EXPECT_GT(r.stats.adaptive->creases.curves, 0u) << m.name;
   }
-  const double min_angle = r.stats.extra.at("min_angle_degrees").get<double>();
+  const double min_angle = r.stats.adaptive->min_angle_degrees;
   const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
   EXPECT_GE(min_angle, m.creased ? 5.0 : 20.0) << m.name;
   // The one case below the 20 degrees away from creases, kept from getting worse: the
@@ -268,8 +268,8 @@ TEST(SdfCrowd, TwoHundredBlobsJoinedByANarrowNeckMeshWithMinEdgeLowered) {
   const MeshTopology t = analyze_topology(r.mesh);
   EXPECT_EQ(t.components, 3u);
   EXPECT_EQ(t.genus, 30);
-  EXPECT_TRUE(r.stats.extra.at("min_edge_lowered").get<bool>());
-  EXPECT_GE(r.stats.extra.at("min_angle_degrees").get<double>(), 20.0);
+  EXPECT_TRUE(r.stats.adaptive->recoveries.min_edge_lowered);
+  EXPECT_GE(r.stats.adaptive->min_angle_degrees, 20.0);
 }
 
 }  // namespace

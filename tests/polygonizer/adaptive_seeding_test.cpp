@@ -37,8 +37,8 @@ void expect_components(const Field& field, const AdaptiveOptions& o, std::size_t
   EXPECT_EQ(t.genus, genus);
   EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
   EXPECT_EQ(r.stats.components, components);
-  EXPECT_EQ(r.stats.extra.at("uncovered_crossings").get<std::size_t>(), 0u);
-  EXPECT_EQ(r.stats.extra.at("seeds").get<std::size_t>(), components);
+  EXPECT_EQ(r.stats.adaptive->seeding.uncovered, 0u);
+  EXPECT_EQ(r.stats.adaptive->seeding.seeds, components);
 }
 
 TEST(AdaptiveSeeding, HollowSphereKeepsItsInnerSphereAtEveryFactor) {
@@ -105,20 +105,20 @@ TEST(AdaptiveSeeding, NothingIsMeshedTwice) {
       "value": "(8*x^4-8*x^2+1)+(8*y^4-8*y^2+1)+(8*z^4-8*z^2+1)", "bounds": [[-1.3,-1.3,-1.3],[1.3,1.3,1.3]]})J");
   expect_components(*chmutov, at_factor(1), 1, 5, "Chmutov quartic, factor 1");
   const auto r = polygonize_adaptive(*chmutov, at_factor(1));
-  EXPECT_GT(r.stats.extra.at("covered_nearby").get<std::size_t>(), 0u);
+  EXPECT_GT(r.stats.adaptive->seeding.covered_nearby, 0u);
 }
 
 TEST(AdaptiveSeeding, ReportsWhatTheSearchDid) {
   Torus thin(Vec3::Zero(), 1.0, 0.01);
   const auto r = polygonize_adaptive(thin, at_factor(2));
-  EXPECT_GT(r.stats.extra.at("refined_cells").get<std::size_t>(), 0u);
-  EXPECT_GT(r.stats.extra.at("sign_changes").get<std::size_t>(), 0u);
-  EXPECT_EQ(r.stats.extra.at("probes").get<std::size_t>(), 0u);  // a bound exists: no probes
+  EXPECT_GT(r.stats.adaptive->seeding.refined_cells, 0u);
+  EXPECT_GT(r.stats.adaptive->seeding.sign_changes, 0u);
+  EXPECT_EQ(r.stats.adaptive->seeding.probes, 0u);  // a bound exists: no probes
   // Expressions have no bound: the local minima of |F| are probed instead.
   const auto f = test::field_from_json(R"J({"type": "expression", "value": "x^2+y^2+z^2-1",
       "bounds": [[-2,-2,-2],[2,2,2]]})J");
   const auto e = polygonize_adaptive(*f, at_factor(2));
-  EXPECT_EQ(e.stats.extra.at("refined_cells").get<std::size_t>(), 0u);
+  EXPECT_EQ(e.stats.adaptive->seeding.refined_cells, 0u);
 }
 
 TEST(AdaptiveSeeding, SmallBlobWithoutABoundIsFoundByAProbe) {
@@ -129,7 +129,7 @@ TEST(AdaptiveSeeding, SmallBlobWithoutABoundIsFoundByAProbe) {
       "bounds": [[-2,-2,-2],[2,2,2]]})J");
   expect_components(*f, at_factor(2), 2, 0, "sphere and a small ball");
   const auto r = polygonize_adaptive(*f, at_factor(2));
-  EXPECT_GT(r.stats.extra.at("probes").get<std::size_t>(), 0u);
+  EXPECT_GT(r.stats.adaptive->seeding.probes, 0u);
 }
 
 TEST(AdaptiveSeeding, SameMeshBitForBitWithTheSearch) {
@@ -148,7 +148,7 @@ TEST(AdaptiveSeeding, NaNAwayFromTheSurfaceCountsAsOutside) {
       "value": "sqrt(x^2+y^2+z^2) - 1 + 0*sqrt(1.6 - x)", "bounds": [[-2,-2,-2],[2,2,2]]})J");
   expect_components(*f, at_factor(3), 1, 0, "one sphere");
   const PolygonizeResult r = polygonize_adaptive(*f, at_factor(3));
-  EXPECT_GT(r.stats.extra.at("non_finite_samples").get<std::size_t>(), 0u);
+  EXPECT_GT(r.stats.adaptive->seeding.non_finite_samples, 0u);
   const auto g = test::field_from_json(R"J({"type": "expression",
       "value": "min(sqrt(x^2+y^2+z^2) - 1, sqrt((x-1.6)^2+y^2+z^2) - 0.2) + 0*sqrt(1.95 - x)",
       "bounds": [[-2,-2,-2],[2,2,2]]})J");

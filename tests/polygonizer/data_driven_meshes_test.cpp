@@ -73,9 +73,9 @@ TEST(DataDrivenRollbacks, TheBunnyMpuAtToleranceThreeThousandthsMeshesWithRollba
   // rollbacks (1.2417, kept). A caller's bound on the triangles keeps the first mesh.
   o.max_triangles = 10'000'000;
   const PolygonizeResult r = polygonize_adaptive(field_of("bunny_mpu.json"), o);
-  EXPECT_FALSE(r.stats.extra.at("quality_rerun").get<bool>());
-  EXPECT_TRUE(r.stats.extra.at("remeshed_with_rollbacks").get<bool>());
-  EXPECT_GT(r.stats.extra.at("rollbacks").get<double>(), 0.0);
+  EXPECT_FALSE(r.stats.adaptive->recoveries.quality_rerun);
+  EXPECT_TRUE(r.stats.adaptive->recoveries.remeshed_with_rollbacks);
+  EXPECT_GT(r.stats.adaptive->tracker.rollbacks, 0u);
   const MeshTopology t = analyze_topology(r.mesh);
   EXPECT_TRUE(t.closed()) << t.boundary_edges << " boundary edges";
   EXPECT_TRUE(t.edge_manifold());

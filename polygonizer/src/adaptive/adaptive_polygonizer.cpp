@@ -14,6 +14,7 @@
 #include <chrono>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -35,6 +36,12 @@ const char* to_string(TriangleCountRule rule) {
 }
 
 const char* to_string(Variant variant) { return variant == Variant::Paper ? "paper" : "improved"; }
+
+const PhaseReport& AdaptiveReport::phase(std::string_view name) const {
+  const auto it = std::find(kAdaptivePhases.begin(), kAdaptivePhases.end(), name);
+  if (it == kAdaptivePhases.end()) throw std::out_of_range("AdaptiveReport: no phase " + std::string(name));
+  return phases[static_cast<std::size_t>(it - kAdaptivePhases.begin())];
+}
 
 namespace {
 
@@ -114,11 +121,11 @@ constexpr double kTurnLimit = 1;
 // as before, bit for bit, at the cost of one run.
 // Only where remeshing_allowed (the bounds are Variant::Improved's promise).
 bool may_rerun_for_quality(const AdaptiveOptions& o, const PolygonizeResult& r) {
-  return adaptive::remeshing_allowed(o) && !r.stats.extra.at("creases.followed").get<bool>();
+  return adaptive::remeshing_allowed(o) && !r.stats.adaptive->creases.followed;
 }
 
 int missed_bounds(const PolygonizeResult& r) {
-  return adaptive::missed_bounds(r.mesh, r.stats.extra.at("quality.over_tolerance").get<std::size_t>());
+  return adaptive::missed_bounds(r.mesh, r.stats.adaptive->quality.over_tolerance);
 }
 
 // The first run's error, which stands when every run made again fails too.
@@ -179,13 +186,13 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       if (row.kind == RunKind::LookAhead) {
         const bool keep = missed_bounds(r) < missed;
         if (keep) {
-          r.stats.extra["min_edge_lowered"] = kept->stats.extra.at("min_edge_lowered");
+          r.stats.adaptive->recoveries.min_edge_lowered = kept->stats.adaptive->recoveries.min_edge_lowered;
           kept = std::move(r);
         }
-        kept->stats.extra["quality_rerun"] = true;
-        kept->stats.extra["quality_rerun_kept"] = keep;
+        kept->stats.adaptive->recoveries.quality_rerun = true;
+        kept->stats.adaptive->recoveries.quality_rerun_kept = keep;
       } else {
-        r.stats.extra["min_edge_lowered"] = row.kind != RunKind::AsGiven && lowered.has_value();
+        r.stats.adaptive->recoveries.min_edge_lowered = row.kind != RunKind::AsGiven && lowered.has_value();
         kept = std::move(r);
         kept_from = row.kind;
       }
@@ -209,7 +216,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   }
   kept->stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   kept->stats.field_evaluations = field.counts() - before;
-  phases.write(kept->stats);
+  phases.write(*kept->stats.adaptive);
   return std::move(*kept);
 }
 

@@ -1,10 +1,9 @@
 // PhaseLedger: the time and field evaluations of each phase (kAdaptivePhases) of the runs
-// polygonize_adaptive makes (stats "phases.*").
+// polygonize_adaptive makes (AdaptiveReport::phases).
 #pragma once
 
-#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/adaptive_report.h>
 #include <cdp/core/field.h>
-#include <cdp/core/polygonize_stats.h>
 
 #include <algorithm>
 #include <array>
@@ -36,32 +35,22 @@ class PhaseLedger {
   // Ends the current phase (a run's end, or its error).
   void close() {
     if (current_ < 0) return;
-    Entry& e = entries_[current_];
+    PhaseReport& e = entries_[current_];
     e.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     e.evaluations += field_.counts() - counts_;
     current_ = -1;
   }
-  // Evaluations a run split with a helper thread (helper_thread.h; stats "split_evaluations").
+  // Evaluations a run split with a helper thread (helper_thread.h).
   void add_split_evaluations(std::uint64_t n) { split_evaluations_ += n; }
   // Every phase, zero where no run entered it.
-  void write(PolygonizeStats& st) const {
-    st.extra["split_evaluations"] = split_evaluations_;
-    for (std::size_t i = 0; i < kAdaptivePhases.size(); ++i) {
-      const std::string key = "phases." + std::string(kAdaptivePhases[i]) + ".";
-      st.extra[key + "seconds"] = entries_[i].seconds;
-      st.extra[key + "value"] = entries_[i].evaluations.value;
-      st.extra[key + "value_gradient"] = entries_[i].evaluations.value_gradient;
-      st.extra[key + "gradient_hessian"] = entries_[i].evaluations.gradient_hessian;
-    }
+  void write(AdaptiveReport& report) const {
+    report.split_evaluations = split_evaluations_;
+    report.phases = entries_;
   }
 
  private:
-  struct Entry {
-    double seconds = 0;
-    EvaluationCounts evaluations;
-  };
   const Field& field_;
-  std::array<Entry, kAdaptivePhases.size()> entries_{};
+  std::array<PhaseReport, kAdaptivePhases.size()> entries_{};
   std::uint64_t split_evaluations_ = 0;
   int current_ = -1;
   std::chrono::steady_clock::time_point start_{};

@@ -17,6 +17,7 @@
 // shrinking work list, kRelaxSweeps sweeps and at most kRelaxSearchSweeps more).
 #pragma once
 
+#include <cdp/core/adaptive_report.h>
 #include <cdp/core/cancel.h>
 #include <cdp/core/field.h>
 #include <cdp/core/mesh.h>
@@ -24,42 +25,6 @@
 #include <cstddef>
 
 namespace cdp::adaptive {
-
-struct QualityReport {
-  std::size_t bad_before = 0;  // triangles under the angle bound before the pass
-  std::size_t bad_after = 0;
-  std::size_t flips = 0, moves = 0, collapses = 0;
-  // Vertices the relaxation moved (moves kept, over its sweeps), and edges it flipped.
-  std::size_t relaxed = 0;
-  std::size_t relax_flips = 0;
-  // Of `relaxed`, the moves of the search sweeps (QualityOptions::aim_mean_edge_ratio), and
-  // how many such sweeps ran.
-  std::size_t relax_searched = 0, relax_search_sweeps = 0;
-  // Moves of the relaxation refused because the moved star would cross a triangle nearby.
-  std::size_t relax_crossings = 0;
-  // Vertices added: splits of edges for the tolerance, inserts in the quad around a cap's
-  // longest edge for the angles.
-  std::size_t splits = 0, inserts = 0;
-  // Triangles the last resort split (measured beyond the tolerance after the refinement: an
-  // edge halved down to min_edge / 2, or a vertex inside at the surface point nearest the
-  // farthest sample); their vertices are counted in `splits` too.
-  std::size_t last_resorts = 0;
-  // Vertices found on a crease (never moved, their edges never flipped).
-  std::size_t crease_vertices = 0;
-  // Dense measurements (28 points, Newton's path length at each) of triangles left whose
-  // estimate (see kToleranceMargin) could not clear them, after the refinement and after each
-  // round of the last resort.
-  std::size_t measured_densely = 0;
-  // Triangles the refinement measured densely because their estimate was within the estimate's
-  // margin below the tolerance, and of those the ones it left unsplit (kDenseClearShare).
-  std::size_t refine_measured = 0, refine_cleared = 0;
-  // Of those, the triangles farther than the tolerance there (0 unless the refinement ran out
-  // of rounds or could not split without breaking a check), the largest such distance and the
-  // centroid of the triangle it was measured on.
-  std::size_t over_tolerance = 0;
-  double over_tolerance_worst = 0;
-  Vec3 over_tolerance_near = Vec3::Zero();
-};
 
 struct QualityOptions {
   // Triangles whose smallest angle is under this are repaired (radians).

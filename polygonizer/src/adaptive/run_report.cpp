@@ -1,4 +1,4 @@
-// The stats of a run (PolygonizeStats::extra's keys as STATS.json writes them).
+// The typed report of a run (PolygonizeStats::adaptive, adaptive_report.h).
 #include "failure_message.h"
 #include "resolve_settings.h"
 #include "run_state.h"
@@ -10,8 +10,6 @@
 namespace cdp::adaptive {
 
 void Run::write_stats() {
-  const bool repair = ctx.options.variant == Variant::Improved;
-  const double tolerance = requested_tolerance(ctx.options, resolved);
   PolygonizeStats& st = result.stats;
   st.components = components;
   st.method = "adaptive";
@@ -21,95 +19,71 @@ void Run::write_stats() {
   st.vertices = result.mesh.num_vertices();
   st.splits = tracking.tracker->splits() + (creases.mesh ? creases.mesh->splits : 0);
   st.merges = tracking.tracker->merges() + (creases.mesh ? creases.mesh->merges : 0);
-  st.extra["seeds"] = tracking.seeding.seeds;
-  st.extra["creases.handling"] = to_string(ctx.options.variant == Variant::Improved ? ctx.options.creases : CreaseHandling::Ignore);
-  st.extra["creases.followed"] = creases.mesh.has_value();
-  st.extra["creases.curves"] = creases.traced.curves.size();
-  st.extra["creases.corners"] = creases.traced.corners.size();
-  st.extra["creases.vertices"] = creases.mesh ? creases.mesh->crease_vertices : 0;
-  st.extra["creases.pieces"] = creases.mesh ? creases.mesh->pieces : 0;
-  st.extra["creases.components"] = creases.components;
-  st.extra["creases.fallback"] = creases.fallback;
-  st.extra["creases.steps"] = creases.mesh ? creases.mesh->steps : 0;
-  st.extra["creases.tracing_resolution"] = creases.tracing_resolution;
-  st.extra["creases.patch_refusals"] = creases.mesh ? creases.mesh->patch_refusals : 0;
-  st.extra["seed_grid_seconds"] = seed_grid_seconds;
-  st.extra["curvature_seconds"] = tracking.tracker->curvature_seconds();
-  st.extra["hessian_seconds"] = tracking.tracker->hessian_seconds();
-  st.extra["failed_seeds"] = tracking.seeding.failed_seeds;
-  st.extra["sign_changes"] = tracking.seeding.sign_changes;
-  st.extra["non_finite_samples"] = seeds.grid.non_finite;
-  st.extra["covered_nearby"] = tracking.seeding.covered_nearby;
-  st.extra["below_resolution"] = tracking.seeding.below_resolution;
-  st.extra["uncovered_crossings"] = tracking.seeding.uncovered;
-  st.extra["refined_cells"] = tracking.seeding.refined_cells;
-  st.extra["unresolved_cells"] = tracking.seeding.unresolved_cells;
-  st.extra["probes"] = tracking.seeding.probes;
-  st.extra["steps"] = tracking.tracker->steps();
-  st.extra["search_visits"] = tracking.tracker->search_visits();
-  st.extra["deferrals"] = tracking.tracker->deferrals();
-  st.extra["anticipations"] = tracking.tracker->anticipations();
-  st.extra["side_points"] = tracking.tracker->side_points();
-  st.extra["forced_closures"] = tracking.tracker->forced_closures() + (creases.mesh ? creases.mesh->forced_closures : 0);
-  st.extra["rollbacks"] = tracking.tracker->rollbacks();
-  st.extra["rollbacks_failed"] = tracking.tracker->failed_rollbacks();
-  st.extra["remeshed_with_rollbacks"] = tracking.remeshed;
-  st.extra["remeshed_carefully"] = careful;
-  st.extra["turn_limited"] = request.max_turn > 0;
-  st.extra["careful_max_turn"] = careful ? settings.sizing.max_turn : 0.0;
-  st.extra["crease_points"] = tracking.tracker->crease_points();
-  st.extra["over_mesh_rejections"] = tracking.tracker->over_mesh();
-  st.extra["necks.walks"] = necks.walks;
-  st.extra["necks.critical_points"] = necks.critical_points;
-  st.extra["necks.tested"] = necks.tested;
-  st.extra["necks.reruns"] = neck_reruns;
+
+  AdaptiveReport& r = st.adaptive.emplace();
+  AdaptiveSettingsReport& s = r.settings;
+  const bool repair = ctx.options.variant == Variant::Improved;
+  s.variant = ctx.options.variant;
+  s.sizing = resolved.sizing.mode;
+  if (s.sizing == SizingMode::Factor) s.factor = resolved.sizing.factor;
+  else s.tolerance = requested_tolerance(ctx.options, resolved);
+  s.min_edge = resolved.sizing.min_edge;
+  s.max_edge = resolved.sizing.max_edge;
+  s.triangle_count = resolved.rule;
+  s.seed_resolution = ctx.options.seed_resolution;
+  s.grading = resolved.grading;
+  s.quality_repair = repair;
+  s.tolerance_refinement = repair && resolved.sizing.mode == SizingMode::Tolerance;
+
+  r.seeding = tracking.seeding;
+  r.seeding.non_finite_samples = seeds.grid.non_finite;
+  r.seed_grid_seconds = seed_grid_seconds;
+
+  const Tracker& t = *tracking.tracker;
+  TrackerReport& tr = r.tracker;
+  tr.steps = t.steps();
+  tr.search_visits = t.search_visits();
+  tr.deferrals = t.deferrals();
+  tr.anticipations = t.anticipations();
+  tr.side_points = t.side_points();
+  tr.forced_closures = t.forced_closures() + (creases.mesh ? creases.mesh->forced_closures : 0);
+  tr.rollbacks = t.rollbacks();
+  tr.rollbacks_failed = t.failed_rollbacks();
+  tr.crease_points = t.crease_points();
+  tr.over_mesh_rejections = t.over_mesh();
+  tr.curvature_seconds = t.curvature_seconds();
+  tr.hessian_seconds = t.hessian_seconds();
   tracking.note_tightest();
-  st.extra["curvature.min_radius"] = std::isfinite(tracking.tightest.first) ? tracking.tightest.first : -1.0;
+  tr.min_curvature_radius = std::isfinite(tracking.tightest.first) ? tracking.tightest.first : -1.0;
+
+  CreaseReport& c = r.creases;
+  c.handling = repair ? ctx.options.creases : CreaseHandling::Ignore;
+  c.followed = creases.mesh.has_value();
+  c.curves = creases.traced.curves.size();
+  c.corners = creases.traced.corners.size();
+  if (creases.mesh) {
+    c.vertices = creases.mesh->crease_vertices;
+    c.pieces = creases.mesh->pieces;
+    c.steps = creases.mesh->steps;
+    c.patch_refusals = creases.mesh->patch_refusals;
+  }
+  c.components = creases.components;
+  c.fallback = creases.fallback;
+  c.tracing_resolution = creases.tracing_resolution;
   // A mesh made across a crease of a black box (see kink_in_black_box) that held together: the
   // crease is cut across by chords, not followed.
-  st.extra["creases.across_black_box"] = kink_in_black_box(ctx.field, tracking.tightest);
-  st.extra["min_angle_degrees"] = min_angle_degrees(result.mesh);
-  st.extra["edge_length.min"] = resolved.sizing.min_edge;
-  st.extra["edge_length.max"] = resolved.sizing.max_edge;
-  st.extra["sizing"] = to_string(resolved.sizing.mode);
-  if (resolved.sizing.mode == SizingMode::Factor) st.extra["factor"] = resolved.sizing.factor;
-  else st.extra["tolerance"] = tolerance;
-  st.extra["variant"] = to_string(ctx.options.variant);
-  st.extra["grading"] = resolved.grading;
-  st.extra["quality_repair"] = repair;
-  st.extra["tolerance_refinement"] = repair && resolved.sizing.mode == SizingMode::Tolerance;
-  st.extra["quality.repair_below_degrees"] = kRepairBelowDegrees;
-  st.extra["quality.bad_before"] = quality.bad_before;
-  st.extra["quality.bad_after"] = quality.bad_after;
-  st.extra["quality.flips"] = quality.flips;
-  st.extra["quality.moves"] = quality.moves;
-  st.extra["quality.relaxed"] = quality.relaxed;
-  st.extra["quality.relax_flips"] = quality.relax_flips;
-  st.extra["quality.refine_measured"] = quality.refine_measured;
-  st.extra["quality.refine_cleared"] = quality.refine_cleared;
-  st.extra["quality.relax_searched"] = quality.relax_searched;
-  st.extra["quality.relax_search_sweeps"] = quality.relax_search_sweeps;
-  st.extra["quality.relax_crossings"] = quality.relax_crossings;
-  st.extra["quality.collapses"] = quality.collapses;
-  st.extra["quality.splits"] = quality.splits;
-  st.extra["quality.inserts"] = quality.inserts;
-  st.extra["quality.last_resorts"] = quality.last_resorts;
-  st.extra["quality.crease_vertices"] = quality.crease_vertices;
-  st.extra["quality.measured_densely"] = quality.measured_densely;
-  st.extra["quality.over_tolerance"] = quality.over_tolerance;
-  if (quality.over_tolerance > 0) {
-    st.extra["quality.over_tolerance_worst"] = quality.over_tolerance_worst;
-    const Vec3& c = quality.over_tolerance_near;
-    st.extra["quality.over_tolerance_near_x"] = c.x();
-    st.extra["quality.over_tolerance_near_y"] = c.y();
-    st.extra["quality.over_tolerance_near_z"] = c.z();
-  }
-  st.extra["triangle_count_rule"] = to_string(resolved.rule);
-  st.extra["seed_resolution"] = ctx.options.seed_resolution;
-  st.extra["min_edge_lowered"] = false;
-  st.extra["look_ahead"] = request.look_ahead;
-  st.extra["quality_rerun"] = false;
-  st.extra["quality_rerun_kept"] = false;
+  c.across_black_box = kink_in_black_box(ctx.field, tracking.tightest);
+
+  r.quality = quality;
+  r.quality.repair_below_degrees = kRepairBelowDegrees;
+  r.necks = {.walks = necks.walks, .critical_points = necks.critical_points, .tested = necks.tested,
+             .reruns = neck_reruns};
+  r.recoveries.turn_limited = request.max_turn > 0;
+  r.recoveries.look_ahead = request.look_ahead;
+  r.recoveries.remeshed_with_rollbacks = tracking.remeshed;
+  r.recoveries.remeshed_carefully = careful;
+  r.recoveries.careful_max_turn = careful ? settings.sizing.max_turn : 0.0;
+  r.min_angle_degrees = min_angle_degrees(result.mesh);
 }
 
 }  // namespace cdp::adaptive

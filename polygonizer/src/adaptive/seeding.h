@@ -29,25 +29,13 @@
 
 #include "tracker.h"
 
+#include <cdp/core/adaptive_report.h>
 #include <cdp/core/surface_seeds.h>
 
 #include <cstddef>
 #include <vector>
 
 namespace cdp::adaptive {
-
-struct SeedingReport {
-  std::size_t sign_changes = 0;      // grid edges and refined-cell segments where F changes sign
-  std::size_t seeds = 0;             // components started
-  std::size_t failed_seeds = 0;      // surface points where not even a hexagon fitted
-  std::size_t covered_nearby = 0;    // sign changes no triangle crosses, but a triangle of the sheet is near
-  std::size_t below_resolution = 0;  // sign changes on meshed components, in detail finer than min_edge
-  std::size_t refined_cells = 0;     // cells split by the small-component search
-  std::size_t unresolved_cells = 0;  // cells at min_edge that may still hold surface (thinner than min_edge)
-  std::size_t probes = 0;            // Newton probes from local minima of |F| (fields without a bound)
-  std::size_t uncovered = 0;         // sign changes not meshed after the run: 0 on success
-  Vec3 first_uncovered = Vec3::Zero();
-};
 
 // Meshes every component through `tracker` (which appends to `mesh`). `cell` sizes the index of
 // triangles the coverage tests use: about a typical edge (never below the grid's cell). Deterministic.

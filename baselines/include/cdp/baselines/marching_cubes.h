@@ -13,12 +13,10 @@ namespace cdp {
 // A welded, indexed mesh (one vertex per crossed lattice edge, less those merged away where
 // edges under a hundredth of a cell are collapsed, so that no triangle degenerates) with normals
 // from the field gradient; closed, oriented and edge-manifold when the surface lies inside the
-// box. stats.method = "mc"; stats.extra holds "traversal", "cell_size", "precision" (if given),
-// "lattice_cells", "root_tolerance", "cubes_visited", "cubes_crossed", "root_evaluations",
-// "face_ambiguity", "collapsed_edges", "dropped_components", "short_edges_left", and for the
-// continuation "seeds", "unresolved_seeds", "starts", "sign_changes", "completion_starts",
-// "unreached_sign_changes" (0 unless the lattice is too coarse for some of the surface the seed
-// grid sees), "completion_evaluations".
+// box. stats.method = "mc"; stats.lattice (lattice_report.h) holds the lattice, the cubes
+// visited and crossed, the evaluations, the face-ambiguity rule, the short-edge collapse, and for
+// the continuation its seeding (unreached_sign_changes is 0 unless the lattice is too coarse for
+// some of the surface the seed grid sees).
 // \pre field.bounds() is valid; F < 0 inside.
 // \return the mesh and its stats (above).
 // \throw InvalidInputError for invalid options (both cell_size and precision, a precision on a

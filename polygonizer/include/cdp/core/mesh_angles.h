@@ -3,7 +3,6 @@
 #pragma once
 
 #include <cdp/core/mesh.h>
-#include <cdp/core/polygonize_stats.h>
 
 #include <array>
 #include <cstddef>
@@ -26,8 +25,10 @@ struct AngleStatistics {
 
 AngleStatistics angle_statistics(const Mesh& mesh);
 
-// Puts angle_statistics(mesh) into stats.extra under "angles.*" (STATS.json's "angles" object),
-// as the polygonize program and the Python module report it for every method.
+struct PolygonizeStats;
+
+// Sets stats.angles to angle_statistics(mesh) (STATS.json's "angles" object), as the polygonize
+// program and the Python module report it for every method.
 void add_angle_statistics(const Mesh& mesh, PolygonizeStats& stats);
 
 }  // namespace cdp

@@ -1,0 +1,166 @@
+// What polygonize_adaptive reports beside its mesh (PolygonizeStats::adaptive): one typed struct
+// per stage of a run (polygonizer/README.md, "How a run goes") and one for the runs made again.
+// STATS.json writes it (cdp/io/polygonize_stats_json.h) under the keys docs/stats.md lists.
+#pragma once
+
+#include <cdp/core/adaptive_modes.h>
+#include <cdp/core/field.h>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace cdp {
+
+// The options as the run resolved them.
+struct AdaptiveSettingsReport {
+  Variant variant = Variant::Improved;
+  SizingMode sizing = SizingMode::Factor;
+  double factor = 0;     // SizingMode::Factor only (STATS "factor")
+  double tolerance = 0;  // the tolerance asked for (its default resolved); not with SizingMode::Factor
+  double min_edge = 0, max_edge = 0;  // the edge clamps after their defaults (STATS "edge_length")
+  TriangleCountRule triangle_count = TriangleCountRule::Hartmann;
+  int seed_resolution = 0;
+  bool grading = false;               // new points' targets graded (Variant::Improved)
+  bool quality_repair = false;        // the repair stage ran (Variant::Improved)
+  bool tolerance_refinement = false;  // triangles measured and split to the tolerance
+};
+
+// The seeding guarantee's counts (polygonizer/src/adaptive/seeding.h).
+struct SeedingReport {
+  std::size_t sign_changes = 0;      // grid edges and refined-cell segments where F changes sign
+  std::size_t seeds = 0;             // components started
+  std::size_t failed_seeds = 0;      // surface points where not even a hexagon fitted
+  std::size_t covered_nearby = 0;    // sign changes no triangle crosses, but a triangle of the sheet is near
+  std::size_t below_resolution = 0;  // sign changes on meshed components, in detail finer than min_edge
+  std::size_t refined_cells = 0;     // cells split by the small-component search
+  std::size_t unresolved_cells = 0;  // cells at min_edge that may still hold surface (thinner than min_edge)
+  std::size_t probes = 0;            // Newton probes from local minima of |F| (fields without a bound)
+  std::size_t uncovered = 0;         // sign changes not meshed after the run: 0 on success (STATS "uncovered_crossings")
+  Vec3 first_uncovered = Vec3::Zero();
+  std::size_t non_finite_samples = 0;  // seed-grid samples where F was NaN or infinite
+};
+
+// The fronts' counters over the tracking stage of the run kept.
+struct TrackerReport {
+  std::size_t steps = 0;
+  std::uint64_t search_visits = 0;  // points the neighbour searches looked at
+  std::size_t deferrals = 0, anticipations = 0, side_points = 0;
+  std::size_t forced_closures = 0;  // the crease patches' included
+  std::size_t rollbacks = 0, rollbacks_failed = 0;
+  std::size_t crease_points = 0;
+  std::size_t over_mesh_rejections = 0;
+  double curvature_seconds = 0, hessian_seconds = 0;
+  // The smallest radius of curvature the fronts met; negative when none was finite (STATS
+  // "curvature.min_radius").
+  double min_curvature_radius = -1;
+};
+
+// The crease stage (CreaseHandling::Follow).
+struct CreaseReport {
+  CreaseHandling handling = CreaseHandling::Ignore;  // Ignore whenever the variant is Paper
+  bool followed = false;  // the mesh's edges run along the creases
+  std::size_t curves = 0, corners = 0;  // traced
+  std::size_t vertices = 0, pieces = 0, components = 0, steps = 0, patch_refusals = 0;  // of the patches
+  std::string fallback;   // why the creases are not followed, or empty
+  int tracing_resolution = 0;  // of the last tracing; 0 when none was made
+  // A black box (no pieces) meshed across a kink that held together: cut across by chords.
+  bool across_black_box = false;
+};
+
+// The repair stage (polygonizer/src/adaptive/quality.h; STATS "quality.*").
+struct QualityReport {
+  double repair_below_degrees = 0;  // triangles whose smallest angle is under this are repaired
+  std::size_t bad_before = 0;  // triangles under the angle bound before the pass
+  std::size_t bad_after = 0;
+  std::size_t flips = 0, moves = 0, collapses = 0;
+  // Vertices the relaxation moved (moves kept, over its sweeps), and edges it flipped.
+  std::size_t relaxed = 0;
+  std::size_t relax_flips = 0;
+  // Of `relaxed`, the moves of the search sweeps (QualityOptions::aim_mean_edge_ratio), and
+  // how many such sweeps ran.
+  std::size_t relax_searched = 0, relax_search_sweeps = 0;
+  // Moves of the relaxation refused because the moved star would cross a triangle nearby.
+  std::size_t relax_crossings = 0;
+  // Vertices added: splits of edges for the tolerance, inserts in the quad around a cap's
+  // longest edge for the angles.
+  std::size_t splits = 0, inserts = 0;
+  // Triangles the last resort split (measured beyond the tolerance after the refinement: an
+  // edge halved down to min_edge / 2, or a vertex inside at the surface point nearest the
+  // farthest sample); their vertices are counted in `splits` too.
+  std::size_t last_resorts = 0;
+  // Vertices found on a crease (never moved, their edges never flipped).
+  std::size_t crease_vertices = 0;
+  // Dense measurements (28 points, Newton's path length at each) of triangles left whose
+  // estimate could not clear them, after the refinement and after each round of the last resort.
+  std::size_t measured_densely = 0;
+  // Triangles the refinement measured densely because their estimate was within the estimate's
+  // margin below the tolerance, and of those the ones it left unsplit.
+  std::size_t refine_measured = 0, refine_cleared = 0;
+  // Of those, the triangles farther than the tolerance there (0 unless the refinement ran out
+  // of rounds or could not split without breaking a check), the largest such distance and the
+  // centroid of the triangle it was measured on.
+  std::size_t over_tolerance = 0;
+  double over_tolerance_worst = 0;
+  Vec3 over_tolerance_near = Vec3::Zero();
+};
+
+// The search for necks the fronts stepped over (polygonizer/src/adaptive/missed_necks.h).
+struct NeckReport {
+  std::size_t walks = 0;            // Newton walks started
+  std::size_t critical_points = 0;  // distinct critical points they reached
+  std::size_t tested = 0;           // thin enough to test against the mesh
+  std::size_t reruns = 0;           // attempts made again with finer edges around a missed neck
+};
+
+// The runs and recoveries behind the mesh kept (polygonizer/README.md, the tables kRuns and
+// kRecoveries).
+struct RecoveryReport {
+  bool min_edge_lowered = false;         // run again with a lower min_edge
+  bool turn_limited = false;             // run with every edge turning the normal at most a radian
+  bool look_ahead = false;               // the fronts looked ahead (the run made for quality)
+  bool quality_rerun = false;            // a second run was made for the quality bounds
+  bool quality_rerun_kept = false;       // and its mesh was kept
+  bool remeshed_with_rollbacks = false;  // meshed again with rollbacks after a stalled front
+  bool remeshed_carefully = false;       // meshed again with limited turns (the careful recovery)
+  double careful_max_turn = 0;           // the careful recovery's turn limit, 0 when it did not run
+};
+
+// The time and field evaluations of one phase (kAdaptivePhases), over every run made.
+struct PhaseReport {
+  double seconds = 0;
+  EvaluationCounts evaluations;
+};
+
+// The phases of AdaptiveReport::phases, in the order a run enters them: the seed grid (and the
+// hash cell's curvature sample); the crease layout (its tracing and patches); the tracking (the
+// seeding and the fronts); the quality (the repair, the relaxation, the tolerance's refinement,
+// the curvature properties on request); the checks (topology, intersections, the gap and neck
+// searches, wherever a run makes them). An error's crease tracing for its message counts in the
+// phase that failed.
+inline constexpr std::array<std::string_view, 5> kAdaptivePhases{"seed_grid", "creases", "tracking", "quality",
+                                                                 "checks"};
+
+struct AdaptiveReport {
+  AdaptiveSettingsReport settings;
+  SeedingReport seeding;
+  TrackerReport tracker;
+  CreaseReport creases;
+  QualityReport quality;
+  NeckReport necks;
+  RecoveryReport recoveries;
+  // Summed over every run made, failed and discarded ones included: the evaluations add up to
+  // PolygonizeStats::field_evaluations.
+  std::array<PhaseReport, kAdaptivePhases.size()> phases{};
+  // Evaluations split with a helper thread (a costly field tracked with two threads).
+  std::uint64_t split_evaluations = 0;
+  double seed_grid_seconds = 0;
+  double min_angle_degrees = 0;  // the smallest angle of the mesh's triangles
+
+  // The phase named `name` (one of kAdaptivePhases). \throw std::out_of_range for another name.
+  const PhaseReport& phase(std::string_view name) const;
+};
+
+}  // namespace cdp
