@@ -24,7 +24,7 @@ test: build
 # for those labelled slow_under_sanitizers (tests/CMakeLists.txt).
 # -O1 -g1 (line tables, enough for the sanitizers' stack traces): the instrumented build was
 # the longest step of CI (23 of its 46 minutes at -O2 -g); these halve the compile time of a
-# heavy file (quality.cpp 45 -> 24 s, adaptive_polygonizer_test.cpp 36 -> 20 s).
+# heavy file (quality.cpp 45 -> 24 s, adaptive/polygonizer_test.cpp 36 -> 20 s).
 test-sanitize: deps
 	@cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" \
 	    -DCDP_SANITIZE=ON -DCDP_BUILD_BENCHMARKS=OFF > /dev/null

@@ -131,9 +131,9 @@ TEST(Faults, MeshesFarFromTheOriginAndTinyMeshesKeepTheirTriangles) {
 
 // ---- 10. Bounded runs ------------------------------------------------------------------------
 // The neighbour searches' bound is tested with the library's option for it
-// (AdaptiveOptions::max_search_visits, adaptive_polygonizer_test.cpp). The run that ended by it
+// (AdaptiveOptions::max_search_visits, polygonizer/adaptive/polygonizer_test.cpp). The run that ended by it
 // here, a thin torus beside a sphere at factor 3 with --min-edge 1e-4, meshes since the vertex
-// hash splits crowded cells (adaptive_hard_surfaces_test.cpp, AdaptiveScales).
+// hash splits crowded cells (polygonizer/adaptive/hard_surfaces_test.cpp, AdaptiveScales).
 
 // ---- 12. Outputs that coincide ---------------------------------------------------------------
 

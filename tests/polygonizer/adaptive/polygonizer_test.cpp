@@ -15,7 +15,7 @@
 #include <limits>
 #include <random>
 
-#include "../../polygonizer/src/parallel.h"
+#include "src/parallel.h"
 #include "common/test_fields.h"
 #include "polygonizer/mesh_checks.h"
 #include "polygonizer/oriented_point_sets.h"

@@ -7,7 +7,7 @@
 #include <random>
 #include <vector>
 
-#include "../../polygonizer/src/adaptive/spatial_hash.h"
+#include "src/adaptive/spatial_hash.h"
 
 namespace {
 

@@ -42,7 +42,7 @@ struct HardSurface {
   // the angle of its faces, not a feature thinner than min_edge, which such a wedge is not (its
   // two faces meet there). None today: meshed along their creases, the gyroid ball and the box
   // minus a ball get past the wedges the tracker stalled at (the diagnosis is tested with the
-  // creases ignored, adaptive_crease_patches_test.cpp).
+  // creases ignored, adaptive/creases/crease_patches_test.cpp).
   std::vector<double> crease_at = {};
   // Tolerances (kTolerances) at which the mesh comes from the last run polygonize_adaptive
   // makes, every edge turning the normal by at most a radian (stats `turn_limited`), after every
@@ -249,34 +249,38 @@ TEST_P(HardSurfaces, CorrectMeshOrClearError) {
   }
 }
 
-std::vector<Case> all_cases() {
-  std::vector<Case> out;
+// Several times slower under the sanitizers, the suite runs there a subset at factor 2 and
+// tolerance and chord 1e-2, named so that a surface added to the list does not change it:
+// creases (the cube; the box minus a ball, whose acute hole rims only crease-aware meshing
+// meshes), an acute crease that fails (the gyroid ball), a cavity, a needle, genus 5 and a few
+// blob fields. The rest (instantiated as AdaptiveMore, with the runaways: the Barth ball, the
+// fifty blobs, 264 s under the sanitizers) carries the label slow_under_sanitizers
+// (tests/CMakeLists.txt).
+bool under_sanitizers(const Case& c) {
+  static const std::set<std::string> kUnderSanitizers = {
+      "cube", "gyroid_ball", "box_minus_ball", "hollow_sphere", "needle", "tanglecube",
+      "random_blobs_1", "random_blobs_5", "random_blobs_9", "random_blobs_13", "random_blobs_17"};
+  if (!kUnderSanitizers.count(hard_surfaces()[c.surface].name)) return false;
+  return c.tolerance > 0 ? c.tolerance == 1e-2 : c.factor == 2;
+}
+
+// The cases under the sanitizers (`sanitized`) or the others.
+std::vector<Case> cases(bool sanitized) {
+  std::vector<Case> all;
   const auto surfaces = hard_surfaces();
   for (std::size_t s = 0; s < surfaces.size(); ++s) {
-#if defined(__SANITIZE_ADDRESS__)
-    // Several times slower under the sanitizers: a subset at factor 2 and tolerance and chord 1e-2, named
-    // so that a surface added to the list does not change it: creases (the cube; the box minus a
-    // ball, whose acute hole rims only crease-aware meshing meshes), an acute crease that fails
-    // (the gyroid ball), a cavity, a needle, genus 5 and a few blob fields. The runaways (the
-    // Barth ball, the fifty blobs: 264 s under the sanitizers) are left to the normal build.
-    static const std::set<std::string> kUnderSanitizers = {
-        "cube", "gyroid_ball", "box_minus_ball", "hollow_sphere", "needle", "tanglecube",
-        "random_blobs_1", "random_blobs_5", "random_blobs_9", "random_blobs_13", "random_blobs_17"};
-    if (kUnderSanitizers.count(surfaces[s].name)) {
-      out.push_back({s, 2});
-      out.push_back({s, 0, 1e-2});
-      out.push_back({s, 0, 1e-2, true});
-    }
-    continue;
-#endif
-    for (double k : surfaces[s].meshes_at) out.push_back({s, k});
-    for (double t : kTolerances) out.push_back({s, 0, t});
-    for (double t : kTolerances) out.push_back({s, 0, t, true});
+    for (double k : surfaces[s].meshes_at) all.push_back({s, k});
+    for (double t : kTolerances) all.push_back({s, 0, t});
+    for (double t : kTolerances) all.push_back({s, 0, t, true});
   }
+  std::vector<Case> out;
+  for (const Case& c : all)
+    if (under_sanitizers(c) == sanitized) out.push_back(c);
   return out;
 }
 
-INSTANTIATE_TEST_SUITE_P(Adaptive, HardSurfaces, testing::ValuesIn(all_cases()), case_name);
+INSTANTIATE_TEST_SUITE_P(Adaptive, HardSurfaces, testing::ValuesIn(cases(true)), case_name);
+INSTANTIATE_TEST_SUITE_P(AdaptiveMore, HardSurfaces, testing::ValuesIn(cases(false)), case_name);
 
 }  // namespace
 }  // namespace cdp

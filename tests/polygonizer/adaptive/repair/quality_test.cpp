@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "../../polygonizer/src/adaptive/quality.h"
+#include "src/adaptive/quality.h"
 #include "common/test_fields.h"
 #include "polygonizer/mesh_checks.h"
 
