@@ -12,6 +12,8 @@ namespace cdp {
 // Throws InvalidInputError "PATH: cannot write[ WHAT]: reason" (reason from errno: "No space
 // left on device", "File too large", "Permission denied", ...), leaving neither the target
 // changed nor the temporary file behind.
+// \throw FileError (an InvalidInputError, errno in error_number()) when the temporary file cannot be
+//        created, written, flushed or closed, or cannot be renamed over the target.
 void write_file_atomically(const std::filesystem::path& path, std::string_view contents, std::string_view what = {});
 
 // For a signal handler: removes the temporary file a write in progress has open, if any. Only

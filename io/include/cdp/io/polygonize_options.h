@@ -74,6 +74,7 @@ struct PolygonizeRequest {
 //        an unknown method, an unknown name (with the nearest known one), a value of the wrong
 //        kind, outside its range or not among its choices, an option `method` does not use,
 //        and two options that exclude each other.
+// \throw InvalidInputError also for `options` that is neither an object nor null.
 PolygonizeRequest polygonize_request(const std::string& method, const nlohmann::json& options);
 
 }  // namespace cdp

@@ -25,6 +25,8 @@ struct CreaseOptions {
 // tangent to each other, or three pieces meeting along a line), so the crease is not defined.
 enum class CreaseStatus { Converged, MaxIterations, DependentGradients, NotFinite };
 
+// \return the status's name: "converged", "max_iterations", "dependent_gradients" or "not_finite"
+//         ("unknown" for a value outside the enum).
 const char* to_string(CreaseStatus status);
 
 struct CreaseProjection {
@@ -39,6 +41,12 @@ struct CreaseProjection {
 // the nearest point of their crease curve (minimum-norm Newton steps, J^T (J J^T)^-1 F); with
 // three, their corner (Newton on the 3 x 3 system). Throws InvalidInputError for a number of
 // pieces other than 2 or 3.
+// \pre field.bounds() is valid where options.tolerance or options.max_step is left non-positive
+//      (their defaults scale with its diagonal).
+// \return the last point with its status, iterations and residual; ok() when it converged.
+// \throw InvalidInputError for a number of pieces other than 2 or 3, or a branch the field refuses
+//        (Field::piece_first_order).
+// \throw what the field's evaluations throw, unchanged.
 CreaseProjection project_to_crease(const Field& field, const Vec3& start,
                                    std::span<const std::vector<std::uint8_t>> branches,
                                    const CreaseOptions& options = {});
@@ -49,6 +57,10 @@ CreaseProjection project_to_crease(const Field& field, const Vec3& start,
 // branch: a box's edge entering a smooth union's blend), where project_to_crease has two equal
 // gradients. Minimum-norm Newton steps as project_to_crease's; NotFinite where the switch is
 // not defined.
+// \pre as project_to_crease.
+// \return as project_to_crease; NotFinite also for k not below the model's number of branch points.
+// \throw InvalidInputError for a branch the field refuses (Field::piece_first_order).
+// \throw what the field's evaluations throw, unchanged.
 CreaseProjection project_to_seam(const Field& field, const Vec3& start, const std::vector<std::uint8_t>& branch,
                                  std::size_t k, const CreaseOptions& options = {});
 

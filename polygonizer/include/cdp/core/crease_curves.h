@@ -53,7 +53,8 @@ struct CreaseTracingResult {
 
 // Every crease of `field` as polylines on both pieces (see the top of this file).
 // \return the curves and corners; none for a field that reports no pieces (a smooth model).
-// \throw InvalidInputError for a resolution below 2.
+// \throw InvalidInputError for a resolution below 2 or a seed grid of more than 2^26 nodes.
+// \throw NoSurfaceError as sample_seed_grid (a box that is not valid, NaN next to the inside).
 // \throw LimitExceededError past max_points.
 // \throw what the field's evaluations throw.
 CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions& options = {});

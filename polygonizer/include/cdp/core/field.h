@@ -84,6 +84,8 @@ inline constexpr double kSamePieceCosine = 0.999;
 // hidden choice is free), the crease tracer (a crease that fades into a seam) and crease-aware
 // meshing (pieces of one function, cycles of one region).
 inline constexpr double kSameToRounding = 1e-12;
+// \return whether `value` and `gradient` are each within kSameToRounding (1 + |reference_value| +
+//         |reference_gradient|) of the reference's.
 inline bool same_to_rounding(double reference_value, const Eigen::Vector3d& reference_gradient, double value,
                              const Eigen::Vector3d& gradient) {
   const double scale = kSameToRounding * (1 + std::abs(reference_value) + reference_gradient.norm());
@@ -97,37 +99,50 @@ class Field {
   Field(const Field&) = delete;
   Field& operator=(const Field&) = delete;
 
+  // \return F(p).
+  // \throw what the model's evaluation throws, unchanged (a Python field: InvalidInputError for a
+  //        result of the wrong shape, or the function's own error); the built-in models throw none.
   double value(const Vec3& p) const {
     n_value_.fetch_add(1, std::memory_order_relaxed);
     return eval_value(p);
   }
   // Value and gradient in one evaluation; returns the value.
+  // \throw as value().
   double value_gradient(const Vec3& p, Vec3& gradient) const {
     n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
     return eval_value_gradient(p, gradient);
   }
+  // \return the gradient of F at p (one value_gradient evaluation).
+  // \throw as value().
   Vec3 gradient(const Vec3& p) const {
     Vec3 g;
     value_gradient(p, g);
     return g;
   }
   // Value, gradient and Hessian in one evaluation; returns the value.
+  // \throw as value().
   double gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const {
     n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
     return eval_gradient_hessian(p, gradient, hessian);
   }
   // Batched values: out[i] = F(points[i]). Models with a vectorized kernel override eval_values.
+  // \pre points and out hold n elements each.
+  // \throw as value().
   void values(const Vec3* points, double* out, std::size_t n) const {
     n_value_.fetch_add(n, std::memory_order_relaxed);
     eval_values(points, out, n);
   }
   // Batched value_gradient: values[i] and gradients[i] at points[i]. Counted as n value_gradient
   // evaluations, as n single calls would be, so that statistics measure the work, not the calls.
+  // \pre points, values and gradients hold n elements each.
+  // \throw as value().
   void values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const {
     n_value_gradient_.fetch_add(n, std::memory_order_relaxed);
     eval_values_gradients(points, values, gradients, n);
   }
   // Batched gradient_hessian, counted as n gradient_hessian evaluations.
+  // \pre points, values, gradients and hessians hold n elements each.
+  // \throw as value().
   void gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians, std::size_t n) const {
     n_gradient_hessian_.fetch_add(n, std::memory_order_relaxed);
     eval_gradients_hessians(points, values, gradients, hessians, n);
@@ -141,6 +156,9 @@ class Field {
   // the field is smooth within `radius`; none from a model that does not report its pieces
   // (then it is treated as smooth everywhere). Counted as one value_gradient and one
   // gradient_hessian per piece.
+  // \return the pieces, the branches as taken at p first; empty where the model reports no branch
+  //         point at p (always, for a model without branch points).
+  // \throw as value() (a first call also classifies the branch points: branch_kinds).
   std::vector<FieldPiece> pieces(const Vec3& p, double radius) const {
     n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
     std::vector<FieldPiece> out = eval_pieces(p, radius);
@@ -151,6 +169,7 @@ class Field {
   // (branch_kinds), seen switching on the surface with different normals on its two sides. The
   // first call classifies the branch points. A crease found nowhere on that grid (a feature
   // smaller than its cells) is missed, as the crease tracer's grid would miss it.
+  // \throw as value() (on the first call, which evaluates the field).
   bool has_pieces() const;
 
   // What a branch point (min, max, abs; numbered as in FieldPiece::branch) makes where it
@@ -172,6 +191,8 @@ class Field {
   // such test (at most kBranchTests a branch point) found the same normal to kSamePieceCosine;
   // one difference makes it Creased. Counted as value_gradient evaluations. Empty for a model
   // without branch points.
+  // \return the kinds, numbered as in FieldPiece::branch; the reference lives as long as the field.
+  // \throw as value() (on the first call, which evaluates the field).
   const std::vector<BranchKind>& branch_kinds() const;
   static constexpr int kBranchSamples = 16;
   static constexpr int kBranchTests = 8;
@@ -206,6 +227,7 @@ class Field {
   // as taken at p. Nothing for a model without such a branch point or where the difference has no
   // gradient. Crease tracing follows a switch past where the two pieces it separates become one
   // (trace_creases). Counted as one value_gradient.
+  // \throw as value().
   struct BranchSwitch {
     double distance = 0;
     Vec3 normal = Vec3::Zero();
@@ -218,6 +240,7 @@ class Field {
   // its rounded edge, a smooth union's blend meeting the shapes it joins), the adaptive
   // polygonizer's sizing sees the curved side before its fronts reach it. Empty for a model
   // without Smooth branch points. Counted as one value_gradient and a gradient_hessian per side.
+  // \throw as value() (a first call also classifies the branch points: branch_kinds).
   struct SmoothSide {
     double distance = 0;
     FieldPiece piece;
@@ -226,13 +249,20 @@ class Field {
   // The piece with `branch` (from pieces()) at another point: the same smooth function, its
   // branches fixed, wherever p is. Throws InvalidInputError for a branch the model cannot have
   // made. Counted as one gradient_hessian.
+  // \throw InvalidInputError for a branch the model cannot have made: a non-empty one from a model
+  //        without branch points, one of another length or with a choice above kFreeBranch from an
+  //        expression, one whose length is not the number of calls of min, max and abs a
+  //        compiled model (AutodiffField) makes at p. Otherwise as value().
   FieldPiece piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
     n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
     return eval_piece(p, branch);
   }
   // The value and gradient of piece(p, branch), the same numbers bit for bit, without its
   // Hessian (what crease tracing, the projections onto creases and the patch tests need).
-  // Throws as piece(). Counted as one value_gradient.
+  // Counted as one value_gradient.
+  // \throw InvalidInputError as piece(), except from a compiled model (AutodiffField), which does not
+  //        check the branch: choices past its calls are ignored, missing ones take the values' branch.
+  //        Otherwise as value().
   std::pair<double, Vec3> piece_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
     n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
     return eval_first_order(p, branch);
@@ -240,6 +270,8 @@ class Field {
 
   // A box that contains the surface (the model's own, or the "bounds" given in its JSON).
   const Box& bounds() const { return bounds_; }
+  // \pre no call of has_pieces, branch_kinds, pieces or smooth_sides came before: the branch kinds
+  //      are found once, over the box of that first call.
   void set_bounds(const Box& b) { bounds_ = b; }
 
   // The model's type name as written in JSON ("sphere", "vis", ...).
@@ -275,6 +307,7 @@ class Field {
   // Marching Tetrahedra "precision" convention scales this. Empty for models without points.
   virtual std::optional<double> constraint_spacing() const { return std::nullopt; }
 
+  // \return the evaluations counted by kind since construction or the last reset_counts().
   EvaluationCounts counts() const {
     return {n_value_.load(std::memory_order_relaxed), n_value_gradient_.load(std::memory_order_relaxed),
             n_gradient_hessian_.load(std::memory_order_relaxed)};

@@ -14,7 +14,9 @@ namespace cdp {
 
 struct Mesh {
   std::vector<Vec3> positions;
-  std::vector<Vec3> normals;                    // per vertex, unit length; empty if not computed
+  // Per vertex, unit length (zero where the field's gradient was zero or NaN); empty if
+  // not computed.
+  std::vector<Vec3> normals;
   std::vector<std::array<int, 3>> triangles;    // counter-clockwise seen from outside
   // Normals per triangle corner, for vertices on a crease of the surface (one normal per side);
   // empty when the vertex normals serve. Where given, they replace `normals` for shading and the
@@ -28,6 +30,7 @@ struct Mesh {
 
 // Sets mesh.normals to the normalized field gradient at every vertex (one value_gradient each,
 // evaluated in batches).
+// \throw what the field's evaluations throw, unchanged.
 void compute_field_normals(const Field& field, Mesh& mesh);
 
 }  // namespace cdp

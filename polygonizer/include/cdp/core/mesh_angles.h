@@ -23,12 +23,16 @@ struct AngleStatistics {
   std::vector<long long> below;
 };
 
+// \pre every triangle index is in [0, mesh.num_vertices()).
+// \return the statistics of the triangles with a positive area and shortest edge; the others are
+//         counted in `degenerate`.
 AngleStatistics angle_statistics(const Mesh& mesh);
 
 struct PolygonizeStats;
 
 // Sets stats.angles to angle_statistics(mesh) (STATS.json's "angles" object), as the polygonize
 // program and the Python module report it for every method.
+// \pre as angle_statistics.
 void add_angle_statistics(const Mesh& mesh, PolygonizeStats& stats);
 
 }  // namespace cdp

@@ -24,6 +24,9 @@ struct OrientedPoints {
 // normalized. Counter-clockwise triangles seen from outside give outward normals. Vertices that
 // no triangle uses, or whose summed normal vanishes, are dropped (they have no orientation).
 // `source` names the mesh in messages; InvalidInputError when no vertex is left.
+// \return the kept vertices (also leaving out those with a non-finite position), in index order.
+// \throw InvalidInputError "SOURCE: problem" for a triangle with an out-of-range vertex index, or
+//        when no vertex is left.
 OrientedPoints oriented_points_from_mesh(const Mesh& mesh, const std::string& source);
 
 // Farthest-point sampling: the first index is the lexicographically smallest position (x, then
@@ -31,9 +34,13 @@ OrientedPoints oriented_points_from_mesh(const Mesh& mesh, const std::string& so
 // already chosen (ties to the lowest index). The result spreads evenly over the surface, does
 // not depend on the order of the vertices except through ties, and never repeats a position
 // while distinct positions remain. O(n * size) time. InvalidInputError when n > size.
+// \pre the positions are finite.
+// \return n indices into `positions`, in the order chosen.
+// \throw InvalidInputError when n > positions.size().
 std::vector<std::size_t> farthest_point_subset(const std::vector<Vec3>& positions, std::size_t n);
 
 // The points at `indices`, in that order.
+// \throw std::out_of_range for an index past the positions or the normals.
 OrientedPoints select_points(const OrientedPoints& points, const std::vector<std::size_t>& indices);
 
 // The smallest axis-aligned box holding the positions (invalid for no points).

@@ -57,11 +57,11 @@ struct SeedGrid {
 // Samples the grid (one batched evaluation). A node where F is NaN or +infinity counts as
 // outside (its value becomes the largest double), one at -infinity as inside (the lowest), so
 // that a function undefined away from its surface (a NaN far out in the box) is meshed.
-// \pre field.bounds() is valid.
 // \return the grid; the count of non-finite nodes in SeedGrid::non_finite.
-// \throw InvalidInputError for a resolution below 2 or a grid of more than 2^31 nodes.
-// \throw NoSurfaceError where a NaN node lies next to an inside node (the surface may pass where
-//        F is undefined) or (with require_closed_in_box) F is negative on the box's boundary.
+// \throw InvalidInputError for a resolution below 2 or a grid of more than 2^26 nodes.
+// \throw NoSurfaceError for a field whose box is not valid, where a NaN node lies next to an inside
+//        node (the surface may pass where F is undefined) or (with require_closed_in_box) F is
+//        negative on the box's boundary.
 SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options = {});
 
 // Every grid edge with a sign change, its crossing point linearly interpolated (not on the

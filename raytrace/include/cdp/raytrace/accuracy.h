@@ -18,6 +18,8 @@ struct SampleStats {
   static constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
   double mean = kNone, std = kNone, max = kNone, min = kNone;
 };
+// \return the count, mean, population standard deviation, minimum and maximum of `values`; the
+//         statistics NaN for no values.
 SampleStats sample_stats(const std::vector<double>& values);
 
 struct AccuracyMetrics {
@@ -36,6 +38,10 @@ struct AccuracyMetrics {
 
 // `mesh` must have normals (the ones the Phong normals blend). Throws InvalidInputError when the
 // sizes do not match.
+// \pre mesh_hits were cast on `mesh` along truth.rays, and every triangle index is in range.
+// \throw InvalidInputError when truth.hits or mesh_hits differ from truth.rays in number, or (where a
+//        ray hits both) the mesh has no normal per vertex.
+// \throw std::out_of_range for a hit triangle that is not in the mesh.
 AccuracyMetrics compute_accuracy(const GroundTruth& truth, const std::vector<MeshHit>& mesh_hits, const Mesh& mesh);
 
 }  // namespace cdp

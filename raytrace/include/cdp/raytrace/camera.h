@@ -19,8 +19,10 @@ struct Ray {
 
 enum class Projection { Perspective, Orthographic };
 
+// \return "perspective" or "orthographic".
 const char* to_string(Projection projection);
 // Throws InvalidInputError on anything but "perspective" or "orthographic".
+// \throw InvalidInputError for any other name.
 Projection parse_projection(const std::string& name);
 
 struct CameraOptions {
@@ -40,13 +42,20 @@ struct CameraOptions {
   std::vector<Vec3> directions;
 };
 
-// Throws InvalidInputError on out-of-range options or an invalid box.
+// Throws InvalidInputError on out-of-range options (the box is checked by make_camera_rays).
+// \throw InvalidInputError for views outside [1, 10000] (without directions), resolution outside
+//        [1, 8192], a distance not above 1 or not finite, fov_deg outside [0, 180), or a direction
+//        that is zero or not finite.
 void validate(const CameraOptions& options);
 
 // The viewing direction of every view, unit length, in order.
+// \pre the options pass validate (unchecked here: a zero direction stays zero, views < 1 gives none).
 std::vector<Vec3> view_directions(const CameraOptions& options);
 
 // All rays, view after view, each view row after row (row-major, pixel centres). Deterministic.
+// \return resolution^2 rays per view direction.
+// \throw InvalidInputError as validate, for a box that is not valid, or for one whose diagonal times
+//        the distance overflows.
 std::vector<Ray> make_camera_rays(const Box& box, const CameraOptions& options);
 
 // The options as written into metrics and cache keys (every field that changes the rays).

@@ -41,6 +41,14 @@ struct CreaseDistance {
 };
 
 // Throws what trace_creases throws. The mesh must be a triangle mesh (any topology).
+// \pre every triangle index is in [0, mesh.num_vertices()) and every position is finite.
+// \return the counts and distances; no crease points and no distances (count 0) for a field without
+//         creases (Field::has_pieces false).
+// \throw InvalidInputError for a tracing resolution below 2 or a seed grid of too many nodes.
+// \throw NoSurfaceError for a field whose box is not valid, or that is NaN next to the inside on
+//        the seed grid.
+// \throw LimitExceededError past options.tracing.max_points.
+// \throw what the field's evaluations throw, unchanged.
 CreaseDistance crease_distance(const Field& field, const Mesh& mesh, const CreaseDistanceOptions& options = {});
 
 }  // namespace cdp

@@ -36,6 +36,8 @@ class EmbreeScene {
  public:
   // Throws InvalidInputError on out-of-range indices, non-finite positions or a mesh whose box's
   // diagonal overflows double.
+  // \throw InvalidInputError for an out-of-range index, a non-finite position, a box whose diagonal
+  //        overflows, or when Embree fails (no device, no buffers, an error building the scene).
   explicit EmbreeScene(const Mesh& mesh);
   ~EmbreeScene();
   EmbreeScene(const EmbreeScene&) = delete;
@@ -44,8 +46,14 @@ class EmbreeScene {
   // The first hit of every ray (t >= 0), in parallel over blocks of rays. Throws InvalidInputError
   // (where Embree would abort) on a non-finite ray or one starting beyond its float range (1e18
   // half-diagonals of the mesh from its centre).
+  // \pre every ray's direction has unit length (so that t is a distance).
+  // \return one hit per ray, in order; triangle -1 where the ray misses.
+  // \throw InvalidInputError for a ray whose direction is not finite, or whose origin is not finite
+  //        or lies beyond that range.
   std::vector<MeshHit> intersect(const std::vector<Ray>& rays) const;
   // The nearest point of the mesh to every point (rtcPointQuery), in parallel.
+  // \pre the points are finite.
+  // \return one per point, in order; distance infinity and triangle -1 for a mesh without triangles.
   std::vector<ClosestPoint> closest_points(const std::vector<Vec3>& points) const;
 
  private:

@@ -31,6 +31,8 @@ struct FieldCostOptions {
 
 // Times single-point evaluations (as the polygonizers make them) at the mesh's vertices. Points
 // where the field throws are skipped. Zero cost for a mesh without vertices.
+// \return the seconds per evaluation of each kind in the fastest pass, over every
+//         ceil(n / max_points)-th of the n vertices; zero also for max_points 0.
 FieldCost measure_field_cost(const Field& field, const Mesh& mesh, const FieldCostOptions& options = {});
 
 }  // namespace cdp

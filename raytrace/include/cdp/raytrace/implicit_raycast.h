@@ -41,6 +41,7 @@ enum class RayStatus : std::uint8_t {
   StepLimit = 3,     // max_steps reached before leaving the box
   NotFinite = 4,     // F was NaN or infinite along the ray
 };
+// \return "miss", "hit", "starts_inside", "step_limit" or "not_finite" ("unknown" outside the enum).
 const char* to_string(RayStatus status);
 
 // Bits of SurfaceHit::flags.
@@ -70,11 +71,26 @@ struct RaycastSetup {
 
 // Throws InvalidInputError on bad options, NoSurfaceError when the field's box is invalid or the
 // gradient is not finite on the estimation grid.
+// \pre where it estimates the bound (options.lipschitz 0 and no bound from the model), the field can
+//      be evaluated from several threads at once (Field::thread_safe is not consulted).
+// \throw InvalidInputError for lipschitz negative or not finite, lipschitz_grid outside [2, 1024],
+//        lipschitz_safety below 1, min_step or tangent_tolerance outside (0, 1), or max_steps or
+//        max_refine_iterations below 1.
+// \throw NoSurfaceError when field.bounds() is not valid, or the gradient is not finite at a point
+//        of the estimation grid.
+// \throw what the field's evaluations throw, unchanged.
 RaycastSetup make_raycast_setup(const Field& field, const RaycastOptions& options);
 
 // max |grad F| over a grid x grid x grid lattice of the box (corners included), in parallel.
+// \pre the field can be evaluated from several threads at once (Field::thread_safe is not consulted).
+// \return the maximum, or the first norm in lattice order that is not finite; a grid below 2 counts
+//         as 2.
+// \throw what the field's evaluations throw, unchanged.
 double max_gradient_norm(const Field& field, const Box& box, int grid);
 
+// \pre setup is make_raycast_setup(field, options); ray.direction has unit length.
+// \return the ray's first crossing of the surface inside setup.box (status, flags, t and normal).
+// \throw what the field's evaluations throw, unchanged.
 SurfaceHit cast_ray(const Field& field, const Ray& ray, const RaycastSetup& setup, const RaycastOptions& options);
 
 struct GroundTruthCounts {
@@ -86,11 +102,16 @@ struct GroundTruth {
   std::vector<Ray> rays;
   std::vector<SurfaceHit> hits;  // one per ray
   RaycastSetup setup;
+  // \return the number of hits of each status and of each flag.
   GroundTruthCounts counts() const;
 };
 
 // Casts every ray in parallel (TBB); each ray is independent, so the result does not depend on
 // the number of threads.
+// \pre every ray's direction has unit length; the field can be evaluated from several threads at
+//      once (Field::thread_safe is not consulted).
+// \return the rays, one hit per ray, and the setup.
+// \throw as make_raycast_setup; what the field's evaluations throw, unchanged.
 GroundTruth compute_ground_truth(const Field& field, std::vector<Ray> rays, const RaycastOptions& options = {});
 
 }  // namespace cdp

@@ -42,6 +42,8 @@ struct MeshQuality {
   MeshTopology topology;
 };
 
+// \throw InvalidInputError for histogram_edges given with fewer than two values or out of order, or
+//        a triangle index out of range.
 MeshQuality compute_mesh_quality(const Mesh& mesh, const MeshQualityOptions& options = {});
 
 }  // namespace cdp

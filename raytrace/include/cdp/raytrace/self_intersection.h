@@ -24,6 +24,10 @@ struct SelfIntersectionReport {
 // Every intersecting pair of distinct triangles (see triangles_intersect in
 // <cdp/core/triangle_intersection.h>). Deterministic and independent of the thread count; no
 // output. Throws InvalidInputError on out-of-range indices or non-finite positions.
+// \return the number of pairs, the first max_examples of them, the degenerate triangles and the
+//         candidate pairs.
+// \throw InvalidInputError as triangle_boxes_for_intersection and overlapping_box_pairs.
+// \throw std::bad_alloc as overlapping_box_pairs.
 SelfIntersectionReport find_self_intersections(const Mesh& mesh, std::size_t max_examples = 16);
 
 // The broad phase: every pair (i, j), i < j, of boxes that overlap (closed boxes, touching
@@ -31,6 +35,9 @@ SelfIntersectionReport find_self_intersections(const Mesh& mesh, std::size_t max
 // (mapped to [-1, 1]^3, rounded outwards and inflated by 2^-20, so none is lost); each is then
 // checked on the double boxes, so the result is exact. Empty boxes (min > max on an axis) take
 // part in no pair; non-finite boxes throw InvalidInputError. Independent of the thread count.
+// \throw InvalidInputError for more than INT_MAX boxes, a box that is not finite, boxes whose extent
+//        overflows double, or when Embree fails (no device, an error building or colliding).
+// \throw std::bad_alloc when collecting Embree's pairs fails.
 std::vector<std::pair<int, int>> overlapping_box_pairs(const std::vector<Box>& boxes);
 
 }  // namespace cdp
