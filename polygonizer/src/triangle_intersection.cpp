@@ -416,7 +416,7 @@ double turn_angle(double y, double x) {
   return x > 0.0 ? atan_unit(y / x) : kPi + atan_unit(y / x);
 }
 
-std::vector<unsigned char> flat_stars(const Mesh& mesh, unsigned workers) {
+std::vector<unsigned char> flat_stars(const Mesh& mesh, unsigned workers, const CancelToken* cancel) {
   const std::size_t nv = mesh.positions.size();
   const VertexTriangles stars(mesh);
   std::vector<unsigned char> flat(nv, 0);
@@ -477,6 +477,7 @@ std::vector<unsigned char> flat_stars(const Mesh& mesh, unsigned workers) {
   };
   constexpr std::size_t kBlock = 4096;
   detail::parallel_blocks(nv, kBlock, nv >= 2 * kBlock ? workers : 1, [&](std::size_t begin, std::size_t end, unsigned) {
+    if (cancel) cancel->check("self-intersections");
     for (std::size_t v = begin; v < end; ++v) flat[v] = certify(v) ? 1 : 0;
   });
   return flat;
@@ -488,6 +489,9 @@ std::vector<unsigned char> flat_stars(const Mesh& mesh, unsigned workers) {
 // Instructions of whole paper-variant runs (torus at factor 5 / bunny VIS-800 at factor 3) for
 // 1, 1.5, 2 and 3: 93.8M / 1099.5M, 91.3M / 1085.9M, 90.5M / 1082.1M, 90.7M / 1081.0M.
 constexpr double kCellEdges = 2;
+// Items (triangles, vertices, buckets) between two polls of the cancel token: a few hundred
+// microseconds of work, an atomic load each.
+constexpr std::size_t kPollEvery = 4096;
 // A triangle whose box spans more than this many cells along an axis is "large": it is tested
 // against every triangle instead of being put in the grid (at most kMaxSpan^3 cells each).
 constexpr int kMaxSpan = 4;
@@ -519,9 +523,15 @@ std::uint64_t cell_hash(int x, int y, int z) {
 // (16 + sqrt n) n box comparisons.
 void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollector& out, int threads,
                      const CancelToken* cancel) {
+  // The preparation's loops poll too: at 2*10^6 triangles they take a few hundred milliseconds.
+  const auto poll = [cancel](std::size_t i) {
+    if (cancel && i % kPollEvery == 0) cancel->check("self-intersections");
+  };
   std::vector<int> live;
-  for (std::size_t f = 0; f < boxes.size(); ++f)
+  for (std::size_t f = 0; f < boxes.size(); ++f) {
+    poll(f);
     if ((boxes[f].min.array() <= boxes[f].max.array()).all()) live.push_back(static_cast<int>(f));
+  }
   const std::size_t n = live.size();
   if (n < 2) return;
 
@@ -529,6 +539,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   // triangles are wider than kMaxSpan - 1 cells.
   std::vector<double> sizes(n);
   for (std::size_t k = 0; k < n; ++k) {
+    poll(k);
     const Tri t = corners(mesh, live[k]);
     sizes[k] = std::sqrt(std::max({(t[1] - t[0]).squaredNorm(), (t[2] - t[1]).squaredNorm(), (t[0] - t[2]).squaredNorm()}));
   }
@@ -537,6 +548,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   const auto max_large = static_cast<std::size_t>(16.0 + std::sqrt(static_cast<double>(n)));
   Box all{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
   for (std::size_t k = 0; k < n; ++k) {
+    poll(k);
     const Box& b = boxes[static_cast<std::size_t>(live[k])];
     sizes[k] = b.size().maxCoeff();
     all.min = all.min.cwiseMin(b.min);
@@ -564,6 +576,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   std::vector<unsigned char> is_large(boxes.size(), 0);
   std::size_t entries = 0;
   for (const int f : live) {
+    poll(static_cast<std::size_t>(f));
     const Box& b = boxes[static_cast<std::size_t>(f)];
     CellRange& r = ranges[static_cast<std::size_t>(f)];
     for (int a = 0; a < 3; ++a) {
@@ -604,13 +617,20 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   // Counts, then their running sums (the end of each bucket), then filled backwards from the last
   // triangle: start[b] ends at the beginning of bucket b, its triangles in increasing order.
   std::vector<std::uint32_t> start(buckets + 1, 0);
-  for (const int f : live)
+  for (const int f : live) {
+    poll(static_cast<std::size_t>(f));
     if (!is_large[static_cast<std::size_t>(f)]) for_each_cell(f, [&](int, int, int, std::size_t b) { ++start[b]; });
-  for (std::size_t b = 1; b <= buckets; ++b) start[b] += start[b - 1];
+  }
+  for (std::size_t b = 1; b <= buckets; ++b) {
+    poll(b);
+    start[b] += start[b - 1];
+  }
   std::vector<int> members(entries);
-  for (auto it = live.rbegin(); it != live.rend(); ++it)
+  for (auto it = live.rbegin(); it != live.rend(); ++it) {
+    poll(static_cast<std::size_t>(*it));
     if (!is_large[static_cast<std::size_t>(*it)])
       for_each_cell(*it, [&](int, int, int, std::size_t b) { members[--start[b]] = *it; });
+  }
 
   // Each bucket's pairs are enumerated from its own list, its members' boxes and lower cells
   // copied side by side first: a list holds few triangles on an even mesh, and its
@@ -625,7 +645,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   const std::size_t block = std::max(kMinBlock, buckets / (kBlocksPerWorker * workers));
   std::vector<PairCollector> found(workers, PairCollector(out.max_pairs()));
   // Pairs that share a vertex with a flat star do not intersect (see flat_stars): skipped.
-  const std::vector<unsigned char> flat = flat_stars(mesh, workers);
+  const std::vector<unsigned char> flat = flat_stars(mesh, workers, cancel);
   struct Member {
     Box box;
     int lo[3];
@@ -641,8 +661,8 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   detail::parallel_blocks(buckets, block, workers, [&](std::size_t begin, std::size_t end, unsigned worker) {
     PairCollector& mine = found[worker];
     std::vector<Member>& list = lists[worker];
-    if (cancel) cancel->check("self-intersections");
     for (std::size_t b = begin; b < end; ++b) {
+      poll(b);
       if (start[b + 1] - start[b] < 2) continue;
       // A triangle with several cells in the bucket appears several times, consecutively.
       list.clear();
@@ -726,7 +746,11 @@ bool triangles_intersect(const Mesh& mesh, int f, int g) {
   return triangles_intersect(corners(mesh, f), corners(mesh, g));
 }
 
-std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate, const char* what) {
+namespace {
+
+// triangle_boxes_for_intersection, polling `cancel` (when given) every kPollEvery triangles.
+std::vector<Box> boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate, const char* what,
+                                        const CancelToken* cancel) {
   if (mesh.triangles.size() > static_cast<std::size_t>(INT_MAX))
     throw InvalidInputError(std::string(what) + ": too many triangles");
   const auto nv = static_cast<long long>(mesh.positions.size());
@@ -740,6 +764,7 @@ std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* 
   std::size_t skipped = 0;
   std::vector<Box> boxes(mesh.triangles.size());
   for (std::size_t f = 0; f < boxes.size(); ++f) {
+    if (cancel && f % kPollEvery == 0) cancel->check(what);
     const Tri t = corners(mesh, static_cast<int>(f));
     if (triangle_is_degenerate(t[0], t[1], t[2])) {
       boxes[f] = {Vec3::Ones(), Vec3::Zero()};
@@ -752,9 +777,15 @@ std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* 
   return boxes;
 }
 
+}  // namespace
+
+std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate, const char* what) {
+  return boxes_for_intersection(mesh, degenerate, what, nullptr);
+}
+
 std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs, int threads,
                                                          const CancelToken* cancel) {
-  const std::vector<Box> boxes = triangle_boxes_for_intersection(mesh, nullptr, "self_intersecting_pairs");
+  const std::vector<Box> boxes = boxes_for_intersection(mesh, nullptr, "self_intersecting_pairs", cancel);
   PairCollector out(max_pairs);
   hash_grid_pairs(mesh, boxes, out, threads, cancel);
   return out.sorted_pairs();

@@ -138,12 +138,16 @@ std::vector<char> Improver::mark_stretched(const std::vector<char>* moved_before
 Improver::RelaxMoves Improver::relax_targets(const std::vector<char>& mark, bool search, double keep_cos) {
   // The marked vertices off creases (on_crease may evaluate and caches: one thread), then
   // their targets, each judged on its own (read only: on several threads, one slot each).
+  // Reserved (nothing touched) so that no push_back copies megabytes between two polls.
   std::vector<int> eligible;
-  for (int v = 0; v < static_cast<int>(mark.size()); ++v)
+  eligible.reserve(mark.size());
+  for (int v = 0; v < static_cast<int>(mark.size()); ++v) {
+    poll(static_cast<std::size_t>(v));
     if (mark[v] && vt_[v].size() >= 3 && !on_crease(v)) eligible.push_back(v);
-  std::vector<Vec3> target(eligible.size());
-  std::vector<double> reach(eligible.size(), 0);
-  std::vector<char> moves(eligible.size(), 0);
+  }
+  std::vector<Vec3> target = polled_vector<Vec3>(eligible.size(), Vec3::Zero());
+  std::vector<double> reach = polled_vector<double>(eligible.size(), 0);
+  std::vector<char> moves = polled_vector<char>(eligible.size(), 0);
   detail::parallel_blocks(eligible.size(), kRelaxBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned) {
     poll();
     for (std::size_t i = begin; i < end; ++i) {
@@ -169,7 +173,12 @@ Improver::RelaxMoves Improver::relax_targets(const std::vector<char>& mark, bool
     }
   });
   RelaxMoves out;
+  const auto count = static_cast<std::size_t>(std::count(moves.begin(), moves.end(), 1));
+  out.vertices.reserve(count);
+  out.starts.reserve(count);
+  out.options.reserve(count);
   for (std::size_t i = 0; i < eligible.size(); ++i) {
+    poll(i);
     if (!moves[i]) continue;
     ProjectionOptions po;
     po.tolerance = 1e-10 * o_.diagonal;
@@ -188,7 +197,7 @@ std::vector<ProjectionResult> Improver::project_moves(const RelaxMoves& moves) c
   // Each projection is independent of the others (the same point in any batch): a
   // thread-safe field's are shared among threads in blocks; any other field's go in one
   // batch (one call per Newton round: a Python function is called once per batch).
-  std::vector<ProjectionResult> landed(starts.size());
+  std::vector<ProjectionResult> landed = polled_vector<ProjectionResult>(starts.size());
   const bool shared = field_.thread_safe();
   detail::parallel_blocks(starts.size(), shared ? kRelaxBlock : starts.size(), shared ? workers_ : 1u,
                           [&](std::size_t begin, std::size_t end, unsigned) {

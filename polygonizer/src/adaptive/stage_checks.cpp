@@ -42,7 +42,7 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
     std::exception_ptr error;
     std::thread topology([&] {
       try {
-        t = analyze_topology(mesh);
+        t = analyze_topology(mesh, cancel);
       } catch (...) {
         error = std::current_exception();
       }
@@ -56,7 +56,7 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
     topology.join();
     if (error) std::rethrow_exception(error);
   } else {
-    t = analyze_topology(mesh);
+    t = analyze_topology(mesh, cancel);
   }
   const auto fail = [](const std::string& what, const Vec3& where) {
     throw NoSurfaceError("adaptive: the mesh came out " + what + " near " + describe_point(where) +

@@ -2,6 +2,7 @@
 // Works on the raw index arrays, so it also detects what OpenMesh would refuse to load.
 #pragma once
 
+#include <cdp/core/cancel.h>
 #include <cdp/core/mesh.h>
 
 namespace cdp {
@@ -15,7 +16,7 @@ struct MeshTopology {
   std::size_t nonmanifold_edges = 0;   // used by three or more triangles
   std::size_t misoriented_edges = 0;   // two triangles traverse the edge in the same direction
   std::size_t nonmanifold_vertices = 0;  // one-ring is not a single fan
-  std::size_t degenerate_triangles = 0;  // repeated index or zero area
+  std::size_t degenerate_triangles = 0;  // repeated index, or twice its area at most 1e-12 of its longest edge squared
   std::size_t duplicate_triangles = 0;   // same vertex set as another triangle
   std::size_t components = 0;            // connected through shared edges
   int euler_characteristic = 0;          // V - E + F
@@ -34,6 +35,12 @@ struct MeshTopology {
   }
 };
 
+// \pre every triangle index is in [0, mesh.num_vertices()).
+// \return the counts above; genus -1 unless the mesh has triangles and is closed, oriented and
+//         manifold.
 MeshTopology analyze_topology(const Mesh& mesh);
+// The same, polling `cancel` every few thousand triangles and vertices.
+// \throw CancelledError once cancel is cancelled.
+MeshTopology analyze_topology(const Mesh& mesh, const CancelToken& cancel);
 
 }  // namespace cdp

@@ -27,8 +27,11 @@ bool triangle_is_degenerate(const Vec3& a, const Vec3& b, const Vec3& c);
 //  - three shared vertices (a duplicated triangle, either orientation): always.
 // Degenerate triangles (see triangle_is_degenerate) never intersect anything here. Throws
 // InvalidInputError on non-finite corners.
+// \throw InvalidInputError when a corner is not finite.
 bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);
 // The same for triangles f and g of a mesh (f != g). Throws InvalidInputError on bad indices.
+// \throw InvalidInputError when f or g is not a triangle of the mesh, f == g, one of their vertex
+//        indices is out of range, or one of their corners is not finite.
 bool triangles_intersect(const Mesh& mesh, int f, int g);
 
 // Every intersecting pair (f, g), f < g, of distinct triangles (see triangles_intersect), found
@@ -36,16 +39,19 @@ bool triangles_intersect(const Mesh& mesh, int f, int g);
 // few triangles much larger than a cell are tested against all): the first max_pairs of them in
 // lexicographic order. Every pair whose boxes overlap is decided exactly once: by the exact test,
 // or, for a pair sharing a vertex whose star is proved to be a flat fan (one that projects
-// one-to-one onto a plane), without it, since such a pair cannot intersect. Meshes of 8192
+// one-to-one onto a plane), without it, since such a pair cannot intersect. Meshes of 2048
 // triangles or more are searched on `threads` threads (0: all cores, at most 8); the result is
 // the same on any number. Deterministic, no output; memory linear in the number of triangles (plus max_pairs), time
 // linear for triangles of similar sizes. Throws InvalidInputError on out-of-range indices or
 // non-finite positions (of vertices that triangles use); LimitExceededError when the grid would
 // hold 2^32 entries (beyond 67 million triangles).
-// `cancel`, when given, is polled in every block of the search (\throw CancelledError).
+// `cancel`, when given, is polled every few thousand triangles or buckets (\throw CancelledError).
+// \throw InvalidInputError as triangle_boxes_for_intersection.
+// \throw LimitExceededError when the hash grid would hold 2^32 entries.
 std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs = 16,
                                                          int threads = 0, const CancelToken* cancel = nullptr);
 // The number of such pairs (the same search).
+// \throw InvalidInputError and LimitExceededError as self_intersecting_pairs.
 std::size_t count_self_intersecting_pairs(const Mesh& mesh, int threads = 0);
 
 // ---- For broad phases (self_intersecting_pairs here, Embree's in <cdp/raytrace/self_intersection.h>).
@@ -54,11 +60,15 @@ std::size_t count_self_intersecting_pairs(const Mesh& mesh, int threads = 0);
 // pair; `degenerate`, when given, receives their number. Throws InvalidInputError (naming `what`)
 // on out-of-range indices or non-finite positions. Triangles with a common point have
 // overlapping boxes (closed, touching included), so a broad phase on these boxes loses no pair.
+// \return one box per triangle, in order.
+// \throw InvalidInputError "WHAT: problem" for more than INT_MAX triangles, an out-of-range vertex
+//        index, or a non-finite position of a vertex that a triangle uses.
 std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate = nullptr,
                                                  const char* what = "self-intersections");
 
 // triangles_intersect without its checks, for candidates whose corners are known to be finite
 // and whose triangles are not degenerate (non-empty boxes above).
+// \pre every corner is finite and neither triangle is degenerate (triangle_is_degenerate).
 bool nondegenerate_triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);
 
 // A floating-point filter before the exact test, for two triangles (s, a1, a2) and (s, b1, b2)
