@@ -249,7 +249,7 @@ bool Improver::try_collapse(int t, int a, int b) {
   std::vector<int> star;
   for (int w : old)
     if (w != t && w != u) star.push_back(w);
-  vt_[a].assign(star.begin(), star.end());
+  vt_[a] = star;
   vt_[b].clear();
   erase_value(vt_[c], t);
   erase_value(vt_[d], u);

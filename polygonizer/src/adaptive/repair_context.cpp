@@ -119,7 +119,7 @@ double Improver::worst_star_distance(int v) const {
   return worst;
 }
 
-bool Improver::may_replace(double worst_new, std::span<const int> removed) const {
+bool Improver::may_replace(double worst_new, const std::vector<int>& removed) const {
   if (!(o_.tolerance > 0) || worst_new <= kToleranceMargin * o_.tolerance) return true;
   double worst_old = 0;
   MidpointMemo memo;
@@ -195,7 +195,7 @@ void Improver::hash_cover(int t, const Vec3& lo, const Vec3& hi) {
   hash_.insert_box(t, glo, ghi);
 }
 
-bool Improver::intersects(const std::vector<Tri>& added, std::span<const int> ignored, int mv, const Vec3& moved) {
+bool Improver::intersects(const std::vector<Tri>& added, const std::vector<int>& ignored, int mv, const Vec3& moved) {
   const auto pos = [&](int v) -> const Vec3& { return v == mv ? moved : P(v); };
   for (const Tri& a : added) {
     const std::array<Vec3, 3> pa{pos(a[0]), pos(a[1]), pos(a[2])};

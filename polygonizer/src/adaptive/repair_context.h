@@ -25,10 +25,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <initializer_list>
 #include <limits>
-#include <memory>
-#include <memory_resource>
 #include <stdexcept>
 #include <numbers>
 #include <numeric>
@@ -195,18 +192,10 @@ class Improver {
  public:
   Improver(const Field& field, Mesh& mesh, const QualityOptions& o)
       : field_(field), smooth_(field.smooth()), m_(mesh), o_(o), workers_(detail::worker_count(o.threads)),
-        crease_(mesh.positions.size(), -1), alive_(mesh.triangles.size(), 1), hash_(cell_size(mesh)) {
+        vt_(mesh.positions.size()), crease_(mesh.positions.size(), -1),
+        alive_(mesh.triangles.size(), 1), hash_(cell_size(mesh)) {
     // Nothing reads its visits, and intersecting_turn queries it on several threads at once.
     hash_.set_counting(false);
-    // Each star's buffer at its size: the arena keeps what a star outgrows.
-    std::vector<int> valence(m_.positions.size(), 0);
-    for (const Tri& t : m_.triangles)
-      for (int v : t) ++valence[static_cast<std::size_t>(v)];
-    vt_.reserve(m_.positions.size());
-    for (std::size_t v = 0; v < m_.positions.size(); ++v) {
-      poll(v);
-      vt_.emplace_back(arena_.get()).reserve(static_cast<std::size_t>(valence[v]));
-    }
     for (int t = 0; t < static_cast<int>(m_.triangles.size()); ++t) {
       poll(static_cast<std::size_t>(t));
       for (int v : m_.triangles[t]) vt_[v].push_back(t);
@@ -270,10 +259,7 @@ class Improver {
   // What new triangles must exceed: kFaceNormalCos, or, where the triangles they replace already
   // faced the surface worse (a fold the fronts left on a sharply curved spot of a coarse mesh),
   // the worst of those: an operation never makes the facing worse, and may repair it.
-  double facing_floor(std::initializer_list<int> replaced) const {
-    return facing_floor(std::span<const int>(replaced.begin(), replaced.size()));
-  }
-  double facing_floor(std::span<const int> replaced) const {
+  double facing_floor(const std::vector<int>& replaced) const {
     double floor = kFaceNormalCos;
     for (int t : replaced) floor = std::min(floor, facing(m_.triangles[t]));
     return floor;
@@ -358,7 +344,7 @@ class Improver {
   // Whether triangles whose worst distance is `worst_new` may replace `removed`, read at the
   // current positions: a move measures its new star at the new place, puts the vertex back, then
   // asks this.
-  bool may_replace(double worst_new, std::span<const int> removed) const;
+  bool may_replace(double worst_new, const std::vector<int>& removed) const;
 
   // Whether the normal n where an edge's midpoint landed belongs to the edge: within about 30
   // degrees of both ends' normals, or on the arc between them, its angles to the two ends adding
@@ -382,8 +368,7 @@ class Improver {
   int across(int t, int a, int b) const;
   bool has_edge(int a, int b) const;
   std::vector<int> neighbours(int v) const;
-  template <class Ids>
-  static void erase_value(Ids& v, int x) {
+  static void erase_value(std::vector<int>& v, int x) {
     const auto it = std::find(v.begin(), v.end(), x);
     if (it != v.end()) v.erase(it);
   }
@@ -404,11 +389,8 @@ class Improver {
   void hash_cover(int t, const Vec3& lo, const Vec3& hi);
   // Whether a triangle of `added` intersects a live triangle other than those in `ignored`
   // (which the operation replaces), with the operation's positions `moved` for vertex `mv`.
-  bool intersects(const std::vector<Tri>& added, std::span<const int> ignored, int mv = -1,
+  bool intersects(const std::vector<Tri>& added, const std::vector<int>& ignored, int mv = -1,
                   const Vec3& moved = Vec3::Zero());
-  bool intersects(const std::vector<Tri>& added, std::initializer_list<int> ignored) {
-    return intersects(added, std::span<const int>(ignored.begin(), ignored.size()));
-  }
 
   // triangles_intersect(a, b) for an `a` known to be non-degenerate: b's own tests (finite
   // corners, degenerate) and then the exact test, without a's degeneracy test again (an exact
@@ -537,7 +519,7 @@ class Improver {
   void add_vertex(const Vec3& x, const Vec3& normal) {
     m_.positions.push_back(x);
     m_.normals.push_back(normal);
-    vt_.emplace_back(arena_.get());
+    vt_.emplace_back();
     crease_.push_back(-1);
   }
   void drop_last_vertex() {
@@ -676,11 +658,7 @@ class Improver {
   Mesh& m_;
   QualityOptions o_;
   unsigned workers_;  // threads of the parallel passes (QualityOptions::threads)
-  // The triangles around each vertex, in one arena: a mesh of 2*10^6 triangles has 10^6 stars,
-  // and freeing their buffers one by one was most of the time a repair cancelled early took to
-  // end; the arena frees a few large blocks at once.
-  std::unique_ptr<std::pmr::monotonic_buffer_resource> arena_ = std::make_unique<std::pmr::monotonic_buffer_resource>();
-  std::vector<std::pmr::vector<int>> vt_;
+  std::vector<std::vector<int>> vt_;
   std::vector<signed char> crease_;
   std::vector<char> alive_;
   std::vector<std::uint32_t> stamp_;

@@ -11,7 +11,6 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
-#include <memory_resource>
 #include <stdexcept>
 #include <vector>
 
@@ -58,19 +57,19 @@ class SpatialHash {
   void insert(int id, const Vec3& p, const PositionOf& position_of) {
     const auto c = static_cast<std::size_t>(cell(key(cell_of(p))));
     if (crowding_ == Crowding::keep) {
-      cells_.ids[c].push_back(id);
+      ids_[c].push_back(id);
       return;
     }
     if (finer_[c]) {
       finer_[c]->insert(id, p, position_of);
       return;
     }
-    cells_.ids[c].push_back(id);
-    if (cells_.ids[c].size() <= kCrowdedCell || depth_ >= kMaxSplitDepth) return;
+    ids_[c].push_back(id);
+    if (ids_[c].size() <= kCrowdedCell || depth_ >= kMaxSplitDepth) return;
     finer_[c].reset(new SpatialHash(h_ / kSplitRatio, Crowding::split, depth_ + 1));
     finer_[c]->counting_ = counting_;
-    for (const int moved : cells_.ids[c]) finer_[c]->insert(moved, moved == id ? p : position_of(moved), position_of);
-    cells_.ids[c] = Ids(cells_.arena.get());
+    for (const int moved : ids_[c]) finer_[c]->insert(moved, moved == id ? p : position_of(moved), position_of);
+    std::vector<int>().swap(ids_[c]);
   }
 
   void remove(int id, const Vec3& p) {
@@ -81,7 +80,7 @@ class SpatialHash {
       finer_[u]->remove(id, p);
       return;
     }
-    auto& v = cells_.ids[u];
+    auto& v = ids_[u];
     for (std::size_t i = 0; i < v.size(); ++i)
       if (v[i] == id) {
         v[i] = v.back();
@@ -107,7 +106,7 @@ class SpatialHash {
     }
     for (std::int64_t k = a.k; k <= b.k; ++k)
       for (std::int64_t j = a.j; j <= b.j; ++j)
-        for (std::int64_t i = a.i; i <= b.i; ++i) cells_.ids[static_cast<std::size_t>(cell(key({i, j, k})))].push_back(id);
+        for (std::int64_t i = a.i; i <= b.i; ++i) ids_[static_cast<std::size_t>(cell(key({i, j, k})))].push_back(id);
   }
 
   // Calls fn(id) for every id stored in a cell overlapping the cube of half-side r around p;
@@ -138,13 +137,13 @@ class SpatialHash {
     g.runs.clear();
     g.hi[0] = g.lo[0] - 1;
     const Cell a = cell_of(lo), b = cell_of(hi);
-    if (coarser_ || crowding_ == Crowding::split || spanned(a, b) > static_cast<double>(cells_.ids.size())) return;
+    if (coarser_ || crowding_ == Crowding::split || spanned(a, b) > static_cast<double>(ids_.size())) return;
     g.lo[0] = a.i, g.lo[1] = a.j, g.lo[2] = a.k;
     g.hi[0] = b.i, g.hi[1] = b.j, g.hi[2] = b.k;
     for (std::int64_t k = a.k; k <= b.k; ++k)
       for (std::int64_t j = a.j; j <= b.j; ++j)
         for (std::int64_t i = a.i; i <= b.i; ++i)
-          if (const int c = find(key({i, j, k})); c >= 0 && !cells_.ids[static_cast<std::size_t>(c)].empty())
+          if (const int c = find(key({i, j, k})); c >= 0 && !ids_[static_cast<std::size_t>(c)].empty())
             g.runs.push_back({i, j, k, c});
   }
 
@@ -154,12 +153,12 @@ class SpatialHash {
   bool any_in(const Gathered& g, const Vec3& lo, const Vec3& hi, Pred&& pred) const {
     const Cell a = cell_of(lo), b = cell_of(hi);
     if (a.i < g.lo[0] || a.j < g.lo[1] || a.k < g.lo[2] || b.i > g.hi[0] || b.j > g.hi[1] || b.k > g.hi[2] ||
-        spanned(a, b) > static_cast<double>(cells_.ids.size()))
+        spanned(a, b) > static_cast<double>(ids_.size()))
       return any_in(lo, hi, pred);
     // g's cells in any_in's order; those of the smaller box keep that order among themselves.
     for (const auto& r : g.runs) {
       if (r.i < a.i || r.i > b.i || r.j < a.j || r.j > b.j || r.k < a.k || r.k > b.k) continue;
-      const Ids& ids = cells_.ids[static_cast<std::size_t>(r.cell)];
+      const std::vector<int>& ids = ids_[static_cast<std::size_t>(r.cell)];
       if (counting_) visits_ += ids.size();
       for (int id : ids)
         if (pred(id)) return true;
@@ -187,13 +186,13 @@ class SpatialHash {
     const auto visit = [&](int c) {
       if (crowding_ == Crowding::split && finer_[static_cast<std::size_t>(c)])
         return any_in_finer(c, lo, hi, pred);
-      const Ids& ids = cells_.ids[static_cast<std::size_t>(c)];
+      const std::vector<int>& ids = ids_[static_cast<std::size_t>(c)];
       if (counting_) visits_ += ids.size();
       for (int id : ids)
         if (pred(id)) return true;
       return false;
     };
-    if (spanned(a, b) > static_cast<double>(cells_.ids.size())) {
+    if (spanned(a, b) > static_cast<double>(ids_.size())) {
       // A cell's key holds its coordinates modulo 2^21 (key): it is in the box when some cell
       // of the box has the same residues, as the scan below would find it.
       const auto meets = [](std::uint64_t residue, std::int64_t from, std::int64_t to) {
@@ -262,7 +261,7 @@ class SpatialHash {
   }
 
   // The cells live in an open-addressing table (linear probing, at most half full) of keys and
-  // indices into cells_.ids: a query looks at 27 cells or more, and std::unordered_map's chained
+  // indices into ids_: a query looks at 27 cells or more, and std::unordered_map's chained
   // buckets made the lookups 9% of a run on the torus. Cells are never removed (an emptied cell
   // keeps its slot), so probing needs no tombstones.
   static std::size_t slot_hash(std::uint64_t k) {
@@ -282,14 +281,14 @@ class SpatialHash {
   }
   // The index of the cell with key k, made empty if there is none.
   int cell(std::uint64_t k) {
-    if (2 * (cells_.ids.size() + 1) > slots_.size()) grow();
+    if (2 * (ids_.size() + 1) > slots_.size()) grow();
     const std::size_t mask = slots_.size() - 1;
     for (std::size_t s = slot_hash(k) & mask;; s = (s + 1) & mask) {
       Slot& slot = slots_[s];
       if (slot.cell < 0) {
-        slot = {k, static_cast<int>(cells_.ids.size())};
+        slot = {k, static_cast<int>(ids_.size())};
         keys_.push_back(k);
-        cells_.ids.emplace_back(cells_.arena.get());
+        ids_.emplace_back();
         if (crowding_ == Crowding::split) finer_.emplace_back();
         return slot.cell;
       }
@@ -309,7 +308,7 @@ class SpatialHash {
   }
   struct Slot {
     std::uint64_t key = 0;
-    int cell = -1;  // index into cells_.ids; -1 marks a free slot
+    int cell = -1;  // index into ids_; -1 marks a free slot
   };
 
   // insert_box: boxes wider than kMaxBoxSpan cells along an axis go to the next level, whose
@@ -330,27 +329,8 @@ class SpatialHash {
   int depth_ = 0;  // levels of splitting above this hash
   std::vector<std::unique_ptr<SpatialHash>> finer_;  // Crowding::split: of each split cell
   std::vector<Slot> slots_;
-  // The cells' ids live in one arena: a hash over a large mesh has about as many cells as
-  // vertices, and freeing their buffers one by one was most of the time a cancelled run took to
-  // end (the arena frees its few large blocks at once). A buffer a cell outgrows stays in the
-  // arena until the hash goes (as capacities double, at most what the cells hold at their
-  // fullest), and so does a split cell's.
-  using Ids = std::pmr::vector<int>;
-  // The arena and the cells drawn from it, moved together: a hash assigned a new one (the
-  // tracker's vertex hash after a rollback) lets go of its cells before its arena.
-  struct Cells {
-    std::unique_ptr<std::pmr::monotonic_buffer_resource> arena = std::make_unique<std::pmr::monotonic_buffer_resource>();
-    std::vector<Ids> ids;
-    Cells() = default;
-    Cells(Cells&&) noexcept = default;
-    Cells& operator=(Cells&& o) noexcept {
-      ids = std::move(o.ids);  // the old cells go first, into the old arena
-      arena = std::move(o.arena);
-      return *this;
-    }
-  };
-  Cells cells_;
-  std::vector<std::uint64_t> keys_;  // of each occupied cell, as cells_.ids
+  std::vector<std::vector<int>> ids_;
+  std::vector<std::uint64_t> keys_;  // of each occupied cell, as ids_
   std::unique_ptr<SpatialHash> coarser_;  // created by the first box too wide for this level
 };
 
