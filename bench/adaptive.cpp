@@ -231,10 +231,10 @@ void BM_AdaptiveBookkeeping(benchmark::State& state) {
                                    static_cast<double>(c.gradient_hessian));
     const double outside = std::max(0.0, r.stats.seconds - in_field);
     for (std::size_t i = 0; i < kAdaptivePhases.size(); ++i) {
-      const PhaseReport& p = r.stats.adaptive->phases[i];
-      phase_outside[i] += std::max(
-          0.0, p.seconds - priced(static_cast<double>(p.evaluations.value), static_cast<double>(p.evaluations.value_gradient),
-                                  static_cast<double>(p.evaluations.gradient_hessian)));
+      const EvaluationCounts& n = r.stats.adaptive->phases[i].evaluations;
+      const auto d = [](std::uint64_t x) { return static_cast<double>(x); };
+      phase_outside[i] += std::max(0.0, r.stats.adaptive->phases[i].seconds -
+                                            priced(d(n.value), d(n.value_gradient), d(n.gradient_hessian)));
     }
     state.SetIterationTime(outside);
     vertices += static_cast<double>(r.stats.vertices);
