@@ -1,412 +1,89 @@
-// The angle repair (repair_context.h): triangles under improve_below repaired by flips, moves,
-// collapses and splits, each kept only where it raises the smallest angle it touches.
-#include "repair_context.h"
+// The angle repair (repair_angles.h).
+#include "repair_angles.h"
 
-namespace cdp::adaptive::repair_detail {
+namespace cdp::adaptive::repair {
+namespace {
 
-bool Improver::try_flip(int t, int k, bool for_ratio) {
-  const Tri T = m_.triangles[t];
-  const int a = T[k], b = T[(k + 1) % 3], c = T[(k + 2) % 3];
-  const int u = across(t, a, b);
-  if (u < 0) return false;
-  const Tri& U = m_.triangles[u];
-  int d = -1;
-  for (int w : U)
-    if (w != a && w != b) d = w;
-  if (d < 0 || d == c) return false;
-  // Each relaxation flip lowers the valences' summed squared distance from 6, or keeps it and
-  // lowers the summed edge ratio (below): no flip can be undone, and the relaxation's moves
-  // then have a more regular mesh to work on (an interior vertex of valence 6 can have six
-  // equilateral triangles, one of 4 or 8 cannot). The valences first: on an even mesh nearly
-  // every edge the relaxation tries fails on them (573,809 of 574,422 tries on the torus at
-  // factor 20), before the other tests' edge scans and square roots.
-  const auto dev = [&](int x, int add) {
-    const int q = static_cast<int>(vt_[x].size()) + add - 6;
-    return q * q;
-  };
-  const int val_before = for_ratio ? dev(a, 0) + dev(b, 0) + dev(c, 0) + dev(d, 0) : 0;
-  const int val_after = for_ratio ? dev(a, -1) + dev(b, -1) + dev(c, 1) + dev(d, 1) : 0;
-  if (val_after > val_before) return false;
-  if (has_edge(c, d)) return false;
-  // The tests that need no field evaluation first.
-  const Tri n1{c, a, d}, n2{d, b, c};
-  if (for_ratio) {
-    const double ratio_before = tri_ratio(T) + tri_ratio(U), ratio_after = tri_ratio(n1) + tri_ratio(n2);
-    const bool better = ratio_after < ratio_before * (1 - kRelaxMinGain)
-                            ? val_after <= val_before
-                            : val_after < val_before && ratio_after < ratio_before * kFlipRatioSlack;
-    if (!better) return false;
-  }
-  const double before = std::min(tri_min_angle(T), tri_min_angle(U));
-  const double after = std::min(tri_min_angle(n1), tri_min_angle(n2));
-  if (for_ratio ? !(after >= std::min(before, kRelaxKeepDegrees * std::numbers::pi / 180))
-                : !(after > before + kMinGain))
-    return false;
-  const double floor = facing_floor({t, u});
-  if (!faces_surface(n1, floor) || !faces_surface(n2, floor)) return false;
-  // A flip must not remove a crease edge nor cut across one.
-  const bool creased = on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d);
-  if (creased && !(face_normal(T).dot(face_normal(U)) > kCreaseFlatCos)) return false;
-  // The new diagonal may lie no farther from the surface than the worst edge of the quad.
-  const auto mid = [&](int x, int y) { return std::abs(signed_distance(0.5 * (P(x) + P(y)))); };
-  const double allowed = std::max({mid(a, b), mid(a, d), mid(d, b), mid(b, c), mid(c, a)});
-  if (!(mid(c, d) <= allowed)) return false;
-  if (!keeps_tolerance({n1, n2}, {t, u})) return false;
-  if (intersects({n1, n2}, {t, u})) return false;
-  m_.triangles[t] = n1;
-  m_.triangles[u] = n2;
-  erase_value(vt_[a], u);
-  erase_value(vt_[b], t);
-  vt_[c].push_back(u);
-  vt_[d].push_back(t);
-  hash_box(t);
-  hash_box(u);
-  touch(t);
-  touch(u);
-  if (for_ratio) {
-    ++r_.relax_flips;
-    for (int w : {a, b, c, d}) flipped_[w] = 1;
-  } else {
-    ++r_.flips;
-  }
-  return true;
-}
+// Rounds over the work list. Each round visits every triangle still under the bound once and
+// every accepted operation raises the smallest angle it touches by kMinGain, so the pass ends
+// on its own; the bound caps the cost (measured: the bunny VIS-800 and tanglecube settle in
+// under 10 rounds).
+constexpr int kQualityRounds = 24;
+// A needle's shortest edge is collapsed when it is shorter than this share of the triangle's
+// second-shortest edge (the other ops cannot open an angle opposite an edge that short).
+constexpr double kNeedleShare = 0.5;
 
-bool Improver::try_move(int v) {
-  if (on_crease(v)) return false;
-  const std::vector<int> ring = neighbours(v);
-  if (ring.size() < 3) return false;
-  Vec3 centroid = Vec3::Zero();
-  for (int w : ring) centroid += P(w);
-  centroid /= static_cast<double>(ring.size());
-  const Vec3 x = P(v), n = m_.normals[v];
-  // Two targets: the centroid of the neighbours (Laplacian smoothing), and the mean of the
-  // apexes of equilateral triangles over the star's outer edges (equilateral_step), which
-  // pulls v towards where each of its triangles would be equilateral and opens small angles
-  // the centroid leaves.
-  std::vector<Vec3> steps;
-  Vec3 to_centroid = centroid - x;
-  to_centroid -= n * n.dot(to_centroid);
-  steps.push_back(to_centroid);
-  const Vec3 to_equilateral = equilateral_step(v);
-  steps.push_back(to_equilateral.squaredNorm() > 0 ? to_equilateral : to_centroid);
-  double shortest = std::numeric_limits<double>::infinity();
-  for (int w : ring) shortest = std::min(shortest, (P(w) - x).norm());
-  double before = std::numeric_limits<double>::infinity();
-  for (int u : vt_[v]) before = std::min(before, tri_min_angle(m_.triangles[u]));
-  for (const double share : kMoveShares)
-  for (const Vec3& step : steps) {
-    // Newton moves the point by about the sagitta of its edges, which changes the angles
-    // little: a tangential position that does not raise them is not worth projecting.
-    {
-      m_.positions[v] = x + share * step;
-      double guess = std::numeric_limits<double>::infinity();
-      for (int u : vt_[v]) guess = std::min(guess, tri_min_angle(m_.triangles[u]));
-      m_.positions[v] = x;
-      if (!(guess > before)) continue;
-    }
-    ProjectionOptions po;
-    po.tolerance = 1e-10 * o_.diagonal;
-    po.max_step = shortest;
-    po.max_travel = shortest;
-    const ProjectionResult pr = project_to_surface(field_, x + share * step, po);
-    if (!pr.ok()) continue;
-    const Vec3& g = pr.gradient;  // at pr.point: no second evaluation of the same point
-    if (!(g.squaredNorm() > 0)) continue;
-    const Vec3 ng = g.normalized();
-    if (!(ng.dot(n) > kMoveNormalCos)) continue;
-    // The star with v at its new place.
-    const double floor = facing_floor(vt_[v]);
-    const Vec3 saved = m_.positions[v], saved_n = m_.normals[v];
-    m_.positions[v] = pr.point;
-    m_.normals[v] = ng;
-    double after = std::numeric_limits<double>::infinity();
-    bool faces = true;
-    std::vector<Tri> star;
-    for (int u : vt_[v]) {
-      star.push_back(m_.triangles[u]);
-      after = std::min(after, tri_min_angle(m_.triangles[u]));
-      faces = faces && faces_surface(m_.triangles[u], floor);
-    }
-    bool ok = after > before + kMinGain && faces;
-    const double new_dist = ok ? worst_star_distance(v) : 0;
-    m_.positions[v] = saved;
-    m_.normals[v] = saved_n;
-    if (ok) {
-      const Vec3 target = pr.point;
-      ok = may_replace(new_dist, vt_[v]) && !intersects(star, vt_[v], v, target);
-      if (ok) {
-        m_.positions[v] = target;
-        m_.normals[v] = ng;
-        crease_[v] = -1;
-        for (int u : vt_[v]) {
-          hash_box(u);
-          touch(u);
-        }
-        ++r_.moves;
-        return true;
-      }
-    }
-  }
-  return false;
-}
-
-bool Improver::try_collapse(int t, int a, int b) {
-  const int u = across(t, a, b);
-  if (u < 0) return false;
-  const bool ca = on_crease(a), cb = on_crease(b);
-  if (ca && cb) return false;
-  int c = -1, d = -1;
-  for (int w : m_.triangles[t])
-    if (w != a && w != b) c = w;
-  for (int w : m_.triangles[u])
-    if (w != a && w != b) d = w;
-  // The link condition: a and b share exactly the neighbours c and d, so the collapse keeps
-  // the surface manifold and its topology; c and d keep at least three neighbours.
-  const std::vector<int> na = neighbours(a), nb = neighbours(b);
-  std::vector<int> common;
-  std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
-  if (common.size() != 2 || !((common[0] == c && common[1] == d) || (common[0] == d && common[1] == c))) return false;
-  if (neighbours(c).size() < 4 || neighbours(d).size() < 4) return false;
-  // The merged vertex: a crease end stays where it is; otherwise the midpoint, on the surface.
-  Vec3 x, nx;
-  // Across a ridge narrower than the edge (the landing's normal within 30 degrees of neither
-  // end's, see lands_between), the merged vertex stands for both flanks.
-  bool ridge = false;
-  if (ca || cb) {
-    x = ca ? P(a) : P(b);
-    nx = ca ? m_.normals[a] : m_.normals[b];
-  } else {
-    ProjectionOptions po;
-    po.tolerance = 1e-10 * o_.diagonal;
-    const double l = (P(a) - P(b)).norm();
-    po.max_step = l;
-    po.max_travel = l;
-    const ProjectionResult pr = project_to_surface(field_, 0.5 * (P(a) + P(b)), po);
-    if (!pr.ok()) return false;
-    const Vec3& g = pr.gradient;  // at pr.point
-    if (!(g.squaredNorm() > 0)) return false;
-    x = pr.point;
-    nx = g.normalized();
-    if (!lands_between(nx, m_.normals[a], m_.normals[b])) return false;
-    ridge = !(nx.dot(m_.normals[a]) > kMoveNormalCos && nx.dot(m_.normals[b]) > kMoveNormalCos);
-    // Not across a crease of the field (two of its min/max/abs pieces meet within the edge):
-    // that edge stands on both faces of a real crease, which a collapse would round off.
-    if (ridge && field_.pieces(x, l).size() > 1) return false;
-  }
-  std::vector<int> old;  // every triangle around a or b
-  for (int w : vt_[a]) old.push_back(w);
-  for (int w : vt_[b])
-    if (std::find(old.begin(), old.end(), w) == old.end()) old.push_back(w);
-  std::sort(old.begin(), old.end());
-  double before = std::numeric_limits<double>::infinity();
-  for (int w : old) before = std::min(before, tri_min_angle(m_.triangles[w]));
-  std::vector<Tri> added;
-  std::vector<int> kept;
-  for (int w : old) {
-    if (w == t || w == u) continue;
-    Tri x3 = m_.triangles[w];
-    for (int& y : x3)
-      if (y == b) y = a;
-    added.push_back(x3);
-    kept.push_back(w);
-  }
-  const double floor = facing_floor(old);
-  const Vec3 saved = m_.positions[a], saved_n = m_.normals[a];
-  const Vec3 flank_a = m_.normals[a], flank_b = m_.normals[b];
-  m_.positions[a] = x;
-  m_.normals[a] = nx;
-  double after = std::numeric_limits<double>::infinity();
-  bool faces = true;
-  for (const Tri& s : added) {
-    after = std::min(after, tri_min_angle(s));
-    if (!ridge) {
-      faces = faces && faces_surface(s, floor);
-      continue;
-    }
-    // On a ridge the crest's normal is up to half the ridge's turn (50-75 degrees on the horse)
-    // from either flank, so a triangle lying on a flank faces it edge-on; at the merged corner
-    // it must face one of the three normals the vertex stands for (crest, either flank), at the
-    // other corners their own as everywhere.
-    const Vec3 fn = face_normal(s);
-    for (int v : s) {
-      const double c = v == a ? std::max({fn.dot(nx), fn.dot(flank_a), fn.dot(flank_b)}) : fn.dot(m_.normals[v]);
-      faces = faces && c > floor;
-    }
-  }
-  bool ok = after > before + kMinGain && faces;
-  const double new_dist = ok ? worst_distance(added) : 0;
-  m_.positions[a] = saved;
-  m_.normals[a] = saved_n;
-  ok = ok && may_replace(new_dist, old);
-  if (ok) ok = !intersects(added, old, a, x);
-  if (!ok) return false;
-  m_.positions[a] = x;
-  m_.normals[a] = nx;
-  crease_[a] = ca || cb ? 1 : -1;
-  alive_[t] = alive_[u] = 0;
-  for (std::size_t i = 0; i < kept.size(); ++i) m_.triangles[kept[i]] = added[i];
-  std::vector<int> star;
-  for (int w : old)
-    if (w != t && w != u) star.push_back(w);
-  vt_[a] = star;
-  vt_[b].clear();
-  erase_value(vt_[c], t);
-  erase_value(vt_[d], u);
-  dead_vertex_.push_back(b);
-  for (int w : star) {
-    hash_box(w);
-    touch(w);
-  }
-  ++r_.collapses;
-  return true;
-}
-
-bool Improver::try_split(int t, int a, int b, bool repair, double shortest) {
-  const int u = across(t, a, b);
-  if (u < 0) return false;
-  if ((P(a) - P(b)).norm() < 2 * (shortest > 0 ? shortest : o_.min_edge)) return false;
-  int c = -1, d = -1;
-  for (int w : m_.triangles[t])
-    if (w != a && w != b) c = w;
-  for (int w : m_.triangles[u])
-    if (w != a && w != b) d = w;
-  // Next to a crease, a repair insertion keeps to one face: the quad flat (the flip's test,
-  // kCreaseFlatCos), the edge it removes not both of whose ends lie on the crease (it may run
-  // along it), and the new vertex landing with its gradient on that face (below). The Barth
-  // ball's crease patches left caps there that nothing else could open: a crease finely
-  // spaced for the steep side, the flat side's vertices far off along its tangent (0.61
-  // degrees at factor 6).
-  const bool creased = repair && (on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d));
-  const Vec3 face_t = creased ? face_normal(m_.triangles[t]) : Vec3::Zero();
-  const Vec3 face_u = creased ? face_normal(m_.triangles[u]) : Vec3::Zero();
-  if (creased && ((on_crease(a) && on_crease(b)) || !(face_t.dot(face_u) > kCreaseFlatCos))) return false;
-  ProjectionOptions po;
-  po.tolerance = 1e-10 * o_.diagonal;
-  const double l = (P(a) - P(b)).norm();
-  po.max_step = 0.5 * l;
-  po.max_travel = 0.5 * l;
-  const Vec3 start = repair ? Vec3(0.25 * (P(a) + P(b) + P(c) + P(d))) : Vec3(0.5 * (P(a) + P(b)));
-  const ProjectionResult pr = project_to_surface(field_, start, po);
-  if (!pr.ok()) return false;
-  const Vec3& g = pr.gradient;  // at pr.point
-  if (!(g.squaredNorm() > 0)) return false;
-  const Vec3 ng = g.normalized();
-  if (!(ng.dot(m_.normals[a]) > 0 && ng.dot(m_.normals[b]) > 0)) return false;
-  if (creased && !(ng.dot(face_t) > kCreaseFlatCos && ng.dot(face_u) > kCreaseFlatCos)) return false;
-  // t = (a, b, c) in its own rotation, u = (b, a, d).
-  const int m = static_cast<int>(m_.positions.size());
-  add_vertex(pr.point, ng);
-  const std::vector<Tri> added{{a, m, c}, {m, b, c}, {b, m, d}, {m, a, d}};
-  bool ok = true;
-  const double floor = facing_floor({t, u});
-  for (const Tri& s : added) ok = ok && faces_surface(s, floor);
-  if (ok && repair) {
-    double after = std::numeric_limits<double>::infinity();
-    for (const Tri& s : added) after = std::min(after, tri_min_angle(s));
-    ok = after > std::min(tri_min_angle(m_.triangles[t]), tri_min_angle(m_.triangles[u])) + kMinGain;
-    const auto mid = [&](int x, int y) { return std::abs(signed_distance(0.5 * (P(x) + P(y)))); };
-    const double allowed = std::max({mid(a, b), mid(a, d), mid(d, b), mid(b, c), mid(c, a)});
-    ok = ok && std::max({mid(m, a), mid(m, b), mid(m, c), mid(m, d)}) <= allowed;
-    ok = ok && keeps_tolerance(added, {t, u});
-  }
-  if (ok) ok = !intersects(added, {t, u});
-  if (!ok) {
-    drop_last_vertex();
-    return false;
-  }
-  const int t2 = tri_count(), u2 = t2 + 1;
-  m_.triangles[t] = added[0];
-  m_.triangles.push_back(added[1]);
-  m_.triangles[u] = added[2];
-  m_.triangles.push_back(added[3]);
-  alive_.push_back(1);
-  alive_.push_back(1);
-  stamp_.push_back(0);
-  stamp_.push_back(0);
-  // a: t, u2 (was t, u); b: t2, u (was t, u); c: t, t2; d: u, u2; m: all four.
-  erase_value(vt_[a], u);
-  vt_[a].push_back(u2);
-  erase_value(vt_[b], t);
-  vt_[b].push_back(t2);
-  vt_[c].push_back(t2);
-  vt_[d].push_back(u2);
-  vt_[m] = {t, t2, u, u2};
-  for (int s : {t, t2, u, u2}) {
-    hash_box(s);
-    touch(s);
-  }
-  ++(repair ? r_.inserts : r_.splits);
-  return true;
-}
-
-bool Improver::repair_triangle(int t) {
-  const Tri T = m_.triangles[t];
-  const auto [len, order] = edges_longest_first(T);
+// One triangle under the bound: the first operation of the list that is applied (flips, a
+// needle's collapse, moves of its corners and their neighbours, a split of a cap, collapses).
+bool repair_triangle(RepairContext& ctx, int t) {
+  const Tri T = ctx.mesh_.triangles[t];
+  const auto [len, order] = ctx.edges_longest_first(T);
   // A cap (an angle near 180 degrees) opens by flipping its longest edge; other edges may flip
   // too. Flips change nothing but connectivity, so they go first.
   for (int k : order)
-    if (try_flip(t, k)) return true;
+    if (ctx.try_flip(t, k)) return true;
   // A needle: its shortest edge goes.
   const int shortest = order[2];
   if (len[shortest] < kNeedleShare * len[order[1]] &&
-      try_collapse(t, T[shortest], T[(shortest + 1) % 3]))
+      ctx.try_collapse(t, T[shortest], T[(shortest + 1) % 3]))
     return true;
   // Otherwise move a corner: the one at the smallest angle first.
   std::array<std::pair<double, int>, 3> corners{};
-  for (int k = 0; k < 3; ++k) corners[k] = {angle_at(P(T[k]), P(T[(k + 1) % 3]), P(T[(k + 2) % 3])), k};
+  for (int k = 0; k < 3; ++k) corners[k] = {angle_at(ctx.P(T[k]), ctx.P(T[(k + 1) % 3]), ctx.P(T[(k + 2) % 3])), k};
   std::sort(corners.begin(), corners.end());
   for (const auto& [angle, k] : corners)
-    if (try_move(T[k])) return true;
+    if (ctx.try_move(T[k])) return true;
   // Then the neighbours of the corners (the second ring), which reshape it from outside.
   for (int v : T)
-    for (int w : neighbours(v))
-      if (w != T[0] && w != T[1] && w != T[2] && try_move(w)) return true;
+    for (int w : ctx.neighbours(v))
+      if (w != T[0] && w != T[1] && w != T[2] && ctx.try_move(w)) return true;
   // A cap: a vertex inside the quad on its longest edge.
-  if (try_split(t, T[order[0]], T[(order[0] + 1) % 3], true)) return true;
+  if (ctx.try_split(t, T[order[0]], T[(order[0] + 1) % 3], true)) return true;
   // Last, removing a vertex: any edge of the triangle, shortest first, where that raises the
   // smallest angle around (a vertex squeezed between neighbours that cannot move).
   for (int i = 2; i >= 0; --i) {
     const int k = order[i];
     if (k == shortest && len[shortest] < kNeedleShare * len[order[1]]) continue;  // tried above
-    if (try_collapse(t, T[k], T[(k + 1) % 3])) return true;
+    if (ctx.try_collapse(t, T[k], T[(k + 1) % 3])) return true;
   }
   return false;
 }
 
-void Improver::repair() {
+}  // namespace
+
+void repair_angles(RepairContext& ctx) {
   std::vector<int> work;
-  for (int t = 0; t < tri_count(); ++t)
-    if (alive_[t] && tri_below(m_.triangles[t], o_.improve_below)) work.push_back(t);
-  r_.bad_before = std::max(r_.bad_before, work.size());
+  for (int t = 0; t < ctx.tri_count(); ++t)
+    if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t], ctx.options_.improve_below)) work.push_back(t);
+  ctx.report_.bad_before = std::max(ctx.report_.bad_before, work.size());
   for (int round = 0; round < kQualityRounds && !work.empty(); ++round) {
     std::vector<std::pair<double, int>> order;
     for (int t : work)
-      if (alive_[t]) order.push_back({tri_min_angle(m_.triangles[t]), t});
+      if (ctx.alive_[t]) order.push_back({ctx.tri_min_angle(ctx.mesh_.triangles[t]), t});
     std::sort(order.begin(), order.end());
-    touched_.clear();
+    ctx.touched_.clear();
     bool changed = false;
     for (std::size_t i = 0; i < order.size(); ++i) {
-      poll(i);
+      ctx.poll(i);
       const int t = order[i].second;
-      if (!alive_[t] || !(tri_min_angle(m_.triangles[t]) < o_.improve_below)) continue;
-      changed = repair_triangle(t) || changed;
+      if (!ctx.alive_[t] || !(ctx.tri_min_angle(ctx.mesh_.triangles[t]) < ctx.options_.improve_below)) continue;
+      changed = repair_triangle(ctx, t) || changed;
     }
     if (!changed) break;
     // Next round: what is still bad among the triangles visited or changed.
     std::vector<int> next;
     for (const auto& [angle, t] : order) next.push_back(t);
-    next.insert(next.end(), touched_.begin(), touched_.end());
+    next.insert(next.end(), ctx.touched_.begin(), ctx.touched_.end());
     std::sort(next.begin(), next.end());
     next.erase(std::unique(next.begin(), next.end()), next.end());
     work.clear();
     for (int t : next)
-      if (alive_[t] && tri_below(m_.triangles[t], o_.improve_below)) work.push_back(t);
+      if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t], ctx.options_.improve_below)) work.push_back(t);
   }
   std::size_t bad = 0;
-  for (int t = 0; t < tri_count(); ++t)
-    if (alive_[t] && tri_below(m_.triangles[t], o_.improve_below)) ++bad;
-  r_.bad_after = bad;
+  for (int t = 0; t < ctx.tri_count(); ++t)
+    if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t], ctx.options_.improve_below)) ++bad;
+  ctx.report_.bad_after = bad;
 }
 
-}  // namespace cdp::adaptive::repair_detail
+}  // namespace cdp::adaptive::repair

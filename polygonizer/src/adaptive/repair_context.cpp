@@ -2,9 +2,9 @@
 // crease vertices, adjacency, and the intersection tests against the triangles nearby.
 #include "repair_context.h"
 
-namespace cdp::adaptive::repair_detail {
+namespace cdp::adaptive::repair {
 
-double Improver::cell_size(const Mesh& m) {
+double RepairContext::cell_size(const Mesh& m) {
   // About two typical edges, so that a query box around a new triangle touches a few cells.
   std::vector<double> lengths;
   const std::size_t stride = std::max<std::size_t>(1, m.triangles.size() / 256);
@@ -15,7 +15,7 @@ double Improver::cell_size(const Mesh& m) {
   return std::max(2 * lengths[lengths.size() / 2], 1e-12);
 }
 
-bool Improver::tri_below(const Tri& t, double limit) const {
+bool RepairContext::tri_below(const Tri& t, double limit) const {
   constexpr double kSurelyAbove = 1e-9;  // radians
   int k = 0;
   double shortest = (P(t[2]) - P(t[1])).squaredNorm();  // faces t[0]
@@ -27,7 +27,7 @@ bool Improver::tri_below(const Tri& t, double limit) const {
   return tri_min_angle(t) < limit;
 }
 
-double Improver::midpoint_distance(int x, int y, MidpointMemo* memo) const {
+double RepairContext::midpoint_distance(int x, int y, MidpointMemo* memo) const {
   const std::pair<int, int> key = std::minmax(x, y);
   if (memo && memo->table) {
     const auto& keys = memo->table->keys;
@@ -43,7 +43,7 @@ double Improver::midpoint_distance(int x, int y, MidpointMemo* memo) const {
   return d;
 }
 
-double Improver::estimate_distance(const Tri& t, int slot, MidpointMemo* memo) const {
+double RepairContext::estimate_distance(const Tri& t, int slot, MidpointMemo* memo) const {
   if (static_cast<std::size_t>(slot) >= estimates_.size()) estimates_.resize(static_cast<std::size_t>(slot) + 1);
   EstimateEntry& e = estimates_[static_cast<std::size_t>(slot)];
   const std::array<bool, 3> kept = kept_corners(e, t);
@@ -63,7 +63,7 @@ double Improver::estimate_distance(const Tri& t, int slot, MidpointMemo* memo) c
   return e.d;
 }
 
-double Improver::estimate_from(const Vec3& a, const Vec3& b, const Vec3& c, double mab, double mbc, double mca) const {
+double RepairContext::estimate_from(const Vec3& a, const Vec3& b, const Vec3& c, double mab, double mbc, double mca) const {
   const double centroid = signed_distance((a + b + c) / 3);
   if (!std::isfinite(mab + mbc + mca + centroid)) return std::numeric_limits<double>::infinity();
   // The quadratic through 0 at the corners and these at the midpoints, sampled on a grid of
@@ -79,11 +79,11 @@ double Improver::estimate_from(const Vec3& a, const Vec3& b, const Vec3& c, doub
   return std::max({q_max * scale, std::abs(centroid), std::abs(mab), std::abs(mbc), std::abs(mca)});
 }
 
-double Improver::sampled_distance(const Tri& t, double fallback, ProjectionResult* worst_at) const {
+double RepairContext::sampled_distance(const Tri& t, double fallback, ProjectionResult* worst_at) const {
   constexpr int kDenseGrid = 6;
   const std::array<Vec3, 3> p{P(t[0]), P(t[1]), P(t[2])};
   ProjectionOptions po;
-  po.tolerance = 1e-10 * o_.diagonal;
+  po.tolerance = 1e-10 * options_.diagonal;
   po.max_travel = std::sqrt(std::max({(p[1] - p[0]).squaredNorm(), (p[2] - p[1]).squaredNorm(), (p[0] - p[2]).squaredNorm()}));
   double worst = 0;
   for (int i = 0; i <= kDenseGrid; ++i)
@@ -101,56 +101,55 @@ double Improver::sampled_distance(const Tri& t, double fallback, ProjectionResul
   return worst;
 }
 
-double Improver::worst_distance(const std::vector<Tri>& ts) const {
+double RepairContext::worst_distance(const std::vector<Tri>& ts) const {
   double worst = 0;
-  if (o_.tolerance > 0) {
+  if (options_.tolerance > 0) {
     MidpointMemo memo;
     for (const Tri& t : ts) worst = std::max(worst, estimate_distance(t, &memo));
   }
   return worst;
 }
 
-double Improver::worst_star_distance(int v) const {
+double RepairContext::worst_star_distance(int v) const {
   double worst = 0;
-  if (o_.tolerance > 0) {
+  if (options_.tolerance > 0) {
     MidpointMemo memo;
-    for (int u : vt_[v]) worst = std::max(worst, estimate_distance(m_.triangles[u], u, &memo));
+    for (int u : vt_[v]) worst = std::max(worst, estimate_distance(mesh_.triangles[u], u, &memo));
   }
   return worst;
 }
 
-bool Improver::may_replace(double worst_new, const std::vector<int>& removed) const {
-  if (!(o_.tolerance > 0) || worst_new <= kToleranceMargin * o_.tolerance) return true;
+bool RepairContext::may_replace(double worst_new, const std::vector<int>& removed) const {
+  if (!(options_.tolerance > 0) || worst_new <= kToleranceMargin * options_.tolerance) return true;
   double worst_old = 0;
   MidpointMemo memo;
-  for (int t : removed) worst_old = std::max(worst_old, estimate_distance(m_.triangles[t], t, &memo));
+  for (int t : removed) worst_old = std::max(worst_old, estimate_distance(mesh_.triangles[t], t, &memo));
   return worst_new <= worst_old;
 }
 
-bool Improver::on_crease(int v) {
+bool RepairContext::on_crease(int v) {
   if (smooth_) return false;  // no crease to find (Field::smooth): no probes
   if (crease_[v] >= 0) return crease_[v];
   const Vec3& x = P(v);
   Vec3 g0;
   field_.value_gradient(x, g0);
-  bool crease = !(g0.squaredNorm() > 0) || !(g0.normalized().dot(m_.normals[v]) > kCreaseNormalCosine);
+  bool crease = !(g0.squaredNorm() > 0) || !(g0.normalized().dot(mesh_.normals[v]) > kCreaseNormalCosine);
   if (!crease) {
-    const double eps = kCreaseProbe * o_.diagonal;
-    const Vec3 n = g0.normalized();
-    const Vec3 g1 = field_.gradient(x + eps * n), g2 = field_.gradient(x - eps * n);
+    const std::array<Vec3, 2> around = CreaseProbe(options_.diagonal).points(x, g0.normalized());
+    const Vec3 g1 = field_.gradient(around[1]), g2 = field_.gradient(around[0]);
     crease = !(g1.squaredNorm() > 0 && g2.squaredNorm() > 0) ||
              !(g1.normalized().dot(g2.normalized()) > kCreaseCosine);
   }
   crease_[v] = crease;
-  if (crease) ++r_.crease_vertices;
+  if (crease) ++report_.crease_vertices;
   return crease;
 }
 
-int Improver::across(int t, int a, int b) const {
+int RepairContext::across(int t, int a, int b) const {
   int found = -1;
   for (int u : vt_[a]) {
     if (u == t || !alive_[u]) continue;
-    const Tri& x = m_.triangles[u];
+    const Tri& x = mesh_.triangles[u];
     if (x[0] == b || x[1] == b || x[2] == b) {
       if (found >= 0) return -1;  // not manifold here: leave it alone
       found = u;
@@ -159,25 +158,25 @@ int Improver::across(int t, int a, int b) const {
   return found;
 }
 
-bool Improver::has_edge(int a, int b) const {
+bool RepairContext::has_edge(int a, int b) const {
   for (int u : vt_[a]) {
-    const Tri& x = m_.triangles[u];
+    const Tri& x = mesh_.triangles[u];
     if (alive_[u] && (x[0] == b || x[1] == b || x[2] == b)) return true;
   }
   return false;
 }
 
-std::vector<int> Improver::neighbours(int v) const {
+std::vector<int> RepairContext::neighbours(int v) const {
   std::vector<int> out;
   for (int u : vt_[v])
-    for (int w : m_.triangles[u])
+    for (int w : mesh_.triangles[u])
       if (w != v) out.push_back(w);
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 
-void Improver::hash_cover(int t, const Vec3& lo, const Vec3& hi) {
+void RepairContext::hash_cover(int t, const Vec3& lo, const Vec3& hi) {
   // Stale entries of earlier shapes stay and are filtered. A triangle is stored with its box
   // grown by kHashSlack cells, and not again while its box stays inside that: the small moves
   // of the relaxation would otherwise add a copy of each triangle around v at every move.
@@ -195,7 +194,7 @@ void Improver::hash_cover(int t, const Vec3& lo, const Vec3& hi) {
   hash_.insert_box(t, glo, ghi);
 }
 
-bool Improver::intersects(const std::vector<Tri>& added, const std::vector<int>& ignored, int mv, const Vec3& moved) {
+bool RepairContext::intersects(const std::vector<Tri>& added, const std::vector<int>& ignored, int mv, const Vec3& moved) {
   const auto pos = [&](int v) -> const Vec3& { return v == mv ? moved : P(v); };
   for (const Tri& a : added) {
     const std::array<Vec3, 3> pa{pos(a[0]), pos(a[1]), pos(a[2])};
@@ -206,7 +205,7 @@ bool Improver::intersects(const std::vector<Tri>& added, const std::vector<int>&
     const bool hit = hash_.any_in(lo, hi, [&](int u) {
       if (stamp_[u] == stamp_id_ || !alive_[u]) return false;
       stamp_[u] = stamp_id_;
-      const Tri& x = m_.triangles[u];
+      const Tri& x = mesh_.triangles[u];
       const std::array<Vec3, 3> pb{pos(x[0]), pos(x[1]), pos(x[2])};
       const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
       if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
@@ -217,7 +216,7 @@ bool Improver::intersects(const std::vector<Tri>& added, const std::vector<int>&
   return false;
 }
 
-bool Improver::apart_by_plane(const std::array<Vec3, 3>& a, const Tri& ia, const Vec3& n, const std::array<Vec3, 3>& b,
+bool RepairContext::apart_by_plane(const std::array<Vec3, 3>& a, const Tri& ia, const Vec3& n, const std::array<Vec3, 3>& b,
                               const Tri& ib, double bound) {
   int side = 0;
   for (int k = 0; k < 3; ++k) {
@@ -230,7 +229,7 @@ bool Improver::apart_by_plane(const std::array<Vec3, 3>& a, const Tri& ia, const
   return side != 0;
 }
 
-bool Improver::apart_at_shared_corner(const std::array<Vec3, 3>& a, const Tri& ia, const std::array<Vec3, 3>& b,
+bool RepairContext::apart_at_shared_corner(const std::array<Vec3, 3>& a, const Tri& ia, const std::array<Vec3, 3>& b,
                                       const Tri& ib) {
   int i = -1, j = -1;
   for (int p = 0; p < 3; ++p)
@@ -242,7 +241,7 @@ bool Improver::apart_at_shared_corner(const std::array<Vec3, 3>& a, const Tri& i
   return i >= 0 && apart_at_shared_vertex(a[i], a[(i + 1) % 3], a[(i + 2) % 3], b[(j + 1) % 3], b[(j + 2) % 3]);
 }
 
-bool Improver::meets_star(const std::vector<StarTriangle>& star, const Vec3& lo, const Vec3& hi, double magnitude,
+bool RepairContext::meets_star(const std::vector<StarTriangle>& star, const Vec3& lo, const Vec3& hi, double magnitude,
                           const Tri& x, const std::array<Vec3, 3>& pb) {
   const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
   if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
@@ -261,36 +260,45 @@ bool Improver::meets_star(const std::vector<StarTriangle>& star, const Vec3& lo,
   return false;
 }
 
-std::size_t Improver::intersecting_turn(const std::vector<Turn>& turns, TurnScratch& scratch) {
-  if (turns.empty()) return 0;
-  constexpr std::size_t kNone = TurnScratch::kNone;
-  for (std::size_t k = 0; k < turns.size(); ++k) scratch.turn_of[static_cast<std::size_t>(turns[k].v)] = k;
-  for (const Turn& turn : turns)
-    for (int u : vt_[turn.v]) {
-      Vec3 lo = P(m_.triangles[u][0]), hi = lo;
-      for (int w : m_.triangles[u]) {
-        lo = lo.cwiseMin(P(w)), hi = hi.cwiseMax(P(w));
-        if (const std::size_t j = scratch.turn_of[static_cast<std::size_t>(w)]; j != kNone)
-          lo = lo.cwiseMin(turns[j].from), hi = hi.cwiseMax(turns[j].from);
-      }
-      hash_cover(u, lo, hi);
-    }
-  scratch.hit.assign(turns.size(), 0);
-  detail::parallel_blocks(turns.size(), kTurnBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned w) {
-    std::vector<std::uint32_t>& stamp = scratch.stamps[w];
-    if (stamp.empty()) stamp.assign(m_.triangles.size(), 0);
-    std::uint32_t& id = scratch.ids[w];  // a worker's stamps outlive its blocks and calls
-    for (std::size_t k = begin; k < end; ++k) {
-      if (id == std::numeric_limits<std::uint32_t>::max()) std::fill(stamp.begin(), stamp.end(), 0), id = 0;
-      const auto at = [&](int q) -> const Vec3& {
-        const std::size_t j = scratch.turn_of[static_cast<std::size_t>(q)];
-        return j != kNone && j > k ? turns[j].from : P(q);
-      };
-      scratch.hit[k] = star_hits(turns[k].v, P(turns[k].v), at, stamp.data(), ++id, scratch.stars[w]);
-    }
-  });
-  for (const Turn& turn : turns) scratch.turn_of[static_cast<std::size_t>(turn.v)] = kNone;
-  return static_cast<std::size_t>(std::find(scratch.hit.begin(), scratch.hit.end(), 1) - scratch.hit.begin());
+Vec3 RepairContext::equilateral_step(int v) const {
+  const Vec3 x = P(v), n = mesh_.normals[v];
+  Vec3 apex_mean = Vec3::Zero();
+  int apexes = 0;
+  for (int u : vt_[v]) {
+    const Tri& t = mesh_.triangles[u];
+    int k = 0;
+    while (t[k] != v) ++k;
+    const Vec3 &a = P(t[(k + 1) % 3]), &b = P(t[(k + 2) % 3]);
+    const Vec3 side = n.cross(b - a);  // towards v's side of edge a -> b, seen from outside
+    if (!(side.squaredNorm() > 0)) continue;
+    apex_mean += 0.5 * (a + b) + std::sqrt(3.0) / 2 * (b - a).norm() * side.normalized();
+    ++apexes;
+  }
+  if (apexes == 0) return Vec3::Zero();
+  Vec3 step = apex_mean / apexes - x;
+  return step - n * n.dot(step);
 }
 
-}  // namespace cdp::adaptive::repair_detail
+void RepairContext::compact() {
+  if (dead_vertex_.empty()) return;
+  std::vector<int> remap(mesh_.positions.size(), 0);
+  for (int v : dead_vertex_) remap[v] = -1;
+  Mesh out;
+  int next = 0;
+  for (std::size_t v = 0; v < mesh_.positions.size(); ++v) {
+    if (remap[v] < 0) continue;
+    remap[v] = next++;
+    out.positions.push_back(mesh_.positions[v]);
+    out.normals.push_back(mesh_.normals[v]);
+  }
+  for (int t = 0; t < tri_count(); ++t) {
+    if (!alive_[t]) continue;
+    const Tri& x = mesh_.triangles[t];
+    out.triangles.push_back({remap[x[0]], remap[x[1]], remap[x[2]]});
+  }
+  mesh_.positions = std::move(out.positions);
+  mesh_.normals = std::move(out.normals);
+  mesh_.triangles = std::move(out.triangles);
+}
+
+}  // namespace cdp::adaptive::repair

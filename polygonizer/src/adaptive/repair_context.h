@@ -1,13 +1,16 @@
-// The repair of quality.h: one class, Improver, over the mesh being repaired, its adjacency,
-// its hash of triangle boxes and its distance estimates (the context every algorithm of the
-// repair shares), with each algorithm's members defined in a file of its own:
-//   repair_context.cpp   geometry, distance estimates, crease vertices, adjacency, the
-//                        intersection tests against the triangles nearby
-//   repair_angles.cpp    the angle repair: flips, moves, collapses, splits of triangles under
-//                        improve_below
-//   repair_relax.cpp     the relaxation of stretched triangles (mean edge ratio)
-//   repair_refine.cpp    the tolerance's refinement, the dense measurement and the last resort
-//   quality.cpp          improve_mesh, the order of the passes (Improver::run), compaction
+// The context the repair's algorithms share (quality.h): the mesh being repaired, its
+// adjacency, its hash of triangle boxes, its distance estimates and crease vertices, the field,
+// and the mesh operations every algorithm is made of (flip, move, collapse, split), each tested
+// before it is applied. The algorithms are free functions on it, one header each:
+//   repair_angles.h       the angle repair of triangles under improve_below
+//   repair_relax.h        the relaxation of stretched triangles (mean edge ratio)
+//   repair_refine.h       the tolerance's refinement (edge splits)
+//   repair_last_resort.h  the dense measurement and the last resort for what is still beyond it
+// and quality.cpp's improve_mesh runs them in order. The context's own definitions:
+//   repair_context.cpp     geometry, distance estimates, crease vertices, adjacency, the
+//                          intersection tests against the triangles nearby, compaction
+//   repair_operations.cpp  the mesh operations
+// The crease probe (crease_probe.h) and the hash (spatial_hash.h) are the tracker's too.
 // Private to src/adaptive.
 #pragma once
 
@@ -33,13 +36,8 @@
 #include <span>
 #include <vector>
 
-namespace cdp::adaptive::repair_detail {
+namespace cdp::adaptive::repair {
 
-// Rounds over the work list. Each round visits every triangle still under the bound once and
-// every accepted operation raises the smallest angle it touches by kMinGain, so the pass ends
-// on its own; the bound caps the cost (measured: the bunny VIS-800 and tanglecube settle in
-// under 10 rounds).
-inline constexpr int kQualityRounds = 24;
 // An operation must raise the smallest angle it touches by at least a quarter of a degree:
 // operations cannot undo each other on floating-point ties, and a vertex cannot creep by tiny
 // moves round after round while the stronger operations further down the list wait.
@@ -63,58 +61,12 @@ inline constexpr double kMoveNormalCos = 0.866;
 inline constexpr double kArcSlack = 30 * std::numbers::pi / 180;
 // Tangential moves tried, as shares of the way to each target (see try_move).
 inline constexpr double kMoveShares[] = {1.0, 0.5, 0.25};
-// A needle's shortest edge is collapsed when it is shorter than this share of the triangle's
-// second-shortest edge (the other ops cannot open an angle opposite an edge that short).
-inline constexpr double kNeedleShare = 0.5;
 // Distance sampling with a tolerance: the largest distance must come out at most this share of
 // the tolerance. The estimate interpolates the distances at the edge midpoints quadratically
 // and scales it by how far the centroid's measured distance exceeds the interpolation's, which
 // captures the sagitta of a curved patch to second order; the 10% margin covers the
 // third-order remainder (measured under 4% on the torus and tanglecube at eps = 1e-2).
 inline constexpr double kToleranceMargin = 0.9;
-// The refinement measures densely (as the tolerance is defined) a triangle whose estimate is
-// over kToleranceMargin of the tolerance but not over the tolerance, and leaves it unsplit when
-// it measures at most this share of the tolerance (a margin for the surface between the dense
-// grid's samples). The estimate's margin is for its own error, under 4 %, but rings of nearly
-// equilateral triangles at the target length estimate at 0.87-0.93 of the tolerance (a
-// triangle's sagitta is 4/3 of its edges'), and splitting them all left bands of triangles of
-// edge ratio 1.6: a sphere capped by a plane at 1e-3, 7036 triangles (1009 splits) and a mean
-// ratio of 1.239 -> 5286 (132 splits) and 1.131 with this (5298 at 0.945, 5222 at 0.99, 7016
-// at 0.9: the estimate's own margin clears almost nothing).
-inline constexpr double kDenseClearShare = 0.95;
-// Rounds of splitting triangles beyond the tolerance; each round halves the longest edge of
-// every offending triangle, and 24 halvings take any edge below min_edge.
-inline constexpr int kRefineRounds = 24;
-// Rounds of the last resort (see last_resort) on what the refinement left beyond the tolerance.
-// A round ends with the refinement and the angle repair of what it split.
-inline constexpr int kLastResortRounds = 4;
-// relax: the triangles whose longest edge exceeds this times their shortest have their edges
-// flipped and their vertices moved (an equilateral triangle is 1; the fronts make 1.22 on
-// average where sizes do not change). On the bunny VIS-800 at factor 3 most of the vertices are
-// candidates: a smoothing of most of the mesh, though not a re-meshing (flips only, no vertex
-// added or removed). Measured mean ratios, bunny VIS-800 at factor 1 / Igea MPU at 2 / horse
-// MPU at 1: 1.246 / 1.255 / 1.263 with 1.15; 1.250 / 1.259 / 1.267 with 1.3; 1.0 (every
-// vertex) gains under 0.001 more.
-inline constexpr double kRelaxRatio = 1.15;
-// Plain sweeps of the relaxation, each flips then moves; where they leave the mesh's mean ratio
-// over the aim, the search sweeps below take over. One, because the later ones buy little for
-// what they cost. Over a 343-run sweep of the quality bounds (the 9 experiment fields and the 40
-// topology-sweep fields, factors 1-5 and tolerances 5e-2-1e-3), against 4:
-// - every run within every bound; the same triangle counts but in 25 tolerance runs (up to 8
-//   triangles either way: the tolerance's refinement sees other positions);
-// - the mean over runs of the mean ratio 1.186 -> 1.208 (the worst 1.2487 -> 1.2499; 43 runs
-//   instead of 5 finish with search sweeps);
-// - the smallest angle over all runs the same (21.13 degrees); a run's own lower in 181 runs and
-//   higher in 58, the mean 31.67 -> 30.87, by up to 11 degrees where it was far above 30 (coarse
-//   meshes of few blobs), and 30.01 -> 25.50 on one (blobs37 at 1e-3);
-// - 0.76 of the time and of the field evaluations;
-// - the mean Phong error of bunny VIS-800, Igea VIS-4004, tanglecube and random blobs at factors
-//   3 and 5 0.3-1.3 % higher (tanglecube at 5: 0.4 % lower), what edges 0.3-1.3 % shorter would
-//   win back if the error goes as the edge length.
-// 2 sweeps: a mean ratio of 1.194 in 0.86 of the time. Instructions in polygonize_adaptive
-// (callgrind, one thread, -O2 -g): torus factor 20 3913M -> 2645M, bunny VIS-800 factor 3
-// 2030M -> 1571M.
-inline constexpr int kRelaxSweeps = 1;
 // A flip of the relaxation that brings the valences nearer 6 may raise the two triangles'
 // summed edge ratio by up to this share, which the moves that follow more than make up for.
 // The same three cases and random blobs at tolerance 1e-3: 1.246 / 1.255 / 1.263 / 1.203; with
@@ -124,31 +76,13 @@ inline constexpr int kRelaxSweeps = 1;
 inline constexpr double kFlipRatioSlack = 1.1;
 // A move must lower its star's mean edge ratio by this share: no creeping by rounding.
 inline constexpr double kRelaxMinGain = 1e-3;
-// At most this many sweeps of the relaxation's search (see relax and searched_step), each made
-// only while the mesh's mean edge ratio is over QualityOptions::aim_mean_edge_ratio. The four
-// runs of that sweep that four plain sweeps left over 1.25 (bunny VIS-800 at 1e-2,
-// Igea MPU at 5e-2 and 1e-2, Igea VIS-4004 at 5e-2: 1.253-1.258; ten plain sweeps reach only
-// 1.2545 on Igea MPU at 1e-2) ended at 1.239-1.245 after the first. After one plain sweep, 43 of
-// the 343 runs are over 1.25 and all end under it.
-inline constexpr int kRelaxSearchSweeps = 4;
-// Stars judged per vertex and search sweep (searched_step): a few dozen flops per triangle of
-// the star each, no evaluation. Igea MPU at 1e-2 with the search in all four sweeps, as a
-// measure of what the budget buys: 1.234 with 4 stars, 1.230 with 8, 1.229 with 12 or 24.
-inline constexpr int kRelaxSearchStars = 8;
 // A move may lower its star's smallest angle only while it stays at or above this (the repair's
 // bound), so the relaxation never undoes the repair.
 inline constexpr double kRelaxKeepDegrees = 30;
-// The relaxation's vertices per block of its parallel passes: enough to outweigh handing a
-// block to a thread (a target costs about a microsecond, a projection a few field calls).
-inline constexpr std::size_t kRelaxBlock = 256;
-// On several threads (with a tolerance, on any number) the relaxation judges at most this many
-// candidates between two tests of their moves for intersections (see relax_sweeps), few enough
-// that a move refused there takes back at most this many judged after it. The chunks start at
-// kRelaxBlock candidates and double up to this while no move is refused.
-inline constexpr std::size_t kRelaxChunk = 4096;
-// Moves per block of those tests: a test costs a microsecond or two, so that the first chunk's
-// moves (at most kRelaxBlock) already spread over several threads.
-inline constexpr std::size_t kTurnBlock = 64;
+// Items per block of the repair's parallel passes (the relaxation's targets and projections,
+// the refinement's estimates): enough to outweigh handing a block to a thread (a target costs
+// about a microsecond, a projection a few field calls).
+inline constexpr std::size_t kRepairBlock = 256;
 // hash_box: a triangle's box is stored grown by this share of a hash cell (about a fifth of an
 // edge), so that moving a corner by less than that stores it again nowhere.
 inline constexpr double kHashSlack = 0.1;
@@ -188,26 +122,31 @@ inline const BarycentricGrid& barycentric_grid() {
 
 using Tri = std::array<int, 3>;
 
-class Improver {
+// All public: the algorithms (the headers above) are free functions that read and change it.
+// One thread changes it; the passes that run on several threads only read it (see
+// star_hits).
+class RepairContext {
  public:
-  Improver(const Field& field, Mesh& mesh, const QualityOptions& o)
-      : field_(field), smooth_(field.smooth()), m_(mesh), o_(o), workers_(detail::worker_count(o.threads)),
+  RepairContext(const Field& field, Mesh& mesh, const QualityOptions& o)
+      : field_(field), smooth_(field.smooth()), mesh_(mesh), options_(o), workers_(detail::worker_count(o.threads)),
         vt_(mesh.positions.size()), crease_(mesh.positions.size(), -1),
         alive_(mesh.triangles.size(), 1), hash_(cell_size(mesh)) {
     // Nothing reads its visits, and intersecting_turn queries it on several threads at once.
     hash_.set_counting(false);
-    for (int t = 0; t < static_cast<int>(m_.triangles.size()); ++t) {
+    for (int t = 0; t < static_cast<int>(mesh_.triangles.size()); ++t) {
       poll(static_cast<std::size_t>(t));
-      for (int v : m_.triangles[t]) vt_[v].push_back(t);
+      for (int v : mesh_.triangles[t]) vt_[v].push_back(t);
       hash_box(t);
     }
-    stamp_.assign(m_.triangles.size(), 0);
+    stamp_.assign(mesh_.triangles.size(), 0);
   }
+  RepairContext(const RepairContext&) = delete;
+  RepairContext& operator=(const RepairContext&) = delete;
 
   // The cancel poll of the loops below: an atomic load every kPollEvery items.
   static constexpr std::size_t kPollEvery = 256;
   void poll(std::size_t i = 0) const {
-    if (i % kPollEvery == 0) o_.cancel.check("adaptive: repair");
+    if (i % kPollEvery == 0) options_.cancel.check("adaptive: repair");
   }
   // n copies of `value`, made kPolledFill at a time with a poll between: filling the vectors of
   // a pass over a million vertices (a hundred megabytes, page faults and all) is a loop too.
@@ -223,13 +162,10 @@ class Improver {
     return v;
   }
 
-  QualityReport run();
-
- private:
   // ---- geometry
   static double cell_size(const Mesh& m);
-  int tri_count() const { return static_cast<int>(m_.triangles.size()); }
-  const Vec3& P(int v) const { return m_.positions[v]; }
+  int tri_count() const { return static_cast<int>(mesh_.triangles.size()); }
+  const Vec3& P(int v) const { return mesh_.positions[v]; }
   // A triangle's edge lengths (edge k: T[k]-T[k+1]) and its edges longest first (ties by index).
   std::pair<std::array<double, 3>, std::array<int, 3>> edges_longest_first(const Tri& T) const {
     const std::array<double, 3> len{(P(T[1]) - P(T[0])).norm(), (P(T[2]) - P(T[1])).norm(), (P(T[0]) - P(T[2])).norm()};
@@ -253,7 +189,7 @@ class Improver {
   double facing(const Tri& t) const {
     const Vec3 n = face_normal(t);
     double worst = 1;
-    for (int v : t) worst = std::min(worst, n.dot(m_.normals[v]));
+    for (int v : t) worst = std::min(worst, n.dot(mesh_.normals[v]));
     return worst;
   }
   // What new triangles must exceed: kFaceNormalCos, or, where the triangles they replace already
@@ -261,7 +197,7 @@ class Improver {
   // the worst of those: an operation never makes the facing worse, and may repair it.
   double facing_floor(const std::vector<int>& replaced) const {
     double floor = kFaceNormalCos;
-    for (int t : replaced) floor = std::min(floor, facing(m_.triangles[t]));
+    for (int t : replaced) floor = std::min(floor, facing(mesh_.triangles[t]));
     return floor;
   }
   bool faces_surface(const Tri& t, double floor) const { return facing(t) > floor; }
@@ -315,7 +251,7 @@ class Improver {
   bool remembered(int slot) const {
     if (static_cast<std::size_t>(slot) >= estimates_.size()) return false;
     const std::array<bool, 3> kept =
-        kept_corners(estimates_[static_cast<std::size_t>(slot)], m_.triangles[static_cast<std::size_t>(slot)]);
+        kept_corners(estimates_[static_cast<std::size_t>(slot)], mesh_.triangles[static_cast<std::size_t>(slot)]);
     return kept[0] && kept[1] && kept[2];
   }
   double estimate_distance(const Tri& t, int slot, MidpointMemo* memo = nullptr) const;
@@ -381,7 +317,7 @@ class Improver {
     Vec3 lo, hi, normal;  // box; unnormalized normal (apart_by_plane)
   };
   void hash_box(int t) {
-    const Tri& x = m_.triangles[t];
+    const Tri& x = mesh_.triangles[t];
     hash_cover(t, P(x[0]).cwiseMin(P(x[1])).cwiseMin(P(x[2])), P(x[0]).cwiseMax(P(x[1])).cwiseMax(P(x[2])));
   }
   // Makes the box triangle t is stored with in the hash hold [lo, hi] (its box, or one over
@@ -452,7 +388,7 @@ class Improver {
     double magnitude = 0;
     for (int u : vt_[v]) {
       stamp[u] = id;
-      const Tri& t = m_.triangles[u];
+      const Tri& t = mesh_.triangles[u];
       StarTriangle x{t, {pos(t[0]), pos(t[1]), pos(t[2])}, {}, {}, {}};
       if (triangle_is_degenerate(x.p[0], x.p[1], x.p[2])) return true;
       x.lo = x.p[0].cwiseMin(x.p[1]).cwiseMin(x.p[2]);
@@ -470,38 +406,12 @@ class Improver {
       // rules it out before its corners are read (most of the triangles found).
       if ((hashed_lo_[u].array() > hi.array()).any() || (hashed_hi_[u].array() < lo.array()).any() || !alive_[u])
         return false;
-      const Tri& x = m_.triangles[u];  // not in v's star, so v is not among its corners
+      const Tri& x = mesh_.triangles[u];  // not in v's star, so v is not among its corners
       return meets_star(star, lo, hi, magnitude, x, {at(x[0]), at(x[1]), at(x[2])});
     };
     return hash_.any_in(lo, hi, hits);
   }
 
-  // A move of the relaxation: the vertex, its position and normal before, and its candidate
-  // (index among the sweep's projected moves).
-  struct Turn {
-    int v;
-    Vec3 from, from_normal;
-    std::size_t candidate;
-  };
-  // intersecting_turn's arrays, made once a sweep (the mesh's connectivity does not change
-  // while the relaxation moves vertices) and left clean after each call.
-  struct TurnScratch {
-    static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
-    TurnScratch(std::size_t vertices, unsigned workers)
-        : turn_of(vertices, kNone), stamps(std::max(workers, 1u)), ids(stamps.size(), 0), stars(stamps.size()) {}
-    std::vector<std::size_t> turn_of;  // by vertex: its turn in the call, or kNone
-    std::vector<std::vector<std::uint32_t>> stamps;  // by worker, as star_hits wants them
-    std::vector<std::uint32_t> ids;
-    std::vector<std::vector<StarTriangle>> stars;
-    std::vector<char> hit;
-  };
-  // The first of `turns` (moves made in this order, all applied now) whose star at the
-  // positions of its turn (the moves before it made, those after it not) intersects a triangle
-  // outside it, as star_intersects would have found then; turns.size() if none. First every
-  // triangle the turns changed is stored in the hash with a box over its corners before and
-  // after (which holds it at any turn; most already are, see hash_cover); then the turns are
-  // tested on all cores, the hash only read.
-  std::size_t intersecting_turn(const std::vector<Turn>& turns, TurnScratch& scratch);
 
   // ---- operations. Each returns whether it was applied and pushes the triangles it changed.
   // By default a flip must raise the smallest angle of the pair by kMinGain (the repair); with
@@ -517,14 +427,14 @@ class Improver {
 
   // A new vertex, not yet in any triangle (a split tries it, then keeps or drops it).
   void add_vertex(const Vec3& x, const Vec3& normal) {
-    m_.positions.push_back(x);
-    m_.normals.push_back(normal);
+    mesh_.positions.push_back(x);
+    mesh_.normals.push_back(normal);
     vt_.emplace_back();
     crease_.push_back(-1);
   }
   void drop_last_vertex() {
-    m_.positions.pop_back();
-    m_.normals.pop_back();
+    mesh_.positions.pop_back();
+    mesh_.normals.pop_back();
     vt_.pop_back();
     crease_.pop_back();
   }
@@ -536,12 +446,8 @@ class Improver {
   // The halves must be at least `shortest` long (0: min_edge).
   bool try_split(int t, int a, int b, bool repair = false, double shortest = 0);
 
-  // Rotates a triangle so that the edge (k, k+1) is given as (T[k], T[k+1]).
-  bool repair_triangle(int t);
-
-  void repair();
-
-  // ---- relaxation: the mean edge ratio (see relax)
+  // A triangle's longest edge over its shortest (the relaxation's measure; infinite for a
+  // zero-length edge).
   double tri_ratio(const Tri& t) const {
     const double a = (P(t[1]) - P(t[0])).squaredNorm(), b = (P(t[2]) - P(t[1])).squaredNorm(),
                  c = (P(t[0]) - P(t[2])).squaredNorm();
@@ -551,64 +457,7 @@ class Improver {
   // Where v would make each of its triangles equilateral on its outer edge (the mean of those
   // apexes), moved into v's tangent plane; zero when v has no such triangle.
   Vec3 equilateral_step(int v) const;
-  // Where in v's tangent plane v's star has the lowest mean edge ratio, as a step from v: a
-  // compass search (the four directions of a tangent frame, the stride halved where none of
-  // them gains) from the better of v and v + `first` (the equilateral step), at most
-  // kRelaxSearchStars stars judged, none whose smallest angle would fall under both the star's
-  // own and kRelaxKeepDegrees (cosine `keep_cos`). The equilateral step aims every triangle at
-  // its outer edge at once, which where the edges around v differ in length (a graded mesh) is
-  // not where their mean ratio is lowest; most of the vertices it leaves stretched gain nothing
-  // from it, and a step the search finds for them does. Zero when no star judged gains
-  // kRelaxMinGain. Read only: judged on several threads.
-  Vec3 searched_step(int v, const Vec3& first, double keep_cos) const;
-  // A star's mean edge ratio and the cosine of its smallest angle. Each triangle's smallest
-  // angle faces its shortest edge; its cosine comes from the squared edge lengths by the law of
-  // cosines, without an arc tangent (most of the relaxation's own time went to them).
-  struct StarShape {
-    double mean_ratio = 0, max_cos = -1;
-  };
-  StarShape star_shape(int v) const { return star_shape(v, P(v)); }
-  // ... with v at `at` (read only: the relaxation's targets are judged on several threads).
-  StarShape star_shape(int v, const Vec3& at) const;
 
-  // Moves the vertices of the triangles whose longest edge exceeds kRelaxRatio times their
-  // shortest towards where their triangles would be equilateral (equilateral_step), projected
-  // back onto the surface: in kRelaxSweeps sweeps, each finding all its targets and projecting
-  // them first (on all cores where the field allows) and then taking them in index order, a
-  // move kept only if it lowers the mean edge ratio of v's star by kRelaxMinGain, keeps its
-  // smallest angle (or at least kRelaxKeepDegrees), its facing and the tolerance, and
-  // intersects nothing. Crease vertices stay. A target that does not lower the star's mean ratio in the tangent plane is not
-  // projected at all (no evaluation). Before the moves of each sweep, flips of the stretched
-  // triangles' edges towards valence 6 (try_flip's for_ratio). The repair above aims at the
-  // worst triangles; this aims at the many mildly stretched ones where the fronts' edge lengths
-  // change (the mean ratio 1.30 -> 1.20 on the bunny VIS-800 at factor 3; no vertex is added or
-  // removed). Where these sweeps leave the mesh's mean ratio over the aim
-  // (QualityOptions::aim_mean_edge_ratio), up to kRelaxSearchSweeps more whose moves are searched
-  // in the tangent plane (searched_step), judged and applied as above; a mesh they leave within
-  // the aim is not touched by them.
-  void relax() {
-    relax_sweeps(kRelaxSweeps, false);
-    if (o_.aim_mean_edge_ratio > 0 && mean_edge_ratio() > o_.aim_mean_edge_ratio)
-      relax_sweeps(kRelaxSearchSweeps, true);
-  }
-  double mean_edge_ratio() const;
-  // `sweeps` sweeps of the relaxation (see relax), with searched_step's moves where `search`;
-  // those stop once the mesh's mean edge ratio is at or under the aim.
-  void relax_sweeps(int sweeps, bool search);
-  // relax_sweeps' steps: the flips of stretched triangles, the vertices to move, their targets in
-  // the tangent plane, projected onto the surface, and the moves judged and applied in order
-  // (true when one was).
-  struct RelaxMoves {
-    std::vector<int> vertices;
-    std::vector<Vec3> starts;
-    std::vector<ProjectionOptions> options;
-  };
-  void flip_stretched();
-  std::vector<char> mark_stretched(const std::vector<char>* moved_before) const;
-  RelaxMoves relax_targets(const std::vector<char>& mark, bool search, double keep_cos);
-  std::vector<ProjectionResult> project_moves(const RelaxMoves& moves) const;
-  bool apply_moves(const RelaxMoves& moves, const std::vector<ProjectionResult>& landed, bool search, double keep_cos,
-                   std::vector<char>& moved);
 
   static std::vector<int> merged(std::vector<int> a, const std::vector<int>& b) {
     a.insert(a.end(), b.begin(), b.end());
@@ -621,42 +470,15 @@ class Improver {
     since_check_.push_back(t);
   }
 
-  double last_resort_edge() const { return o_.last_resort_min_edge > 0 ? o_.last_resort_min_edge : o_.min_edge; }
-  // A triangle measured farther from the surface than the tolerance: by how much, and the
-  // surface point its farthest sample's Newton path landed on.
-  struct Beyond {
-    int t;
-    Tri T;
-    double d;
-    ProjectionResult worst;
-  };
-  // The triangles of `work` whose estimate does not clear them, measured densely (each at most
-  // once per call); those beyond the tolerance there.
-  std::vector<Beyond> measure_densely(const std::vector<int>& work);
-  // The last resort for a triangle the refinement left beyond the tolerance (a ridge or fillet
-  // narrower than the edges around it, whose corners' normals are too far apart for a midpoint
-  // split to face like the surface; or edges under twice min_edge on a bend just above what
-  // min_edge can follow): any of its edges halved, down to halves of
-  // QualityOptions::last_resort_min_edge, else a new vertex inside it at the surface point nearest
-  // its farthest sample, which splits it in three. The same checks as every split (the new
-  // triangles face like the surface, intersect nothing); the angles are repaired after. Returns
-  // whether it split.
-  bool last_resort(const Beyond& b);
-  // Splits triangle t in three at the surface point a projection landed on.
-  bool try_insert_inside(int t, const ProjectionResult& landed);
-
-  // Splits the triangles of `work` beyond the bound, and then those the splits made, for at
-  // most kRefineRounds rounds. Returns the triangles that may still be beyond it (a split that
-  // failed its checks, or rounds run out).
-  std::vector<int> refine(std::vector<int> work);
+  double last_resort_edge() const { return options_.last_resort_min_edge > 0 ? options_.last_resort_min_edge : options_.min_edge; }
 
   // Drops removed triangles and vertices, renumbering what is left in its order.
   void compact();
 
   const Field& field_;
   const bool smooth_;  // Field::smooth
-  Mesh& m_;
-  QualityOptions o_;
+  Mesh& mesh_;
+  QualityOptions options_;
   unsigned workers_;  // threads of the parallel passes (QualityOptions::threads)
   std::vector<std::vector<int>> vt_;
   std::vector<signed char> crease_;
@@ -674,7 +496,7 @@ class Improver {
   std::vector<Vec3> hashed_lo_, hashed_hi_;
   // Triangles changed in the current round, and since the last tolerance check.
   std::vector<int> touched_, since_check_, dead_vertex_;
-  QualityReport r_;
+  QualityReport report_;
 };
 
-}  // namespace cdp::adaptive::repair_detail
+}  // namespace cdp::adaptive::repair

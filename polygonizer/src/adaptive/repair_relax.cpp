@@ -1,34 +1,95 @@
-// The relaxation (repair_context.h): stretched triangles' edges flipped and vertices moved
-// towards equilateral stars, searched in the tangent plane where the mean edge ratio stays over the aim.
-#include "repair_context.h"
+// The relaxation (repair_relax.h).
+#include "repair_relax.h"
 
-namespace cdp::adaptive::repair_detail {
+namespace cdp::adaptive::repair {
+namespace {
 
-Vec3 Improver::equilateral_step(int v) const {
-  const Vec3 x = P(v), n = m_.normals[v];
-  Vec3 apex_mean = Vec3::Zero();
-  int apexes = 0;
-  for (int u : vt_[v]) {
-    const Tri& t = m_.triangles[u];
-    int k = 0;
-    while (t[k] != v) ++k;
-    const Vec3 &a = P(t[(k + 1) % 3]), &b = P(t[(k + 2) % 3]);
-    const Vec3 side = n.cross(b - a);  // towards v's side of edge a -> b, seen from outside
-    if (!(side.squaredNorm() > 0)) continue;
-    apex_mean += 0.5 * (a + b) + std::sqrt(3.0) / 2 * (b - a).norm() * side.normalized();
-    ++apexes;
+// relax: the triangles whose longest edge exceeds this times their shortest have their edges
+// flipped and their vertices moved (an equilateral triangle is 1; the fronts make 1.22 on
+// average where sizes do not change). On the bunny VIS-800 at factor 3 most of the vertices are
+// candidates: a smoothing of most of the mesh, though not a re-meshing (flips only, no vertex
+// added or removed). Measured mean ratios, bunny VIS-800 at factor 1 / Igea MPU at 2 / horse
+// MPU at 1: 1.246 / 1.255 / 1.263 with 1.15; 1.250 / 1.259 / 1.267 with 1.3; 1.0 (every
+// vertex) gains under 0.001 more.
+constexpr double kRelaxRatio = 1.15;
+// Plain sweeps of the relaxation, each flips then moves; where they leave the mesh's mean ratio
+// over the aim, the search sweeps below take over. One, because the later ones buy little for
+// what they cost. Over a 343-run sweep of the quality bounds (the 9 experiment fields and the 40
+// topology-sweep fields, factors 1-5 and tolerances 5e-2-1e-3), against 4:
+// - every run within every bound; the same triangle counts but in 25 tolerance runs (up to 8
+//   triangles either way: the tolerance's refinement sees other positions);
+// - the mean over runs of the mean ratio 1.186 -> 1.208 (the worst 1.2487 -> 1.2499; 43 runs
+//   instead of 5 finish with search sweeps);
+// - the smallest angle over all runs the same (21.13 degrees); a run's own lower in 181 runs and
+//   higher in 58, the mean 31.67 -> 30.87, by up to 11 degrees where it was far above 30 (coarse
+//   meshes of few blobs), and 30.01 -> 25.50 on one (blobs37 at 1e-3);
+// - 0.76 of the time and of the field evaluations;
+// - the mean Phong error of bunny VIS-800, Igea VIS-4004, tanglecube and random blobs at factors
+//   3 and 5 0.3-1.3 % higher (tanglecube at 5: 0.4 % lower), what edges 0.3-1.3 % shorter would
+//   win back if the error goes as the edge length.
+// 2 sweeps: a mean ratio of 1.194 in 0.86 of the time. Instructions in polygonize_adaptive
+// (callgrind, one thread, -O2 -g): torus factor 20 3913M -> 2645M, bunny VIS-800 factor 3
+// 2030M -> 1571M.
+constexpr int kRelaxSweeps = 1;
+// At most this many sweeps of the relaxation's search (see relax and searched_step), each made
+// only while the mesh's mean edge ratio is over QualityOptions::aim_mean_edge_ratio. The four
+// runs of that sweep that four plain sweeps left over 1.25 (bunny VIS-800 at 1e-2,
+// Igea MPU at 5e-2 and 1e-2, Igea VIS-4004 at 5e-2: 1.253-1.258; ten plain sweeps reach only
+// 1.2545 on Igea MPU at 1e-2) ended at 1.239-1.245 after the first. After one plain sweep, 43 of
+// the 343 runs are over 1.25 and all end under it.
+constexpr int kRelaxSearchSweeps = 4;
+// Stars judged per vertex and search sweep (searched_step): a few dozen flops per triangle of
+// the star each, no evaluation. Igea MPU at 1e-2 with the search in all four sweeps, as a
+// measure of what the budget buys: 1.234 with 4 stars, 1.230 with 8, 1.229 with 12 or 24.
+constexpr int kRelaxSearchStars = 8;
+// On several threads (with a tolerance, on any number) the relaxation judges at most this many
+// candidates between two tests of their moves for intersections (see relax_sweeps), few enough
+// that a move refused there takes back at most this many judged after it. The chunks start at
+// kRelaxBlock candidates and double up to this while no move is refused.
+constexpr std::size_t kRelaxChunk = 4096;
+// Moves per block of those tests: a test costs a microsecond or two, so that the first chunk's
+// moves (at most kRelaxBlock) already spread over several threads.
+constexpr std::size_t kTurnBlock = 64;
+
+// A star's mean edge ratio and the cosine of its smallest angle. Each triangle's smallest
+// angle faces its shortest edge; its cosine comes from the squared edge lengths by the law of
+// cosines, without an arc tangent (most of the relaxation's own time went to them).
+struct StarShape {
+  double mean_ratio = 0, max_cos = -1;
+};
+// ... with v at `at` (read only: the relaxation's targets are judged on several threads).
+StarShape star_shape(const RepairContext& ctx, int v, const Vec3& at) {
+  const auto pos = [&](int w) -> const Vec3& { return w == v ? at : ctx.P(w); };
+  StarShape s;
+  for (int u : ctx.vt_[v]) {
+    const Tri& t = ctx.mesh_.triangles[u];
+    const Vec3 &a = pos(t[0]), &b = pos(t[1]), &c = pos(t[2]);
+    std::array<double, 3> l{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
+    std::sort(l.begin(), l.end());
+    const double xy = l[1] * l[2];
+    s.mean_ratio += l[0] > 0 ? std::sqrt(l[2] / l[0]) : std::numeric_limits<double>::infinity();
+    s.max_cos = std::max(s.max_cos, xy > 0 ? std::min(1.0, (l[1] + l[2] - l[0]) / (2 * std::sqrt(xy))) : 1.0);
   }
-  if (apexes == 0) return Vec3::Zero();
-  Vec3 step = apex_mean / apexes - x;
-  return step - n * n.dot(step);
+  s.mean_ratio /= std::max<std::size_t>(1, ctx.vt_[v].size());
+  return s;
 }
+StarShape star_shape(const RepairContext& ctx, int v) { return star_shape(ctx, v, ctx.P(v)); }
 
-Vec3 Improver::searched_step(int v, const Vec3& first, double keep_cos) const {
-  const Vec3 x = P(v), n = m_.normals[v];
-  const StarShape start = star_shape(v);
+// Where in v's tangent plane v's star has the lowest mean edge ratio, as a step from v: a
+// compass search (the four directions of a tangent frame, the stride halved where none of
+// them gains) from the better of v and v + `first` (the equilateral step), at most
+// kRelaxSearchStars stars judged, none whose smallest angle would fall under both the star's
+// own and kRelaxKeepDegrees (cosine `keep_cos`). The equilateral step aims every triangle at
+// its outer edge at once, which where the edges around v differ in length (a graded mesh) is
+// not where their mean ratio is lowest; most of the vertices it leaves stretched gain nothing
+// from it, and a step the search finds for them does. Zero when no star judged gains
+// kRelaxMinGain. Read only: judged on several threads.
+Vec3 searched_step(const RepairContext& ctx, int v, const Vec3& first, double keep_cos) {
+  const Vec3 x = ctx.P(v), n = ctx.mesh_.normals[v];
+  const StarShape start = star_shape(ctx, v);
   const double cos_cap = std::max(start.max_cos, keep_cos);
   const auto score = [&](const Vec3& step) {
-    const StarShape s = star_shape(v, x + step);
+    const StarShape s = star_shape(ctx, v, x + step);
     return s.max_cos <= cos_cap ? s.mean_ratio : std::numeric_limits<double>::infinity();
   };
   Vec3 best = Vec3::Zero();
@@ -52,122 +113,144 @@ Vec3 Improver::searched_step(int v, const Vec3& first, double keep_cos) const {
   return best_score < start.mean_ratio * (1 - kRelaxMinGain) ? best : Vec3::Zero();
 }
 
-auto Improver::star_shape(int v, const Vec3& at) const -> StarShape {
-  const auto pos = [&](int w) -> const Vec3& { return w == v ? at : P(w); };
-  StarShape s;
-  for (int u : vt_[v]) {
-    const Tri& t = m_.triangles[u];
-    const Vec3 &a = pos(t[0]), &b = pos(t[1]), &c = pos(t[2]);
-    std::array<double, 3> l{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
-    std::sort(l.begin(), l.end());
-    const double xy = l[1] * l[2];
-    s.mean_ratio += l[0] > 0 ? std::sqrt(l[2] / l[0]) : std::numeric_limits<double>::infinity();
-    s.max_cos = std::max(s.max_cos, xy > 0 ? std::min(1.0, (l[1] + l[2] - l[0]) / (2 * std::sqrt(xy))) : 1.0);
-  }
-  s.mean_ratio /= std::max<std::size_t>(1, vt_[v].size());
-  return s;
+// A move of the relaxation: the vertex, its position and normal before, and its candidate
+// (index among the sweep's projected moves).
+struct Turn {
+  int v;
+  Vec3 from, from_normal;
+  std::size_t candidate;
+};
+// intersecting_turn's arrays, made once a sweep (the mesh's connectivity does not change
+// while the relaxation moves vertices) and left clean after each call.
+struct TurnScratch {
+  static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  TurnScratch(std::size_t vertices, unsigned workers)
+      : turn_of(vertices, kNone), stamps(std::max(workers, 1u)), ids(stamps.size(), 0), stars(stamps.size()) {}
+  std::vector<std::size_t> turn_of;  // by vertex: its turn in the call, or kNone
+  std::vector<std::vector<std::uint32_t>> stamps;  // by worker, as star_hits wants them
+  std::vector<std::uint32_t> ids;
+  std::vector<std::vector<RepairContext::StarTriangle>> stars;
+  std::vector<char> hit;
+};
+// The first of `turns` (moves made in this order, all applied now) whose star at the
+// positions of its turn (the moves before it made, those after it not) intersects a triangle
+// outside it, as star_intersects would have found then; turns.size() if none. First every
+// triangle the turns changed is stored in the hash with a box over its corners before and
+// after (which holds it at any turn; most already are, see hash_cover); then the turns are
+// tested on all cores, the hash only read.
+std::size_t intersecting_turn(RepairContext& ctx, const std::vector<Turn>& turns, TurnScratch& scratch) {
+  if (turns.empty()) return 0;
+  constexpr std::size_t kNone = TurnScratch::kNone;
+  for (std::size_t k = 0; k < turns.size(); ++k) scratch.turn_of[static_cast<std::size_t>(turns[k].v)] = k;
+  for (const Turn& turn : turns)
+    for (int u : ctx.vt_[turn.v]) {
+      Vec3 lo = ctx.P(ctx.mesh_.triangles[u][0]), hi = lo;
+      for (int w : ctx.mesh_.triangles[u]) {
+        lo = lo.cwiseMin(ctx.P(w)), hi = hi.cwiseMax(ctx.P(w));
+        if (const std::size_t j = scratch.turn_of[static_cast<std::size_t>(w)]; j != kNone)
+          lo = lo.cwiseMin(turns[j].from), hi = hi.cwiseMax(turns[j].from);
+      }
+      ctx.hash_cover(u, lo, hi);
+    }
+  scratch.hit.assign(turns.size(), 0);
+  detail::parallel_blocks(turns.size(), kTurnBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned w) {
+    std::vector<std::uint32_t>& stamp = scratch.stamps[w];
+    if (stamp.empty()) stamp.assign(ctx.mesh_.triangles.size(), 0);
+    std::uint32_t& id = scratch.ids[w];  // a worker's stamps outlive its blocks and calls
+    for (std::size_t k = begin; k < end; ++k) {
+      if (id == std::numeric_limits<std::uint32_t>::max()) std::fill(stamp.begin(), stamp.end(), 0), id = 0;
+      const auto at = [&](int q) -> const Vec3& {
+        const std::size_t j = scratch.turn_of[static_cast<std::size_t>(q)];
+        return j != kNone && j > k ? turns[j].from : ctx.P(q);
+      };
+      scratch.hit[k] = ctx.star_hits(turns[k].v, ctx.P(turns[k].v), at, stamp.data(), ++id, scratch.stars[w]);
+    }
+  });
+  for (const Turn& turn : turns) scratch.turn_of[static_cast<std::size_t>(turn.v)] = kNone;
+  return static_cast<std::size_t>(std::find(scratch.hit.begin(), scratch.hit.end(), 1) - scratch.hit.begin());
 }
 
-double Improver::mean_edge_ratio() const {
-  double sum = 0;
-  std::size_t n = 0;
-  for (int t = 0; t < tri_count(); ++t)
-    if (alive_[t]) sum += tri_ratio(m_.triangles[t]), ++n;
-  return n ? sum / n : 0;
-}
-
-void Improver::relax_sweeps(int sweeps, bool search) {
-  const double keep_cos = std::cos(kRelaxKeepDegrees * std::numbers::pi / 180);
-  // Vertices moved in the previous sweep: a later sweep moves only those, the vertices whose
-  // star holds one, and the corners of this sweep's flips (any other would compute the same
-  // target and be refused again, but for the rare move refused for crossing a triangle beyond
-  // its star that has moved since).
-  std::vector<char> moved;
-  for (int sweep = 0; sweep < sweeps; ++sweep) {
-    if (search && sweep > 0 && mean_edge_ratio() <= o_.aim_mean_edge_ratio) break;
-    if (search) ++r_.relax_search_sweeps;
-    flip_stretched();
-    const std::vector<char> mark = mark_stretched(sweep > 0 ? &moved : nullptr);
-    moved.assign(m_.positions.size(), 0);
-    const RelaxMoves moves = relax_targets(mark, search, keep_cos);
-    if (moves.vertices.empty()) break;
-    if (!apply_moves(moves, project_moves(moves), search, keep_cos, moved)) break;
-  }
-}
-
+// relax_sweeps' steps: the flips of stretched triangles, the vertices to move, their targets in
+// the tangent plane, projected onto the surface, and the moves judged and applied in order
+// (true when one was).
+struct RelaxMoves {
+  std::vector<int> vertices;
+  std::vector<Vec3> starts;
+  std::vector<ProjectionOptions> options;
+};
 // First the flips (try_flip's for_ratio): each stretched triangle's edges, longest first.
-void Improver::flip_stretched() {
-  flipped_.assign(m_.positions.size(), 0);
-  for (int t = 0; t < tri_count(); ++t) {
-    poll(static_cast<std::size_t>(t));
-    if (!alive_[t] || !(tri_ratio(m_.triangles[t]) > kRelaxRatio)) continue;
-    const Tri T = m_.triangles[t];
+void flip_stretched(RepairContext& ctx) {
+  ctx.flipped_.assign(ctx.mesh_.positions.size(), 0);
+  for (int t = 0; t < ctx.tri_count(); ++t) {
+    ctx.poll(static_cast<std::size_t>(t));
+    if (!ctx.alive_[t] || !(ctx.tri_ratio(ctx.mesh_.triangles[t]) > kRelaxRatio)) continue;
+    const Tri T = ctx.mesh_.triangles[t];
     int k = 0;
     double longest = 0;
     for (int i = 0; i < 3; ++i) {
-      const double l = (P(T[(i + 1) % 3]) - P(T[i])).squaredNorm();
+      const double l = (ctx.P(T[(i + 1) % 3]) - ctx.P(T[i])).squaredNorm();
       if (l > longest) longest = l, k = i;
     }
     for (int i = 0; i < 3; ++i)
-      if (try_flip(t, (k + i) % 3, true)) break;
+      if (ctx.try_flip(t, (k + i) % 3, true)) break;
   }
 }
 
 // The corners of stretched triangles; after the first sweep (`moved` given) only those moved in
 // the sweep before, flipped in this one, or with a moved vertex in their star.
-std::vector<char> Improver::mark_stretched(const std::vector<char>* moved_before) const {
-  std::vector<char> mark(m_.positions.size(), 0);
-  for (int t = 0; t < tri_count(); ++t) {
-    if (!alive_[t] || !(tri_ratio(m_.triangles[t]) > kRelaxRatio)) continue;
-    const Tri& x = m_.triangles[t];
+std::vector<char> mark_stretched(const RepairContext& ctx, const std::vector<char>* moved_before) {
+  std::vector<char> mark(ctx.mesh_.positions.size(), 0);
+  for (int t = 0; t < ctx.tri_count(); ++t) {
+    if (!ctx.alive_[t] || !(ctx.tri_ratio(ctx.mesh_.triangles[t]) > kRelaxRatio)) continue;
+    const Tri& x = ctx.mesh_.triangles[t];
     for (int v : x) mark[v] = 1;
   }
   if (moved_before) {
     const std::vector<char>& moved = *moved_before;
     for (int v = 0; v < static_cast<int>(mark.size()); ++v) {
-      if (!mark[v] || moved[v] || flipped_[v]) continue;
+      if (!mark[v] || moved[v] || ctx.flipped_[v]) continue;
       bool star_moved = false;
-      for (int u : vt_[v])
-        for (int w : m_.triangles[u]) star_moved = star_moved || moved[w];
+      for (int u : ctx.vt_[v])
+        for (int w : ctx.mesh_.triangles[u]) star_moved = star_moved || moved[w];
       mark[v] = star_moved;
     }
   }
   return mark;
 }
 
-Improver::RelaxMoves Improver::relax_targets(const std::vector<char>& mark, bool search, double keep_cos) {
+RelaxMoves relax_targets(RepairContext& ctx, const std::vector<char>& mark, bool search, double keep_cos) {
   // The marked vertices off creases (on_crease may evaluate and caches: one thread), then
   // their targets, each judged on its own (read only: on several threads, one slot each).
   // Reserved (nothing touched) so that no push_back copies megabytes between two polls.
   std::vector<int> eligible;
   eligible.reserve(mark.size());
   for (int v = 0; v < static_cast<int>(mark.size()); ++v) {
-    poll(static_cast<std::size_t>(v));
-    if (mark[v] && vt_[v].size() >= 3 && !on_crease(v)) eligible.push_back(v);
+    ctx.poll(static_cast<std::size_t>(v));
+    if (mark[v] && ctx.vt_[v].size() >= 3 && !ctx.on_crease(v)) eligible.push_back(v);
   }
-  std::vector<Vec3> target = polled_vector<Vec3>(eligible.size(), Vec3::Zero());
-  std::vector<double> reach = polled_vector<double>(eligible.size(), 0);
-  std::vector<char> moves = polled_vector<char>(eligible.size(), 0);
-  detail::parallel_blocks(eligible.size(), kRelaxBlock, workers_, [&](std::size_t begin, std::size_t end, unsigned) {
-    poll();
+  std::vector<Vec3> target = ctx.polled_vector<Vec3>(eligible.size(), Vec3::Zero());
+  std::vector<double> reach = ctx.polled_vector<double>(eligible.size(), 0);
+  std::vector<char> moves = ctx.polled_vector<char>(eligible.size(), 0);
+  detail::parallel_blocks(eligible.size(), kRepairBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned) {
+    ctx.poll();
     for (std::size_t i = begin; i < end; ++i) {
       const int v = eligible[i];
-      Vec3 step = equilateral_step(v);
+      Vec3 step = ctx.equilateral_step(v);
       if (!(step.squaredNorm() > 0)) continue;
       // Judged first in the tangent plane, where it costs no evaluation: Newton moves the
       // point by far less than the step (the step squared times the curvature), so a move
       // that gains nothing there gains nothing on the surface.
       if (search) {
-        step = searched_step(v, step, keep_cos);
+        step = searched_step(ctx, v, step, keep_cos);
         if (!(step.squaredNorm() > 0)) continue;
-      } else if (!(star_shape(v, P(v) + step).mean_ratio < star_shape(v).mean_ratio * (1 - kRelaxMinGain))) {
+      } else if (!(star_shape(ctx, v, ctx.P(v) + step).mean_ratio < star_shape(ctx, v).mean_ratio * (1 - kRelaxMinGain))) {
         continue;
       }
       double shortest = std::numeric_limits<double>::infinity();
-      for (int u : vt_[v])
-        for (int w : m_.triangles[u])
-          if (w != v) shortest = std::min(shortest, (P(w) - P(v)).norm());
-      target[i] = P(v) + step;
+      for (int u : ctx.vt_[v])
+        for (int w : ctx.mesh_.triangles[u])
+          if (w != v) shortest = std::min(shortest, (ctx.P(w) - ctx.P(v)).norm());
+      target[i] = ctx.P(v) + step;
       reach[i] = shortest;
       moves[i] = 1;
     }
@@ -178,10 +261,10 @@ Improver::RelaxMoves Improver::relax_targets(const std::vector<char>& mark, bool
   out.starts.reserve(count);
   out.options.reserve(count);
   for (std::size_t i = 0; i < eligible.size(); ++i) {
-    poll(i);
+    ctx.poll(i);
     if (!moves[i]) continue;
     ProjectionOptions po;
-    po.tolerance = 1e-10 * o_.diagonal;
+    po.tolerance = 1e-10 * ctx.options_.diagonal;
     po.max_step = reach[i];
     po.max_travel = reach[i];
     out.vertices.push_back(eligible[i]);
@@ -191,27 +274,27 @@ Improver::RelaxMoves Improver::relax_targets(const std::vector<char>& mark, bool
   return out;
 }
 
-std::vector<ProjectionResult> Improver::project_moves(const RelaxMoves& moves) const {
+std::vector<ProjectionResult> project_moves(const RepairContext& ctx, const RelaxMoves& moves) {
   const std::vector<Vec3>& starts = moves.starts;
   const std::vector<ProjectionOptions>& opts = moves.options;
   // Each projection is independent of the others (the same point in any batch): a
   // thread-safe field's are shared among threads in blocks; any other field's go in one
   // batch (one call per Newton round: a Python function is called once per batch).
-  std::vector<ProjectionResult> landed = polled_vector<ProjectionResult>(starts.size());
-  const bool shared = field_.thread_safe();
-  detail::parallel_blocks(starts.size(), shared ? kRelaxBlock : starts.size(), shared ? workers_ : 1u,
+  std::vector<ProjectionResult> landed = ctx.polled_vector<ProjectionResult>(starts.size());
+  const bool shared = ctx.field_.thread_safe();
+  detail::parallel_blocks(starts.size(), shared ? kRepairBlock : starts.size(), shared ? ctx.workers_ : 1u,
                           [&](std::size_t begin, std::size_t end, unsigned) {
-                            poll();
+                            ctx.poll();
                             const std::vector<ProjectionResult> part = project_to_surface(
-                                field_, std::span(starts).subspan(begin, end - begin),
+                                ctx.field_, std::span(starts).subspan(begin, end - begin),
                                 std::span(opts).subspan(begin, end - begin));
                             std::copy(part.begin(), part.end(), landed.begin() + static_cast<std::ptrdiff_t>(begin));
                           });
   return landed;
 }
 
-bool Improver::apply_moves(const RelaxMoves& moves, const std::vector<ProjectionResult>& landed, bool search,
-                           double keep_cos, std::vector<char>& moved) {
+bool apply_moves(RepairContext& ctx, const RelaxMoves& moves, const std::vector<ProjectionResult>& landed, bool search,
+                 double keep_cos, std::vector<char>& moved) {
   const std::vector<int>& moving = moves.vertices;
   // The moves are judged in order, each at the positions the moves before it left, and
   // applied. On several threads the intersection test (star_intersects, the costliest
@@ -233,63 +316,63 @@ bool Improver::apply_moves(const RelaxMoves& moves, const std::vector<Projection
     const int v = moving[i];
     const Vec3 ng = landed[i].gradient.normalized();
     const Vec3& target = landed[i].point;
-    if (!(ng.dot(m_.normals[v]) > kMoveNormalCos)) return std::nullopt;
-    const StarShape before = star_shape(v);
-    const double floor = facing_floor(vt_[v]);
-    const Vec3 saved = P(v), saved_n = m_.normals[v];
-    m_.positions[v] = target;
-    m_.normals[v] = ng;
-    const StarShape after = star_shape(v);
+    if (!(ng.dot(ctx.mesh_.normals[v]) > kMoveNormalCos)) return std::nullopt;
+    const StarShape before = star_shape(ctx, v);
+    const double floor = ctx.facing_floor(ctx.vt_[v]);
+    const Vec3 saved = ctx.P(v), saved_n = ctx.mesh_.normals[v];
+    ctx.mesh_.positions[v] = target;
+    ctx.mesh_.normals[v] = ng;
+    const StarShape after = star_shape(ctx, v);
     bool ok = after.mean_ratio < before.mean_ratio * (1 - kRelaxMinGain) &&
               after.max_cos <= std::max(before.max_cos, keep_cos);
-    for (int u : vt_[v]) ok = ok && faces_surface(m_.triangles[u], floor);
-    const double new_dist = ok ? worst_star_distance(v) : 0;
-    m_.positions[v] = saved;
-    m_.normals[v] = saved_n;
-    if (!(ok && may_replace(new_dist, vt_[v]))) return std::nullopt;
-    if (test_intersections && star_intersects(v, target)) {
-      ++r_.relax_crossings;
+    for (int u : ctx.vt_[v]) ok = ok && ctx.faces_surface(ctx.mesh_.triangles[u], floor);
+    const double new_dist = ok ? ctx.worst_star_distance(v) : 0;
+    ctx.mesh_.positions[v] = saved;
+    ctx.mesh_.normals[v] = saved_n;
+    if (!(ok && ctx.may_replace(new_dist, ctx.vt_[v]))) return std::nullopt;
+    if (test_intersections && ctx.star_intersects(v, target)) {
+      ++ctx.report_.relax_crossings;
       return std::nullopt;
     }
-    m_.positions[v] = target;
-    m_.normals[v] = ng;
+    ctx.mesh_.positions[v] = target;
+    ctx.mesh_.normals[v] = ng;
     // Unlike try_move, the crease test is not asked again (3 evaluations): v was not on a
     // crease, and Newton lands it on one piece's zero set, on a crease only by accident.
     moved[v] = 1;
     return Turn{v, saved, saved_n, i};
   };
   const auto keep = [&](const Turn& turn) {
-    for (int u : vt_[turn.v]) {
-      hash_box(u);
-      touch(u);
+    for (int u : ctx.vt_[turn.v]) {
+      ctx.hash_box(u);
+      ctx.touch(u);
     }
-    ++r_.relaxed;
-    if (search) ++r_.relax_searched;
+    ++ctx.report_.relaxed;
+    if (search) ++ctx.report_.relax_searched;
     changed = true;
   };
-  if (workers_ <= 1 && !(o_.tolerance > 0)) {
+  if (ctx.workers_ <= 1 && !(ctx.options_.tolerance > 0)) {
     for (std::size_t i = 0; i < moving.size(); ++i) {
-      poll(i);
+      ctx.poll(i);
       if (const std::optional<Turn> turn = judge(i, true)) keep(*turn);
     }
   } else {
-    TurnScratch scratch(m_.positions.size(), workers_);
+    TurnScratch scratch(ctx.mesh_.positions.size(), ctx.workers_);
     std::vector<Turn> turns;
-    std::size_t chunk = kRelaxBlock;
+    std::size_t chunk = kRepairBlock;
     for (std::size_t i = 0; i < moving.size();) {
-      poll();
+      ctx.poll();
       turns.clear();
       for (const std::size_t stop = std::min(moving.size(), i + chunk); i < stop; ++i)
         if (const std::optional<Turn> turn = judge(i, false)) turns.push_back(*turn);
-      const std::size_t refused = intersecting_turn(turns, scratch);
+      const std::size_t refused = intersecting_turn(ctx, turns, scratch);
       for (std::size_t k = turns.size(); k-- > refused;) {
-        m_.positions[turns[k].v] = turns[k].from;
-        m_.normals[turns[k].v] = turns[k].from_normal;
+        ctx.mesh_.positions[turns[k].v] = turns[k].from;
+        ctx.mesh_.normals[turns[k].v] = turns[k].from_normal;
         moved[turns[k].v] = 0;
       }
       for (std::size_t k = 0; k < refused; ++k) keep(turns[k]);
       if (refused < turns.size()) {
-        ++r_.relax_crossings;
+        ++ctx.report_.relax_crossings;
         i = turns[refused].candidate + 1;
       }
       // Where moves are refused, shorter chunks, down to one candidate: the moves judged
@@ -301,4 +384,41 @@ bool Improver::apply_moves(const RelaxMoves& moves, const std::vector<Projection
   return changed;
 }
 
-}  // namespace cdp::adaptive::repair_detail
+// `sweeps` sweeps of the relaxation (see relax), with searched_step's moves where `search`;
+// those stop once the mesh's mean edge ratio is at or under the aim.
+void relax_sweeps(RepairContext& ctx, int sweeps, bool search) {
+  const double keep_cos = std::cos(kRelaxKeepDegrees * std::numbers::pi / 180);
+  // Vertices moved in the previous sweep: a later sweep moves only those, the vertices whose
+  // star holds one, and the corners of this sweep's flips (any other would compute the same
+  // target and be refused again, but for the rare move refused for crossing a triangle beyond
+  // its star that has moved since).
+  std::vector<char> moved;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    if (search && sweep > 0 && mean_edge_ratio(ctx) <= ctx.options_.aim_mean_edge_ratio) break;
+    if (search) ++ctx.report_.relax_search_sweeps;
+    flip_stretched(ctx);
+    const std::vector<char> mark = mark_stretched(ctx, sweep > 0 ? &moved : nullptr);
+    moved.assign(ctx.mesh_.positions.size(), 0);
+    const RelaxMoves moves = relax_targets(ctx, mark, search, keep_cos);
+    if (moves.vertices.empty()) break;
+    if (!apply_moves(ctx, moves, project_moves(ctx, moves), search, keep_cos, moved)) break;
+  }
+}
+
+}  // namespace
+
+double mean_edge_ratio(const RepairContext& ctx) {
+  double sum = 0;
+  std::size_t n = 0;
+  for (int t = 0; t < ctx.tri_count(); ++t)
+    if (ctx.alive_[t]) sum += ctx.tri_ratio(ctx.mesh_.triangles[t]), ++n;
+  return n ? sum / n : 0;
+}
+
+void relax(RepairContext& ctx) {
+  relax_sweeps(ctx, kRelaxSweeps, false);
+  if (ctx.options_.aim_mean_edge_ratio > 0 && mean_edge_ratio(ctx) > ctx.options_.aim_mean_edge_ratio)
+    relax_sweeps(ctx, kRelaxSearchSweeps, true);
+}
+
+}  // namespace cdp::adaptive::repair

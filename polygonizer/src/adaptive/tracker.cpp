@@ -252,12 +252,14 @@ void Tracker::crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns,
   const std::size_t n = xs.size();
   out.assign(n, std::nullopt);
   if (n == 0) return;
-  const double eps = kCreaseProbe * s_.diagonal;
-  constexpr double kSides[2] = {-1.0, 1.0};
+  const CreaseProbe probe(s_.diagonal);
   std::vector<Vec3> probes(2 * n), gradients(2 * n);
   std::vector<double> values(2 * n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int s = 0; s < 2; ++s) probes[2 * i + s] = xs[i] + kSides[s] * eps * ns[i];
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::array<Vec3, 2> around = probe.points(xs[i], ns[i]);
+    probes[2 * i] = around[0];
+    probes[2 * i + 1] = around[1];
+  }
   field_.values_gradients(probes.data(), values.data(), gradients.data(), 2 * n);
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3& x_normal = ns[i];
