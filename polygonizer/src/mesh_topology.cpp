@@ -44,7 +44,7 @@ MeshTopology analyze(const Mesh& mesh, const CancelToken* cancel) {
   // The triangles around each vertex, in increasing order (a triangle with a repeated index
   // once per occurrence, consecutively).
   poll(0);
-  const VertexTriangles around_vertex(mesh);
+  const VertexTriangles around_vertex(mesh, cancel, "mesh topology");
   const std::vector<int>& offsets = around_vertex.offsets;
   const std::vector<int>& incident = around_vertex.incident;
 

@@ -418,7 +418,7 @@ double turn_angle(double y, double x) {
 
 std::vector<unsigned char> flat_stars(const Mesh& mesh, unsigned workers, const CancelToken* cancel) {
   const std::size_t nv = mesh.positions.size();
-  const VertexTriangles stars(mesh);
+  const VertexTriangles stars(mesh, cancel, "self-intersections");
   std::vector<unsigned char> flat(nv, 0);
   const auto certify = [&](std::size_t v) {
     const auto begin = static_cast<std::size_t>(stars.offsets[v]);
@@ -754,24 +754,35 @@ std::vector<Box> boxes_for_intersection(const Mesh& mesh, std::size_t* degenerat
   if (mesh.triangles.size() > static_cast<std::size_t>(INT_MAX))
     throw InvalidInputError(std::string(what) + ": too many triangles");
   const auto nv = static_cast<long long>(mesh.positions.size());
-  for (const auto& t : mesh.triangles)
-    for (int i : t)
+  const std::size_t n = mesh.triangles.size();
+  const auto poll = [&](std::size_t f) {
+    if (cancel && f % kPollEvery == 0) cancel->check(what);
+  };
+  for (std::size_t f = 0; f < n; ++f) {
+    poll(f);
+    for (int i : mesh.triangles[f])
       if (i < 0 || i >= nv) throw InvalidInputError(std::string(what) + ": a triangle index is out of range");
-  for (const auto& t : mesh.triangles)
-    for (int i : t)
+  }
+  for (std::size_t f = 0; f < n; ++f) {
+    poll(f);
+    for (int i : mesh.triangles[f])
       if (!mesh.positions[static_cast<std::size_t>(i)].allFinite())
         throw InvalidInputError(std::string(what) + ": a vertex position is not finite");
+  }
   std::size_t skipped = 0;
-  std::vector<Box> boxes(mesh.triangles.size());
-  for (std::size_t f = 0; f < boxes.size(); ++f) {
-    if (cancel && f % kPollEvery == 0) cancel->check(what);
+  // Reserved, not sized: the pages of a hundred megabytes of boxes (2*10^6 triangles) are then
+  // touched in the polled loop, not all at once before it (a tenth of a second unpolled).
+  std::vector<Box> boxes;
+  boxes.reserve(n);
+  for (std::size_t f = 0; f < n; ++f) {
+    poll(f);
     const Tri t = corners(mesh, static_cast<int>(f));
     if (triangle_is_degenerate(t[0], t[1], t[2])) {
-      boxes[f] = {Vec3::Ones(), Vec3::Zero()};
+      boxes.push_back({Vec3::Ones(), Vec3::Zero()});
       ++skipped;
       continue;
     }
-    boxes[f] = {t[0].cwiseMin(t[1]).cwiseMin(t[2]), t[0].cwiseMax(t[1]).cwiseMax(t[2])};
+    boxes.push_back({t[0].cwiseMin(t[1]).cwiseMin(t[2]), t[0].cwiseMax(t[1]).cwiseMax(t[2])});
   }
   if (degenerate) *degenerate = skipped;
   return boxes;

@@ -4,6 +4,7 @@
 // self-intersection check's flat stars. Indices must be valid (callers check them first).
 #pragma once
 
+#include <cdp/core/cancel.h>
 #include <cdp/core/mesh.h>
 
 #include <cstddef>
@@ -16,14 +17,24 @@ struct VertexTriangles {
   std::vector<int> offsets;  // num_vertices + 1
   std::vector<int> incident;
 
-  explicit VertexTriangles(const Mesh& mesh) : offsets(mesh.positions.size() + 1, 0) {
-    for (const auto& t : mesh.triangles)
-      for (const int i : t) ++offsets[static_cast<std::size_t>(i) + 1];
+  // `cancel` (optional) is polled every kPollEvery triangles, with `what` in its error.
+  static constexpr std::size_t kPollEvery = 4096;
+  explicit VertexTriangles(const Mesh& mesh, const CancelToken* cancel = nullptr, const char* what = "")
+      : offsets(mesh.positions.size() + 1, 0) {
+    const auto poll = [&](std::size_t f) {
+      if (cancel && f % kPollEvery == 0) cancel->check(what);
+    };
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+      poll(f);
+      for (const int i : mesh.triangles[f]) ++offsets[static_cast<std::size_t>(i) + 1];
+    }
     std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
     incident.resize(static_cast<std::size_t>(offsets.back()));
     std::vector<int> fill(offsets.begin(), offsets.end() - 1);
-    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+      poll(f);
       for (const int i : mesh.triangles[f]) incident[static_cast<std::size_t>(fill[static_cast<std::size_t>(i)]++)] = static_cast<int>(f);
+    }
   }
 };
 

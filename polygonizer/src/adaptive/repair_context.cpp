@@ -283,15 +283,21 @@ void RepairContext::compact() {
   if (dead_vertex_.empty()) return;
   std::vector<int> remap(mesh_.positions.size(), 0);
   for (int v : dead_vertex_) remap[v] = -1;
+  // Polled: at 2*10^6 triangles this is a tenth of a second.
   Mesh out;
+  out.positions.reserve(mesh_.positions.size());
+  out.normals.reserve(mesh_.positions.size());
+  out.triangles.reserve(mesh_.triangles.size());
   int next = 0;
   for (std::size_t v = 0; v < mesh_.positions.size(); ++v) {
+    poll(v);
     if (remap[v] < 0) continue;
     remap[v] = next++;
     out.positions.push_back(mesh_.positions[v]);
     out.normals.push_back(mesh_.normals[v]);
   }
   for (int t = 0; t < tri_count(); ++t) {
+    poll(static_cast<std::size_t>(t));
     if (!alive_[t]) continue;
     const Tri& x = mesh_.triangles[t];
     out.triangles.push_back({remap[x[0]], remap[x[1]], remap[x[2]]});

@@ -18,6 +18,7 @@
 
 #include "crease_probe.h"
 #include "spatial_hash.h"
+#include "../background_release.h"
 #include "../parallel.h"
 
 #include <cdp/core/errors.h>
@@ -133,13 +134,19 @@ class RepairContext {
         alive_(mesh.triangles.size(), 1), hash_(cell_size(mesh)) {
     // Nothing reads its visits, and intersecting_turn queries it on several threads at once.
     hash_.set_counting(false);
-    for (int t = 0; t < static_cast<int>(mesh_.triangles.size()); ++t) {
-      poll(static_cast<std::size_t>(t));
-      for (int v : mesh_.triangles[t]) vt_[v].push_back(t);
-      hash_box(t);
+    try {
+      for (int t = 0; t < static_cast<int>(mesh_.triangles.size()); ++t) {
+        poll(static_cast<std::size_t>(t));
+        for (int v : mesh_.triangles[t]) vt_[v].push_back(t);
+        hash_box(t);
+      }
+    } catch (...) {
+      release_if_cancelled();  // a constructor that throws runs no destructor
+      throw;
     }
     stamp_.assign(mesh_.triangles.size(), 0);
   }
+  ~RepairContext() { release_if_cancelled(); }
   RepairContext(const RepairContext&) = delete;
   RepairContext& operator=(const RepairContext&) = delete;
 
@@ -474,6 +481,14 @@ class RepairContext {
 
   // Drops removed triangles and vertices, renumbering what is left in its order.
   void compact();
+
+  // A cancelled repair frees its million small buffers (the stars, the hash's cells) on a thread
+  // of their own (background_release.h).
+  void release_if_cancelled() noexcept {
+    if (options_.cancel.cancelled())
+      detail::release_in_background(vt_, hash_, estimates_, hashed_lo_, hashed_hi_, stamp_, alive_, crease_, flipped_,
+                                    touched_, since_check_);
+  }
 
   const Field& field_;
   const bool smooth_;  // Field::smooth

@@ -5,6 +5,8 @@
 #include "failure_message.h"
 #include "resolve_settings.h"
 #include "run_state.h"
+
+#include "../background_release.h"
 #include "stage_checks.h"
 #include "surface_gaps.h"
 
@@ -75,6 +77,14 @@ constexpr std::array<Recovery, 3> kRecoveries{{
 
 Run::Run(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases, const RunRequest& request)
     : ctx{field, options, phases}, request(request) {}
+
+Run::~Run() {
+  if (!ctx.options.cancel.cancelled()) return;
+  // Plain data only: the tracker keeps its callbacks (a Python caller's, say) to be let go of
+  // here, on the caller's thread.
+  if (tracking.tracker) tracking.tracker->release_in_background();
+  detail::release_in_background(result.mesh, creases, seeds.grid);
+}
 
 void Run::prepare() {
   ctx.enter("seed_grid", "sampling the seed grid");

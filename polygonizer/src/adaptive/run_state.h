@@ -22,6 +22,12 @@ struct Recovery;
 class Run {
  public:
   Run(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases, const RunRequest& request);
+  // A cancelled run's memory (the tracker's hashes and arrays, the mesh, the crease layout, the
+  // seed grid) is freed on a thread of its own (background_release.h), so that CancelledError
+  // reaches the caller at once.
+  ~Run();
+  Run(const Run&) = delete;
+  Run& operator=(const Run&) = delete;
   PolygonizeResult mesh_with_recoveries(Bend& bend);
 
  private:

@@ -1,5 +1,6 @@
 #include "tracker.h"
 #include "crease_probe.h"
+#include "../background_release.h"
 
 #include <cdp/core/crease.h>
 #include <cdp/core/errors.h>
@@ -44,6 +45,11 @@ constexpr std::size_t kTriangleSlack = 64;  // the first hexagon and other tiny 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
     : field_(field), s_(settings), mesh_(mesh),
       front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell, Crowding::split), finer_zones_(settings.finer_zones) {}
+
+void Tracker::release_in_background() noexcept {
+  detail::release_in_background(front_hash_, vertex_hash_, fs_, target_, mac_, shape_index_, front_refs_, dead_,
+                                loop_vertex_, critical_starts_);
+}
 
 void Tracker::measure(std::span<const Vec3> points, std::vector<std::optional<Placed>>& out,
                       std::span<const Known> known) const {

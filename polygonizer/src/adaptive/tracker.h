@@ -167,6 +167,10 @@ class Tracker {
   };
 
   Tracker(const Field& field, const Settings& settings, Mesh& mesh);
+  // For a cancelled run: hands the tracker's memory (its hashes' cells, the fronts, the
+  // per-vertex arrays; no callback) to a thread of its own (background_release.h), leaving the
+  // tracker empty. Only its destructor may follow.
+  void release_in_background() noexcept;
 
   // Meshes the component through `seed` (a point on the surface). Returns false when not even
   // the first hexagon could be placed there (the caller tries another seed).
