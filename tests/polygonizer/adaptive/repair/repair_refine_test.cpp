@@ -1,8 +1,11 @@
 // refine (src/adaptive/repair_refine.h) alone, on a coarse icosphere, against the distance of
-// a flat triangle from the unit sphere in closed form.
+// a flat triangle from the unit sphere in closed form (through closest_point_on_triangle, whose
+// regions tests/raytrace/embree_scene_test.cpp checks).
 #include "src/adaptive/repair_refine.h"
 
 #include "polygonizer/adaptive/repair/repair_fixtures.h"
+
+#include <cdp/core/triangle_geometry.h>
 
 #include <numeric>
 
@@ -11,31 +14,11 @@ namespace {
 
 using namespace test_repair;
 
-// The point of triangle (a, b, c) nearest the origin (Ericson, Real-Time Collision Detection,
-// 5.1.5: the vertex, edge or face region the origin projects into).
-Vec3 nearest_to_origin(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 p = Vec3::Zero(), ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
-  const Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
-  const double denom = 1 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
-}
-
 // The largest distance from triangle (a, b, c), inside the unit sphere, to the sphere: 1 minus
 // the distance of the triangle from the centre.
-double distance_to_sphere(const Vec3& a, const Vec3& b, const Vec3& c) { return 1 - nearest_to_origin(a, b, c).norm(); }
+double distance_to_sphere(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return 1 - closest_point_on_triangle(Vec3::Zero(), a, b, c).norm();
+}
 
 TEST(RepairRefine, SplitsTheTrianglesBeyondTheToleranceUntilWithinIt) {
   const auto field = unit_sphere();
