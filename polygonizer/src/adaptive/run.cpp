@@ -5,10 +5,9 @@
 #include "failure_message.h"
 #include "resolve_settings.h"
 #include "run_state.h"
-
-#include "../background_release.h"
 #include "stage_checks.h"
 #include "surface_gaps.h"
+#include "../background_release.h"
 
 #include <algorithm>
 #include <array>
