@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "apps/app_files.h"
 #include "common/run_command.h"
 
 namespace cdp {
@@ -20,10 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
+using test::read_json;
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

@@ -20,6 +20,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "apps/app_files.h"
 #include "common/run_command.h"
 #include "support/app_support.h"
 
@@ -28,7 +29,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kTorus = R"({"type": "torus", "major_radius": 1, "minor_radius": 0.4})";
+using test::kTorus;
 constexpr const char* kSphere = R"({"type": "sphere", "radius": 1})";
 
 std::string slurp(const fs::path& p) {

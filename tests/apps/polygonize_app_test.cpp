@@ -14,17 +14,14 @@
 #include <string>
 #include <vector>
 
+#include "apps/app_files.h"
 #include "common/run_command.h"
 
 namespace cdp {
 namespace {
 
-constexpr const char* kTorus = R"({"type": "torus", "major_radius": 1, "minor_radius": 0.4})";
-
-nlohmann::json read_json(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
+using test::kTorus;
+using test::read_json;
 
 class PolygonizeApp : public ::testing::TestWithParam<std::string> {};
 

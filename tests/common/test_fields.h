@@ -6,7 +6,9 @@
 #include <cdp/core/models/expression.h>
 #include <cdp/io/field_factory.h>
 
+#include <cmath>
 #include <memory>
+#include <sstream>
 #include <string>
 
 namespace cdp::test {
@@ -27,6 +29,21 @@ inline std::unique_ptr<Field> tanglecube() {
 inline std::unique_ptr<Field> three_separate_blobs() {
   return std::make_unique<Blobs>(BlobKernel::Wyvill, 0.3,
                                  std::vector<Blob>{{{0, 0, 0}, 1.0, 1.0}, {{3, 0, 0}, 1.0, 1.0}, {{0, 3, 0.5}, 1.2, 1.0}});
+}
+
+// The JSON of an expression field in the cube [-half, half]^3.
+inline std::string expression(const std::string& value, double half) {
+  std::ostringstream s;
+  s << R"({"type": "expression", "value": ")" << value << R"(", "bounds": [[)" << -half << ", " << -half << ", "
+    << -half << "], [" << half << ", " << half << ", " << half << "]]}";
+  return s.str();
+}
+
+// The distance of p from the field's zero set, to first order: |F| / |grad F|.
+inline double first_order_distance(const Field& f, const Vec3& p) {
+  Vec3 g;
+  const double v = f.value_gradient(p, g);
+  return std::abs(v) / g.norm();
 }
 
 // A field from JSON text, as a user would write it.

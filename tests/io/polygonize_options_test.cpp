@@ -11,7 +11,7 @@
 namespace cdp {
 namespace {
 
-std::string error_of(const std::string& method, const nlohmann::json& options) {
+std::string options_error(const std::string& method, const nlohmann::json& options) {
   try {
     polygonize_request(method, options);
   } catch (const InvalidInputError& e) {
@@ -87,22 +87,22 @@ TEST(PolygonizeOptions, EveryOptionReachesTheMethodsOptions) {
 }
 
 TEST(PolygonizeOptions, MistakesAreOneLineErrorsNamingTheOption) {
-  EXPECT_EQ(error_of("adaptive", {{"factr", 2}}), "unknown option \"factr\" (did you mean \"factor\"?)");
-  EXPECT_EQ(error_of("adaptive", {{"zzzzzz", 2}}), "unknown option \"zzzzzz\"");
-  EXPECT_EQ(error_of("marching", {}), "method must be \"adaptive\", \"mc\" or \"mt\", not \"marching\"");
-  EXPECT_EQ(error_of("adaptive", {{"cell", 0.1}}), "cell does not apply to method \"adaptive\"");
-  EXPECT_EQ(error_of("mt", {{"face_ambiguity", "join_inside"}}), "face_ambiguity does not apply to method \"mt\"");
-  EXPECT_EQ(error_of("adaptive", {{"factor", 2}, {"chord", 0.1}}), "give one of factor, tolerance and chord, not several");
-  EXPECT_EQ(error_of("mc", {{"cell", 0.1}, {"precision", 2}}), "give one of cell and precision, not several");
-  EXPECT_EQ(error_of("adaptive", {{"factor", -1}}), "factor must be a positive number, not -1.0");
-  EXPECT_EQ(error_of("adaptive", {{"factor", "2"}}), "factor must be a positive number, not \"2\"");
-  EXPECT_EQ(error_of("adaptive", {{"min_edge", 0}}), "min_edge must be a positive number, not 0.0");
-  EXPECT_EQ(error_of("adaptive", {{"seed_resolution", 1}}), "seed_resolution must be an integer in [2, 2147483647], not 1");
-  EXPECT_EQ(error_of("adaptive", {{"seed_resolution", 2.5}}), "seed_resolution must be an integer in [2, 2147483647], not 2.5");
-  EXPECT_EQ(error_of("adaptive", {{"triangle_count", "floor"}}),
+  EXPECT_EQ(options_error("adaptive", {{"factr", 2}}), "unknown option \"factr\" (did you mean \"factor\"?)");
+  EXPECT_EQ(options_error("adaptive", {{"zzzzzz", 2}}), "unknown option \"zzzzzz\"");
+  EXPECT_EQ(options_error("marching", {}), "method must be \"adaptive\", \"mc\" or \"mt\", not \"marching\"");
+  EXPECT_EQ(options_error("adaptive", {{"cell", 0.1}}), "cell does not apply to method \"adaptive\"");
+  EXPECT_EQ(options_error("mt", {{"face_ambiguity", "join_inside"}}), "face_ambiguity does not apply to method \"mt\"");
+  EXPECT_EQ(options_error("adaptive", {{"factor", 2}, {"chord", 0.1}}), "give one of factor, tolerance and chord, not several");
+  EXPECT_EQ(options_error("mc", {{"cell", 0.1}, {"precision", 2}}), "give one of cell and precision, not several");
+  EXPECT_EQ(options_error("adaptive", {{"factor", -1}}), "factor must be a positive number, not -1.0");
+  EXPECT_EQ(options_error("adaptive", {{"factor", "2"}}), "factor must be a positive number, not \"2\"");
+  EXPECT_EQ(options_error("adaptive", {{"min_edge", 0}}), "min_edge must be a positive number, not 0.0");
+  EXPECT_EQ(options_error("adaptive", {{"seed_resolution", 1}}), "seed_resolution must be an integer in [2, 2147483647], not 1");
+  EXPECT_EQ(options_error("adaptive", {{"seed_resolution", 2.5}}), "seed_resolution must be an integer in [2, 2147483647], not 2.5");
+  EXPECT_EQ(options_error("adaptive", {{"triangle_count", "floor"}}),
             "triangle_count must be \"hartmann\" or \"paper_floor\", not \"floor\"");
-  EXPECT_EQ(error_of("adaptive", {{"curvature", 1}}), "curvature must be true or false, not 1");
-  EXPECT_EQ(error_of("adaptive", nlohmann::json::array()), "the options must be an object");
+  EXPECT_EQ(options_error("adaptive", {{"curvature", 1}}), "curvature must be true or false, not 1");
+  EXPECT_EQ(options_error("adaptive", nlohmann::json::array()), "the options must be an object");
 }
 
 }  // namespace

@@ -23,11 +23,11 @@
 namespace cdp {
 namespace {
 
-Expression expression(const std::string& formula, double half = 2) {
+Expression crease_expression(const std::string& formula, double half = 2) {
   return Expression(formula, {}, Box{Vec3::Constant(-half), Vec3::Constant(half)});
 }
 
-const char* kCube = "max(abs(x),max(abs(y),abs(z)))-1";
+const char* kCubeFormula = "max(abs(x),max(abs(y),abs(z)))-1";
 
 // The pieces' gradients at p, as a set (order-free comparison).
 std::set<std::array<double, 3>> gradients(const std::vector<FieldPiece>& pieces) {
@@ -37,7 +37,7 @@ std::set<std::array<double, 3>> gradients(const std::vector<FieldPiece>& pieces)
 }
 
 TEST(FieldPieces, ACubeHasOnePieceOnAFaceTwoOnAnEdgeThreeAtACorner) {
-  const Expression cube = expression(kCube);
+  const Expression cube = crease_expression(kCubeFormula);
   // On a face, away from the edges: the face's plane x - 1.
   auto face = cube.pieces(Vec3(1, 0.5, 0.2), 0.1);
   ASSERT_EQ(face.size(), 1u);
@@ -59,7 +59,7 @@ TEST(FieldPieces, ACubeHasOnePieceOnAFaceTwoOnAnEdgeThreeAtACorner) {
 }
 
 TEST(FieldPieces, APieceKeepsItsBranchesAwayFromWhereItWasFound) {
-  const Expression cube = expression(kCube);
+  const Expression cube = crease_expression(kCubeFormula);
   const auto edge = cube.pieces(Vec3(1, 0.95, 0.2), 0.1);
   ASSERT_EQ(edge.size(), 2u);
   // The y-face's plane y - 1, evaluated far inside the x-face's part of the field.
@@ -71,7 +71,7 @@ TEST(FieldPieces, APieceKeepsItsBranchesAwayFromWhereItWasFound) {
 
 TEST(FieldPieces, DerivativesOfAPieceMatchFiniteDifferences) {
   // Two unioned spheres: min of two distances; each piece is one sphere's distance.
-  const Expression spheres = expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)");
+  const Expression spheres = crease_expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)");
   const Vec3 p(0.01, 0.8, 0.3);
   const auto pieces = spheres.pieces(p, 0.05);
   ASSERT_EQ(pieces.size(), 2u);
@@ -91,11 +91,11 @@ TEST(FieldPieces, DerivativesOfAPieceMatchFiniteDifferences) {
 }
 
 TEST(FieldPieces, OnlyModelsWithBranchPointsHavePieces) {
-  EXPECT_TRUE(expression(kCube).has_pieces());
-  EXPECT_TRUE(expression("abs(x)+y^2+z^2-1").has_pieces());  // a lens: its rim is a crease
+  EXPECT_TRUE(crease_expression(kCubeFormula).has_pieces());
+  EXPECT_TRUE(crease_expression("abs(x)+y^2+z^2-1").has_pieces());  // a lens: its rim is a crease
   // Two planes: abs switches at x = 0, away from the surface, so no crease (Field::branch_kinds).
-  EXPECT_FALSE(expression("abs(x)-1").has_pieces());
-  EXPECT_FALSE(expression("x^2+y^2+z^2-1").has_pieces());
+  EXPECT_FALSE(crease_expression("abs(x)-1").has_pieces());
+  EXPECT_FALSE(crease_expression("x^2+y^2+z^2-1").has_pieces());
   EXPECT_FALSE(Sphere(Vec3::Zero(), 1.0).has_pieces());
 }
 
@@ -106,7 +106,7 @@ TEST(FieldPieces, SmoothModelsReportNoPiecesAndCountTheirEvaluations) {
   const FieldPiece whole = sphere.piece(Vec3(2, 0, 0), {});
   EXPECT_DOUBLE_EQ(whole.value, sphere.value(Vec3(2, 0, 0)));
   EXPECT_THROW(sphere.piece(Vec3::Zero(), {1}), InvalidInputError);
-  const Expression cube = expression(kCube);
+  const Expression cube = crease_expression(kCubeFormula);
   // The branch points' kinds are found once, with evaluations of their own (tested below).
   cube.branch_kinds();
   cube.reset_counts();
@@ -123,7 +123,7 @@ std::vector<std::vector<std::uint8_t>> branches(const std::vector<FieldPiece>& p
 }
 
 TEST(CreaseProjection, LandsOnTheCircleWhereTwoSpheresMeet) {
-  const Expression spheres = expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)");
+  const Expression spheres = crease_expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)");
   const Vec3 start(0.05, 0.8, 0.2);
   const auto b = branches(spheres.pieces(start, 0.1));
   ASSERT_EQ(b.size(), 2u);
@@ -149,7 +149,7 @@ TEST(CreaseProjection, LandsOnTheCircleWhereTwoSpheresMeet) {
 }
 
 TEST(CreaseProjection, LandsOnACubesEdgeAndCornerAndACylindersRim) {
-  const Expression cube = expression(kCube);
+  const Expression cube = crease_expression(kCubeFormula);
   const Vec3 near_edge(1.02, 0.97, 0.3);
   const auto edge = project_to_crease(cube, near_edge, branches(cube.pieces(near_edge, 0.1)));
   ASSERT_TRUE(edge.ok());
@@ -161,7 +161,7 @@ TEST(CreaseProjection, LandsOnACubesEdgeAndCornerAndACylindersRim) {
   ASSERT_TRUE(corner.ok());
   EXPECT_LE((corner.point - Vec3(1, -1, 1)).norm(), 1e-12);
 
-  const Expression cylinder = expression("max(sqrt(x^2+y^2)-1, abs(z)-1)");
+  const Expression cylinder = crease_expression("max(sqrt(x^2+y^2)-1, abs(z)-1)");
   const Vec3 near_rim(0.6, 0.75, -0.98);
   const auto rim = project_to_crease(cylinder, near_rim, branches(cylinder.pieces(near_rim, 0.1)));
   ASSERT_TRUE(rim.ok());
@@ -171,7 +171,7 @@ TEST(CreaseProjection, LandsOnACubesEdgeAndCornerAndACylindersRim) {
 
 TEST(CreaseProjection, ReportsTangentPiecesAndRefusesOtherCounts) {
   // Two planes that are parallel (x = 0 and x = 0.5): no crease between them.
-  const Expression slab = expression("max(x-0.5, -x)");
+  const Expression slab = crease_expression("max(x-0.5, -x)");
   const auto b = branches(slab.pieces(Vec3(0.25, 0, 0), 1));
   ASSERT_EQ(b.size(), 2u);
   EXPECT_EQ(project_to_crease(slab, Vec3(0.25, 0, 0), b).status, CreaseStatus::DependentGradients);
@@ -185,7 +185,7 @@ namespace cdp {
 namespace {
 
 TEST(CreaseCurves, ACubeHasTwelveEdgesBetweenEightCorners) {
-  const Expression cube = expression(kCube);
+  const Expression cube = crease_expression(kCubeFormula);
   const CreaseTracingResult r = trace_creases(cube);
   EXPECT_EQ(r.curves.size(), 12u);
   EXPECT_EQ(r.corners.size(), 8u);
@@ -212,7 +212,7 @@ TEST(CreaseCurves, AMengerSpongeOfLevelOneHasItsSeventyTwoEdges) {
   // opening's corner is, a hole's wall and a crossing hole's face are one plane from two
   // branches: pairs of pieces that meet only at the corner are no crease (they were 5 curves of
   // a single point, which the layout refused).
-  const Expression menger = expression(
+  const Expression menger = crease_expression(
       "max(max(abs(x), abs(y), abs(z)) - 1, -min(max(abs(x), abs(y)) - 0.4, max(abs(y), abs(z)) - 0.4, "
       "max(abs(x), abs(z)) - 0.4))",
       1.3);
@@ -232,7 +232,7 @@ TEST(CreaseCurves, AMengerSpongeOfLevelOneHasItsSeventyTwoEdges) {
 TEST(CreaseCurves, CreasesThatCrossWhereTheirPiecesAreTangentMeetAtACorner) {
   // Two equal pipes crossing: the ellipses where they meet (in the planes x = y and x = -y) cross
   // at (0, 0, +-0.5), where the pipes are tangent. Four arcs, each from one crossing to the other.
-  const Expression pipes = expression("min(hypot(y, z) - 0.5, hypot(x, z) - 0.5)", 1);
+  const Expression pipes = crease_expression("min(hypot(y, z) - 0.5, hypot(x, z) - 0.5)", 1);
   const CreaseTracingResult r = trace_creases(pipes);
   EXPECT_EQ(r.stops, 0u);
   ASSERT_EQ(r.corners.size(), 2u);
@@ -248,7 +248,7 @@ TEST(CreaseCurves, CreasesThatCrossWhereTheirPiecesAreTangentMeetAtACorner) {
 }
 
 TEST(CreaseCurves, LoopsOfACylindersRimsTwoSpheresAndABoxMinusASphere) {
-  const Expression cylinder = expression("max(sqrt(x^2+y^2)-1, abs(z)-1)");
+  const Expression cylinder = crease_expression("max(sqrt(x^2+y^2)-1, abs(z)-1)");
   const CreaseTracingResult rims = trace_creases(cylinder);
   ASSERT_EQ(rims.curves.size(), 2u);
   for (const CreaseCurve& c : rims.curves) {
@@ -268,14 +268,14 @@ TEST(CreaseCurves, LoopsOfACylindersRimsTwoSpheresAndABoxMinusASphere) {
   }
   EXPECT_TRUE(rims.corners.empty());
 
-  const Expression spheres = expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)");
+  const Expression spheres = crease_expression("min(sqrt((x-0.5)^2+y^2+z^2)-1, sqrt((x+0.5)^2+y^2+z^2)-1)");
   const CreaseTracingResult circle = trace_creases(spheres);
   ASSERT_EQ(circle.curves.size(), 1u);
   EXPECT_TRUE(circle.curves[0].closed);
 
   // A box with a ball of radius 1.2 taken out: the ball opens a round hole in each face (radius
   // sqrt(1.2^2 - 1)) and leaves the edges and corners whole.
-  const Expression carved = expression("max(max(abs(x),max(abs(y),abs(z)))-1, 1.2-sqrt(x^2+y^2+z^2))");
+  const Expression carved = crease_expression("max(max(abs(x),max(abs(y),abs(z)))-1, 1.2-sqrt(x^2+y^2+z^2))");
   const CreaseTracingResult holes = trace_creases(carved);
   std::size_t loops = 0;
   for (const CreaseCurve& c : holes.curves) {
@@ -300,7 +300,7 @@ TEST(CreaseCurves, LoopsOfACylindersRimsTwoSpheresAndABoxMinusASphere) {
 // the two sides (2 each); the top edges' pieces between the spheres (2) and at the ends (4);
 // the end faces' edges (8); the bottom's long edges (2).
 TEST(CreaseCurves, TwoSpheresOnABarHaveEveryCornerOfTheFaceBetweenThem) {
-  const Expression bar = expression(test::kSpheresOnABar, 1.7);
+  const Expression bar = crease_expression(test::kSpheresOnABar, 1.7);
   CreaseTracingOptions o;
   o.resolution = 64;
   const CreaseTracingResult r = trace_creases(bar, o);
@@ -334,7 +334,7 @@ TEST(CreaseCurves, TheGyroidAndBarthBallsRimsAreAllFoundOnce) {
        2.1, std::sqrt(3.5), 20},
   };
   for (const Ball& b : balls) {
-    const Expression e = expression(b.formula, b.half);
+    const Expression e = crease_expression(b.formula, b.half);
     const CreaseTracingResult r = trace_creases(e);
     EXPECT_EQ(r.curves.size(), b.curves) << b.formula;
     EXPECT_EQ(r.stops, 0u);
@@ -355,11 +355,11 @@ TEST(CreaseCurves, TheGyroidAndBarthBallsRimsAreAllFoundOnce) {
 
 // The fields SDF code writes: rounded primitives and smooth unions are C1 where their min, max
 // and clamps switch, so they have no crease; a sharp difference on top of them still has.
-const char* kRoundedBox = "sqrt(max(abs(x)-0.6,0)^2+max(abs(y)-0.4,0)^2+max(abs(z)-0.3,0)^2)-0.15";
+const char* kRoundedBoxFormula = "sqrt(max(abs(x)-0.6,0)^2+max(abs(y)-0.4,0)^2+max(abs(z)-0.3,0)^2)-0.15";
 // Inigo Quilez's polynomial smooth minimum of the rounded box a and a sphere b, radius 0.2.
 Expression smooth_union(const std::string& outer = "u") {
   return Expression(outer, {}, Box{Vec3::Constant(-1.2), Vec3::Constant(1.2)},
-                    {{"a", kRoundedBox},
+                    {{"a", kRoundedBoxFormula},
                      {"b", "sqrt((x-0.5)^2+(y-0.3)^2+z^2)-0.45"},
                      {"h", "clamp(0.5+0.5*(b-a)/0.2,0,1)"},
                      {"u", "b + h*(a-b) - 0.2*h*(1-h)"}});
@@ -370,7 +370,7 @@ using Kind = Field::BranchKind;
 TEST(BranchKinds, RoundedBoxesAndSmoothUnionsHaveNoCrease) {
   // Branch points in program order: abs(x), max, abs(y), max, abs(z), max. The abs switch where
   // the max hides them (|x| < 0.6 at x = 0).
-  const Expression box(kRoundedBox, {}, Box{Vec3::Constant(-1.1), Vec3::Constant(1.1)});
+  const Expression box(kRoundedBoxFormula, {}, Box{Vec3::Constant(-1.1), Vec3::Constant(1.1)});
   EXPECT_EQ(box.branch_kinds(),
             (std::vector<Kind>{Kind::Hidden, Kind::Smooth, Kind::Hidden, Kind::Smooth, Kind::Hidden, Kind::Smooth}));
   EXPECT_FALSE(box.has_pieces());
@@ -416,7 +416,7 @@ TEST(BranchKinds, TheFarSideOfAC1SeamIsTheSurfaceBeyondItContinuedToThePoint) {
   // rounds into the edge of radius 0.15 around the line y = 0.4, z = 0.3: beyond the seam the
   // field is the distance from that line minus 0.15, continued to the point a cylinder of radius
   // hypot(0.15, 0.05) there.
-  const Expression box(kRoundedBox, {}, Box{Vec3::Constant(-1.1), Vec3::Constant(1.1)});
+  const Expression box(kRoundedBoxFormula, {}, Box{Vec3::Constant(-1.1), Vec3::Constant(1.1)});
   const Vec3 p(0, 0.55, 0.25);
   const auto sides = box.smooth_sides(p, 0.1);
   ASSERT_EQ(sides.size(), 1u);
@@ -429,13 +429,13 @@ TEST(BranchKinds, TheFarSideOfAC1SeamIsTheSurfaceBeyondItContinuedToThePoint) {
   EXPECT_TRUE(box.smooth_sides(p, 0.04).empty());
   EXPECT_TRUE(box.smooth_sides(Vec3(0, 0.55, 0), 0.12).empty());
   // Sharp booleans have no C1 seam.
-  EXPECT_TRUE(expression(kCube).smooth_sides(Vec3(1, 0.99, 0), 1).empty());
+  EXPECT_TRUE(crease_expression(kCubeFormula).smooth_sides(Vec3(1, 0.99, 0), 1).empty());
 }
 
 TEST(BranchKinds, SharpBooleansStayCreasedBesideSmoothOnes) {
   // The cube (abs(x), abs(y), abs(z), the inner max, the outer one): its max are creases, and
   // classifying them is counted, once.
-  const Expression cube = expression(kCube);
+  const Expression cube = crease_expression(kCubeFormula);
   cube.reset_counts();
   EXPECT_TRUE(cube.has_pieces());
   const std::uint64_t classified = cube.counts().value_gradient;
@@ -468,14 +468,14 @@ TEST(BranchKinds, SharpBooleansStayCreasedBesideSmoothOnes) {
 
 TEST(BranchKinds, ACubesPiecesAreAsTheyWere) {
   // Without smooth branch points nothing is free: the pieces keep every branch fixed.
-  const Expression cube = expression(kCube);
+  const Expression cube = crease_expression(kCubeFormula);
   for (const FieldPiece& q : cube.pieces(Vec3(0.98, -0.99, 1.0), 0.05))
     for (const std::uint8_t b : q.branch) EXPECT_NE(b, Field::kFreeBranch);
 }
 
 TEST(CreaseCurves, SmoothFieldsHaveNone) {
   EXPECT_TRUE(trace_creases(Sphere(Vec3::Zero(), 1)).curves.empty());
-  EXPECT_TRUE(trace_creases(expression("x^2+y^2+z^2-1")).curves.empty());
+  EXPECT_TRUE(trace_creases(crease_expression("x^2+y^2+z^2-1")).curves.empty());
 }
 
 }  // namespace
@@ -488,7 +488,7 @@ namespace {
 // expression of the same formula: its jets record and force the branches as the interpreter does.
 TEST(CompiledPieces, ACompiledCappedCylinderHasTheExpressionsPieces) {
   const auto compiled = compiled_models().at("capped_cylinder")();
-  const Expression e = expression("max(sqrt(x^2+y^2)-1, abs(z)-1)", 1.5);
+  const Expression e = crease_expression("max(sqrt(x^2+y^2)-1, abs(z)-1)", 1.5);
   EXPECT_TRUE(compiled->has_pieces());
   EXPECT_FALSE(compiled_models().at("tanglecube")()->has_pieces());
   const Vec3 points[] = {{0.2, 0.1, 1.0}, {0.99, 0.05, 0.5}, {0.6, 0.8, 0.98}, {0.7071, -0.7071, -1.0}, {0.1, 0.2, 0}};

@@ -19,12 +19,12 @@
 namespace cdp {
 namespace {
 
-struct Case {
+struct DataCase {
   std::string file;
   std::string method;
 };
 
-std::ostream& operator<<(std::ostream& os, const Case& c) { return os << c.file << "/" << c.method; }
+std::ostream& operator<<(std::ostream& os, const DataCase& c) { return os << c.file << "/" << c.method; }
 
 // One field per file for the whole suite: the Igea solve takes seconds.
 const Field& field_of(const std::string& file) {
@@ -34,7 +34,7 @@ const Field& field_of(const std::string& file) {
   return *f;
 }
 
-class DataDrivenMeshes : public ::testing::TestWithParam<Case> {};
+class DataDrivenMeshes : public ::testing::TestWithParam<DataCase> {};
 
 TEST_P(DataDrivenMeshes, ClosedOneComponentGenusZero) {
   const Field& field = field_of(GetParam().file);
@@ -85,8 +85,8 @@ TEST(DataDrivenRollbacks, TheBunnyMpuAtToleranceThreeThousandthsMeshesWithRollba
   EXPECT_EQ(t.genus, 0);
 }
 
-std::vector<Case> cases() {
-  std::vector<Case> out;
+std::vector<DataCase> data_cases() {
+  std::vector<DataCase> out;
   for (const char* file : {"bunny_vis800.json", "horse_mpu.json", "igea_vis4004.json"})
     for (const char* method : {"mc", "mt", "adaptive"}) out.push_back({file, method});
   // The Igea VIS-4004's cases carry the ctest label slow_under_sanitizers (tests/CMakeLists.txt):
@@ -95,7 +95,7 @@ std::vector<Case> cases() {
   return out;
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, DataDrivenMeshes, ::testing::ValuesIn(cases()),
+INSTANTIATE_TEST_SUITE_P(Models, DataDrivenMeshes, ::testing::ValuesIn(data_cases()),
                          [](const auto& info) {
                            std::string name = info.param.file.substr(0, info.param.file.find('.')) + "_" + info.param.method;
                            return name;

@@ -125,7 +125,7 @@ TEST(Expression, ASubtreeWrittenTwiceIsOneBranchPoint) {
   for (const Field::BranchKind k : flat.branch_kinds()) EXPECT_NE(k, Field::BranchKind::Creased);
   EXPECT_FALSE(flat.has_pieces());
   // The same bits as the named form and as each copy evaluated apart.
-  for (const Vec3 p : {Vec3(0.1, 0.2, 0.3), Vec3(-0.7, 0.05, 0.4), Vec3(0.9, -0.3, 0.0)}) {
+  for (const Vec3& p : {Vec3(0.1, 0.2, 0.3), Vec3(-0.7, 0.05, 0.4), Vec3(0.9, -0.3, 0.0)}) {
     Vec3 g1, g2;
     Mat3 H1, H2;
     EXPECT_EQ(flat.gradient_hessian(p, g1, H1), named.gradient_hessian(p, g2, H2));

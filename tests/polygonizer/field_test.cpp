@@ -7,31 +7,19 @@
 #include <cdp/core/models/mpu.h>
 #include <cdp/core/models/vis.h>
 
-#include <bit>
 #include <cstdint>
 #include <memory>
 #include <random>
 #include <vector>
 
+#include "common/same_bits.h"
 #include "common/test_fields.h"
 #include "polygonizer/oriented_point_sets.h"
 
 namespace cdp {
 namespace {
 
-bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
-
-bool same_bits(const Vec3& a, const Vec3& b) {
-  for (int k = 0; k < 3; ++k)
-    if (!same_bits(a[k], b[k])) return false;
-  return true;
-}
-
-bool same_bits(const Mat3& a, const Mat3& b) {
-  for (int k = 0; k < 9; ++k)
-    if (!same_bits(a.data()[k], b.data()[k])) return false;
-  return true;
-}
+using test::same_bits;
 
 std::vector<std::unique_ptr<Field>> models() {
   std::vector<std::unique_ptr<Field>> v;

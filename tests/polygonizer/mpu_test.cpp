@@ -8,16 +8,13 @@
 
 #include <random>
 
+#include "common/test_fields.h"
 #include "polygonizer/oriented_point_sets.h"
 
 namespace cdp {
 namespace {
 
-double first_order_distance(const Field& f, const Vec3& p) {
-  Vec3 g;
-  const double v = f.value_gradient(p, g);
-  return std::abs(v) / g.norm();
-}
+using test::first_order_distance;
 
 MpuOptions options_with_error(double max_error) {
   MpuOptions o;

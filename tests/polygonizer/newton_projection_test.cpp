@@ -3,7 +3,6 @@
 
 #include <cdp/core/newton_projection.h>
 
-#include <bit>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -12,6 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/same_bits.h"
 #include "common/test_fields.h"
 
 namespace cdp {
@@ -110,7 +110,7 @@ TEST(NewtonProjection, ReportsAStepThatCannotMoveThePoint) {
   EXPECT_LT(r.iterations, 5);
 }
 
-bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
+using test::same_bits;
 
 // Wraps a field and records the size of every values_gradients batch asked of it.
 class BatchRecorder : public Field {

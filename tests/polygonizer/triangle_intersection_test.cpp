@@ -259,7 +259,9 @@ TEST(TriangleIntersection, ApartAtSharedVertexIsNeverWrongAndSettlesFans) {
     const bool met = meet(s, a1, a2, b1, b2);
     apart += filtered;
     meeting += met;
-    if (filtered) ASSERT_FALSE(met) << "trial " << trial;
+    if (filtered) {
+      ASSERT_FALSE(met) << "trial " << trial;
+    }
   }
   EXPECT_GT(apart, 10000);   // the random pairs it could settle
   EXPECT_GT(meeting, 10000);  // and the random pairs that meet, none of them settled
@@ -269,8 +271,12 @@ TEST(TriangleIntersection, ApartAtSharedVertexIsNeverWrongAndSettlesFans) {
     const Vec3 b1 = (s + a1 + a2) / 3 + Vec3(0, 0, k * std::numeric_limits<double>::epsilon()),
                b2 = s + Vec3(0.1, 0.2, -1);
     const bool met = meet(s, a1, a2, b1, b2);
-    if (k == 0) EXPECT_TRUE(met);
-    if (apart_at_shared_vertex(s, a1, a2, b1, b2)) EXPECT_FALSE(met) << k;
+    if (k == 0) {
+      EXPECT_TRUE(met);
+    }
+    if (apart_at_shared_vertex(s, a1, a2, b1, b2)) {
+      EXPECT_FALSE(met) << k;
+    }
   }
   // Corners that are not finite decide nothing (and do not throw).
   const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();

@@ -17,12 +17,7 @@
 namespace cdp {
 namespace {
 
-// Distance of p from the zero set, to first order.
-double first_order_distance(const Field& f, const Vec3& p) {
-  Vec3 g;
-  const double v = f.value_gradient(p, g);
-  return std::abs(v) / g.norm();
-}
+using test::first_order_distance;
 
 TEST(Vis, InterpolatesItsConstraints) {
   const Vis vis(test::sphere_points(150), 0.02);

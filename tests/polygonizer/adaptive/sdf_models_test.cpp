@@ -151,13 +151,13 @@ std::vector<SdfModel> sdf_models() {
   return v;
 }
 
-struct Case {
+struct SdfCase {
   std::size_t model;
   double factor;
   double tolerance = 0;  // positive: SizingMode::Tolerance instead of the factor
 };
 
-std::string case_name(const testing::TestParamInfo<Case>& info) {
+std::string sdf_case_name(const testing::TestParamInfo<SdfCase>& info) {
   std::ostringstream s;
   s << sdf_models()[info.param.model].name;
   if (info.param.tolerance > 0) s << "_tolerance" << info.param.tolerance;
@@ -168,7 +168,7 @@ std::string case_name(const testing::TestParamInfo<Case>& info) {
   return n;
 }
 
-class SdfModels : public testing::TestWithParam<Case> {};
+class SdfModels : public testing::TestWithParam<SdfCase> {};
 
 // The smallest angle of the triangles none of whose corners lies on a crease (where two pieces of
 // the field meet within 1e-6 of the diagonal): the quality bound away from creases, measured from
@@ -235,12 +235,12 @@ TEST_P(SdfModels, MeshWithTheirCreasesAndGoodTriangles) {
   // up to the sphere's.
   const bool known_shortfall = m.name == "drilled_sphere" && GetParam().factor == 3 && GetParam().tolerance == 0;
   EXPECT_GE(away.degrees, known_shortfall ? 19.8 : 20.0) << m.name << ": away from creases, near " << away.where.transpose();
-  std::cout << "sdf-model " << m.name << " " << case_name({GetParam(), 0}) << ": " << t.triangles << " triangles, "
+  std::cout << "sdf-model " << m.name << " " << sdf_case_name({GetParam(), 0}) << ": " << t.triangles << " triangles, "
             << r.stats.seconds << " s, min angle " << min_angle << ", away from creases " << away.degrees << "\n";
 }
 
-std::vector<Case> all_cases() {
-  std::vector<Case> out;
+std::vector<SdfCase> all_cases() {
+  std::vector<SdfCase> out;
   for (std::size_t s = 0; s < sdf_models().size(); ++s) {
     // Under the sanitizers factor 3 only: the other cases carry the ctest label
     // slow_under_sanitizers (tests/CMakeLists.txt).
@@ -250,7 +250,7 @@ std::vector<Case> all_cases() {
   return out;
 }
 
-INSTANTIATE_TEST_SUITE_P(Adaptive, SdfModels, testing::ValuesIn(all_cases()), case_name);
+INSTANTIATE_TEST_SUITE_P(Adaptive, SdfModels, testing::ValuesIn(all_cases()), sdf_case_name);
 
 // 90k triangles and two runs: several times slower under the sanitizers (ctest label
 // slow_under_sanitizers, tests/CMakeLists.txt).

@@ -28,14 +28,9 @@
 namespace cdp {
 namespace {
 
-std::string expression(const std::string& value, double half) {
-  std::ostringstream s;
-  s << R"({"type": "expression", "value": ")" << value << R"(", "bounds": [[)" << -half << ", " << -half << ", "
-    << -half << "], [" << half << ", " << half << ", " << half << "]]}";
-  return s.str();
-}
+using test::expression;
 
-std::string blobs_json(unsigned seed, int count) {
+std::string blob_field_json(unsigned seed, int count) {
   // As the hard-surface suite's random_blobs_N (adaptive/hard_surfaces_test.cpp).
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> c(-1.6, 1.6), r(0.7, 1.3);
@@ -63,8 +58,8 @@ const std::vector<Surface>& smooth_surfaces() {
       {"torus", R"({"type": "torus", "major_radius": 1, "minor_radius": 0.35})", {1, 2, 3, 5, 10}},
       {"tanglecube", expression(test::kTanglecube, 3), {1, 2, 3, 5}},
       {"chmutov4", expression("(8*x^4-8*x^2+1)+(8*y^4-8*y^2+1)+(8*z^4-8*z^2+1)", 1.3), {1, 2, 3, 5}},
-      {"blobs_103", blobs_json(103, 5), {1, 2, 3, 5}},
-      {"blobs_111", blobs_json(111, 3), {1, 2, 3, 5}},
+      {"blobs_103", blob_field_json(103, 5), {1, 2, 3, 5}},
+      {"blobs_111", blob_field_json(111, 3), {1, 2, 3, 5}},
   };
   return v;
 }
