@@ -53,8 +53,10 @@ bool repair_triangle(RepairContext& ctx, int t) {
 
 void repair_angles(RepairContext& ctx) {
   std::vector<int> work;
-  for (int t = 0; t < ctx.tri_count(); ++t)
+  for (int t = 0; t < ctx.tri_count(); ++t) {
+    ctx.poll(static_cast<std::size_t>(t));
     if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t], ctx.options_.improve_below)) work.push_back(t);
+  }
   ctx.report_.bad_before = std::max(ctx.report_.bad_before, work.size());
   for (int round = 0; round < kQualityRounds && !work.empty(); ++round) {
     std::vector<std::pair<double, int>> order;
@@ -77,12 +79,17 @@ void repair_angles(RepairContext& ctx) {
     std::sort(next.begin(), next.end());
     next.erase(std::unique(next.begin(), next.end()), next.end());
     work.clear();
-    for (int t : next)
+    for (std::size_t i = 0; i < next.size(); ++i) {
+      ctx.poll(i);
+      const int t = next[i];
       if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t], ctx.options_.improve_below)) work.push_back(t);
+    }
   }
   std::size_t bad = 0;
-  for (int t = 0; t < ctx.tri_count(); ++t)
+  for (int t = 0; t < ctx.tri_count(); ++t) {
+    ctx.poll(static_cast<std::size_t>(t));
     if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t], ctx.options_.improve_below)) ++bad;
+  }
   ctx.report_.bad_after = bad;
 }
 

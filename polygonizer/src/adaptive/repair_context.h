@@ -19,6 +19,7 @@
 #include "crease_probe.h"
 #include "spatial_hash.h"
 #include "../background_release.h"
+#include "../polled_growth.h"
 #include "../parallel.h"
 
 #include <cdp/core/errors.h>
@@ -434,10 +435,15 @@ class RepairContext {
 
   // A new vertex, not yet in any triangle (a split tries it, then keeps or drops it).
   void add_vertex(const Vec3& x, const Vec3& normal) {
+    detail::grow_apart(options_.cancel, "adaptive: repair", 1, mesh_.positions, mesh_.normals, vt_, crease_);
     mesh_.positions.push_back(x);
     mesh_.normals.push_back(normal);
     vt_.emplace_back();
     crease_.push_back(-1);
+  }
+  // Room for n more triangles in the per-triangle arrays, made before an operation adds them.
+  void make_room_for_triangles(std::size_t n) {
+    detail::grow_apart(options_.cancel, "adaptive: repair", n, mesh_.triangles, alive_, stamp_);
   }
   void drop_last_vertex() {
     mesh_.positions.pop_back();

@@ -25,6 +25,7 @@ bool try_insert_inside(RepairContext& ctx, int t, const ProjectionResult& landed
     ctx.drop_last_vertex();
     return false;
   }
+  ctx.make_room_for_triangles(2);
   const int t2 = ctx.tri_count(), t3 = t2 + 1;
   ctx.mesh_.triangles[t] = added[0];
   ctx.mesh_.triangles.push_back(added[1]);

@@ -315,6 +315,7 @@ bool RepairContext::try_split(int t, int a, int b, bool repair, double shortest)
     drop_last_vertex();
     return false;
   }
+  make_room_for_triangles(2);
   const int t2 = tri_count(), u2 = t2 + 1;
   mesh_.triangles[t] = added[0];
   mesh_.triangles.push_back(added[1]);

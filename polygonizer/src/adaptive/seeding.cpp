@@ -46,6 +46,9 @@ constexpr int kSegmentSamples = 8;
 constexpr std::size_t kMaxRefinedCells = 1u << 20;
 // Steps of min_edge a surface point may be from the mesh and still belong to a meshed component.
 constexpr int kWalkSteps = 32;
+// The checks between components poll the cancel token every so many sign changes, witnesses or
+// triangles indexed: well under a millisecond of work each.
+constexpr std::size_t kPollEvery = 256;
 
 struct SignChange {
   Vec3 a = Vec3::Zero(), b = Vec3::Zero();  // F(a) and F(b) differ in sign (F < 0 counts as inside)
@@ -86,11 +89,13 @@ std::optional<SurfacePoint> surface_point(const Field& field, const SignChange& 
 // is asked between components, never inside the tracker's loop.
 class MeshCoverage {
  public:
-  MeshCoverage(const Mesh& mesh, double cell) : mesh_(mesh), h_(cell), cells_(cell) {}
+  MeshCoverage(const Mesh& mesh, double cell, const CancelToken& cancel)
+      : mesh_(mesh), h_(cell), cells_(cell), cancel_(cancel) {}
 
   void update() {
     const auto& P = mesh_.positions;
     for (; indexed_ < mesh_.triangles.size(); ++indexed_) {
+      if (indexed_ % kPollEvery == 0) cancel_.check("adaptive: seeding");
       const auto& t = mesh_.triangles[indexed_];
       const Vec3 lo = P[t[0]].cwiseMin(P[t[1]]).cwiseMin(P[t[2]]);
       const Vec3 hi = P[t[0]].cwiseMax(P[t[1]]).cwiseMax(P[t[2]]);
@@ -200,12 +205,13 @@ class MeshCoverage {
   double longest_ = 0;
   std::size_t indexed_ = 0;
   SpatialHash cells_;
+  CancelToken cancel_;
 };
 
 class Seeder {
  public:
   Seeder(const Field& field, const SeedGrid& grid, double min_edge, double cell, Tracker& tracker, const Mesh& mesh)
-      : field_(field), grid_(grid), min_edge_(min_edge), tracker_(tracker), cover_(mesh, std::max(cell, grid.h)) {}
+      : field_(field), grid_(grid), min_edge_(min_edge), tracker_(tracker), cover_(mesh, std::max(cell, grid.h), tracker.cancel_token()) {}
 
   SeedingReport run() {
     grid_sign_changes();
@@ -359,6 +365,7 @@ class Seeder {
 
   void grid_sign_changes() {
     grid_.for_each_sign_change([&](const std::array<int, 3>& a, const std::array<int, 3>& b) {
+      poll();
       visit({grid_.point(a[0], a[1], a[2]), grid_.point(b[0], b[1], b[2]), grid_.value(a[0], a[1], a[2]),
              grid_.value(b[0], b[1], b[2])});
     });
@@ -571,15 +578,22 @@ class Seeder {
   void recheck() {
     cover_.update();
     for (const Witness& w : unsure_) {
+      poll();
       if (w.has_segment && cover_.crosses(w.change.a, w.change.b)) continue;
       if (w.at && walks_to_mesh(*w.at)) continue;  // its first test is meshed_at
       if (report_.uncovered++ == 0) report_.first_uncovered = w.at ? w.at->point : 0.5 * (w.change.a + w.change.b);
     }
   }
 
+  // The cancel poll of the checks between components (the tracker polls its own loop).
+  void poll() {
+    if (++polls_ % kPollEvery == 0) tracker_.cancel_token().check("adaptive: seeding");
+  }
+
   const Field& field_;
   const SeedGrid& grid_;
   double min_edge_;
+  std::size_t polls_ = 0;
   Tracker& tracker_;
   MeshCoverage cover_;
   std::vector<Deviation> deviations_;  // by triangle, see deviation()

@@ -1,6 +1,7 @@
 #include "tracker.h"
 #include "crease_probe.h"
 #include "../background_release.h"
+#include "../polled_growth.h"
 
 #include <cdp/core/crease.h>
 #include <cdp/core/errors.h>
@@ -40,6 +41,9 @@ constexpr double kOverMesh = 0.3;
 // the cost of its searches among crowded vertices, until the vertex hash split crowded cells.
 constexpr std::size_t kTrianglesPerVertex = 3;
 constexpr std::size_t kTriangleSlack = 64;  // the first hexagon and other tiny meshes, with room
+// longest_front_edge polls the cancel token every so many stale entries popped: about a
+// millisecond's work, and an atomic load next to it costs nothing.
+constexpr std::size_t kStalePollEvery = 4096;
 }  // namespace
 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
@@ -93,6 +97,7 @@ void Tracker::measure(std::span<const Vec3> points, std::vector<std::optional<Pl
 int Tracker::add_vertex(const Placed& placed) {
   const Curvature& c = placed.curvature;
   const int v = static_cast<int>(mesh_.positions.size());
+  detail::grow_apart(s_.cancel, "adaptive", 1, mesh_.positions, mesh_.normals, target_, mac_, shape_index_, front_refs_);
   mesh_.positions.push_back(placed.point);
   mesh_.normals.push_back(c.normal);
   target_.push_back(placed_target(placed));
@@ -311,10 +316,14 @@ void Tracker::link(int a, int b) {
 }
 
 double Tracker::longest_front_edge() const {
+  // The heap keeps every edge a front ever had: where the last long edges close, one call may
+  // pop millions of stale entries (a second at 2*10^6 triangles), so it polls the cancel token.
+  std::size_t popped = 0;
   while (!front_edges_.empty()) {
     const auto& [length, a, b] = front_edges_.top();
     if (fs_.nodes[a].front >= 0 && fs_.nodes[a].next == b) return length;
     front_edges_.pop();
+    if (++popped % kStalePollEvery == 0) s_.cancel.check("adaptive");
   }
   return 0;
 }

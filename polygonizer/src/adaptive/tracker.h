@@ -171,6 +171,8 @@ class Tracker {
   // per-vertex arrays; no callback) to a thread of its own (background_release.h), leaving the
   // tracker empty. Only its destructor may follow.
   void release_in_background() noexcept;
+  // AdaptiveOptions::cancel, for the stages that work beside the tracker (the seeding's checks).
+  const CancelToken& cancel_token() const { return s_.cancel; }
 
   // Meshes the component through `seed` (a point on the surface). Returns false when not even
   // the first hexagon could be placed there (the caller tries another seed).
