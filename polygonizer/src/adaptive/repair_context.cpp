@@ -186,6 +186,7 @@ void RepairContext::hash_cover(int t, const Vec3& lo, const Vec3& hi) {
   const double slack = kHashSlack * hash_.cell_size();
   const Vec3 glo = lo.array() - slack, ghi = hi.array() + slack;
   if (hashed_lo_.size() <= static_cast<std::size_t>(t)) {
+    detail::grow_apart(options_.cancel, "adaptive: repair", t + 1 - hashed_lo_.size(), hashed_lo_, hashed_hi_);
     hashed_lo_.resize(t + 1);
     hashed_hi_.resize(t + 1);
   }

@@ -520,6 +520,7 @@ void Tracker::compact() {
     for (int& v : tri) v = remap[v];
   dead_.assign(m, 0);
   vertex_hash_ = SpatialHash(s_.hash_cell, Crowding::split);
+  vertex_hash_.set_cancel(s_.cancel);
   for (int v = 0; v < m; ++v) vertex_hash_.insert(v, mesh_.positions[v], vertex_position());
 }
 

@@ -6,13 +6,17 @@
 // extent, so that searches stay local where edges are far shorter than the cell.
 #pragma once
 
+#include <cdp/core/cancel.h>
 #include <cdp/core/field.h>
 
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <vector>
+
+#include "../polled_growth.h"
 
 namespace cdp::adaptive {
 
@@ -30,6 +34,10 @@ class SpatialHash {
   double cell_size() const { return h_; }
   // Without counting, the const queries write nothing, so several threads may query the hash at
   // once (while none inserts); visits() then stops growing. Counting is on by default.
+  // A run's cancel token, polled while the table grows: at 10^6 cells one growth rehashes 2*10^6
+  // slots and moves the cells' arrays, 0.1-0.2 s in one call (cancel.h). Not passed to the
+  // coarser and finer levels, which stay small.
+  void set_cancel(const CancelToken& cancel) { cancel_ = cancel; }
   void set_counting(bool on) {
     counting_ = on;
     if (coarser_) coarser_->set_counting(on);
@@ -295,16 +303,21 @@ class SpatialHash {
       if (slot.key == k) return slot.cell;
     }
   }
+  // Doubles the slots (at half load), and with a cancel token, the cells' arrays too, which fill
+  // up at the same cell: one array at a time, polled between and while rehashing.
   void grow() {
     std::vector<Slot> old = std::move(slots_);
     slots_.assign(old.empty() ? 64 : 2 * old.size(), Slot{});
     const std::size_t mask = slots_.size() - 1;
-    for (const Slot& o : old) {
+    for (std::size_t i = 0; i < old.size(); ++i) {
+      if (cancel_ && i % kGrowPollEvery == 0) cancel_->check("adaptive");
+      const Slot& o = old[i];
       if (o.cell < 0) continue;
       std::size_t s = slot_hash(o.key) & mask;
       while (slots_[s].cell >= 0) s = (s + 1) & mask;
       slots_[s] = o;
     }
+    if (cancel_) detail::grow_apart(*cancel_, "adaptive", 1, keys_, ids_);
   }
   struct Slot {
     std::uint64_t key = 0;
@@ -315,6 +328,8 @@ class SpatialHash {
   // cells are kLevelRatio times wider; each box is stored in at most (kMaxBoxSpan + 1)^3 cells
   // of its level.
   static constexpr std::int64_t kMaxBoxSpan = 4;
+  // grow() polls every so many slots: a few hundred microseconds of rehashing.
+  static constexpr std::size_t kGrowPollEvery = 1 << 14;
   static constexpr double kLevelRatio = 4;
   // Crowding::split: a cell splits past 128 points, about 20 times what a cell two edges wide
   // holds on a surface meshed evenly (about 7), so that only cells whose edges are several times
@@ -332,6 +347,7 @@ class SpatialHash {
   std::vector<std::vector<int>> ids_;
   std::vector<std::uint64_t> keys_;  // of each occupied cell, as ids_
   std::unique_ptr<SpatialHash> coarser_;  // created by the first box too wide for this level
+  std::optional<CancelToken> cancel_;
 };
 
 }  // namespace cdp::adaptive

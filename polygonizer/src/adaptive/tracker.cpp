@@ -48,7 +48,10 @@ constexpr std::size_t kStalePollEvery = 4096;
 
 Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
     : field_(field), s_(settings), mesh_(mesh),
-      front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell, Crowding::split), finer_zones_(settings.finer_zones) {}
+      front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell, Crowding::split), finer_zones_(settings.finer_zones) {
+  front_hash_.set_cancel(s_.cancel);
+  vertex_hash_.set_cancel(s_.cancel);
+}
 
 void Tracker::release_in_background() noexcept {
   detail::release_in_background(front_hash_, vertex_hash_, fs_, target_, mac_, shape_index_, front_refs_, dead_,

@@ -76,3 +76,34 @@ TEST(AdaptiveSpatialHash, ACrowdedCellSplitsWithoutLosingPointsAndKeepsSearchesL
 }
 
 }  // namespace
+
+namespace {
+
+// A run's token (set_cancel) is polled while the table grows, the one long step of a large hash;
+// a hash without one grows as before, and a token never cancelled changes nothing.
+TEST(AdaptiveSpatialHash, GrowingPollsTheRunsCancelToken) {
+  const auto fill = [](SpatialHash& hash, int from, int to) {
+    for (int i = from; i < to; ++i) hash.insert(i, Vec3(i + 0.5, 0.5, 0.5));  // a cell each
+  };
+  const auto found = [](const SpatialHash& hash, int n) {  // the points found where they were put
+    int count = 0;
+    for (int i = 0; i < n; ++i) hash.for_each_near(Vec3(i + 0.5, 0.5, 0.5), 0.1, [&](int id) { count += id == i; });
+    return count;
+  };
+  const cdp::CancelToken cancel;
+  SpatialHash polled(1.0), plain(1.0);
+  polled.set_cancel(cancel);
+  // The first table has 64 slots, kept at most half full: the 33rd cell makes it grow.
+  fill(polled, 0, 32);
+  cancel.cancel();
+  EXPECT_THROW(fill(polled, 32, 33), cdp::CancelledError);
+  fill(plain, 0, 1000);
+  EXPECT_EQ(found(plain, 1000), 1000);
+  cancel.reset();
+  SpatialHash uncancelled(1.0);
+  uncancelled.set_cancel(cancel);
+  fill(uncancelled, 0, 1000);
+  EXPECT_EQ(found(uncancelled, 1000), 1000);
+}
+
+}  // namespace
