@@ -211,7 +211,11 @@ class MeshCoverage {
 class Seeder {
  public:
   Seeder(const Field& field, const SeedGrid& grid, double min_edge, double cell, Tracker& tracker, const Mesh& mesh)
-      : field_(field), grid_(grid), min_edge_(min_edge), tracker_(tracker), cover_(mesh, std::max(cell, grid.h), tracker.cancel_token()) {}
+      : field_(field),
+        grid_(grid),
+        min_edge_(min_edge),
+        tracker_(tracker),
+        cover_(mesh, std::max(cell, grid.h), tracker.cancel_token()) {}
 
   SeedingReport run() {
     grid_sign_changes();

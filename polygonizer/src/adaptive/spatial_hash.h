@@ -34,16 +34,17 @@ class SpatialHash {
   double cell_size() const { return h_; }
   // Without counting, the const queries write nothing, so several threads may query the hash at
   // once (while none inserts); visits() then stops growing. Counting is on by default.
-  // A run's cancel token, polled while the table grows: at 10^6 cells one growth rehashes 2*10^6
-  // slots and moves the cells' arrays, 0.1-0.2 s in one call (cancel.h). Not passed to the
-  // coarser and finer levels, which stay small.
-  void set_cancel(const CancelToken& cancel) { cancel_ = cancel; }
   void set_counting(bool on) {
     counting_ = on;
     if (coarser_) coarser_->set_counting(on);
     for (auto& f : finer_)
       if (f) f->set_counting(on);
   }
+  // A run's cancel token, polled while the table grows: at 10^6 cells one growth rehashes 2*10^6
+  // slots and moves the cells' arrays, 0.1-0.2 s in one call (cancel.h). Not passed to the
+  // coarser and finer levels, which stay small.
+  void set_cancel(const CancelToken& cancel) { cancel_ = cancel; }
+
   // Ids looked at by the searches so far (an upper bound; a search stopping early counts its
   // whole last cell): the cost of the searches, which the tracker bounds.
   std::uint64_t visits() const { return visits_ + (coarser_ ? coarser_->visits() : 0); }
