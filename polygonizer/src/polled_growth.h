@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <vector>
 
 namespace cdp::detail {
 
@@ -23,6 +24,21 @@ void grow_apart(const CancelToken& cancel, const char* what, std::size_t n, Arra
     cancel.check(what);
   };
   (grow(arrays), ...);
+}
+
+// n copies of `value`, made kPolledFill at a time with `poll()` before each block: filling a
+// vector of millions of elements (a hundred megabytes of fresh pages, page faults and all) is a
+// loop too.
+inline constexpr std::size_t kPolledFill = std::size_t{1} << 16;
+template <class T, class Poll>
+std::vector<T> polled_vector(std::size_t n, Poll poll, const T& value = T()) {
+  std::vector<T> v;
+  v.reserve(n);
+  for (std::size_t i = 0; i < n; i += kPolledFill) {
+    poll();
+    v.resize(std::min(n, i + kPolledFill), value);
+  }
+  return v;
 }
 
 }  // namespace cdp::detail

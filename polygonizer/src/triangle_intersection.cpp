@@ -7,6 +7,7 @@
 #include <cdp/core/triangle_intersection.h>
 
 #include "parallel.h"
+#include "polled_growth.h"
 #include "vertex_triangles.h"
 
 #include <cdp/core/errors.h>
@@ -575,12 +576,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   };
   // Zero-filled a block at a time between polls: at 2*10^6 triangles, 48 MB of fresh pages
   // filled at once were the check's longest unpolled stretch.
-  std::vector<CellRange> ranges;
-  ranges.reserve(boxes.size());
-  while (ranges.size() < boxes.size()) {
-    ranges.resize(std::min(boxes.size(), ranges.size() + (std::size_t{1} << 16)));
-    poll(0);
-  }
+  std::vector<CellRange> ranges = detail::polled_vector<CellRange>(boxes.size(), [&] { poll(0); });
   std::vector<int> large;
   std::vector<unsigned char> is_large(boxes.size(), 0);
   std::size_t entries = 0;

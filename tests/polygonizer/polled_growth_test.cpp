@@ -58,5 +58,15 @@ TEST(PolledGrowth, ACancelledRunStopsAfterTheFirstArrayItMoves) {
   EXPECT_EQ(a, (std::vector<int>{1, 2}));
 }
 
+TEST(PolledGrowth, APolledVectorHoldsItsCopiesAndPollsBeforeEachBlock) {
+  const std::size_t n = 2 * kPolledFill + 5;
+  int polls = 0;
+  const std::vector<int> v = polled_vector(n, [&] { ++polls; }, 7);
+  EXPECT_EQ(v, std::vector<int>(n, 7));
+  EXPECT_EQ(polls, 3);
+  EXPECT_TRUE(polled_vector<int>(0, [&] { ++polls; }).empty());
+  EXPECT_EQ(polls, 3);
+}
+
 }  // namespace
 }  // namespace cdp::detail

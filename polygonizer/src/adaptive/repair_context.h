@@ -162,18 +162,10 @@ class RepairContext {
   void poll(std::size_t i = 0) const {
     if (i % kPollEvery == 0) options_.cancel.check("adaptive: repair");
   }
-  // n copies of `value`, made kPolledFill at a time with a poll between: filling the vectors of
-  // a pass over a million vertices (a hundred megabytes, page faults and all) is a loop too.
-  static constexpr std::size_t kPolledFill = std::size_t{1} << 16;
+  // n copies of `value`, filled a block at a time with a poll before each (polled_growth.h).
   template <class T>
   std::vector<T> polled_vector(std::size_t n, const T& value = T()) const {
-    std::vector<T> v;
-    v.reserve(n);
-    for (std::size_t i = 0; i < n; i += kPolledFill) {
-      poll();
-      v.resize(std::min(n, i + kPolledFill), value);
-    }
-    return v;
+    return detail::polled_vector(n, [this] { poll(); }, value);
   }
 
   // ---- geometry
