@@ -9,18 +9,39 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <iterator>
+#include <type_traits>
 #include <vector>
 
 namespace cdp::detail {
 
+// The elements a polled loop below handles between two polls: a few milliseconds of page faults.
+inline constexpr std::size_t kPolledFill = std::size_t{1} << 16;
+
 // Makes room for `n` more elements in each of `arrays` that lacks it, doubling its capacity as
-// push_back would (so the capacities, and nothing else, are as before), and polls `cancel` after
-// each array it moved. \throw CancelledError naming `what`, once cancelled.
+// push_back would (so the capacities, and nothing else, are as before). Each array is moved into
+// its new storage kPolledFill elements at a time with a poll of `cancel` before each block and
+// after the array: the page faults of the fresh storage, not the copy, are most of a growth's
+// time (a 24 MB array grown to 48 MB took 0.09 s in one call). \throw CancelledError naming
+// `what`, once cancelled; the array being moved then gets its elements back, unchanged.
 template <class... Array>
 void grow_apart(const CancelToken& cancel, const char* what, std::size_t n, Array&... arrays) {
   const auto grow = [&](auto& a) {
     if (a.size() + n <= a.capacity()) return;
-    a.reserve(std::max(2 * a.capacity(), a.size() + n));
+    std::remove_reference_t<decltype(a)> b;
+    b.reserve(std::max(2 * a.capacity(), a.size() + n));
+    try {
+      for (std::size_t i = 0; i < a.size(); i += kPolledFill) {
+        cancel.check(what);
+        const auto from = a.begin() + static_cast<std::ptrdiff_t>(i);
+        b.insert(b.end(), std::make_move_iterator(from),
+                 std::make_move_iterator(from + static_cast<std::ptrdiff_t>(std::min(kPolledFill, a.size() - i))));
+      }
+    } catch (...) {
+      std::move(b.begin(), b.end(), a.begin());  // resident pages, no allocation: quick
+      throw;
+    }
+    a.swap(b);
     cancel.check(what);
   };
   (grow(arrays), ...);
@@ -29,7 +50,6 @@ void grow_apart(const CancelToken& cancel, const char* what, std::size_t n, Arra
 // n copies of `value`, made kPolledFill at a time with `poll()` before each block: filling a
 // vector of millions of elements (a hundred megabytes of fresh pages, page faults and all) is a
 // loop too.
-inline constexpr std::size_t kPolledFill = std::size_t{1} << 16;
 template <class T, class Poll>
 std::vector<T> polled_vector(std::size_t n, Poll poll, const T& value = T()) {
   std::vector<T> v;
@@ -39,6 +59,18 @@ std::vector<T> polled_vector(std::size_t n, Poll poll, const T& value = T()) {
     v.resize(std::min(n, i + kPolledFill), value);
   }
   return v;
+}
+
+// Empties `v`, a vector of buffers (a mesh's per-vertex stars, say), freeing them kPolledFill
+// at a time from the back with `poll()` before each block: 10^6 small buffers given back at
+// once took 0.1 s at 2*10^6 triangles. Where `poll` throws, what is left is still held.
+template <class T, class Poll>
+void polled_clear(std::vector<std::vector<T>>& v, Poll poll) {
+  while (!v.empty()) {
+    poll();
+    v.resize(v.size() - std::min(v.size(), kPolledFill));
+  }
+  std::vector<std::vector<T>>().swap(v);
 }
 
 }  // namespace cdp::detail

@@ -621,7 +621,8 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   };
   // Counts, then their running sums (the end of each bucket), then filled backwards from the last
   // triangle: start[b] ends at the beginning of bucket b, its triangles in increasing order.
-  std::vector<std::uint32_t> start(buckets + 1, 0);
+  // Zero-filled between polls, as the ranges: tens of megabytes at 2*10^6 triangles.
+  std::vector<std::uint32_t> start = detail::polled_vector<std::uint32_t>(buckets + 1, [&] { poll(0); }, 0);
   for (const int f : live) {
     poll(static_cast<std::size_t>(f));
     if (!is_large[static_cast<std::size_t>(f)]) for_each_cell(f, [&](int, int, int, std::size_t b) { ++start[b]; });
@@ -630,7 +631,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
     poll(b);
     start[b] += start[b - 1];
   }
-  std::vector<int> members(entries);
+  std::vector<int> members = detail::polled_vector<int>(entries, [&] { poll(0); });
   for (auto it = live.rbegin(); it != live.rend(); ++it) {
     poll(static_cast<std::size_t>(*it));
     if (!is_large[static_cast<std::size_t>(*it)])

@@ -4,6 +4,8 @@
 // self-intersection check's flat stars. Indices must be valid (callers check them first).
 #pragma once
 
+#include "polled_growth.h"
+
 #include <cdp/core/cancel.h>
 #include <cdp/core/mesh.h>
 
@@ -29,7 +31,8 @@ struct VertexTriangles {
       for (const int i : mesh.triangles[f]) ++offsets[static_cast<std::size_t>(i) + 1];
     }
     std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
-    incident.resize(static_cast<std::size_t>(offsets.back()));
+    // Zero-filled between polls: 24 MB of fresh pages at 2*10^6 triangles.
+    incident = detail::polled_vector<int>(static_cast<std::size_t>(offsets.back()), [&] { poll(0); });
     std::vector<int> fill(offsets.begin(), offsets.end() - 1);
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
       poll(f);

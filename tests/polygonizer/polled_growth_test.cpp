@@ -1,10 +1,12 @@
-// grow_apart (polygonizer/src/polled_growth.h): arrays that fill up together are grown one by
-// one, each as push_back would grow it, with a cancel poll after each one moved.
+// polled_growth.h: arrays that fill up together are grown one by one (grow_apart), each as
+// push_back would grow it, with a cancel poll after each one moved; big arrays are filled
+// (polled_vector) and arrays of buffers freed (polled_clear) a block at a time between polls.
 #include "src/polled_growth.h"
 
 #include <gtest/gtest.h>
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace cdp::detail {
@@ -41,7 +43,7 @@ TEST(PolledGrowth, ArraysWithRoomAreLeftAlone) {
   EXPECT_EQ(a.capacity(), 16u);
 }
 
-TEST(PolledGrowth, ACancelledRunStopsAfterTheFirstArrayItMoves) {
+TEST(PolledGrowth, ACancelledGrowthLeavesTheArraysAsTheyWere) {
   std::vector<int> a{1, 2}, b{3, 4};
   a.shrink_to_fit();
   b.shrink_to_fit();
@@ -53,9 +55,48 @@ TEST(PolledGrowth, ACancelledRunStopsAfterTheFirstArrayItMoves) {
   } catch (const CancelledError& e) {
     EXPECT_STREQ(e.what(), "adaptive: cancelled");
   }
-  EXPECT_GE(a.capacity(), 3u);  // moved, then polled
-  EXPECT_EQ(b.capacity(), 2u);  // not reached
   EXPECT_EQ(a, (std::vector<int>{1, 2}));
+  EXPECT_EQ(a.capacity(), 2u);
+  EXPECT_EQ(b.capacity(), 2u);  // not reached
+}
+
+// An element whose moves cancel a token once a given number of them were made: a cancel()
+// arriving from another thread while a growth moves its blocks.
+struct CancellingElement {
+  static inline const CancelToken* token = nullptr;
+  static inline std::size_t moves = 0, cancel_at = 0;
+  std::vector<int> value;
+  explicit CancellingElement(std::vector<int> v) : value(std::move(v)) {}
+  CancellingElement(const CancellingElement&) = default;
+  CancellingElement(CancellingElement&& o) noexcept : value(std::move(o.value)) {
+    if (++moves == cancel_at) token->cancel();
+  }
+  CancellingElement& operator=(CancellingElement&& o) noexcept = default;
+  bool operator==(const CancellingElement&) const = default;
+};
+
+TEST(PolledGrowth, ALongArrayMovesABlockBetweenPollsAndGetsItsElementsBackWhenCancelled) {
+  std::vector<CancellingElement> a(2 * kPolledFill + 1, CancellingElement({1, 2}));
+  a.shrink_to_fit();
+  a.back() = CancellingElement({3});
+  const std::vector<CancellingElement> before = a;
+  const CancelToken cancel;
+  CancellingElement::token = &cancel;
+  // Cancelled during the second block: the poll before the third throws, two blocks moved.
+  CancellingElement::moves = 0;
+  CancellingElement::cancel_at = kPolledFill + 1;
+  EXPECT_THROW(grow_apart(cancel, "repair", 1, a), CancelledError);
+  EXPECT_EQ(CancellingElement::moves, 2 * kPolledFill);
+  EXPECT_EQ(a, before);
+  EXPECT_EQ(a.capacity(), before.size());
+  // Not cancelled: every element moved once, the capacity doubled.
+  cancel.reset();
+  CancellingElement::moves = 0;
+  CancellingElement::cancel_at = 0;
+  grow_apart(cancel, "repair", 1, a);
+  EXPECT_EQ(CancellingElement::moves, before.size());
+  EXPECT_EQ(a, before);
+  EXPECT_EQ(a.capacity(), 2 * before.size());
 }
 
 TEST(PolledGrowth, APolledVectorHoldsItsCopiesAndPollsBeforeEachBlock) {
@@ -66,6 +107,26 @@ TEST(PolledGrowth, APolledVectorHoldsItsCopiesAndPollsBeforeEachBlock) {
   EXPECT_EQ(polls, 3);
   EXPECT_TRUE(polled_vector<int>(0, [&] { ++polls; }).empty());
   EXPECT_EQ(polls, 3);
+}
+
+TEST(PolledGrowth, PolledClearFreesABlockAfterEachPollAndKeepsWhatAThrowingPollLeft) {
+  const std::size_t n = 2 * kPolledFill + 5;
+  std::vector<std::vector<int>> stars(n, std::vector<int>{1, 2, 3});
+  int polls = 0;
+  polled_clear(stars, [&] { ++polls; });
+  EXPECT_TRUE(stars.empty());
+  EXPECT_EQ(stars.capacity(), 0u);
+  EXPECT_EQ(polls, 3);
+  // Cancelled at the second poll: one block is freed, the rest (and their contents) held.
+  stars.assign(n, std::vector<int>{4});
+  polls = 0;
+  EXPECT_THROW(polled_clear(stars,
+                            [&] {
+                              if (++polls == 2) throw CancelledError("test: cancelled");
+                            }),
+               CancelledError);
+  ASSERT_EQ(stars.size(), n - kPolledFill);
+  EXPECT_EQ(stars.back(), std::vector<int>{4});
 }
 
 }  // namespace

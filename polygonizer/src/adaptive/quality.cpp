@@ -68,7 +68,9 @@ QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions&
     throw std::logic_error("improve_mesh: the mesh needs one normal per vertex");
   if (mesh.triangles.empty()) return {};
   repair::RepairContext ctx(field, mesh, options);
-  return repair::run_repair(ctx);
+  QualityReport report = repair::run_repair(ctx);
+  ctx.release();
+  return report;
 }
 
 }  // namespace cdp::adaptive

@@ -131,7 +131,11 @@ class RepairContext {
  public:
   RepairContext(const Field& field, Mesh& mesh, const QualityOptions& o)
       : field_(field), smooth_(field.smooth()), mesh_(mesh), options_(o), workers_(detail::worker_count(o.threads)),
-        vt_(mesh.positions.size()), crease_(mesh.positions.size(), -1),
+        // Made a block at a time between polls (polled_growth.h): 10^6 empty stars are 24 MB of
+        // fresh pages.
+        vt_(detail::polled_vector<std::vector<int>>(mesh.positions.size(),
+                                                    [&o] { o.cancel.check("adaptive: repair"); })),
+        crease_(mesh.positions.size(), -1),
         alive_(mesh.triangles.size(), 1), hash_(cell_size(mesh)) {
     // Nothing reads its visits, and intersecting_turn queries it on several threads at once.
     hash_.set_counting(false);
@@ -477,6 +481,8 @@ class RepairContext {
     return a;
   }
   void touch(int t) {
+    // Both grow to millions at 2*10^6 triangles: grown apart, polled (polled_growth.h).
+    detail::grow_apart(options_.cancel, "adaptive: repair", 1, touched_, since_check_);
     touched_.push_back(t);
     since_check_.push_back(t);
   }
@@ -485,6 +491,14 @@ class RepairContext {
 
   // Drops removed triangles and vertices, renumbering what is left in its order.
   void compact();
+
+  // Frees the stars and the hash's cells, a million small buffers each at 2*10^6 triangles,
+  // with polls between blocks (detail::polled_clear), before the destructor frees the rest at
+  // once. The context is then only to be destroyed.
+  void release() {
+    detail::polled_clear(vt_, [this] { poll(); });
+    hash_.clear();
+  }
 
   // A cancelled repair frees its million small buffers (the stars, the hash's cells) on a thread
   // of their own (background_release.h).

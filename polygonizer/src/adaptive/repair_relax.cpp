@@ -201,6 +201,7 @@ void flip_stretched(RepairContext& ctx) {
 std::vector<char> mark_stretched(const RepairContext& ctx, const std::vector<char>* moved_before) {
   std::vector<char> mark(ctx.mesh_.positions.size(), 0);
   for (int t = 0; t < ctx.tri_count(); ++t) {
+    ctx.poll(static_cast<std::size_t>(t));
     if (!ctx.alive_[t] || !(ctx.tri_ratio(ctx.mesh_.triangles[t]) > kRelaxRatio)) continue;
     const Tri& x = ctx.mesh_.triangles[t];
     for (int v : x) mark[v] = 1;
@@ -362,8 +363,12 @@ bool apply_moves(RepairContext& ctx, const RelaxMoves& moves, const std::vector<
     for (std::size_t i = 0; i < moving.size();) {
       ctx.poll();
       turns.clear();
-      for (const std::size_t stop = std::min(moving.size(), i + chunk); i < stop; ++i)
+      // Polled within the chunk too: 4096 judgings, each measuring two stars (and, with a
+      // tolerance, evaluating the field), ran 0.1-0.14 s at 2*10^6 triangles on a loaded machine.
+      for (const std::size_t stop = std::min(moving.size(), i + chunk); i < stop; ++i) {
+        ctx.poll(i);
         if (const std::optional<Turn> turn = judge(i, false)) turns.push_back(*turn);
+      }
       const std::size_t refused = intersecting_turn(ctx, turns, scratch);
       for (std::size_t k = turns.size(); k-- > refused;) {
         ctx.mesh_.positions[turns[k].v] = turns[k].from;

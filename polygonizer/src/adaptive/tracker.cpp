@@ -6,6 +6,7 @@
 #include <cdp/core/crease.h>
 #include <cdp/core/errors.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -51,6 +52,7 @@ Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
       front_hash_(settings.hash_cell), vertex_hash_(settings.hash_cell, Crowding::split), finer_zones_(settings.finer_zones) {
   front_hash_.set_cancel(s_.cancel);
   vertex_hash_.set_cancel(s_.cancel);
+  fs_.cancel = s_.cancel;
 }
 
 void Tracker::release_in_background() noexcept {
@@ -292,6 +294,7 @@ void Tracker::crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns,
 }
 
 void Tracker::emit_triangle(int a, int b, int c) {
+  detail::grow_apart(s_.cancel, "adaptive", 1, mesh_.triangles);
   mesh_.triangles.push_back({a, b, c});
   const Vec3& pa = mesh_.positions[a];
   area_ += 0.5 * (mesh_.positions[b] - pa).cross(mesh_.positions[c] - pa).norm();
@@ -315,7 +318,9 @@ void Tracker::emit_triangle(int a, int b, int c) {
 
 void Tracker::link(int a, int b) {
   fs_.link(a, b);
-  front_edges_.emplace((mesh_.positions[fs_.nodes[a].vertex] - mesh_.positions[fs_.nodes[b].vertex]).norm(), a, b);
+  detail::grow_apart(s_.cancel, "adaptive", 1, front_edges_);
+  front_edges_.emplace_back((mesh_.positions[fs_.nodes[a].vertex] - mesh_.positions[fs_.nodes[b].vertex]).norm(), a, b);
+  std::push_heap(front_edges_.begin(), front_edges_.end());
 }
 
 double Tracker::longest_front_edge() const {
@@ -323,9 +328,10 @@ double Tracker::longest_front_edge() const {
   // pop millions of stale entries (a second at 2*10^6 triangles), so it polls the cancel token.
   std::size_t popped = 0;
   while (!front_edges_.empty()) {
-    const auto& [length, a, b] = front_edges_.top();
+    const auto& [length, a, b] = front_edges_.front();
     if (fs_.nodes[a].front >= 0 && fs_.nodes[a].next == b) return length;
-    front_edges_.pop();
+    std::pop_heap(front_edges_.begin(), front_edges_.end());
+    front_edges_.pop_back();
     if (++popped % kStalePollEvery == 0) s_.cancel.check("adaptive");
   }
   return 0;
