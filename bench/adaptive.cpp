@@ -198,6 +198,43 @@ BENCHMARK(BM_AdaptivePaperVariant)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 
+// Speed per core: the torus of experiments/fields/torus.json on one thread, meshed at factor 40
+// by the adaptive method (the default, then Variant::Paper) and by marching cubes at cell 0.004
+// (about seven times the triangles), the three in turn in every iteration so that their ratios
+// come from the same moments of a shared machine. Counters: the default's triangles per second
+// over marching cubes' (aim: at least 1), the default's time over the paper variant's (aim: at
+// most 1.2), and each one's microseconds a triangle. Manual time: the default's. About 9 s an
+// iteration, so not in bench-short.
+void BM_SpeedPerCoreSlow(benchmark::State& state) {
+  static const std::unique_ptr<Field> torus = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/torus.json");
+  AdaptiveOptions improved;
+  improved.factor = 40;
+  improved.threads = 1;
+  AdaptiveOptions paper = improved;
+  paper.variant = Variant::Paper;
+  MarchingOptions mc;
+  mc.cell_size = 0.004;
+  mc.threads = 1;
+  std::array<double, 3> seconds{}, triangles{};
+  for (auto _ : state) {
+    for (int k = 0; k < 3; ++k) {
+      const PolygonizeResult r =
+          k == 2 ? marching_cubes(*torus, mc) : polygonize_adaptive(*torus, k == 0 ? improved : paper);
+      seconds[k] += r.stats.seconds;
+      triangles[k] += static_cast<double>(r.stats.triangles);
+      if (k == 0) state.SetIterationTime(r.stats.seconds);
+    }
+  }
+  const auto us_per_triangle = [&](int k) { return 1e6 * seconds[k] / triangles[k]; };
+  state.counters["default_us_per_triangle"] = us_per_triangle(0);
+  state.counters["paper_us_per_triangle"] = us_per_triangle(1);
+  state.counters["mc_us_per_triangle"] = us_per_triangle(2);
+  state.counters["triangle_rate_vs_mc"] = us_per_triangle(2) / us_per_triangle(0);
+  state.counters["time_vs_paper"] = seconds[0] / seconds[1];
+  state.SetLabel("torus/adaptive_vs_mc/factor40_cell0.004/threads1");
+}
+BENCHMARK(BM_SpeedPerCoreSlow)->UseManualTime()->Unit(benchmark::kMillisecond);
+
 // The adaptive polygonizer's own time outside the field (issue 14's "bookkeeping"): the run's
 // time less its evaluation counts priced by measure_field_cost at the mesh's vertices (single
 // calls, the fastest of three passes). The manual time is that remainder, so the dashboard
