@@ -146,11 +146,16 @@ class RepairContext {
       // 2*10^6 triangles.
       hashed_lo_.reserve(mesh_.triangles.size());
       hashed_hi_.reserve(mesh_.triangles.size());
+      const double slack = kHashSlack * hash_.cell_size();
       for (int t = 0; t < static_cast<int>(mesh_.triangles.size()); ++t) {
         poll(static_cast<std::size_t>(t));
-        for (int v : mesh_.triangles[t]) vt_[v].push_back(t);
-        hash_box(t);
+        const Tri& x = mesh_.triangles[t];
+        for (int v : x) vt_[v].push_back(t);
+        // hash_cover's box, the hash filled at once below.
+        hashed_lo_.push_back(P(x[0]).cwiseMin(P(x[1])).cwiseMin(P(x[2])).array() - slack);
+        hashed_hi_.push_back(P(x[0]).cwiseMax(P(x[1])).cwiseMax(P(x[2])).array() + slack);
       }
+      hash_.insert_boxes(hashed_lo_, hashed_hi_);
     } catch (...) {
       release_if_cancelled();  // a constructor that throws runs no destructor
       throw;

@@ -14,6 +14,7 @@
 #include <array>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <numbers>
 #include <sstream>
 #include <thread>
@@ -99,11 +100,22 @@ SmallestCorner smallest_corner(const Mesh& mesh, const std::array<int, 3>& t) {
 
 }  // namespace
 
-// One atan2 per triangle.
+// A triangle's smallest corner is at most 60 degrees, so its cosine is positive and its angle
+// grows with the tangent |u x v| / u . v: the arctangent is taken only for the triangles whose
+// tangent is within kTieShare of the smallest so far (and those with no such tangent: zero area,
+// non-finite). A triangle left out is over that share larger, far beyond the rounding of the
+// quotient and of atan2, so the result is the smallest atan2 of all triangles, as when each was
+// taken (an atan2 a triangle was 2.3% of a torus run at factor 40 on one thread, perf).
 double min_angle_degrees(const Mesh& mesh) {
-  double best = 180;
+  constexpr double kTieShare = 1e-9;
+  double best = 180, best_tangent = std::numeric_limits<double>::infinity();
   for (const auto& t : mesh.triangles) {
     const SmallestCorner c = smallest_corner(mesh, t);
+    if (c.sine > 0 && c.cosine > 0) {
+      const double tangent = c.sine / c.cosine;
+      if (tangent > best_tangent * (1 + kTieShare)) continue;
+      best_tangent = std::min(best_tangent, tangent);
+    }
     best = std::min(best, std::atan2(c.sine, c.cosine) * 180 / std::numbers::pi);
   }
   return best;

@@ -6,6 +6,10 @@
 #include <cdp/core/cancel.h>
 #include <cdp/core/errors.h>
 
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
 #include <string>
 
 namespace cdp::adaptive {
@@ -35,6 +39,35 @@ TEST(AdaptiveStages, TheChecksRefuseAnOpenMeshAndCountTheQualityBoundsMissed) {
   sliver.positions[3] = {0.5, 0.5, 0.01};  // the faces at vertex 3 nearly flat: angles near 0
   EXPECT_EQ(missed_bounds(sliver, 0), 3);
   EXPECT_NEAR(min_angle_degrees(tetra), 45, 1e-9);
+}
+
+TEST(AdaptiveStages, TheSmallestAngleIsThatOfEveryCornerMeasured) {
+  // Random triangles, a few of them slivers, with every corner's angle measured as the
+  // reference: min_angle_degrees takes an arctangent only for the triangles that may hold the
+  // smallest, and must find the same.
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> coordinate(-1, 1);
+  Mesh mesh;
+  for (int t = 0; t < 2000; ++t) {
+    const int first = static_cast<int>(mesh.positions.size());
+    for (int k = 0; k < 3; ++k) mesh.positions.push_back({coordinate(random), coordinate(random), coordinate(random)});
+    if (t % 97 == 0)  // a sliver: the third corner near the middle of the first edge
+      mesh.positions.back() = 0.5 * (mesh.positions[first] + mesh.positions[first + 1]) + Vec3::Constant(1e-4 * t);
+    mesh.triangles.push_back({first, first + 1, first + 2});
+  }
+  double reference = 180;
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 u = mesh.positions[t[(k + 1) % 3]] - mesh.positions[t[k]];
+      const Vec3 v = mesh.positions[t[(k + 2) % 3]] - mesh.positions[t[k]];
+      reference = std::min(reference, std::atan2(u.cross(v).norm(), u.dot(v)) * 180 / std::numbers::pi);
+    }
+  EXPECT_LT(reference, 1);
+  EXPECT_NEAR(min_angle_degrees(mesh), reference, 1e-9);
+  // A zero-area triangle anywhere: 0.
+  mesh.positions.push_back(mesh.positions[0]);
+  mesh.triangles.push_back({0, 1, static_cast<int>(mesh.positions.size()) - 1});
+  EXPECT_EQ(min_angle_degrees(mesh), 0);
 }
 
 }  // namespace
