@@ -46,6 +46,8 @@ struct Front {
   bool alive = false;
   int stall = 0;  // deferrals since the front last advanced
   std::vector<HeapEntry> heap;  // std::push_heap's order
+  // Frees the heap of a front that is done (`heap = {}` would keep its capacity).
+  void release_heap() { std::vector<HeapEntry>().swap(heap); }
 };
 
 struct FrontSet {

@@ -35,7 +35,7 @@ int Tracker::merge_fronts(int p, int q) {
   fs_.fronts[keep].size += fs_.fronts[gone].size;
   fs_.fronts[gone].size = 0;
   fs_.fronts[gone].alive = false;
-  fs_.fronts[gone].heap = {};
+  fs_.fronts[gone].release_heap();
   refresh(p);
   refresh(q);
   refresh(p2);

@@ -27,6 +27,7 @@
 #include <cdp/core/triangle_intersection.h>
 
 #include <algorithm>
+#include <bit>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -146,6 +147,7 @@ class RepairContext {
       // 2*10^6 triangles.
       hashed_lo_.reserve(mesh_.triangles.size());
       hashed_hi_.reserve(mesh_.triangles.size());
+      reserve_stars();
       const double slack = kHashSlack * hash_.cell_size();
       for (int t = 0; t < static_cast<int>(mesh_.triangles.size()); ++t) {
         poll(static_cast<std::size_t>(t));
@@ -163,6 +165,21 @@ class RepairContext {
     stamp_.assign(mesh_.triangles.size(), 0);
   }
   ~RepairContext() { release_if_cancelled(); }
+
+  // Each star's array allocated once, at the capacity its push_backs would reach (the next power
+  // of two of the vertex's triangles): pushed one at a time, a star of six was allocated four
+  // times, 4*10^6 allocations at 2*10^6 triangles.
+  void reserve_stars() {
+    std::vector<unsigned> valence = polled_vector<unsigned>(vt_.size(), 0);
+    for (std::size_t t = 0; t < mesh_.triangles.size(); ++t) {
+      poll(t);
+      for (int v : mesh_.triangles[t]) ++valence[static_cast<std::size_t>(v)];
+    }
+    for (std::size_t v = 0; v < vt_.size(); ++v) {
+      poll(v);
+      if (valence[v] > 0) vt_[v].reserve(std::bit_ceil(valence[v]));
+    }
+  }
   RepairContext(const RepairContext&) = delete;
   RepairContext& operator=(const RepairContext&) = delete;
 

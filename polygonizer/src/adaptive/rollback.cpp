@@ -453,7 +453,7 @@ void Tracker::cut_hole(const std::vector<int>& absorbed, const std::vector<char>
   for (const int g : absorbed) {
     Front& fr = fs_.fronts[g];
     fr.alive = false;
-    fr.heap = {};
+    fr.release_heap();
   }
   for (std::size_t n = 0; n < fs_.nodes.size(); ++n) {
     const FrontNode& fn = fs_.nodes[n];

@@ -9,6 +9,7 @@
 #include <cdp/core/cancel.h>
 #include <cdp/core/field.h>
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -134,49 +135,47 @@ class SpatialHash {
 
   // insert_box(id, lo[id], hi[id]) for every id of the two arrays, in order, with the same
   // cells made in the same order, but each cell's array sized once: one insert_box at a time, the
-  // arrays of a mesh's hash grew a few times each, and the repair's hash of every triangle was a
-  // tenth of its run (the torus at factor 40, perf). For a hash of boxes (Crowding::keep).
-  // Polls the cancel token (set_cancel), and grows its list of cells polled (polled_growth.h).
+  // arrays of a mesh's hash grew a few times each (to the capacity given here at once), and the
+  // repair's hash of every triangle was a tenth of its run (the torus at factor 40, perf). For a hash of boxes (Crowding::keep).
+  // Polls the cancel token (set_cancel).
   void insert_boxes(const std::vector<Vec3>& lo, const std::vector<Vec3>& hi) {
-    // The cell of each entry of this level, in order; kWide marks a box for the coarser level.
-    constexpr int kWide = -1;
-    std::vector<int> cells, entries;  // entries: per box, its count of cells (0 for kWide)
-    entries.reserve(lo.size());
-    std::vector<std::uint32_t> added;  // by cell: entries it gets here
     const auto poll = [this](std::size_t i) {
       if (cancel_ && i % kGrowPollEvery == 0) cancel_->check("adaptive");
     };
+    const auto wide = [](const Cell& a, const Cell& b) {
+      return b.i - a.i > kMaxBoxSpan || b.j - a.j > kMaxBoxSpan || b.k - a.k > kMaxBoxSpan;
+    };
+    // Each box's cells, made in insert_box's order and counted; then the arrays sized; then the
+    // ids stored, the cells found again (a lookup costs less than keeping every entry's cell).
+    std::vector<std::uint32_t> added;  // by cell: the entries it gets here
     for (std::size_t id = 0; id < lo.size(); ++id) {
       poll(id);
       const Cell a = cell_of(lo[id]), b = cell_of(hi[id]);
-      if (b.i - a.i > kMaxBoxSpan || b.j - a.j > kMaxBoxSpan || b.k - a.k > kMaxBoxSpan) {
-        entries.push_back(kWide);
-        continue;
-      }
-      int n = 0;
+      if (wide(a, b)) continue;
       for (std::int64_t k = a.k; k <= b.k; ++k)
         for (std::int64_t j = a.j; j <= b.j; ++j)
-          for (std::int64_t i = a.i; i <= b.i; ++i, ++n) {
-            const int c = cell(key({i, j, k}));
-            if (static_cast<std::size_t>(c) >= added.size()) added.resize(ids_.size(), 0);
-            ++added[static_cast<std::size_t>(c)];
-            if (cancel_) detail::grow_apart(*cancel_, "adaptive", 1, cells);
-            cells.push_back(c);
+          for (std::int64_t i = a.i; i <= b.i; ++i) {
+            const auto c = static_cast<std::size_t>(cell(key({i, j, k})));
+            if (c >= added.size()) added.resize(ids_.size(), 0);
+            ++added[c];
           }
-      entries.push_back(n);
     }
     for (std::size_t c = 0; c < added.size(); ++c) {
       poll(c);
-      if (added[c]) ids_[c].reserve(ids_[c].size() + added[c]);
+      if (added[c]) ids_[c].reserve(std::bit_ceil(ids_[c].size() + added[c]));  // as push_back would
     }
-    std::size_t next = 0;
+    std::vector<std::uint32_t>().swap(added);
     for (std::size_t id = 0; id < lo.size(); ++id) {
       poll(id);
-      if (entries[id] == kWide) {
+      const Cell a = cell_of(lo[id]), b = cell_of(hi[id]);
+      if (wide(a, b)) {
         insert_box(static_cast<int>(id), lo[id], hi[id]);
         continue;
       }
-      for (int e = 0; e < entries[id]; ++e) ids_[static_cast<std::size_t>(cells[next++])].push_back(static_cast<int>(id));
+      for (std::int64_t k = a.k; k <= b.k; ++k)
+        for (std::int64_t j = a.j; j <= b.j; ++j)
+          for (std::int64_t i = a.i; i <= b.i; ++i)
+            ids_[static_cast<std::size_t>(find(key({i, j, k})))].push_back(static_cast<int>(id));
     }
   }
 

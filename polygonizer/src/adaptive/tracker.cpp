@@ -534,7 +534,7 @@ void Tracker::run_fronts() {
         remove_node(b);
         remove_node(c);
         fr.alive = false;
-        fr.heap = {};
+        fr.release_heap();
         break;
       }
       step(f);
