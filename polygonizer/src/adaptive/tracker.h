@@ -316,6 +316,8 @@ class Tracker {
   void link(int a, int b);
   // The longest edge on any front now (edges that left the fronts are dropped lazily).
   double longest_front_edge() const;
+  // Drops the stale entries of front_edges_ (see there).
+  void drop_stale_front_edges();
   // Whether the front through node is a slit: narrower than min_edge, on one sheet (see step).
   bool is_slit(int node) const;
   void remove_node(int node);
@@ -433,6 +435,10 @@ class Tracker {
   // (polled_growth.h): it holds every edge a front ever had, over 10^7 at 2*10^6 triangles, and
   // one doubling of it was a tenth of a second.
   mutable std::vector<std::tuple<double, int, int>> front_edges_;
+  // Its stale entries are dropped when it reaches this size, which is then set to twice what is
+  // left (drop_stale_front_edges).
+  std::size_t drop_stale_at_ = kMinStaleDrop;
+  static constexpr std::size_t kMinStaleDrop = std::size_t{1} << 16;
   FrontSet fs_;
   SpatialHash front_hash_;
   // Splits crowded cells (Crowding::split), which changes the order of its points: every query
