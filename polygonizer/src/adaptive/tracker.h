@@ -314,7 +314,8 @@ class Tracker {
   int insert_node(int vertex, int front);
   // fs_.link, and the new front edge a -> b into the record of front edge lengths.
   void link(int a, int b);
-  // The longest edge on any front now (edges that left the fronts are dropped lazily).
+  // The longest edge on any front now (edges that left the fronts are dropped lazily, and in
+  // bulk by drop_stale_front_edges).
   double longest_front_edge() const;
   // Drops the stale entries of front_edges_ (see there).
   void drop_stale_front_edges();
@@ -430,10 +431,11 @@ class Tracker {
   std::vector<double> target_, mac_, shape_index_;
   std::vector<CriticalStart> critical_starts_;
   // Front edges by length (length, start node, end node), a max-heap with lazy deletion: an
-  // entry is stale once its start node has left the fronts or links elsewhere. Kept with
+  // entry is stale once its start node has left the fronts or links elsewhere, and the stale
+  // entries are dropped each time the heap has doubled (drop_stale_front_edges). Kept with
   // std::push_heap and std::pop_heap (a priority_queue's order) so that it grows polled
-  // (polled_growth.h): it holds every edge a front ever had, over 10^7 at 2*10^6 triangles, and
-  // one doubling of it was a tenth of a second.
+  // (polled_growth.h): with every edge a front ever had, one doubling was a tenth of a second at
+  // 2*10^6 triangles.
   mutable std::vector<std::tuple<double, int, int>> front_edges_;
   // Its stale entries are dropped when it reaches this size, which is then set to twice what is
   // left (drop_stale_front_edges).
