@@ -27,8 +27,8 @@
 #include <cdp/core/triangle_intersection.h>
 
 #include <algorithm>
-#include <bit>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>

@@ -120,7 +120,7 @@ class SpatialHash {
   // radius 0.003, in a hash sized by the tube's edges, took 330 s of a run to insert.
   void insert_box(int id, const Vec3& lo, const Vec3& hi) {
     const Cell a = cell_of(lo), b = cell_of(hi);
-    if (b.i - a.i > kMaxBoxSpan || b.j - a.j > kMaxBoxSpan || b.k - a.k > kMaxBoxSpan) {
+    if (too_wide(a, b)) {
       if (!coarser_) {
         coarser_ = std::make_unique<SpatialHash>(h_ * kLevelRatio);
         coarser_->counting_ = counting_;
@@ -128,54 +128,45 @@ class SpatialHash {
       coarser_->insert_box(id, lo, hi);
       return;
     }
-    for (std::int64_t k = a.k; k <= b.k; ++k)
-      for (std::int64_t j = a.j; j <= b.j; ++j)
-        for (std::int64_t i = a.i; i <= b.i; ++i) ids_[static_cast<std::size_t>(cell(key({i, j, k})))].push_back(id);
+    for_each_key(a, b, [&](std::uint64_t k) { ids_[static_cast<std::size_t>(cell(k))].push_back(id); });
   }
 
-  // insert_box(id, lo[id], hi[id]) for every id of the two arrays, in order, with the same
-  // cells made in the same order, but each cell's array sized once: one insert_box at a time, the
-  // arrays of a mesh's hash grew a few times each (to the capacity given here at once), and the
-  // repair's hash of every triangle was a tenth of its run (the torus at factor 40, perf). For a hash of boxes (Crowding::keep).
-  // Polls the cancel token (set_cancel).
+  // insert_box(id, lo[id], hi[id]) for every id of the two arrays, in order: the same cells made
+  // in the same order, but each cell's array sized once, at the capacity its push_backs would
+  // reach. One insert_box at a time, the arrays grew a few times each, and the repair's hash of
+  // every triangle was a tenth of its run (the torus at factor 40, perf). For a hash of boxes
+  // (Crowding::keep). Polls the cancel token (set_cancel).
   void insert_boxes(const std::vector<Vec3>& lo, const std::vector<Vec3>& hi) {
     const auto poll = [this](std::size_t i) {
       if (cancel_ && i % kGrowPollEvery == 0) cancel_->check("adaptive");
     };
-    const auto wide = [](const Cell& a, const Cell& b) {
-      return b.i - a.i > kMaxBoxSpan || b.j - a.j > kMaxBoxSpan || b.k - a.k > kMaxBoxSpan;
-    };
-    // Each box's cells, made in insert_box's order and counted; then the arrays sized; then the
-    // ids stored, the cells found again (a lookup costs less than keeping every entry's cell).
+    // Each box's cells made in insert_box's order and counted; the arrays sized; the ids stored,
+    // the cells found again (a lookup costs less than keeping every entry's cell).
     std::vector<std::uint32_t> added;  // by cell: the entries it gets here
     for (std::size_t id = 0; id < lo.size(); ++id) {
       poll(id);
       const Cell a = cell_of(lo[id]), b = cell_of(hi[id]);
-      if (wide(a, b)) continue;
-      for (std::int64_t k = a.k; k <= b.k; ++k)
-        for (std::int64_t j = a.j; j <= b.j; ++j)
-          for (std::int64_t i = a.i; i <= b.i; ++i) {
-            const auto c = static_cast<std::size_t>(cell(key({i, j, k})));
-            if (c >= added.size()) added.resize(ids_.size(), 0);
-            ++added[c];
-          }
+      if (too_wide(a, b)) continue;
+      for_each_key(a, b, [&](std::uint64_t k) {
+        const auto c = static_cast<std::size_t>(cell(k));
+        if (c >= added.size()) added.resize(ids_.size(), 0);
+        ++added[c];
+      });
     }
     for (std::size_t c = 0; c < added.size(); ++c) {
       poll(c);
-      if (added[c]) ids_[c].reserve(std::bit_ceil(ids_[c].size() + added[c]));  // as push_back would
+      if (added[c]) ids_[c].reserve(std::bit_ceil(ids_[c].size() + added[c]));
     }
     std::vector<std::uint32_t>().swap(added);
     for (std::size_t id = 0; id < lo.size(); ++id) {
       poll(id);
       const Cell a = cell_of(lo[id]), b = cell_of(hi[id]);
-      if (wide(a, b)) {
+      if (too_wide(a, b))
         insert_box(static_cast<int>(id), lo[id], hi[id]);
-        continue;
-      }
-      for (std::int64_t k = a.k; k <= b.k; ++k)
-        for (std::int64_t j = a.j; j <= b.j; ++j)
-          for (std::int64_t i = a.i; i <= b.i; ++i)
-            ids_[static_cast<std::size_t>(find(key({i, j, k})))].push_back(static_cast<int>(id));
+      else
+        for_each_key(a, b, [&](std::uint64_t k) {
+          ids_[static_cast<std::size_t>(find(k))].push_back(static_cast<int>(id));
+        });
     }
   }
 
@@ -348,6 +339,17 @@ class SpatialHash {
       if (slot.cell < 0) return -1;
       if (slot.key == k) return slot.cell;
     }
+  }
+  // A box from cell a to cell b goes to the coarser level (insert_box).
+  static bool too_wide(const Cell& a, const Cell& b) {
+    return b.i - a.i > kMaxBoxSpan || b.j - a.j > kMaxBoxSpan || b.k - a.k > kMaxBoxSpan;
+  }
+  // fn(key) for the cells from a to b, x fastest.
+  template <class Fn>
+  static void for_each_key(const Cell& a, const Cell& b, Fn&& fn) {
+    for (std::int64_t k = a.k; k <= b.k; ++k)
+      for (std::int64_t j = a.j; j <= b.j; ++j)
+        for (std::int64_t i = a.i; i <= b.i; ++i) fn(key({i, j, k}));
   }
   // The index of the cell with key k, made empty if there is none.
   int cell(std::uint64_t k) {
