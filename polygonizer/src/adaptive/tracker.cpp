@@ -326,11 +326,11 @@ void Tracker::link(int a, int b) {
 
 void Tracker::drop_stale_front_edges() {
   // Lazy deletion alone keeps every edge a front ever had: millions of entries at 2*10^6
-  // triangles (28 MiB of the peak), and longest_front_edge popped them a million at a time. Each time the heap has
-  // doubled, the entries that are stale now (they never become live again: a node's next
-  // changes only through link, which pushes the new edge, and a node that left the fronts does
-  // not come back) are dropped and the heap made anew: amortized constant work a link. Only the
-  // longest live length is ever read, and it is the same.
+  // triangles (28 MiB of the peak), which longest_front_edge popped a million at a time. Each
+  // time the heap has doubled, the entries that are stale now are dropped (they never become
+  // live again: a node's next changes only through link, which pushes the new edge, and a node
+  // that left the fronts does not come back) and the heap made anew: amortized constant work a
+  // link. Only the longest live length is ever read, and it is the same.
   std::size_t kept = 0;
   for (std::size_t i = 0; i < front_edges_.size(); ++i) {
     if (i % kStalePollEvery == 0) s_.cancel.check("adaptive");
@@ -343,8 +343,9 @@ void Tracker::drop_stale_front_edges() {
 }
 
 double Tracker::longest_front_edge() const {
-  // The heap keeps every edge a front ever had: where the last long edges close, one call may
-  // pop millions of stale entries (a second at 2*10^6 triangles), so it polls the cancel token.
+  // Where the last long edges close, one call may pop up to the stale half of the heap
+  // (drop_stale_front_edges; before that, millions of entries and a second at 2*10^6
+  // triangles), so it polls the cancel token.
   std::size_t popped = 0;
   while (!front_edges_.empty()) {
     const auto& [length, a, b] = front_edges_.front();
