@@ -343,9 +343,9 @@ void Tracker::drop_stale_front_edges() {
 }
 
 double Tracker::longest_front_edge() const {
-  // Where the last long edges close, one call may pop up to the stale half of the heap
-  // (drop_stale_front_edges; before that, millions of entries and a second at 2*10^6
-  // triangles), so it polls the cancel token.
+  // Where the last long edges close, one call may pop many stale entries (at most the heap,
+  // which drop_stale_front_edges keeps under twice what its last pass left, or 2^16; before
+  // it, millions of entries and a second at 2*10^6 triangles), so it polls the cancel token.
   std::size_t popped = 0;
   while (!front_edges_.empty()) {
     const auto& [length, a, b] = front_edges_.front();
