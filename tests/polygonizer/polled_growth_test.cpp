@@ -1,6 +1,6 @@
-// polled_growth.h: arrays that fill up together are grown one by one (grow_apart), each as
-// push_back would grow it, with a cancel poll after each one moved; big arrays are filled
-// (polled_vector) and arrays of buffers freed (polled_clear) a block at a time between polls.
+// polled_growth.h: arrays are grown (grow_apart, each as push_back would grow it), filled
+// (polled_vector) and, as arrays of buffers, freed (polled_clear) a block at a time with a
+// cancel poll before each block.
 #include "src/polled_growth.h"
 
 #include <gtest/gtest.h>

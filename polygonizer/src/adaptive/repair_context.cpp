@@ -183,8 +183,7 @@ void RepairContext::hash_cover(int t, const Vec3& lo, const Vec3& hi) {
   if (static_cast<std::size_t>(t) < hashed_lo_.size() && (lo.array() >= hashed_lo_[t].array()).all() &&
       (hi.array() <= hashed_hi_[t].array()).all())
     return;
-  const double slack = kHashSlack * hash_.cell_size();
-  const Vec3 glo = lo.array() - slack, ghi = hi.array() + slack;
+  const auto [glo, ghi] = grown_box(lo, hi);
   if (hashed_lo_.size() <= static_cast<std::size_t>(t)) {
     detail::grow_apart(options_.cancel, "adaptive: repair", t + 1 - hashed_lo_.size(), hashed_lo_, hashed_hi_);
     hashed_lo_.resize(t + 1);

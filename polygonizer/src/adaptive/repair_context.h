@@ -148,14 +148,15 @@ class RepairContext {
       hashed_lo_.reserve(mesh_.triangles.size());
       hashed_hi_.reserve(mesh_.triangles.size());
       reserve_stars();
-      const double slack = kHashSlack * hash_.cell_size();
       for (int t = 0; t < static_cast<int>(mesh_.triangles.size()); ++t) {
         poll(static_cast<std::size_t>(t));
         const Tri& x = mesh_.triangles[t];
         for (int v : x) vt_[v].push_back(t);
-        // hash_cover's box, the hash filled at once below.
-        hashed_lo_.push_back(P(x[0]).cwiseMin(P(x[1])).cwiseMin(P(x[2])).array() - slack);
-        hashed_hi_.push_back(P(x[0]).cwiseMax(P(x[1])).cwiseMax(P(x[2])).array() + slack);
+        // hash_box's box, the hash filled at once below.
+        const auto [lo, hi] = tri_box(x);
+        const auto [glo, ghi] = grown_box(lo, hi);
+        hashed_lo_.push_back(glo);
+        hashed_hi_.push_back(ghi);
       }
       hash_.insert_boxes(hashed_lo_, hashed_hi_);
     } catch (...) {
@@ -349,8 +350,17 @@ class RepairContext {
     Vec3 lo, hi, normal;  // box; unnormalized normal (apart_by_plane)
   };
   void hash_box(int t) {
-    const Tri& x = mesh_.triangles[t];
-    hash_cover(t, P(x[0]).cwiseMin(P(x[1])).cwiseMin(P(x[2])), P(x[0]).cwiseMax(P(x[1])).cwiseMax(P(x[2])));
+    const auto [lo, hi] = tri_box(mesh_.triangles[t]);
+    hash_cover(t, lo, hi);
+  }
+  // A triangle's box, and the box hash_cover stores a box [lo, hi] with: grown by kHashSlack of
+  // a hash cell.
+  std::pair<Vec3, Vec3> tri_box(const Tri& x) const {
+    return {P(x[0]).cwiseMin(P(x[1])).cwiseMin(P(x[2])), P(x[0]).cwiseMax(P(x[1])).cwiseMax(P(x[2]))};
+  }
+  std::pair<Vec3, Vec3> grown_box(const Vec3& lo, const Vec3& hi) const {
+    const double slack = kHashSlack * hash_.cell_size();
+    return {lo.array() - slack, hi.array() + slack};
   }
   // Makes the box triangle t is stored with in the hash hold [lo, hi] (its box, or one over
   // several positions of its corners, see intersecting_turn).
