@@ -60,7 +60,8 @@ struct RunRow {
 constexpr std::array<RunRow, 4> kRuns{{
     {RunKind::AsGiven, "as_given"},
     // min_edge lowered to kBendEdgeShare of the tightest bend the first run met, where it failed
-    // at a bend tighter than min_edge (lowered_min_edge); stats "min_edge_lowered".
+    // at a bend tighter than min_edge (adaptive::lowered_min_edge, resolve_settings.h); stats
+    // "min_edge_lowered".
     {RunKind::LoweredMinEdge, "lowered_min_edge"},
     // Tolerance mode: every edge turning the normal by at most kTurnLimit from the start, at the
     // lowered min_edge where there is one; stats "turn_limited".
@@ -69,29 +70,6 @@ constexpr std::array<RunRow, 4> kRuns{{
     // look-ahead, the mesh that misses fewer kept (may_rerun_for_quality); stats "quality_rerun".
     {RunKind::LookAhead, "look_ahead"},
 }};
-
-// A run that fails where the surface bends more tightly than the default min_edge lets edges
-// follow is meshed once more with min_edge at kBendEdgeShare of the tightest radius of curvature
-// its runs met: the perturbed Barth sextic clipped by a ball (its necks bend with a radius of
-// 0.0083, the default min_edge is 0.0145) fails at factors 1-3 and meshes with min_edge 0.0021,
-// a quarter of that radius, in 0.7-3.3 s. Not below kLowestMinEdge of the diagonal, a tenth of
-// the default; a bend down to kLowestBendShare of that edge is meshed with it (a crowd of 200
-// Wyvill blobs, two of them joined by a neck 0.006 wide that bends with a radius of 0.0012,
-// meshes with min_edge 0.0018 at factors 1 and 2 and tolerance 1e-2, and failed at all three);
-// a tighter radius is a crease or a singular point, not a bend to follow. Only where the caller
-// left min_edge, max_triangles and max_steps to their defaults (a bound the caller set is
-// kept), and not in paper mode.
-constexpr double kBendEdgeShare = 0.25;
-constexpr double kLowestMinEdge = 2e-4;
-constexpr double kLowestBendShare = 0.5;
-
-std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions& o, const Bend& bend) {
-  if (!adaptive::remeshing_allowed(o) || o.min_edge > 0) return std::nullopt;
-  const adaptive::Settings s = adaptive::resolve_settings(field, o);
-  const double lowest = kLowestMinEdge * s.diagonal;
-  if (!(bend.first < s.sizing.min_edge) || !(bend.first >= kLowestBendShare * lowest)) return std::nullopt;
-  return std::max(kBendEdgeShare * bend.first, lowest);
-}
 
 // Tolerance mode asks for chords up to the diameter of a bend tighter than the tolerance
 // (chord_for_deviation), which can step over the necks of a surface like the Barth ball. Where
@@ -154,7 +132,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     if (row.kind == RunKind::LoweredMinEdge) lowered_error = e.what();
     if (row.kind != RunKind::AsGiven) return false;
     if (adaptive::kink_in_black_box(field, bend)) return true;
-    lowered = lowered_min_edge(field, options, bend);
+    lowered = adaptive::lowered_min_edge(field, options, bend.first);
     if (!lowered && !may_limit_turn) return true;
     first_error = FirstError{limit, e.what()};
     return false;
@@ -163,7 +141,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     AdaptiveOptions again = options;
     adaptive::RunRequest request;
     switch (row.kind) {
-      case RunKind::AsGiven: break;
+      case RunKind::AsGiven:
+        request.lowered_min_edge_follows = true;
+        break;
       case RunKind::LoweredMinEdge:
         if (kept || !lowered) continue;
         again.min_edge = *lowered;

@@ -5,6 +5,8 @@
 
 #include <cdp/core/adaptive_polygonizer.h>
 
+#include <optional>
+
 namespace cdp::adaptive {
 
 // The options with every default resolved: the sizing (the tolerance's share, the edge bounds
@@ -24,5 +26,13 @@ double requested_tolerance(const AdaptiveOptions& options, const Settings& setti
 // by the caller's own bounds (max_triangles, max_steps, max_search_visits: a run made again with
 // shorter edges would pass them sooner), nor in paper mode (the algorithm as printed, whatever it gives).
 bool remeshing_allowed(const AdaptiveOptions& options);
+
+// The min_edge a run that failed is meshed again with (kRuns' lowered_min_edge,
+// adaptive_polygonizer.cpp) where the surface bends more tightly than the default min_edge lets
+// edges follow: kBendEdgeShare of the tightest radius of curvature the run met, not below
+// kLowestMinEdge of the diagonal. None where the caller set min_edge (a bound the caller set is
+// kept), where remeshing_allowed says no, or where the radius is not under min_edge or is below
+// kLowestBendShare of that lowest edge (a crease or a singular point, not a bend to follow).
+std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions& options, double tightest_radius);
 
 }  // namespace cdp::adaptive

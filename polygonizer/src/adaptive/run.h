@@ -18,6 +18,10 @@ struct RunRequest {
   // Positive: Sizing::max_turn from the start, the crease-aware patches included (the last run
   // in tolerance mode); stats "turn_limited".
   double max_turn = 0;
+  // The run as given, which polygonize_adaptive meshes again with a lowered min_edge where it
+  // fails at a bend tighter than min_edge (kRuns, lowered_min_edge): the recoveries, which keep
+  // min_edge, are skipped where what failed needs shorter edges (Run::needs_shorter_edges).
+  bool lowered_min_edge_follows = false;
 };
 
 // Meshes the surface with `options` as `request` changes them, the recoveries included.

@@ -41,6 +41,10 @@ class Run {
   std::size_t repair_and_check();
   // Adds a ball of finer edges around each neck the last attempt stepped over.
   void zone_missed_necks();
+  // Whether the attempt failed where no recovery can mend it and a run with a lowered min_edge
+  // follows (RunRequest::lowered_min_edge_follows): every neck it stepped over is narrower than
+  // min_edge.
+  bool needs_shorter_edges();
   // Tries one recovery of kRecoveries; true when it meshed.
   bool recover(const Recovery& r, bool after_limit);
   // The stats of the run's mesh (run_report.cpp).
