@@ -157,22 +157,35 @@ void Run::zone_missed_necks() {
         {m.point, 0.5 * m.width + kNeckZoneEdges * m.edge, std::max(resolved.sizing.min_edge, 0.5 * m.width)});
 }
 
-// A neck narrower than min_edge cannot be meshed with edges at least min_edge long (a triangle
-// inscribed in its waist has edges shorter than its width), and every recovery keeps min_edge
-// (zone_missed_necks' balls too): the crowd of 200 blobs at factor 3 stepped over the same neck,
-// 0.0058 wide with min_edge 0.018, in its first attempt and its eight recoveries (16 s) before
-// the run with min_edge lowered meshed it (4 s). None of the runs of the test suite or the
-// topology sweep meshed in a recovery after such an attempt.
+namespace {
+
+// A neck less than kUnmeshableNeck times min_edge wide cannot be meshed with edges at least
+// min_edge long: its waist, about pi times its width around, would hold fewer than the three
+// edges a tube needs. (A neck 0.96 times min_edge wide was meshed, its edges shorter than
+// min_edge there: the crowd of 200 blobs at tolerance 1e-3.)
+constexpr double kUnmeshableNeck = 0.5;
+
+}  // namespace
+
+// Every recovery keeps min_edge (zone_missed_necks' balls too), so an attempt that stepped over
+// a neck too narrow for it dooms the rest: the crowd of 200 blobs at factor 3 stepped over the
+// same neck, 0.0058 wide with min_edge 0.018, in its first attempt and its eight recoveries
+// (16 s) before the run with min_edge lowered meshed it (4 s). Over the test suite, the topology
+// sweep and the experiment fields at factors 1-12 and tolerances 1e-3 and 1e-4, only the crowd
+// steps over such a neck, and none of its recoveries meshed after it had.
 bool Run::needs_shorter_edges() {
-  if (!request.lowered_min_edge_follows || necks.missed.empty()) return false;
-  for (const MissedNeck& m : necks.missed)
-    if (!(m.width < resolved.sizing.min_edge)) return false;
+  if (!request.lowered_min_edge_follows) return false;
+  const bool unmeshable = std::any_of(necks.missed.begin(), necks.missed.end(), [&](const MissedNeck& m) {
+    return m.width < kUnmeshableNeck * resolved.sizing.min_edge;
+  });
+  if (!unmeshable) return false;
   tracking.note_tightest();
-  return lowered_min_edge(ctx.field, ctx.options, tracking.tightest.first).has_value();
+  doomed = lowered_min_edge(ctx.field, ctx.options, tracking.tightest.first).has_value();
+  return doomed;
 }
 
 bool Run::recover(const Recovery& r, bool after_limit) {
-  if (after_limit && !r.after_limit) return false;
+  if (doomed || (after_limit && !r.after_limit)) return false;
   const bool may_mesh_again = remeshing_allowed(ctx.options);
   switch (r.kind) {
     case RecoveryKind::AroundNecks:
@@ -201,6 +214,7 @@ bool Run::recover(const Recovery& r, bool after_limit) {
       // edges keeps its first error).
       if (!r.strict || facing_across_solid(ctx.field, mesh(), 1).empty()) return true;
     } catch (const NoSurfaceError&) {
+      if (needs_shorter_edges()) return false;
       no_surface = true;
     } catch (const LimitExceededError&) {
       // the neighbour searches' bound: shorter edges at the fillet may not crowd it

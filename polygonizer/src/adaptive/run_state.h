@@ -41,9 +41,9 @@ class Run {
   std::size_t repair_and_check();
   // Adds a ball of finer edges around each neck the last attempt stepped over.
   void zone_missed_necks();
-  // Whether the attempt failed where no recovery can mend it and a run with a lowered min_edge
-  // follows (RunRequest::lowered_min_edge_follows): every neck it stepped over is narrower than
-  // min_edge.
+  // Whether the last attempt failed where no recovery can mend it and a run with a lowered
+  // min_edge follows (RunRequest::lowered_min_edge_follows): it stepped over a neck too narrow
+  // for edges of min_edge (kUnmeshableNeck). Sets `doomed`, which ends the recoveries.
   bool needs_shorter_edges();
   // Tries one recovery of kRecoveries; true when it meshed.
   bool recover(const Recovery& r, bool after_limit);
@@ -70,6 +70,7 @@ class Run {
   std::size_t components = 0;
   NeckSearch necks;  // of the last attempt
   bool careful = false;  // the careful recovery ran
+  bool doomed = false;   // no recovery can mend what failed (needs_shorter_edges)
   std::size_t neck_reruns = 0;
 };
 
