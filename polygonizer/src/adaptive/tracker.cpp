@@ -394,9 +394,10 @@ double Tracker::local_edge_length(int node) const {
   double delta = std::min({target_[n.vertex], target_[fs_.nodes[n.prev].vertex], target_[fs_.nodes[n.next].vertex]});
   if (!s_.look_ahead) return delta;
   const Vec3& p = mesh_.positions[n.vertex];
-  front_hash_.for_each_near(p, delta / kLookAheadGradation, [&](int q) {
+  const double gradation = s_.look_ahead_gradation;
+  front_hash_.for_each_near(p, delta / gradation, [&](int q) {
     const int w = fs_.nodes[q].vertex;
-    delta = std::min(delta, target_[w] + kLookAheadGradation * (mesh_.positions[w] - p).norm());
+    delta = std::min(delta, target_[w] + gradation * (mesh_.positions[w] - p).norm());
   });
   return delta;
 }

@@ -58,6 +58,12 @@ inline constexpr std::uint64_t kSearchVisitsPerStep = 5000;
 inline constexpr std::uint64_t kSearchWindow = 4096;
 
 // Options with every default resolved.
+// Settings::look_ahead: the edge length may grow by this share of the distance from a front
+// point's target (with edges of about the target, 1.4 times an edge's length an edge). The
+// grading's kGrowth binds first where sizes drop: with it at 1.5, 0.25 here gave the same
+// meshes on the bunny VIS-800, the Igea and bunny MPU models and Chmutov's sextic.
+inline constexpr double kLookAheadGradation = 0.4;
+
 struct Settings {
   Sizing sizing;
   TriangleCountRule rule = TriangleCountRule::Hartmann;
@@ -96,6 +102,9 @@ struct Settings {
   // outer edges met the round hole's rim, edges 0.07 apart, with edges of 0.47: 8-degree
   // triangles at factor 10).
   bool look_ahead = false;
+  // The look-ahead's share of the distance (kLookAheadGradation; the crease patches' own,
+  // kPatchLookAheadGradation in crease_patches.cpp).
+  double look_ahead_gradation = kLookAheadGradation;
   // Cell size of the spatial hashes: about a typical edge, so that a query visits a few cells
   // holding a few points each whatever the density.
   double hash_cell = 1;
@@ -138,12 +147,6 @@ inline constexpr double kSameSideCosine = 0;
 // mesh over. At factor 2 and above the torus and the bunny never turn that much. Bridges obey
 // the same bound (can_bridge).
 inline constexpr double kMaxTurnCosine = 0.2588;
-
-// Settings::look_ahead: the edge length may grow by this share of the distance from a front
-// point's target (with edges of about the target, 1.4 times an edge's length an edge). The
-// grading's kGrowth binds first where sizes drop: with it at 1.5, 0.25 here gave the same
-// meshes on the bunny VIS-800, the Igea and bunny MPU models and Chmutov's sextic.
-inline constexpr double kLookAheadGradation = 0.4;
 
 // Points in the tracker's error messages (and the crease layout's): "(x, y, z)", six decimals.
 inline std::string format_point(const Vec3& p) {
