@@ -332,6 +332,50 @@ void BM_AdaptiveThreads(benchmark::State& state) {
 }
 BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 2)->UseManualTime()->Unit(benchmark::kMillisecond);
 
+// One SDF model at factor 3, for BM_AdaptiveSdf and BM_AdaptiveSdfCrowdSlow: each iteration
+// meshes it with its creases followed (the defaults), then ignored, then a smooth sphere (an
+// expression of its own): `creases_cost_ratio` is the first time over the second (not reported
+// where the second fails, nor where `compare_ignored` is false), and
+// `per_triangle_vs_sphere` the time per triangle over the sphere's (the SDF-models issue: at
+// most 1.5 where the model is C1, and at most 2); manual time = the default run's.
+void sdf_model_costs(benchmark::State& state, const Field& field, const std::string& name, bool compare_ignored = true) {
+  const Box box{Vec3::Constant(-1.2), Vec3::Constant(1.2)};
+  const Expression sphere("sqrt(x^2+y^2+z^2)-1", {}, box);
+  AdaptiveOptions o;
+  o.factor = 3;
+  double follow = 0, ignore = 0, follow_per_triangle = 0, sphere_per_triangle = 0, triangles = 0;
+  // The run with creases ignored meshed (a Menger sponge's do not: no ratio then).
+  bool ignored = compare_ignored;
+  for (auto _ : state) {
+    o.creases = CreaseHandling::Follow;
+    const PolygonizeResult f = polygonize_adaptive(field, o);
+    o.creases = CreaseHandling::Ignore;
+    // Once the run with creases ignored has failed (the Menger sponge's, after about 4 s), it is
+    // not made again: it would fail the same way, and made at every iteration it was most of
+    // bench-short's time for this benchmark.
+    if (ignored) {
+      try {
+        ignore += polygonize_adaptive(field, o).stats.seconds;
+      } catch (const LimitExceededError&) {
+        ignored = false;
+      } catch (const NoSurfaceError&) {
+        ignored = false;
+      }
+    }
+    o.creases = CreaseHandling::Follow;
+    const PolygonizeResult s = polygonize_adaptive(sphere, o);
+    state.SetIterationTime(f.stats.seconds);
+    follow += f.stats.seconds;
+    triangles += static_cast<double>(f.stats.triangles);
+    follow_per_triangle += f.stats.seconds / static_cast<double>(f.stats.triangles);
+    sphere_per_triangle += s.stats.seconds / static_cast<double>(s.stats.triangles);
+  }
+  state.counters["triangles"] = triangles / static_cast<double>(state.iterations());
+  if (ignored) state.counters["creases_cost_ratio"] = follow / ignore;
+  state.counters["per_triangle_vs_sphere"] = follow_per_triangle / sphere_per_triangle;
+  state.SetLabel(name + "/adaptive/factor3");
+}
+
 // Models written as SDF code writes them, at factor 3: a rounded box, a smooth union of it with a
 // sphere (both C1 where their max and clamps switch: no crease), the union minus a cylinder (C1
 // seams and two sharp rims), fogleman/sdf's README model (sharp creases only), a Menger sponge of
@@ -340,11 +384,7 @@ BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 2)->UseManualTime
 // fades out into a seam), cdp.sdf's rounded block with a ball blended on and a hole through
 // both (its rounded box written as Inigo Quilez's exact distance) and fogleman/sdf's README model
 // with its holes cut by a smooth difference (k = 0.1: each face, its fillet and its hole's wall
-// one smooth region, coded differently along its boundaries). Each
-// iteration meshes the model with its creases followed (the defaults), then ignored, then a
-// smooth sphere (an expression of its own): `creases_cost_ratio` is the first time over the
-// second (not reported where the second fails) (the SDF-models issue: at most 1.5 where the model is C1), `per_triangle_vs_sphere`
-// the time per triangle over the sphere's (at most 2); manual time = the default run's.
+// one smooth region, coded differently along its boundaries); sdf_model_costs times each.
 void BM_AdaptiveSdf(benchmark::State& state) {
   static const char* kRoundedBox = "sqrt(max(abs(x)-0.6,0)^2+max(abs(y)-0.4,0)^2+max(abs(z)-0.3,0)^2)-0.15";
   const std::map<std::string, std::string> blend = {
@@ -387,41 +427,20 @@ void BM_AdaptiveSdf(benchmark::State& state) {
                                 {{"d0", "max(hypot(x,y,z)-1, max(abs(x),abs(y),abs(z))-0.75)"},
                                  {"d1", "min(hypot(y,z)-0.5, hypot(x,z)-0.5, hypot(x,y)-0.5)"},
                                  {"h", "clamp(0.5-(d1+d0)*5,0,1)"}});
-  const Expression sphere("sqrt(x^2+y^2+z^2)-1", {}, box);
-  AdaptiveOptions o;
-  o.factor = 3;
-  double follow = 0, ignore = 0, follow_per_triangle = 0, sphere_per_triangle = 0, triangles = 0;
-  bool ignored = true;  // the run with creases ignored meshed (a Menger sponge's do not: no ratio then)
-  for (auto _ : state) {
-    o.creases = CreaseHandling::Follow;
-    const PolygonizeResult f = polygonize_adaptive(field, o);
-    o.creases = CreaseHandling::Ignore;
-    // Once the run with creases ignored has failed (the Menger sponge's, after about 4 s), it is
-    // not made again: it would fail the same way, and made at every iteration it was most of
-    // bench-short's time for this benchmark.
-    if (ignored) {
-      try {
-        ignore += polygonize_adaptive(field, o).stats.seconds;
-      } catch (const LimitExceededError&) {
-        ignored = false;
-      } catch (const NoSurfaceError&) {
-        ignored = false;
-      }
-    }
-    o.creases = CreaseHandling::Follow;
-    const PolygonizeResult s = polygonize_adaptive(sphere, o);
-    state.SetIterationTime(f.stats.seconds);
-    follow += f.stats.seconds;
-    triangles += static_cast<double>(f.stats.triangles);
-    follow_per_triangle += f.stats.seconds / static_cast<double>(f.stats.triangles);
-    sphere_per_triangle += s.stats.seconds / static_cast<double>(s.stats.triangles);
-  }
-  state.counters["triangles"] = triangles / static_cast<double>(state.iterations());
-  if (ignored) state.counters["creases_cost_ratio"] = follow / ignore;
-  state.counters["per_triangle_vs_sphere"] = follow_per_triangle / sphere_per_triangle;
-  state.SetLabel(std::string(kNames[which]) + "/adaptive/factor3");
+  sdf_model_costs(state, field, kNames[which]);
 }
 BENCHMARK(BM_AdaptiveSdf)->ArgName("model")->DenseRange(0, 8)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// The crowd of 200 Wyvill blobs (tests/polygonizer/fields), two of them joined by a neck
+// narrower than min_edge: the run as given fails and the run with min_edge lowered meshes it
+// (about 155k triangles and 4 s at factor 3; not in bench-short).
+void BM_AdaptiveSdfCrowdSlow(benchmark::State& state) {
+  static const std::unique_ptr<Field> crowd =
+      load_field(std::string(CDP_SOURCE_DIR) + "/tests/polygonizer/fields/crowd_200_wyvill_blobs.json");
+  // A sum of blobs has no min, max or abs: ignoring creases would mesh it the same way again.
+  sdf_model_costs(state, *crowd, "crowd_200_blobs", false);
+}
+BENCHMARK(BM_AdaptiveSdfCrowdSlow)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // Components of very different scales: a torus tube of radius 0.003 beside a sphere of radius
 // 1.2 at factor 1, min_edge 1e-4 (the hashes sized by the tube's edges hold the sphere's
