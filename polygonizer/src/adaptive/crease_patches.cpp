@@ -30,16 +30,6 @@ constexpr double kSideProbe = 0.05;
 // Fewest edges of a crease: two for a curve between corners (so that two curves joining the
 // same two corners bound a patch of at least four vertices), three for a loop.
 constexpr std::size_t kMinOpenEdges = 2, kMinLoopEdges = 3;
-// The patches' fronts look ahead with a gentler gradation than a smooth surface's re-run
-// (kLookAheadGradation, 0.4): a patch's fronts start from its loops one after another, and the
-// last to run covers the patch up to the short edges of the loops not yet run (a sphere drilled
-// by a hole of radius 0.05: the rim's edges 0.017, the sphere's 0.33; the first front arrived
-// at the other rim with edges of 0.06-0.1 and left a 19.9-degree triangle at factor 3, 17.9 at
-// 3.2). Over ten creased SDF models at factors 1 to 6 in steps of 0.25 (210 runs), 0.3 here left
-// 2 runs meshed across their creases instead of 6, and 2 with a triangle under 10 degrees
-// instead of 9, at the same triangle count; the drilled sphere's smallest angle over them went
-// from 0.4 degrees (at its rim, factor 4.25) to 16.6.
-constexpr double kPatchLookAheadGradation = 0.3;
 
 // A piece as a field of its own: the smooth function with the piece's branches fixed. Its zero
 // set continues past the crease (where the CSG field takes another piece), so the fronts of its
@@ -702,7 +692,7 @@ bool in_patch(const Field& field, const Branch& branch, const Vec3& x, double d,
 }  // namespace
 
 CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& creases, const Settings& settings,
-                               double estimated_area) {
+                               double estimated_area, double look_ahead_gradation) {
   CreaseMesh out;
   const double diagonal = settings.diagonal;
   CreaseVertices cv;
@@ -754,7 +744,7 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
     Mesh part;
     Settings patch_settings = settings;
     patch_settings.look_ahead = true;
-    patch_settings.look_ahead_gradation = kPatchLookAheadGradation;
+    patch_settings.look_ahead_gradation = look_ahead_gradation;
     Tracker tracker(piece, patch_settings, part);
     if (estimated_area > 0) tracker.set_estimated_area(estimated_area);
     tracker.set_patch_test([&field, &branch](const Vec3& a, const Vec3& b) { return inside_patch(field, branch, a, b); });

@@ -49,9 +49,11 @@ struct CreaseMesh {
   std::size_t patch_refusals = 0;
 };
 
-// Lays out `creases` (from trace_creases on `field`) and meshes every patch they bound. Throws
-// CreaseLayoutError as above, and whatever a tracker throws (StalledFrontError, LimitExceededError).
+// Lays out `creases` (from trace_creases on `field`) and meshes every patch they bound, its
+// fronts looking ahead with `look_ahead_gradation` (Settings::look_ahead_gradation;
+// kPatchLookAheadGradations, stage_creases.h). Throws CreaseLayoutError as above, and whatever a
+// tracker throws (StalledFrontError, LimitExceededError).
 CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& creases, const Settings& settings,
-                               double estimated_area);
+                               double estimated_area, double look_ahead_gradation);
 
 }  // namespace cdp::adaptive

@@ -4,6 +4,22 @@
 
 namespace cdp::adaptive {
 
+namespace {
+
+// The patches meshed with each of kPatchLookAheadGradations in turn until none stalls.
+CreaseMesh mesh_patches(const Field& field, const CreaseTracingResult& traced, const Settings& settings,
+                        double estimated_area) {
+  for (std::size_t k = 0;; ++k) {
+    try {
+      return mesh_crease_patches(field, traced, settings, estimated_area, kPatchLookAheadGradations[k]);
+    } catch (const StalledFrontError&) {
+      if (k + 1 == kPatchLookAheadGradations.size()) throw;
+    }
+  }
+}
+
+}  // namespace
+
 CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options, const Settings& settings,
                              double estimated_area) {
   CreaseLayout out;
@@ -16,7 +32,7 @@ CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options,
       out.traced = trace_creases(field, co);  // no work for a field without pieces
       if (!out.traced.curves.empty()) {
         if (attempt == 0 && options.phase) options.phase("meshing along creases");
-        out.mesh = mesh_crease_patches(field, out.traced, settings, estimated_area);
+        out.mesh = mesh_patches(field, out.traced, settings, estimated_area);
         out.components = analyze_topology(out.mesh->mesh).components;
         out.fallback.clear();
       }

@@ -8,6 +8,7 @@
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/crease_curves.h>
 
+#include <array>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -19,6 +20,22 @@ namespace cdp::adaptive {
 // missed), once more on a grid twice as fine (eight times the values, on a field cheap enough
 // to have min/max/abs branches: an expression).
 inline constexpr int kCreaseTracings = 2;
+
+// The patches' fronts look ahead (Settings::look_ahead) with a gentler gradation than a smooth
+// surface's re-run (kLookAheadGradation, 0.4): a patch's fronts run one after another
+// (Tracker::run_fronts), and the first to run covers the patch up to the short edges of the
+// loops that have not run yet (a sphere drilled by a hole of radius 0.05: the rims' edges 0.017,
+// the sphere's 0.33; the first front arrived at the other rim with edges of 0.06-0.1 and left a
+// 19.9-degree triangle at factor 3, 17.9 at 3.2, 0.37 at the rim at 4.25). Over ten creased SDF
+// models at factors 1 to 6 in steps of 0.25 (210 runs), 0.3 left 2 runs meshed across their
+// creases instead of 6 and 2 with a triangle under 10 degrees instead of 9, at the same triangle
+// count; the drilled sphere's smallest angle over them went from 0.37 degrees to 16.6. Where a
+// patch's front stalls (StalledFrontError) the patches are meshed again with the next share
+// before the surface is meshed across its creases: 0.25 meshed the last 2 (a box with two
+// crossing filleted holes at factors 2.5 and 5.75, genus 3, 20.0 and 18.4 degrees), and the
+// Barth ball at tolerance 3e-2 in its first run (0.6 s; before, the last run of kRuns, 12 s);
+// as the first share it left a stalled front on the crossing holes at factor 3.
+inline constexpr std::array<double, 2> kPatchLookAheadGradations{0.3, 0.25};
 
 // Whether the options follow creases: CreaseHandling::Follow in Variant::Improved (the paper
 // variant has no crease handling).

@@ -103,7 +103,7 @@ struct Settings {
   // triangles at factor 10).
   bool look_ahead = false;
   // The look-ahead's share of the distance (kLookAheadGradation; the crease patches' own,
-  // kPatchLookAheadGradation in crease_patches.cpp).
+  // kPatchLookAheadGradations in stage_creases.h).
   double look_ahead_gradation = kLookAheadGradation;
   // Cell size of the spatial hashes: about a typical edge, so that a query visits a few cells
   // holding a few points each whatever the density.

@@ -249,7 +249,7 @@ INSTANTIATE_TEST_SUITE_P(Adaptive, SdfModels, testing::ValuesIn(all_cases()), sd
 
 // The drilled sphere's patch on the sphere is bounded by the hole's two rims, whose edges are a
 // twentieth of the sphere's: the fronts start from one rim and reach the other with edges
-// graded down by the look-ahead (kPatchLookAheadGradation). With the smooth re-run's gradation
+// graded down by the look-ahead (kPatchLookAheadGradations). With the smooth re-run's gradation
 // (0.4) the factors between the suite's missed the bounds: 17.9 degrees away from the creases at
 // 3.2, 0.37 at the rim at 4.25.
 TEST(SdfDrilledSphere, EveryQuarterFactorFromOneToSixMeetsTheAngleBounds) {
