@@ -1,6 +1,7 @@
 #include <cdp/core/errors.h>
 #include <cdp/core/models/blobs.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace cdp {
@@ -25,6 +26,17 @@ inline KernelValue blinn(double s) {
 }
 
 inline KernelValue kernel(BlobKernel kind, double s) { return kind == BlobKernel::Wyvill ? wyvill(s) : blinn(s); }
+
+// The support grid (Blobs::blobs_near) from this many blobs on: below it a loop over every blob
+// costs about what finding the cell does.
+constexpr std::size_t kGridBlobs = 32;
+// About this many cells along the grid's longest side per mean blob diameter, and at most
+// kMaxGridCells cells along a side: a cell then holds a few blobs' supports.
+constexpr double kCellsPerDiameter = 2;
+constexpr int kMaxGridCells = 64;
+// A blob's support box is widened by this share of its radius, far beyond the rounding of
+// |p - c|^2 / R^2 < 1 next to the sphere of radius R.
+constexpr double kSupportMargin = 1e-9;
 
 // max over a >= 0 of |d k(a) / d a|: Wyvill's polynomial peaks at a ~ 0.5035 (about 1.58343);
 // Blinn's Gaussian at a = 1/sqrt(2) (sqrt(2) e^-1/2). Rounded up.
@@ -55,6 +67,67 @@ Blobs::Blobs(BlobKernel kernel, double threshold, std::vector<Blob> blobs)
     box.max = box.max.cwiseMax(b.center + Vec3::Constant(reach));
   }
   set_bounds(box);
+  all_.resize(blobs_.size());
+  for (std::uint32_t i = 0; i < all_.size(); ++i) all_[i] = i;
+  if (kernel == BlobKernel::Wyvill && blobs_.size() >= kGridBlobs) build_support_grid(box);
+}
+
+void Blobs::build_support_grid(const Box& box) {
+  double mean_radius = 0;
+  for (const auto& b : blobs_) mean_radius += b.radius;
+  mean_radius /= static_cast<double>(blobs_.size());
+  const Vec3 size = box.size();
+  const double cell = std::max(size.maxCoeff() / kMaxGridCells, 2 * mean_radius / kCellsPerDiameter);
+  inv_cell_ = 1 / cell;
+  grid_origin_ = box.min;
+  for (int a = 0; a < 3; ++a) cells_[a] = std::clamp(static_cast<int>(std::ceil(size[a] * inv_cell_)), 1, kMaxGridCells);
+  // The cell range of [lo, hi] along each axis: floor((x - origin) / cell) is monotone in x, so
+  // every point of the box falls in a cell of the range.
+  const auto range = [&](const Blob& b, int a) {
+    const double reach = b.radius * (1 + kSupportMargin);
+    const auto at = [&](double x) {
+      return std::clamp(static_cast<int>(std::floor((x - grid_origin_[a]) * inv_cell_)), 0, cells_[a] - 1);
+    };
+    return std::pair{at(b.center[a] - reach), at(b.center[a] + reach)};
+  };
+  const std::size_t n = static_cast<std::size_t>(cells_[0]) * cells_[1] * cells_[2];
+  const auto index = [&](int x, int y, int z) {
+    return (static_cast<std::size_t>(z) * cells_[1] + y) * cells_[0] + x;
+  };
+  // Two passes: counts, then the lists, each blob's index written in order.
+  cell_start_.assign(n + 1, 0);
+  for (int pass = 0; pass < 2; ++pass) {
+    std::vector<std::uint32_t> fill;
+    if (pass == 1) {
+      for (std::size_t c = 0; c < n; ++c) cell_start_[c + 1] += cell_start_[c];
+      cell_blobs_.assign(cell_start_[n], 0);
+      fill.assign(cell_start_.begin(), cell_start_.end() - 1);
+    }
+    for (std::uint32_t i = 0; i < blobs_.size(); ++i) {
+      const auto [x0, x1] = range(blobs_[i], 0);
+      const auto [y0, y1] = range(blobs_[i], 1);
+      const auto [z0, z1] = range(blobs_[i], 2);
+      for (int z = z0; z <= z1; ++z)
+        for (int y = y0; y <= y1; ++y)
+          for (int x = x0; x <= x1; ++x) {
+            if (pass == 0) ++cell_start_[index(x, y, z) + 1];
+            else cell_blobs_[fill[index(x, y, z)]++] = i;
+          }
+    }
+  }
+}
+
+std::span<const std::uint32_t> Blobs::blobs_near(const Vec3& p) const {
+  if (cell_start_.empty()) return all_;
+  std::array<int, 3> c{};
+  for (int a = 0; a < 3; ++a) {
+    const double t = std::floor((p[a] - grid_origin_[a]) * inv_cell_);
+    // Outside the grid (or NaN): every blob, as without a grid.
+    if (!(t >= 0 && t < cells_[a])) return all_;
+    c[a] = static_cast<int>(t);
+  }
+  const std::size_t k = (static_cast<std::size_t>(c[2]) * cells_[1] + c[1]) * cells_[0] + c[0];
+  return {cell_blobs_.data() + cell_start_[k], cell_blobs_.data() + cell_start_[k + 1]};
 }
 
 std::optional<double> Blobs::lipschitz_bound(const Box& region) const {
@@ -100,7 +173,8 @@ std::optional<std::pair<double, double>> Blobs::value_range(const Box& region) c
 
 double Blobs::eval_value(const Vec3& p) const {
   double sum = 0;
-  for (const auto& b : blobs_) {
+  for (const std::uint32_t i : blobs_near(p)) {
+    const Blob& b = blobs_[i];
     const double inv_r2 = 1.0 / (b.radius * b.radius);
     const double s = (p - b.center).squaredNorm() * inv_r2;  // as in the derivative paths, bit for bit
     if (kernel_ == BlobKernel::Wyvill && s >= 1.0) continue;
@@ -112,7 +186,8 @@ double Blobs::eval_value(const Vec3& p) const {
 double Blobs::eval_value_gradient(const Vec3& p, Vec3& gradient) const {
   double sum = 0;
   gradient.setZero();
-  for (const auto& b : blobs_) {
+  for (const std::uint32_t i : blobs_near(p)) {
+    const Blob& b = blobs_[i];
     const Vec3 d = p - b.center;
     const double inv_r2 = 1.0 / (b.radius * b.radius);
     const double s = d.squaredNorm() * inv_r2;
@@ -128,7 +203,8 @@ double Blobs::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian
   double sum = 0;
   gradient.setZero();
   hessian.setZero();
-  for (const auto& b : blobs_) {
+  for (const std::uint32_t i : blobs_near(p)) {
+    const Blob& b = blobs_[i];
     const Vec3 d = p - b.center;
     const double inv_r2 = 1.0 / (b.radius * b.radius);
     const double s = d.squaredNorm() * inv_r2;

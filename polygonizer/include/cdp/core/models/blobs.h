@@ -4,6 +4,10 @@
 
 #include <cdp/core/field.h>
 
+#include <span>
+
+#include <array>
+#include <cstdint>
 #include <vector>
 
 namespace cdp {
@@ -37,10 +41,25 @@ class Blobs : public Field {
   double eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const override;
 
  private:
+  // The blobs whose terms may not vanish at p (all of them for Blinn's kernel or a point outside
+  // the support grid), in index order.
+  std::span<const std::uint32_t> blobs_near(const Vec3& p) const;
+  void build_support_grid(const Box& box);
+
   BlobKernel kernel_;
   double threshold_;
   std::vector<Blob> blobs_;
   double lipschitz_ = 0;
+  // Wyvill's kernel vanishes beyond R, so a point's sum needs only the blobs whose support
+  // reaches it: a uniform grid over the bounds lists, per cell, the blobs whose support box meets
+  // the cell, in index order. The sums then add the same terms in the same order as a loop over
+  // every blob (the others are skipped there too), bit for bit. Only from kGridBlobs blobs.
+  std::vector<std::uint32_t> all_;         // 0 .. n-1: the full list
+  std::vector<std::uint32_t> cell_start_;  // per cell, into cell_blobs_ (one past the last cell too)
+  std::vector<std::uint32_t> cell_blobs_;
+  std::array<int, 3> cells_{0, 0, 0};
+  Vec3 grid_origin_ = Vec3::Zero();
+  double inv_cell_ = 0;
 };
 
 }  // namespace cdp
