@@ -171,8 +171,8 @@ constexpr double kUnmeshableNeck = 0.5;
 // a neck too narrow for it dooms the rest: the crowd of 200 blobs at factor 3 stepped over the
 // same neck, 0.0058 wide with min_edge 0.018, in its first attempt and its eight recoveries
 // (16 s) before the run with min_edge lowered meshed it (4 s). Over the test suite, the topology
-// sweep and the experiment fields at factors 1-12 and tolerances 1e-3 and 1e-4, only the crowd
-// steps over such a neck, and none of its recoveries meshed after it had.
+// sweep and the experiment fields at factors 1, 2, 5 and 12 and tolerances 1e-3 and 1e-4, only
+// the crowd steps over such a neck, and none of its recoveries meshed after it had.
 bool Run::needs_shorter_edges() {
   if (!request.lowered_min_edge_follows) return false;
   const bool unmeshable = std::any_of(necks.missed.begin(), necks.missed.end(), [&](const MissedNeck& m) {
