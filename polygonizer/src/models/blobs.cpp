@@ -30,8 +30,8 @@ inline KernelValue kernel(BlobKernel kind, double s) { return kind == BlobKernel
 // The support grid (Blobs::blobs_near) from this many blobs on: below it a loop over every blob
 // costs about what finding the cell does.
 constexpr std::size_t kGridBlobs = 32;
-// About this many cells along the grid's longest side per mean blob diameter, and at most
-// kMaxGridCells cells along a side: a cell then holds a few blobs' supports.
+// This many cells per mean blob diameter (at most kMaxGridCells along a side): a cell then meets
+// a few blobs' supports.
 constexpr double kCellsPerDiameter = 2;
 constexpr int kMaxGridCells = 64;
 // A blob's support box is widened by this share of its radius, far beyond the rounding of
