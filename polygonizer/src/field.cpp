@@ -35,10 +35,10 @@ std::pair<double, Vec3> Field::eval_first_order(const Vec3& p, const std::vector
   return {v, g};
 }
 
-std::vector<FieldPiece> Field::eval_pieces(const Vec3& p, double radius) const {
+std::vector<FieldPiece> Field::eval_pieces(const Vec3& p, double radius, bool hessians) const {
   BranchRecord record;
   if (!has_branch_points() || !eval_branch_record(p, record) || record.taken.empty()) return {};
-  return pieces_near_branches(p, record, radius);
+  return pieces_near_branches(p, record, radius, hessians);
 }
 
 std::optional<Field::BranchSwitch> Field::branch_switch(const Vec3& p, std::size_t k) const {
@@ -185,7 +185,57 @@ namespace {
 
 }  // namespace
 
-std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchRecord& record, double radius) const {
+std::optional<std::vector<FieldPiece>> Field::pieces_of_live_choices(const Vec3& p, const std::vector<std::uint8_t>& base,
+                                                                    const std::vector<int>& split, bool hessians) const {
+  std::vector<std::int8_t> bits(base.size(), -1);
+  for (std::size_t j = 0; j < split.size(); ++j) bits[static_cast<std::size_t>(split[j])] = static_cast<std::int8_t>(j);
+  struct Leaf {
+    std::size_t mask;
+    FieldPiece piece;
+  };
+  std::vector<Leaf> leaves;
+  // Combinations still to evaluate: the flips (bit j: split[j]) and which of the split choices
+  // are settled (the others are tried flipped only where an evaluation depends on them).
+  struct Todo {
+    std::size_t mask, settled;
+  };
+  std::vector<Todo> todo{{0, 0}};
+  while (!todo.empty()) {
+    const Todo t = todo.back();
+    todo.pop_back();
+    std::vector<std::uint8_t> branch = base;
+    for (std::size_t j = 0; j < split.size(); ++j)
+      if (t.mask >> j & 1u) branch[static_cast<std::size_t>(split[j])] ^= 1u;
+    FieldPiece piece;
+    std::uint64_t live = 0;
+    if (!eval_piece_live(p, branch, bits.data(), hessians, piece, live)) return std::nullopt;
+    // This evaluation stands for every combination that differs from it only in choices it does
+    // not depend on; each choice it depends on is settled here and tried the other way too.
+    std::size_t settled = t.settled;
+    for (std::size_t j = 0; j < split.size(); ++j) {
+      const std::size_t bit = std::size_t{1} << j;
+      if ((settled & bit) || !(live & bit)) continue;
+      settled |= bit;
+      todo.push_back({t.mask | bit, settled});
+    }
+    piece.branch = std::move(branch);
+    leaves.push_back({t.mask, std::move(piece)});
+  }
+  // As the loop over every combination keeps them: in order of their flips, the first of equal ones.
+  std::sort(leaves.begin(), leaves.end(), [](const Leaf& a, const Leaf& b) { return a.mask < b.mask; });
+  std::vector<FieldPiece> out;
+  for (Leaf& leaf : leaves) {
+    const FieldPiece& next = leaf.piece;
+    const auto same = [&](const FieldPiece& q) {
+      return q.value == next.value && q.gradient == next.gradient && q.hessian == next.hessian;
+    };
+    if (std::none_of(out.begin(), out.end(), same)) out.push_back(std::move(leaf.piece));
+  }
+  return out;
+}
+
+std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchRecord& record, double radius,
+                                                   bool hessians) const {
   const std::vector<std::uint8_t>& taken = record.taken;
   const std::vector<double>& distance = record.distance;
   branch_kinds();
@@ -206,6 +256,18 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
       base[k] = kFreeBranch;
       any_free = true;
     }
+  if (!any_free && split.empty() && !hessians) {
+    // One piece, the branches as the values take them: the record's own evaluation (the same
+    // numbers, bit for bit, as evaluating those branches again). Most points crease tracing
+    // visits lie so, inside a face.
+    FieldPiece piece;
+    piece.branch = taken;
+    piece.value = record.value;
+    piece.gradient = record.gradient;
+    return {std::move(piece)};
+  }
+  if (!any_free && !split.empty())
+    if (std::optional<std::vector<FieldPiece>> out = pieces_of_live_choices(p, base, split, hessians)) return *out;
   const std::size_t combinations = std::size_t{1} << split.size();
   std::vector<FieldPiece> all;
   std::vector<std::size_t> kept;
@@ -214,7 +276,13 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
     std::vector<std::uint8_t> branch = base;
     for (std::size_t j = 0; j < split.size(); ++j)
       if (mask >> j & 1u) branch[static_cast<std::size_t>(split[j])] ^= 1u;
-    all.push_back(eval_piece(p, branch));
+    if (hessians) {
+      all.push_back(eval_piece(p, branch));
+    } else {
+      FieldPiece& piece = all.emplace_back();
+      std::tie(piece.value, piece.gradient) = eval_first_order(p, branch);
+      piece.branch = std::move(branch);
+    }
     // Different branches often give the same function (a choice inside an argument that is not
     // taken): the same numbers at p, bit for bit, are one piece.
     const FieldPiece& next = all.back();
@@ -235,8 +303,10 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
   // second; made free there, that piece held two faces and the crease between them, and the
   // patches of a tetrahedron with a ball blended in crossed at its corners.
   std::uint64_t evaluations = 0;
+  out.reserve(kept.size());
   for (const std::size_t mask : kept) {
-    FieldPiece piece = all[mask];
+    // Moved: the comparisons below read the other pieces' numbers, never their branches.
+    FieldPiece piece = std::move(all[mask]);
     if (any_free) {
       for (std::size_t k = 0; k < piece.branch.size(); ++k) {
         if (base[k] == kFreeBranch || std::binary_search(split.begin(), split.end(), static_cast<int>(k))) continue;

@@ -44,11 +44,15 @@ constexpr int kMaxDefinitions = 256;
 // What a run does at the branch points (min, max, abs, numbered in program order): nothing
 // beyond taking the branch (Free); also report at each the branch taken and how far the surface
 // where it would switch lies, to first order (Record: Jet1 only); take given branches (Forced).
-enum class Branching { Free, Record, Forced };
+// ForcedLive: as Forced, and also report which branch points the value depends on (Field's
+// eval_first_order_live).
+enum class Branching { Free, Record, Forced, ForcedLive };
 
 struct BranchLog {
   const std::uint8_t* forced = nullptr;      // Forced: the branch to take at each branch point
   Field::BranchRecord* record = nullptr;     // Record: the branch taken and where it switches
+  const std::int8_t* bit = nullptr;          // ForcedLive: each branch point's bit in *live, or -1
+  std::uint64_t* live = nullptr;             // ForcedLive: the bits of the branch points the value depends on
 };
 
 struct ExpressionProgram {
@@ -73,34 +77,51 @@ struct ExpressionProgram {
     T* slot = reinterpret_cast<T*>(slot_storage);
     int top = -1;
     [[maybe_unused]] int branch_point = 0;
+    // ForcedLive: beside each stack entry and slot, the bits of the branch points whose choice
+    // reaches it (a min or max passes on its chosen argument's only, and its own).
+    constexpr bool kLive = mode == Branching::ForcedLive;
+    [[maybe_unused]] std::uint64_t dep[kLive ? kMaxStack : 1];
+    [[maybe_unused]] std::uint64_t dep_slot[kLive ? kMaxDefinitions : 1];
+    [[maybe_unused]] const auto own_bit = [&] {
+      const int b = record.bit[branch_point - 1];
+      return b >= 0 ? std::uint64_t{1} << b : std::uint64_t{0};
+    };
     // At a branch point: the branch to take, given that `natural` is the one the values choose.
     [[maybe_unused]] const auto choose = [&](bool natural, const T& a, const T& b) {
       const int k = branch_point++;
-      if constexpr (mode == Branching::Forced)
+      if constexpr (mode == Branching::Forced || kLive)
         return record.forced[k] == Field::kFreeBranch ? natural : record.forced[k] != 0;
       if constexpr (mode == Branching::Record) record.record->add(natural, a.v - b.v, a.g - b.g);
       return natural;
     };
     for (const Instruction& in : code) {
       switch (in.op) {
-        case Op::Const: new (&stack[++top]) T(in.constant); break;
-        case Op::X: new (&stack[++top]) T(x); break;
-        case Op::Y: new (&stack[++top]) T(y); break;
-        case Op::Z: new (&stack[++top]) T(z); break;
-        case Op::Add: --top; stack[top] = stack[top] + stack[top + 1]; break;
-        case Op::Sub: --top; stack[top] = stack[top] - stack[top + 1]; break;
-        case Op::Mul: --top; stack[top] = stack[top] * stack[top + 1]; break;
-        case Op::Div: --top; stack[top] = stack[top] / stack[top + 1]; break;
-        case Op::Pow: --top; stack[top] = pow(stack[top], stack[top + 1]); break;
+        case Op::Const: new (&stack[++top]) T(in.constant); if constexpr (kLive) dep[top] = 0; break;
+        case Op::X: new (&stack[++top]) T(x); if constexpr (kLive) dep[top] = 0; break;
+        case Op::Y: new (&stack[++top]) T(y); if constexpr (kLive) dep[top] = 0; break;
+        case Op::Z: new (&stack[++top]) T(z); if constexpr (kLive) dep[top] = 0; break;
+        case Op::Add: --top; stack[top] = stack[top] + stack[top + 1]; if constexpr (kLive) dep[top] |= dep[top + 1]; break;
+        case Op::Sub: --top; stack[top] = stack[top] - stack[top + 1]; if constexpr (kLive) dep[top] |= dep[top + 1]; break;
+        case Op::Mul: --top; stack[top] = stack[top] * stack[top + 1]; if constexpr (kLive) dep[top] |= dep[top + 1]; break;
+        case Op::Div: --top; stack[top] = stack[top] / stack[top + 1]; if constexpr (kLive) dep[top] |= dep[top + 1]; break;
+        case Op::Pow: --top; stack[top] = pow(stack[top], stack[top + 1]); if constexpr (kLive) dep[top] |= dep[top + 1]; break;
         case Op::Min:
           --top;
           if constexpr (mode == Branching::Free) stack[top] = min(stack[top], stack[top + 1]);
-          else if (choose(stack[top + 1].v < stack[top].v, stack[top], stack[top + 1])) stack[top] = stack[top + 1];
+          else if (choose(stack[top + 1].v < stack[top].v, stack[top], stack[top + 1])) {
+            stack[top] = stack[top + 1];
+            if constexpr (kLive) dep[top] = dep[top + 1];
+          }
+          if constexpr (kLive) dep[top] |= own_bit();
           break;
         case Op::Max:
           --top;
           if constexpr (mode == Branching::Free) stack[top] = max(stack[top], stack[top + 1]);
-          else if (choose(stack[top].v < stack[top + 1].v, stack[top], stack[top + 1])) stack[top] = stack[top + 1];
+          else if (choose(stack[top].v < stack[top + 1].v, stack[top], stack[top + 1])) {
+            stack[top] = stack[top + 1];
+            if constexpr (kLive) dep[top] = dep[top + 1];
+          }
+          if constexpr (kLive) dep[top] |= own_bit();
           break;
         case Op::Neg: stack[top] = -stack[top]; break;
         case Op::PowConst: stack[top] = pow(stack[top], in.constant); break;
@@ -111,17 +132,25 @@ struct ExpressionProgram {
         case Op::Cos: stack[top] = cos(stack[top]); break;
         case Op::Tan: stack[top] = tan(stack[top]); break;
         case Op::Atan: stack[top] = atan(stack[top]); break;
-        case Op::Atan2: --top; stack[top] = atan2(stack[top], stack[top + 1]); break;
+        case Op::Atan2: --top; stack[top] = atan2(stack[top], stack[top + 1]); if constexpr (kLive) dep[top] |= dep[top + 1]; break;
         case Op::Floor: stack[top] = floor(stack[top]); break;
         case Op::Round: stack[top] = round(stack[top]); break;
-        case Op::Store: new (&slot[static_cast<int>(in.constant)]) T(stack[top--]); break;
-        case Op::Load: new (&stack[++top]) T(slot[static_cast<int>(in.constant)]); break;
+        case Op::Store:
+          if constexpr (kLive) dep_slot[static_cast<int>(in.constant)] = dep[top];
+          new (&slot[static_cast<int>(in.constant)]) T(stack[top--]);
+          break;
+        case Op::Load:
+          new (&stack[++top]) T(slot[static_cast<int>(in.constant)]);
+          if constexpr (kLive) dep[top] = dep_slot[static_cast<int>(in.constant)];
+          break;
         case Op::Abs:
           if constexpr (mode == Branching::Free) stack[top] = abs(stack[top]);
           else if (choose(stack[top].v < 0, stack[top], -stack[top])) stack[top] = -stack[top];
+          if constexpr (kLive) dep[top] |= own_bit();
           break;
       }
     }
+    if constexpr (kLive) *record.live = dep[0];
     return stack[0];
   }
 };
@@ -565,6 +594,12 @@ bool Expression::has_branch_points() const { return program_->branch_points > 0;
 
 bool Expression::eval_branch_record(const Vec3& p, BranchRecord& record) const {
   if (program_->branch_points == 0) return false;
+  // One allocation each, not one per doubling: a record is made at every point crease tracing visits.
+  const auto n = static_cast<std::size_t>(program_->branch_points);
+  record.taken.reserve(n);
+  record.distance.reserve(n);
+  record.seam_step.reserve(n);
+  record.seam_normal.reserve(n);
   const Jet1 natural = program_->run<Jet1, detail::Branching::Record>(
       Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2), detail::BranchLog{nullptr, &record});
   record.value = natural.v;
@@ -586,6 +621,25 @@ std::pair<double, Vec3> Expression::eval_first_order(const Vec3& p, const std::v
                                                                 Jet1::variable(p.z(), 2),
                                                                 detail::BranchLog{branch.data(), nullptr});
   return {r.v, r.g};
+}
+
+bool Expression::eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>& branch, const std::int8_t* bits,
+                                 bool hessian, FieldPiece& piece, std::uint64_t& live) const {
+  check_branch(branch);
+  const detail::BranchLog log{branch.data(), nullptr, bits, &live};
+  if (hessian) {
+    const Jet2 r = program_->run<Jet2, detail::Branching::ForcedLive>(
+        Jet2::variable(p.x(), 0), Jet2::variable(p.y(), 1), Jet2::variable(p.z(), 2), log);
+    piece.value = r.v;
+    piece.gradient = r.g;
+    piece.hessian = r.h;
+  } else {
+    const Jet1 r = program_->run<Jet1, detail::Branching::ForcedLive>(
+        Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2), log);
+    piece.value = r.v;
+    piece.gradient = r.g;
+  }
+  return true;
 }
 
 FieldPiece Expression::eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {

@@ -49,6 +49,8 @@ class Expression : public Field {
   bool eval_branch_record(const Vec3& p, BranchRecord& record) const override;
   std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
   FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
+  bool eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>& branch, const std::int8_t* bits, bool hessian,
+                       FieldPiece& piece, std::uint64_t& live) const override;
 
  private:
   void check_branch(const std::vector<std::uint8_t>& branch) const;  // InvalidInputError unless one of ours
