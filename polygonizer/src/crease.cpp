@@ -31,20 +31,32 @@ const char* to_string(CreaseStatus status) {
 
 CreaseProjection project_to_crease(const Field& field, const Vec3& start,
                                    std::span<const std::vector<std::uint8_t>> branches, const CreaseOptions& options) {
+  return project_to_crease(field, start, branches, {}, options);
+}
+
+CreaseProjection project_to_crease(const Field& field, const Vec3& start,
+                                   std::span<const std::vector<std::uint8_t>> branches,
+                                   std::span<const std::pair<double, Vec3>> at_start, const CreaseOptions& options) {
   const int n = static_cast<int>(branches.size());
   if (n != 2 && n != 3)
     throw InvalidInputError("project_to_crease: needs 2 pieces (a crease) or 3 (a corner), not " + std::to_string(n));
+  if (!at_start.empty() && at_start.size() != branches.size())
+    throw InvalidInputError("project_to_crease: " + std::to_string(at_start.size()) + " evaluations at the start for " +
+                            std::to_string(n) + " pieces");
   const double diag = field.bounds().diagonal();
   const double tol = options.tolerance > 0 ? options.tolerance : 1e-10 * diag;
   const double max_step = options.max_step > 0 ? options.max_step : 0.1 * diag;
   CreaseProjection out;
   out.point = start;
-  Eigen::Matrix<double, Eigen::Dynamic, 3> J(n, 3);
-  Eigen::VectorXd F(n);
+  // Two or three rows: storage on the stack (a projection is made at every crease step).
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::ColMajor, 3, 3> J(n, 3);
+  Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 3, 1> F(n);
   for (int it = 0;; ++it) {
     double residual = 0, product = 1;
     for (int i = 0; i < n; ++i) {
-      const auto [value, gradient] = field.piece_first_order(out.point, branches[static_cast<std::size_t>(i)]);
+      const auto [value, gradient] = it == 0 && !at_start.empty()
+                                         ? at_start[static_cast<std::size_t>(i)]
+                                         : field.piece_first_order(out.point, branches[static_cast<std::size_t>(i)]);
       const double g = gradient.norm();
       if (!std::isfinite(value) || !gradient.allFinite()) {
         out.status = CreaseStatus::NotFinite;
@@ -52,6 +64,7 @@ CreaseProjection project_to_crease(const Field& field, const Vec3& start,
       }
       J.row(i) = gradient.transpose();
       F(i) = value;
+      out.gradients[static_cast<std::size_t>(i)] = gradient;
       residual = std::max(residual, g > 0 ? std::abs(value) / g : std::numeric_limits<double>::infinity());
       product *= g * g;
     }
@@ -65,7 +78,7 @@ CreaseProjection project_to_crease(const Field& field, const Vec3& start,
       out.status = CreaseStatus::MaxIterations;
       return out;
     }
-    const Eigen::MatrixXd gram = J * J.transpose();
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 3, 3> gram = J * J.transpose();
     if (!(gram.determinant() > kDependentGradients * product)) {
       out.status = CreaseStatus::DependentGradients;
       return out;

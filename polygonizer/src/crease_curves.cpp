@@ -79,7 +79,7 @@ struct Tracer {
 
   // The pieces taken on the surface right at p: those whose switch lies within a radius of
   // the Newton tolerance's size.
-  std::vector<FieldPiece> active(const Vec3& p) const { return field.pieces(p, kActiveRadius * tol); }
+  std::vector<FieldPiece> active(const Vec3& p) const { return field.pieces_first_order(p, kActiveRadius * tol); }
 
   // Whether both pieces (gradients g1, g2) are among those taken at p: then p is on the crease
   // of the surface, not on an intersection of pieces that another branch hides.
@@ -122,7 +122,7 @@ struct Tracer {
     const Vec3 ga = piece(p, a).gradient.normalized(), gb = piece(p, b).gradient.normalized();
     bool found = false;
     double nearest = std::numeric_limits<double>::infinity();
-    for (const FieldPiece& q : field.pieces(p, reach)) {
+    for (const FieldPiece& q : field.pieces_first_order(p, reach)) {
       const Vec3 g = q.gradient.normalized();
       if (g.dot(ga) > kSamePieceCosine || g.dot(gb) > kSamePieceCosine) continue;
       if (!(std::abs(q.value) <= reach * q.gradient.norm())) continue;
@@ -178,7 +178,9 @@ struct Tracer {
       const CreaseProjection c = seam ? project_to_seam(field, p + s * t, a, static_cast<std::size_t>(k), o.newton)
                                       : project_to_crease(field, p + s * t, two, o.newton);
       if (!c.ok()) continue;
-      const Vec3 ga = piece(c.point, a).gradient, gb = piece(c.point, b).gradient;
+      // On the crease, the projection's own last evaluation of a and b.
+      const Vec3 ga = seam ? piece(c.point, a).gradient : c.gradients[0];
+      const Vec3 gb = seam ? piece(c.point, b).gradient : c.gradients[1];
       Vec3 tn = dir * ga.cross(gb).normalized();
       double new_dir = dir;
       if (seam) {
@@ -347,8 +349,12 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
   so.require_closed_in_box = false;
   // A model without branch points has no creases (and costs nothing, not a grid).
   if (!field.has_pieces()) return result;
-  const SeedGrid grid = sample_seed_grid(field, so);
-  PointGrid traced(grid.h);
+  SeedGrid sampled;
+  if (!options.grid) sampled = sample_seed_grid(field, so);
+  const SeedGrid& grid = options.grid ? *options.grid : sampled;
+  // Cells of the radius it is searched with (max_spacing): 27 cells a search. (Cells of the grid's
+  // h, a little smaller, made it 125, the tracing's largest cost on a Menger sponge.)
+  PointGrid traced(tr.max_spacing);
   std::vector<Vec3> corners;
   grid.for_each_sign_change([&](const std::array<int, 3>& ia, const std::array<int, 3>& ib) {
     const Vec3 pa = grid.point(ia[0], ia[1], ia[2]), pb = grid.point(ib[0], ib[1], ib[2]);
@@ -356,14 +362,16 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
     const ProjectionResult s = project_to_surface(field, pa + fa / (fa - fb) * (pb - pa));
     if (!s.ok()) return;
     // The two pieces taken nearest the crossing whose crease lies within a cell.
-    const std::vector<FieldPiece> near = field.pieces(s.point, grid.h);
+    const std::vector<FieldPiece> near = field.pieces_first_order(s.point, grid.h);
     if (near.size() < 2) return;
     for (std::size_t i = 0; i < near.size(); ++i)
       for (std::size_t j = i + 1; j < near.size(); ++j) {
         const std::vector<Branch> two{near[i].branch, near[j].branch};
-        const CreaseProjection c = project_to_crease(field, s.point, two, options.newton);
+        const std::array<std::pair<double, Vec3>, 2> at_s{std::pair{near[i].value, near[i].gradient},
+                                                          std::pair{near[j].value, near[j].gradient}};
+        const CreaseProjection c = project_to_crease(field, s.point, two, at_s, options.newton);
         if (!c.ok() || (c.point - s.point).norm() > 2 * grid.h) continue;
-        const Vec3 g0 = tr.piece(c.point, two[0]).gradient.normalized(), g1 = tr.piece(c.point, two[1]).gradient.normalized();
+        const Vec3 g0 = c.gradients[0].normalized(), g1 = c.gradients[1].normalized();
         // Pieces that are one by their normals bend nothing there: no crease starts. Pieces that
         // differ only by rounding do (a smooth difference's blend, d0 - (d1 + d0) h at h = 1,
         // leaves the two sides of d0's max in its last bits: on fogleman/sdf's model with

@@ -16,6 +16,7 @@
 #include <map>
 #include <numbers>
 #include <random>
+#include <span>
 #include <set>
 #include <string>
 
@@ -273,6 +274,27 @@ TEST(CreaseProjection, LandsOnACubesEdgeAndCornerAndACylindersRim) {
   EXPECT_NEAR(std::hypot(rim.point.x(), rim.point.y()), 1, 1e-12);
 }
 
+// Given the pieces' values and gradients at the start, the projection makes the same steps
+// without evaluating them there again, and reports the gradients of its last evaluation.
+TEST(CreaseProjection, StartsFromGivenEvaluationsAndReportsTheLastGradients) {
+  const Expression spheres = crease_expression("min(hypot(x-0.5,y,z)-1, hypot(x+0.5,y,z)-1)");
+  const Vec3 start(0.1, 0.7, 0.3);
+  const auto near = spheres.pieces(start, 0.5);
+  ASSERT_EQ(near.size(), 2u);
+  const auto b = branches(near);
+  const std::array<std::pair<double, Vec3>, 2> at_start{std::pair{near[0].value, near[0].gradient},
+                                                        std::pair{near[1].value, near[1].gradient}};
+  const CreaseProjection plain = project_to_crease(spheres, start, b);
+  spheres.reset_counts();
+  const CreaseProjection given = project_to_crease(spheres, start, b, at_start);
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(given.point, plain.point);
+  EXPECT_EQ(given.iterations, plain.iterations);
+  EXPECT_EQ(spheres.counts().value_gradient, 2u * static_cast<std::uint64_t>(plain.iterations));
+  for (std::size_t i = 0; i < 2; ++i) EXPECT_EQ(given.gradients[i], spheres.piece_first_order(given.point, b[i]).second);
+  EXPECT_THROW(project_to_crease(spheres, start, b, std::span(at_start).first(1)), InvalidInputError);
+}
+
 TEST(CreaseProjection, ReportsTangentPiecesAndRefusesOtherCounts) {
   // Two planes that are parallel (x = 0 and x = 0.5): no crease between them.
   const Expression slab = crease_expression("max(x-0.5, -x)");
@@ -321,6 +343,13 @@ TEST(CreaseCurves, AMengerSpongeOfLevelOneHasItsSeventyTwoEdges) {
       "max(abs(x), abs(z)) - 0.4))",
       1.3);
   const CreaseTracingResult r = trace_creases(menger);
+  // The same curves from a grid sampled before (the adaptive polygonizer's seed grid).
+  const SeedGrid grid = sample_seed_grid(menger, SeedOptions{});
+  CreaseTracingOptions given;
+  given.grid = &grid;
+  const CreaseTracingResult again = trace_creases(menger, given);
+  ASSERT_EQ(again.curves.size(), r.curves.size());
+  for (std::size_t i = 0; i < r.curves.size(); ++i) EXPECT_EQ(again.curves[i].points, r.curves[i].points);
   EXPECT_EQ(r.curves.size(), 72u);
   EXPECT_EQ(r.corners.size(), 40u);
   EXPECT_EQ(r.stops, 0u);

@@ -101,7 +101,7 @@ void Run::prepare() {
   // seeding meets that mesh as finished surface, so only components without creases are left to it.
   if (follows_creases(ctx.options)) {
     ctx.enter("creases");  // the tracing too; AdaptiveOptions::phase hears of it where it finds creases
-    creases = lay_out_creases(ctx.field, ctx.options, settings, seeds.estimated_area);
+    creases = lay_out_creases(ctx.field, ctx.options, settings, seeds.estimated_area, &seeds.grid);
   }
 }
 

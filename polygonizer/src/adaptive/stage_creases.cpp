@@ -21,7 +21,7 @@ CreaseMesh mesh_patches(const Field& field, const CreaseTracingResult& traced, c
 }  // namespace
 
 CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options, const Settings& settings,
-                             double estimated_area) {
+                             double estimated_area, const SeedGrid* seed_grid) {
   CreaseLayout out;
   if (!follows_creases(options)) return out;
   CreaseTracingOptions co;
@@ -29,6 +29,7 @@ CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options,
   for (int attempt = 0; attempt < kCreaseTracings; ++attempt, co.resolution *= 2) {
     try {
       out.tracing_resolution = co.resolution;
+      co.grid = attempt == 0 ? seed_grid : nullptr;
       out.traced = trace_creases(field, co);  // no work for a field without pieces
       if (!out.traced.curves.empty()) {
         if (attempt == 0 && options.phase) options.phase("meshing along creases");

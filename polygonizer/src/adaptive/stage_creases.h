@@ -53,11 +53,12 @@ struct CreaseLayout {
 };
 
 // Traces the field's creases and meshes the patches they bound with `settings`;
-// `estimated_area` as Tracker::set_estimated_area. Nothing for CreaseHandling::Ignore or
+// `estimated_area` as Tracker::set_estimated_area. The first tracing searches `seed_grid` (the
+// seed grid stage's, at options.seed_resolution), if given. Nothing for CreaseHandling::Ignore or
 // Variant::Paper. A layout that fails is not an error: `fallback` says why, and the tracking
 // stage meshes the surface as a smooth one.
 // \throw CancelledError, and what the trackers throw but a layout, stall or bound error.
 CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options, const Settings& settings,
-                             double estimated_area);
+                             double estimated_area, const SeedGrid* seed_grid = nullptr);
 
 }  // namespace cdp::adaptive

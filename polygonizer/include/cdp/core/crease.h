@@ -6,8 +6,10 @@
 
 #include <cdp/core/field.h>
 
+#include <array>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace cdp {
@@ -34,6 +36,9 @@ struct CreaseProjection {
   CreaseStatus status = CreaseStatus::MaxIterations;
   int iterations = 0;
   double residual = 0;  // the largest |F_i| / |grad F_i| at `point`
+  // Each piece's gradient at `point` (the first 2 or 3, in the order given), from the evaluation
+  // that measured the residual: the numbers Field::piece_first_order gives there, bit for bit.
+  std::array<Vec3, 3> gradients{Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   bool ok() const { return status == CreaseStatus::Converged; }
 };
 
@@ -50,6 +55,13 @@ struct CreaseProjection {
 CreaseProjection project_to_crease(const Field& field, const Vec3& start,
                                    std::span<const std::vector<std::uint8_t>> branches,
                                    const CreaseOptions& options = {});
+// The same from a start where each piece's value and gradient are known already (at_start[i]
+// for branches[i]: from Field::pieces or pieces_first_order at `start`), which are not
+// evaluated again; empty at_start: evaluated, as above.
+// \throw as above, and InvalidInputError for a non-empty at_start of another size than branches.
+CreaseProjection project_to_crease(const Field& field, const Vec3& start,
+                                   std::span<const std::vector<std::uint8_t>> branches,
+                                   std::span<const std::pair<double, Vec3>> at_start, const CreaseOptions& options = {});
 
 // Moves `start` onto the curve where the piece `branch` is zero and branch point k switches
 // (Field::branch_switch): the crease between that piece and the one that differs from it at k

@@ -6,6 +6,7 @@
 
 #include <cdp/core/crease.h>
 #include <cdp/core/field.h>
+#include <cdp/core/surface_seeds.h>
 
 #include <array>
 #include <cstdint>
@@ -27,6 +28,10 @@ struct CreaseTracingOptions {
   // The largest number of points of all polylines together (a bound on the work).
   std::size_t max_points = 1'000'000;
   CreaseOptions newton;  // the projection onto the crease at each step
+  // The grid of F over the field's bounds at `resolution` (sample_seed_grid), where the caller
+  // has sampled it already (the adaptive polygonizer's seed grid): its crossings are searched
+  // instead of those of a grid sampled again. Must outlive the call.
+  const SeedGrid* grid = nullptr;
 };
 
 struct CreaseCurve {
