@@ -1,6 +1,8 @@
 // The angle repair (repair_angles.h).
 #include "repair_angles.h"
 
+#include <numbers>
+
 namespace cdp::adaptive::repair {
 namespace {
 
@@ -12,6 +14,9 @@ constexpr int kQualityRounds = 24;
 // A needle's shortest edge is collapsed when it is shorter than this share of the triangle's
 // second-shortest edge (the other ops cannot open an angle opposite an edge that short).
 constexpr double kNeedleShare = 0.5;
+// A cap whose largest angle is at least this (radians; 150 degrees) on a crease edge: its apex
+// lies within a sixth of the edge from it, well inside the crease probes' reach of the crease.
+constexpr double kCapAngle = 5 * std::numbers::pi / 6;
 
 // One triangle under the bound: the first operation of the list that is applied (flips, a
 // needle's collapse, moves of its corners and their neighbours, a split of a cap, collapses).
@@ -39,6 +44,18 @@ bool repair_triangle(RepairContext& ctx, int t) {
       if (w != T[0] && w != T[1] && w != T[2] && ctx.try_move(w)) return true;
   // A cap: a vertex inside the quad on its longest edge.
   if (ctx.try_split(t, T[order[0]], T[(order[0] + 1) % 3], true)) return true;
+  // A cap on a crease edge whose apex stands next to the crease, where a patch's front placed it
+  // within the patch tests' margin (fogleman/sdf's model with filleted holes at factor 2.5: an
+  // apex 0.0024 past the crease where two holes' walls meet, a 2.8 degree cap): the probes flag
+  // the apex as a crease vertex too, so nothing above may move or merge it. It goes onto the
+  // nearer end of the crease edge.
+  const int apex = (order[0] + 2) % 3;
+  if (angle_at(ctx.P(T[apex]), ctx.P(T[(apex + 1) % 3]), ctx.P(T[(apex + 2) % 3])) >= kCapAngle &&
+      ctx.on_crease(T[order[0]]) && ctx.on_crease(T[(order[0] + 1) % 3]) && ctx.on_crease(T[apex])) {
+    // Edge k joins T[k] and T[k + 1]: edge `apex` the apex to T[order[0]], edge apex + 2 the other end to it.
+    const int near = len[apex] <= len[(apex + 2) % 3] ? T[order[0]] : T[(order[0] + 1) % 3];
+    if (ctx.try_collapse(t, near, T[apex], true)) return true;
+  }
   // Last, removing a vertex: any edge of the triangle, shortest first, where that raises the
   // smallest angle around (a vertex squeezed between neighbours that cannot move).
   for (int i = 2; i >= 0; --i) {

@@ -464,8 +464,11 @@ class RepairContext {
 
   bool try_move(int v);
 
-  // Collapses edge (a, b) of triangle t into one vertex (a keeps its index).
-  bool try_collapse(int t, int a, int b);
+  // Collapses edge (a, b) of triangle t into one vertex (a keeps its index). Two crease vertices
+  // are not merged, unless `apex_onto_crease`: then a is an end of a crease edge of t and b the
+  // apex of the cap t, which the crease probes flag only for standing within their reach of the
+  // crease, and b goes onto a (repair_angles).
+  bool try_collapse(int t, int a, int b, bool apex_onto_crease = false);
 
   // A new vertex, not yet in any triangle (a split tries it, then keeps or drops it).
   void add_vertex(const Vec3& x, const Vec3& normal) {

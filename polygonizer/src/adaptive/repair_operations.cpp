@@ -151,11 +151,11 @@ bool RepairContext::try_move(int v) {
   return false;
 }
 
-bool RepairContext::try_collapse(int t, int a, int b) {
+bool RepairContext::try_collapse(int t, int a, int b, bool apex_onto_crease) {
   const int u = across(t, a, b);
   if (u < 0) return false;
   const bool ca = on_crease(a), cb = on_crease(b);
-  if (ca && cb) return false;
+  if (ca && cb && !apex_onto_crease) return false;
   int c = -1, d = -1;
   for (int w : mesh_.triangles[t])
     if (w != a && w != b) c = w;

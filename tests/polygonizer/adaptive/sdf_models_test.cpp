@@ -268,6 +268,29 @@ TEST(SdfDrilledSphere, EveryQuarterFactorFromOneToSixMeetsTheAngleBounds) {
   }
 }
 
+// At factor 2.5 the patch of one hole's wall placed a vertex 0.0024 past the crease where two
+// holes' walls meet (the patch tests' margin allows the crease's sagitta), the apex of a 2.8
+// degree cap on a crease edge that the crease probes kept from moving or merging; the repair
+// now merges such an apex onto the crease (repair_angles.cpp).
+TEST(SdfFoglemanFilletedHoles, AtFactorTwoAndAHalfNoCapHangsOverTheCreaseOfTwoHoles) {
+  const std::vector<SdfModel> models = sdf_models();
+  const auto m = std::find_if(models.begin(), models.end(),
+                              [](const SdfModel& x) { return x.name == "fogleman_filleted_holes"; });
+  ASSERT_NE(m, models.end());
+  const auto field = test::field_from_json(m->json);
+  AdaptiveOptions o;
+  o.factor = 2.5;
+  const PolygonizeResult r = polygonize_adaptive(*field, o);
+  test::expect_sound(r.mesh, m->name);
+  const MeshTopology t = analyze_topology(r.mesh);
+  EXPECT_EQ(static_cast<int>(t.components), m->components);
+  EXPECT_EQ(t.genus, m->genus);
+  EXPECT_EQ(r.stats.adaptive->creases.fallback, "");
+  EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0);
+  const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
+  EXPECT_GE(away.degrees, 20.0) << "away from creases, near " << away.where.transpose();
+}
+
 // 90k triangles and two runs: several times slower under the sanitizers (ctest label
 // slow_under_sanitizers, tests/CMakeLists.txt).
 TEST(SdfCrowd, TwoHundredBlobsJoinedByANarrowNeckMeshWithMinEdgeLowered) {
