@@ -2,7 +2,8 @@
 // QualityOptions::improve_below) repaired one by one, smallest angle first, by the context's
 // operations in a fixed order (flips of each edge, the collapse of a needle's shortest edge,
 // moves of its corners and of their neighbours, a vertex inside the quad of a cap's longest
-// edge, collapses of its other edges), each applied only where it raises the smallest angle it
+// edge, the apex of a cap on a crease edge merged onto the crease, collapses of its other
+// edges), each applied only where it raises the smallest angle it
 // touches by kMinGain and keeps the checks of every operation (repair_context.h).
 #pragma once
 
