@@ -44,8 +44,8 @@ constexpr int kMaxDefinitions = 256;
 // What a run does at the branch points (min, max, abs, numbered in program order): nothing
 // beyond taking the branch (Free); also report at each the branch taken and how far the surface
 // where it would switch lies, to first order (Record: Jet1 only); take given branches (Forced).
-// ForcedLive: as Forced, and also report which branch points the value depends on (Field's
-// eval_first_order_live).
+// ForcedLive: as Forced, and also report which branch points the value depends on
+// (Field::eval_piece_live).
 enum class Branching { Free, Record, Forced, ForcedLive };
 
 struct BranchLog {
