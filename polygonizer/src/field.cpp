@@ -183,6 +183,11 @@ const std::vector<Field::BranchKind>& Field::branch_kinds() const {
 
 namespace {
 
+// Two pieces with the same numbers at a point, bit for bit: one function there.
+bool same_numbers(const FieldPiece& a, const FieldPiece& b) {
+  return a.value == b.value && a.gradient == b.gradient && a.hessian == b.hessian;
+}
+
 }  // namespace
 
 std::optional<std::vector<FieldPiece>> Field::pieces_of_live_choices(const Vec3& p, const std::vector<std::uint8_t>& base,
@@ -225,10 +230,7 @@ std::optional<std::vector<FieldPiece>> Field::pieces_of_live_choices(const Vec3&
   std::sort(leaves.begin(), leaves.end(), [](const Leaf& a, const Leaf& b) { return a.mask < b.mask; });
   std::vector<FieldPiece> out;
   for (Leaf& leaf : leaves) {
-    const FieldPiece& next = leaf.piece;
-    const auto same = [&](const FieldPiece& q) {
-      return q.value == next.value && q.gradient == next.gradient && q.hessian == next.hessian;
-    };
+    const auto same = [&](const FieldPiece& q) { return same_numbers(q, leaf.piece); };
     if (std::none_of(out.begin(), out.end(), same)) out.push_back(std::move(leaf.piece));
   }
   return out;
@@ -285,10 +287,7 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
     }
     // Different branches often give the same function (a choice inside an argument that is not
     // taken): the same numbers at p, bit for bit, are one piece.
-    const FieldPiece& next = all.back();
-    const auto same = [&](std::size_t i) {
-      return all[i].value == next.value && all[i].gradient == next.gradient && all[i].hessian == next.hessian;
-    };
+    const auto same = [&](std::size_t i) { return same_numbers(all[i], all.back()); };
     if (std::none_of(kept.begin(), kept.end(), same)) kept.push_back(mask);
   }
   std::vector<FieldPiece> out;
@@ -318,8 +317,7 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
       }
       // Likewise a split choice this piece does not depend on at p.
       for (std::size_t j = 0; j < split.size(); ++j) {
-        const FieldPiece& other = all[mask ^ (std::size_t{1} << j)];
-        if (other.value == piece.value && other.gradient == piece.gradient && other.hessian == piece.hessian)
+        if (same_numbers(all[mask ^ (std::size_t{1} << j)], piece))
           piece.branch[static_cast<std::size_t>(split[j])] = kFreeBranch;
       }
     }

@@ -91,9 +91,6 @@ void Blobs::build_support_grid(const Box& box) {
     return std::pair{at(b.center[a] - reach), at(b.center[a] + reach)};
   };
   const std::size_t n = static_cast<std::size_t>(cells_[0]) * cells_[1] * cells_[2];
-  const auto index = [&](int x, int y, int z) {
-    return (static_cast<std::size_t>(z) * cells_[1] + y) * cells_[0] + x;
-  };
   // Two passes: counts, then the lists, each blob's index written in order.
   cell_start_.assign(n + 1, 0);
   for (int pass = 0; pass < 2; ++pass) {
@@ -110,8 +107,8 @@ void Blobs::build_support_grid(const Box& box) {
       for (int z = z0; z <= z1; ++z)
         for (int y = y0; y <= y1; ++y)
           for (int x = x0; x <= x1; ++x) {
-            if (pass == 0) ++cell_start_[index(x, y, z) + 1];
-            else cell_blobs_[fill[index(x, y, z)]++] = i;
+            if (pass == 0) ++cell_start_[cell_index(x, y, z) + 1];
+            else cell_blobs_[fill[cell_index(x, y, z)]++] = i;
           }
     }
   }
@@ -126,7 +123,7 @@ std::span<const std::uint32_t> Blobs::blobs_near(const Vec3& p) const {
     if (!(t >= 0 && t < cells_[a])) return all_;
     c[a] = static_cast<int>(t);
   }
-  const std::size_t k = (static_cast<std::size_t>(c[2]) * cells_[1] + c[1]) * cells_[0] + c[0];
+  const std::size_t k = cell_index(c[0], c[1], c[2]);
   return {cell_blobs_.data() + cell_start_[k], cell_blobs_.data() + cell_start_[k + 1]};
 }
 

@@ -4,10 +4,9 @@
 
 #include <cdp/core/field.h>
 
-#include <span>
-
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace cdp {
@@ -45,6 +44,10 @@ class Blobs : public Field {
   // the support grid), in index order.
   std::span<const std::uint32_t> blobs_near(const Vec3& p) const;
   void build_support_grid(const Box& box);
+  // Cell (x, y, z) of the support grid, in cell_start_.
+  std::size_t cell_index(int x, int y, int z) const {
+    return (static_cast<std::size_t>(z) * cells_[1] + y) * cells_[0] + x;
+  }
 
   BlobKernel kernel_;
   double threshold_;
