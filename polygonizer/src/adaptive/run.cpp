@@ -50,7 +50,7 @@ constexpr std::array<double, 2> kFinerTurns{0.5, 0.25};
 // exception from a callable field or a cancellation goes on unchanged). Only after a failure,
 // so that every surface that meshes at the first attempt comes out as it always has.
 constexpr std::array<Recovery, 3> kRecoveries{{
-    // The mesh stepped over necks (check_against_field): made again as it was, with balls of
+    // The mesh stepped over necks (check_necks): made again as it was, with balls of
     // short edges around them (kNeckZoneEdges). The rest of its mesh passed every check, and the
     // careful run's sizing is finer everywhere and fails more often (blobs38 of the topology
     // sweep at factor 1: its careful mesh intersected itself far from the neck). Again while a
@@ -139,16 +139,25 @@ void Run::attempt() {
       ctx.enter("checks");
       check_mesh(mesh(), expected_components(), false, ctx.options.threads, ctx.options.cancel);
     }
+    search_necks();
     components = repair_and_check();
+  } catch (const MissedNeckError&) {
+    throw;
   } catch (const NoSurfaceError& e) {
     if (!fall_back(e)) throw;
+    search_necks();
     components = repair_and_check();
   } catch (const LimitExceededError& e) {
     if (!fall_back(e)) throw;
+    search_necks();
     components = repair_and_check();
   }
-  check_against_field(ctx.field, mesh(), components, tracking.tracker->critical_starts(), resolved.sizing.min_edge,
-                      necks);
+  check_components_apart(ctx.field, mesh(), components);
+}
+
+void Run::search_necks() {
+  ctx.enter("checks");
+  check_necks(ctx.field, mesh(), tracking.tracker->critical_starts(), resolved.sizing.min_edge, necks);
 }
 
 void Run::zone_missed_necks() {

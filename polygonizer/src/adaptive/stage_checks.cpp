@@ -1,5 +1,5 @@
-// The checks stage: what a run's mesh must pass before it is returned (check_mesh,
-// check_against_field), and the quality bounds a mesh of a smooth surface is held to.
+// The checks stage: what a run's mesh must pass before it is returned (check_mesh, check_necks,
+// check_components_apart), and the quality bounds a mesh of a smooth surface is held to.
 #include "stage_checks.h"
 
 #include "../parallel.h"
@@ -146,18 +146,17 @@ int missed_bounds(const Mesh& mesh, std::size_t over_tolerance) {
   return under20 + (share_under_30 > kBoundShareUnder30) + (mean_ratio > kBoundMeanEdgeRatio) + (over_tolerance > 0);
 }
 
-void check_against_field(const Field& field, const Mesh& mesh, std::size_t components,
-                         std::span<const CriticalStart> critical_starts, double min_edge, NeckSearch& necks) {
-  // check_mesh passes a front that crossed a neck narrower than its edges and closed on each
-  // side of it: two closed components where the surface has one (surface_gaps.h).
+void check_components_apart(const Field& field, const Mesh& mesh, std::size_t components) {
   if (components > 1)
     if (const auto at = uncovered_between_components(field, mesh))
       throw NoSurfaceError("adaptive: two components of the mesh face each other across the solid near " +
                            describe_point(*at) +
                            ", where the surface joins them: a front closed on each side of a neck narrower "
                            "than its edges");
-  // It passes a mesh that stepped over a neck or a tunnel narrower than its edges, too: a
-  // handle too few, each component whole (missed_necks.h).
+}
+
+void check_necks(const Field& field, const Mesh& mesh, std::span<const CriticalStart> critical_starts,
+                 double min_edge, NeckSearch& necks) {
   necks = find_missed_necks(field, mesh, critical_starts);
   if (!necks.missed.empty()) {
     const MissedNeck& m = necks.missed.front();
@@ -166,7 +165,7 @@ void check_against_field(const Field& field, const Mesh& mesh, std::size_t compo
         << m.width << " wide near " << describe_point(m.point) << " (F has a saddle there, F = " << m.value
         << ", and it lies " << (m.value < 0 ? "outside" : "inside") << " the mesh)"
         << (m.width < min_edge ? ", narrower than min_edge" : "") << ": a front stepped over it";
-    throw NoSurfaceError(msg.str());
+    throw MissedNeckError(msg.str());
   }
 }
 
