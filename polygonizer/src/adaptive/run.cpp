@@ -115,6 +115,9 @@ bool Run::fall_back(const std::exception& e) {
 }
 
 std::size_t Run::repair_and_check() {
+  // A neck stepped over fails before the repair (check_necks: the repair makes no handle).
+  ctx.enter("checks");
+  check_necks(ctx.field, mesh(), tracking.tracker->critical_starts(), resolved.sizing.min_edge, necks);
   quality = {};
   quality = repair_mesh(ctx, resolved, seeds, creases, tracking, mesh());
   if (resolved.curvature_properties) {
@@ -139,25 +142,17 @@ void Run::attempt() {
       ctx.enter("checks");
       check_mesh(mesh(), expected_components(), false, ctx.options.threads, ctx.options.cancel);
     }
-    search_necks();
     components = repair_and_check();
   } catch (const MissedNeckError&) {
     throw;
   } catch (const NoSurfaceError& e) {
     if (!fall_back(e)) throw;
-    search_necks();
     components = repair_and_check();
   } catch (const LimitExceededError& e) {
     if (!fall_back(e)) throw;
-    search_necks();
     components = repair_and_check();
   }
   check_components_apart(ctx.field, mesh(), components);
-}
-
-void Run::search_necks() {
-  ctx.enter("checks");
-  check_necks(ctx.field, mesh(), tracking.tracker->critical_starts(), resolved.sizing.min_edge, necks);
 }
 
 void Run::zone_missed_necks() {

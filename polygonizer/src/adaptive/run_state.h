@@ -38,9 +38,8 @@ class Run {
   // Drops a crease layout whose meshing failed with `e` and meshes the surface as smooth;
   // false where there was none.
   bool fall_back(const std::exception& e);
+  // The tracked mesh's neck search (check_necks, into `necks`), its repair, its checks.
   std::size_t repair_and_check();
-  // The tracked mesh's neck search before its repair (check_necks), into `necks`.
-  void search_necks();
   // Adds a ball of finer edges around each neck the last attempt stepped over.
   void zone_missed_necks();
   // Whether the last attempt failed where no recovery can mend it and a run with a lowered
