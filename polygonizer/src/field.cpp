@@ -37,14 +37,14 @@ std::pair<double, Vec3> Field::eval_first_order(const Vec3& p, const std::vector
 
 std::vector<FieldPiece> Field::eval_pieces(const Vec3& p, double radius, bool hessians) const {
   BranchRecord record;
-  if (!has_branch_points() || !eval_branch_record(p, record) || record.taken.empty()) return {};
+  if (!has_branch_points() || !eval_branch_record(p, {}, record) || record.taken.empty()) return {};
   return pieces_near_branches(p, record, radius, hessians);
 }
 
 std::optional<Field::BranchSwitch> Field::branch_switch(const Vec3& p, std::size_t k) const {
   n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
   BranchRecord record;
-  if (!eval_branch_record(p, record) || k >= record.taken.size()) return std::nullopt;
+  if (!eval_branch_record(p, {}, record) || k >= record.taken.size()) return std::nullopt;
   const Vec3& n = record.seam_normal[k];
   if (!(n.squaredNorm() > 0)) return std::nullopt;
   // seam_step is -(a - b) grad (a - b) / |grad (a - b)|^2, so minus its component along the
@@ -52,14 +52,15 @@ std::optional<Field::BranchSwitch> Field::branch_switch(const Vec3& p, std::size
   return BranchSwitch{-record.seam_step[k].dot(n), n};
 }
 
-std::vector<Field::SmoothSide> Field::eval_smooth_sides(const Vec3& p, double radius) const {
+std::vector<Field::SmoothSide> Field::eval_smooth_sides(const Vec3& p, double radius,
+                                                       const std::vector<std::uint8_t>& branch) const {
   std::vector<SmoothSide> out;
   if (!has_branch_points()) return out;
   const std::vector<BranchKind>& kinds = branch_kinds();
   if (!any_smooth_) return out;
   BranchRecord record;
   n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
-  if (!eval_branch_record(p, record)) return out;
+  if (!eval_branch_record(p, branch, record)) return out;
   for (std::size_t k = 0; k < std::min(kinds.size(), record.taken.size()); ++k) {
     if (kinds[k] != BranchKind::Smooth || !(record.distance[k] <= radius)) continue;
     std::vector<std::uint8_t> branch = record.taken;
@@ -130,7 +131,7 @@ Field::BranchKind Field::switch_verdict(const Vec3& p, const BranchRecord& recor
     q += step;
     at = BranchRecord{};
     ++evaluations;
-    if (!eval_branch_record(q, at) || at.taken.size() != record.taken.size()) return BranchKind::Unknown;
+    if (!eval_branch_record(q, {}, at) || at.taken.size() != record.taken.size()) return BranchKind::Unknown;
   }
 }
 
@@ -149,7 +150,7 @@ const std::vector<Field::BranchKind>& Field::branch_kinds() const {
           const Vec3 p = box.min + Vec3((i + 0.5) * cell.x(), (j + 0.5) * cell.y(), (k + 0.5) * cell.z());
           BranchRecord record;
           ++evaluations;
-          if (!eval_branch_record(p, record)) continue;
+          if (!eval_branch_record(p, {}, record)) continue;
           if (kinds.empty()) {
             kinds.assign(record.taken.size(), BranchKind::Unknown);
             smooth_tests.assign(record.taken.size(), 0);

@@ -8,6 +8,7 @@
 #include <cdp/core/crease_curves.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/models/analytic.h>
+#include <cdp/core/models/autodiff_field.h>
 #include <cdp/core/models/compiled.h>
 #include <cdp/core/models/expression.h>
 
@@ -19,6 +20,7 @@
 #include <span>
 #include <set>
 #include <string>
+#include <type_traits>
 
 #include "common/test_fields.h"
 
@@ -563,6 +565,64 @@ TEST(BranchKinds, TheFarSideOfAC1SeamIsTheSurfaceBeyondItContinuedToThePoint) {
   EXPECT_TRUE(box.smooth_sides(Vec3(0, 0.55, 0), 0.12).empty());
   // Sharp booleans have no C1 seam.
   EXPECT_TRUE(crease_expression(kCubeFormula).smooth_sides(Vec3(1, 0.99, 0), 1).empty());
+}
+
+TEST(BranchKinds, EachFaceAtACreaseSeesItsOwnSeams) {
+  // A box minus a cylinder along z with a fillet (the smooth difference's clamp): on the face
+  // z = -0.75 the fillet begins where hypot(x, y) = 0.6. At (0, -0.75, -0.75), on the box's edge,
+  // the field takes one face's branch of the box's max, and with it sees only that face's seam.
+  // On a piece, each face sees its own, as the field does just inside that face.
+  const std::map<std::string, std::string> d = {{"d0", "max(abs(x)-0.75,abs(y)-0.75,abs(z)-0.75)"},
+                                                {"d1", "hypot(x,y)-0.5"},
+                                                {"h", "clamp(0.5-(d1+d0)*5,0,1)"}};
+  const Expression part("d0-(d1+d0)*h+0.1*h*(1-h)", {}, Box{Vec3::Constant(-0.9), Vec3::Constant(0.9)}, d);
+  ASSERT_TRUE(part.has_pieces());
+  const Vec3 p(0, -0.75, -0.75);
+  const auto pieces = part.pieces(p, 1e-6);
+  ASSERT_EQ(pieces.size(), 2u);
+  constexpr double kInside = 1e-7;
+  int seen = 0;
+  for (const FieldPiece& piece : pieces) {
+    const bool bottom = piece.gradient.z() < -0.5;  // the face z = -0.75; else y = -0.75
+    const auto sides = part.smooth_sides(p, 0.5, piece.branch);
+    ASSERT_EQ(sides.size(), 1u);
+    // The switch d1 + d0 = 0.1 lies 0.15 away along the gradient of d1 + d0: (0, -1, -1) on the
+    // bottom, (0, -2, 0) on the side. Beyond it the clamp is 0.5 - 5 (d1 + d0) = -0.75 at p: the
+    // blend's value there 0.25 * 0.75 - 0.1 * 0.75 * 1.75 on both faces.
+    EXPECT_NEAR(sides[0].distance, bottom ? 0.15 / std::sqrt(2.0) : 0.075, 1e-12);
+    EXPECT_NEAR(sides[0].piece.value, 0.25 * 0.75 - 0.1 * 0.75 * 1.75, 1e-12);
+    const Vec3 inside = p + kInside * (bottom ? Vec3(0, 1, 0) : Vec3(0, 0, 1));
+    const auto beside = part.smooth_sides(inside, 0.5);
+    ASSERT_EQ(beside.size(), 1u);
+    EXPECT_NEAR(sides[0].distance, beside[0].distance, 10 * kInside);
+    EXPECT_LT((sides[0].piece.gradient - beside[0].piece.gradient).norm(), 10 * kInside);
+    EXPECT_LT((sides[0].piece.hessian - beside[0].piece.hessian).norm(), 100 * kInside);
+    seen |= bottom ? 1 : 2;
+  }
+  EXPECT_EQ(seen, 3);
+  // The field itself, at the same point, sees one of the two.
+  EXPECT_EQ(part.smooth_sides(p, 0.5).size(), 1u);
+  // A compiled model of the same formula (its jets record the branches a piece forces) sees the
+  // same: its branch points are numbered as the expression's (abs, abs, max, abs, max; the
+  // clamp's max and min).
+  const auto filleted_hole = [](const auto& x, const auto& y, const auto& z) {
+    using T = std::decay_t<decltype(x)>;
+    using std::abs, std::max, std::min, std::sqrt;
+    const T d0 = max(max(abs(x) - 0.75, abs(y) - 0.75), abs(z) - 0.75);
+    const T d1 = sqrt(x * x + y * y) - 0.5;
+    const T h = min(max(0.5 - (d1 + d0) * 5.0, T(0.0)), T(1.0));
+    return T(d0 - (d1 + d0) * h + 0.1 * h * (1.0 - h));
+  };
+  const FunctionField<decltype(filleted_hole)> compiled("filleted_hole", filleted_hole, part.bounds());
+  for (const FieldPiece& piece : pieces) {
+    const auto a = compiled.smooth_sides(p, 0.5, piece.branch), b = part.smooth_sides(p, 0.5, piece.branch);
+    ASSERT_EQ(a.size(), 1u);
+    ASSERT_EQ(b.size(), 1u);
+    EXPECT_NEAR(a[0].distance, b[0].distance, 1e-14);
+    EXPECT_NEAR(a[0].piece.value, b[0].piece.value, 1e-14);
+    EXPECT_LT((a[0].piece.gradient - b[0].piece.gradient).norm(), 1e-13);
+    EXPECT_LT((a[0].piece.hessian - b[0].piece.hessian).norm(), 1e-12);
+  }
 }
 
 TEST(BranchKinds, SharpBooleansStayCreasedBesideSmoothOnes) {

@@ -55,8 +55,10 @@ class PieceField final : public Field {
     hessian = q.hessian;
     return q.value;
   }
-  std::vector<SmoothSide> eval_smooth_sides(const Vec3& p, double radius) const override {
-    return field_.smooth_sides(p, radius);
+  // The seams of this piece's own face, where the field itself may take the other's branch (a
+  // piece has one branch, its own).
+  std::vector<SmoothSide> eval_smooth_sides(const Vec3& p, double radius, const Branch&) const override {
+    return field_.smooth_sides(p, radius, branch_);
   }
 
  private:
@@ -199,7 +201,9 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
   for (std::size_t i = 0; i < n; ++i) {
     double len = std::min(piece_edge_length(field, sizing, P[i], curve.pieces[0]),
                           piece_edge_length(field, sizing, P[i], curve.pieces[1]));
-    len = std::min(len, seam_edge_length(field, sizing, P[i], len));  // as the patches' fronts will (Tracker::Placed)
+    // As the patches' fronts will (Tracker::Placed), each on its own face: at the crease the field
+    // takes either face's branch, and with it sees only that face's seams.
+    for (const Branch& piece : curve.pieces) len = std::min(len, seam_edge_length(field, sizing, P[i], len, piece));
     const bool interior = curve.closed || (i > 0 && i + 1 < n);
     if (interior) {
       const Vec3 a = P[i] - at(i + n - 1), b = at(i + 1) - P[i];

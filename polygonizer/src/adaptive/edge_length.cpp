@@ -24,9 +24,10 @@ double edge_length(const Sizing& s, double min_radius) {
   return std::clamp(l, s.min_edge, s.max_edge);
 }
 
-double seam_edge_length(const Field& field, const Sizing& sizing, const Vec3& p, double own) {
+double seam_edge_length(const Field& field, const Sizing& sizing, const Vec3& p, double own,
+                        const std::vector<std::uint8_t>& branch) {
   double best = std::numeric_limits<double>::infinity();
-  for (const Field::SmoothSide& side : field.smooth_sides(p, own / kSeamGradation)) {
+  for (const Field::SmoothSide& side : field.smooth_sides(p, own / kSeamGradation, branch)) {
     try {
       const Curvature c = curvature_from_derivatives(side.piece.gradient, side.piece.hessian);
       best = std::min(best, edge_length(sizing, c.min_radius) + kSeamGradation * side.distance);

@@ -43,13 +43,14 @@ constexpr int kMaxDefinitions = 256;
 
 // What a run does at the branch points (min, max, abs, numbered in program order): nothing
 // beyond taking the branch (Free); also report at each the branch taken and how far the surface
-// where it would switch lies, to first order (Record: Jet1 only); take given branches (Forced).
+// where it would switch lies, to first order (Record: Jet1 only; the given branches where there
+// are, else as the values choose); take given branches (Forced).
 // ForcedLive: as Forced, and also report which branch points the value depends on
 // (Field::eval_piece_live).
 enum class Branching { Free, Record, Forced, ForcedLive };
 
 struct BranchLog {
-  const std::uint8_t* forced = nullptr;      // Forced: the branch to take at each branch point
+  const std::uint8_t* forced = nullptr;      // Forced (Record: or null): the branch to take at each branch point
   Field::BranchRecord* record = nullptr;     // Record: the branch taken and where it switches
   const std::int8_t* bit = nullptr;          // ForcedLive: each branch point's bit in *live, or -1
   std::uint64_t* live = nullptr;             // ForcedLive: the bits of the branch points the value depends on
@@ -91,7 +92,12 @@ struct ExpressionProgram {
       const int k = branch_point++;
       if constexpr (mode == Branching::Forced || kLive)
         return record.forced[k] == Field::kFreeBranch ? natural : record.forced[k] != 0;
-      if constexpr (mode == Branching::Record) record.record->add(natural, a.v - b.v, a.g - b.g);
+      if constexpr (mode == Branching::Record) {
+        const bool taken =
+            record.forced == nullptr || record.forced[k] == Field::kFreeBranch ? natural : record.forced[k] != 0;
+        record.record->add(taken, a.v - b.v, a.g - b.g);
+        return taken;
+      }
       return natural;
     };
     for (const Instruction& in : code) {
@@ -592,8 +598,10 @@ double Expression::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& he
 
 bool Expression::has_branch_points() const { return program_->branch_points > 0; }
 
-bool Expression::eval_branch_record(const Vec3& p, BranchRecord& record) const {
+bool Expression::eval_branch_record(const Vec3& p, const std::vector<std::uint8_t>& branch,
+                                    BranchRecord& record) const {
   if (program_->branch_points == 0) return false;
+  if (!branch.empty()) check_branch(branch);
   // One allocation each, not one per doubling: a record is made at every point crease tracing visits.
   const auto n = static_cast<std::size_t>(program_->branch_points);
   record.taken.reserve(n);
@@ -601,7 +609,7 @@ bool Expression::eval_branch_record(const Vec3& p, BranchRecord& record) const {
   record.seam_step.reserve(n);
   record.seam_normal.reserve(n);
   const Jet1 natural = program_->run<Jet1, detail::Branching::Record>(
-      Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2), detail::BranchLog{nullptr, &record});
+      Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2), detail::BranchLog{branch.empty() ? nullptr : branch.data(), &record});
   record.value = natural.v;
   record.gradient = natural.g;
   return true;

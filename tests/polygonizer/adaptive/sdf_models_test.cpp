@@ -291,6 +291,28 @@ TEST(SdfFoglemanFilletedHoles, AtFactorTwoAndAHalfNoCapHangsOverTheCreaseOfTwoHo
   EXPECT_GE(away.degrees, 20.0) << "away from creases, near " << away.where.transpose();
 }
 
+// The box's edge y = z = -0.75 passes 0.15 from where the hole's fillet begins on the face
+// z = -0.75. At the edge the field takes the face y = -0.75's branch of the box's max, which sees
+// no fillet near, so the crease's edges stayed 0.3 long beside the fillet's 0.03, and the strip
+// of flat face between them was closed with triangles of 19.4 and 19.9 degrees at these factors.
+// Each face's seams now shorten the crease's edges (Field::smooth_sides on a piece).
+TEST(SdfBoxFilletedHole, AtTheBoxEdgeBesideTheFilletTheFaceOfTheFilletShortensTheCrease) {
+  const std::vector<SdfModel> models = sdf_models();
+  const auto m =
+      std::find_if(models.begin(), models.end(), [](const SdfModel& x) { return x.name == "box_filleted_hole"; });
+  ASSERT_NE(m, models.end());
+  const auto field = test::field_from_json(m->json);
+  for (const double factor : {5.5, 6.0}) {
+    AdaptiveOptions o;
+    o.factor = factor;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    EXPECT_EQ(r.stats.adaptive->creases.fallback, "") << factor;
+    EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0) << factor;
+    const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
+    EXPECT_GE(away.degrees, 20.0) << factor << ": away from creases, near " << away.where.transpose();
+  }
+}
+
 // 90k triangles and two runs: several times slower under the sanitizers (ctest label
 // slow_under_sanitizers, tests/CMakeLists.txt).
 TEST(SdfCrowd, TwoHundredBlobsJoinedByANarrowNeckMeshWithMinEdgeLowered) {

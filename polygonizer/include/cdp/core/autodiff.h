@@ -187,6 +187,7 @@ namespace detail {
 // ordinary evaluation) they only cost the test of a null pointer.
 struct BranchTrace {
   const std::vector<std::uint8_t>* forced = nullptr;  // take these branches; record when null
+  bool record_forced = false;                         // record also where forced
   Field::BranchRecord record;                         // recorded: the branch taken, where it switches
   std::size_t calls = 0;                              // branch points met
 };
@@ -210,12 +211,10 @@ class BranchTraceScope {
 template <int O>
 bool take_branch(BranchTrace& t, bool natural, const Jet<O>& a, const Jet<O>& b) {
   const std::size_t k = t.calls++;
-  if (t.forced) {
-    if (k >= t.forced->size() || (*t.forced)[k] == Field::kFreeBranch) return natural;
-    return (*t.forced)[k] != 0;
-  }
-  t.record.add(natural, a.v - b.v, a.g - b.g);
-  return natural;
+  bool taken = natural;
+  if (t.forced && k < t.forced->size() && (*t.forced)[k] != Field::kFreeBranch) taken = (*t.forced)[k] != 0;
+  if (!t.forced || t.record_forced) t.record.add(taken, a.v - b.v, a.g - b.g);
+  return taken;
 }
 
 }  // namespace detail

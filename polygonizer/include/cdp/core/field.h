@@ -258,7 +258,14 @@ class Field {
     double distance = 0;
     FieldPiece piece;
   };
-  std::vector<SmoothSide> smooth_sides(const Vec3& p, double radius) const { return eval_smooth_sides(p, radius); }
+  std::vector<SmoothSide> smooth_sides(const Vec3& p, double radius) const { return eval_smooth_sides(p, radius, {}); }
+  // The same on one piece (`branch` from pieces(): its branches fixed, the free ones as the values
+  // choose): the seams of one face at a crease, where the field itself takes either face's branch
+  // and sees only that face's seams.
+  // \throw InvalidInputError for a branch the model cannot have made (as piece()); else as value().
+  std::vector<SmoothSide> smooth_sides(const Vec3& p, double radius, const std::vector<std::uint8_t>& branch) const {
+    return eval_smooth_sides(p, radius, branch);
+  }
   // The piece with `branch` (from pieces()) at another point: the same smooth function, its
   // branches fixed, wherever p is. Throws InvalidInputError for a branch the model cannot have
   // made. Counted as one gradient_hessian.
@@ -375,14 +382,16 @@ class Field {
   virtual FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const;
   // smooth_sides: from the record at p and the kinds (a field that stands for another, such as
   // one piece of it, passes the call on).
-  virtual std::vector<SmoothSide> eval_smooth_sides(const Vec3& p, double radius) const;
+  virtual std::vector<SmoothSide> eval_smooth_sides(const Vec3& p, double radius, const std::vector<std::uint8_t>& branch) const;
 
   // Whether the model has branch points at all (cheap; the default: none).
   virtual bool has_branch_points() const { return false; }
-  // One evaluation's record of the model's branch points at p (BranchRecord); false for a model
-  // without branch points.
-  virtual bool eval_branch_record(const Vec3& p, BranchRecord& record) const {
+  // One evaluation's record of the model's branch points at p (BranchRecord), taking `branch`
+  // (as in FieldPiece::branch; kFreeBranch, or an empty `branch`: as the values choose); false
+  // for a model without branch points.
+  virtual bool eval_branch_record(const Vec3& p, const std::vector<std::uint8_t>& branch, BranchRecord& record) const {
     (void)p;
+    (void)branch;
     (void)record;
     return false;
   }

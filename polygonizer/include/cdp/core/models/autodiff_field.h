@@ -57,8 +57,12 @@ class AutodiffField : public Field {
     hessian = r.h;
     return r.v;
   }
-  bool eval_branch_record(const Vec3& p, BranchRecord& out) const override {
+  bool eval_branch_record(const Vec3& p, const std::vector<std::uint8_t>& branch, BranchRecord& out) const override {
     detail::BranchTrace trace;
+    if (!branch.empty()) {
+      trace.forced = &branch;
+      trace.record_forced = true;
+    }
     record(p, trace);
     if (trace.calls == 0) return false;
     out = std::move(trace.record);

@@ -46,7 +46,7 @@ class Expression : public Field {
   // is evaluated (arguments before the call); a branch is 0 for the first argument (+u for abs),
   // 1 for the second (-u), kFreeBranch for the one the values take.
   bool has_branch_points() const override;
-  bool eval_branch_record(const Vec3& p, BranchRecord& record) const override;
+  bool eval_branch_record(const Vec3& p, const std::vector<std::uint8_t>& branch, BranchRecord& record) const override;
   std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
   FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
   bool eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>& branch, const std::int8_t* bits, bool hessian,
