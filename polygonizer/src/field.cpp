@@ -53,7 +53,7 @@ std::optional<Field::BranchSwitch> Field::branch_switch(const Vec3& p, std::size
 }
 
 std::vector<Field::SmoothSide> Field::eval_smooth_sides(const Vec3& p, double radius,
-                                                       const std::vector<std::uint8_t>& branch) const {
+                                                       const std::vector<std::uint8_t>& branch, SeamSideAt at) const {
   std::vector<SmoothSide> out;
   if (!has_branch_points()) return out;
   const std::vector<BranchKind>& kinds = branch_kinds();
@@ -66,7 +66,8 @@ std::vector<Field::SmoothSide> Field::eval_smooth_sides(const Vec3& p, double ra
     std::vector<std::uint8_t> branch = record.taken;
     branch[k] ^= 1u;
     n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
-    out.push_back({record.distance[k], eval_piece(p, branch)});
+    const Vec3 q = at == SeamSideAt::Seam ? Vec3(p + record.seam_step[k]) : p;
+    out.push_back({record.distance[k], eval_piece(q, branch)});
   }
   return out;
 }

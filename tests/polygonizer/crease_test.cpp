@@ -597,6 +597,23 @@ TEST(BranchKinds, EachFaceAtACreaseSeesItsOwnSeams) {
     EXPECT_NEAR(sides[0].distance, beside[0].distance, 10 * kInside);
     EXPECT_LT((sides[0].piece.gradient - beside[0].piece.gradient).norm(), 10 * kInside);
     EXPECT_LT((sides[0].piece.hessian - beside[0].piece.hessian).norm(), 100 * kInside);
+    // Where the far side begins: the switch's point nearest p, (0, -0.675, -0.675) on the bottom,
+    // (0, -0.675, -0.75) on the side, where the clamp's argument is 0 and the blend
+    // d0 + 2.5 s^2 - 0.5 s + 0.025 (s = d1 + d0 = 0.1) has the Hessian 5 grad s grad s^T (the
+    // cylinder's bend cancels there) and the gradient grad d0. On the bottom grad s = (0, -1, -1):
+    // a bend of 5 across the seam, the fillet's radius 0.2 (continued to p, 1.38). On the side
+    // grad s = (0, -2, 0) is the face's normal: the blend begins flat.
+    const auto begins = part.smooth_sides(p, 0.5, piece.branch, Field::SeamSideAt::Seam);
+    ASSERT_EQ(begins.size(), 1u);
+    EXPECT_EQ(begins[0].distance, sides[0].distance);
+    EXPECT_NEAR(begins[0].piece.value, -0.075, 1e-12);  // d0 there, off the surface
+    const Curvature at_seam = curvature_from_derivatives(begins[0].piece.gradient, begins[0].piece.hessian);
+    if (bottom) {
+      EXPECT_NEAR(at_seam.min_radius, 0.2, 1e-9);
+      EXPECT_GT(curvature_from_derivatives(sides[0].piece.gradient, sides[0].piece.hessian).min_radius, 1.3);
+    } else {
+      EXPECT_GT(at_seam.min_radius, 1e9);
+    }
     seen |= bottom ? 1 : 2;
   }
   EXPECT_EQ(seen, 3);

@@ -25,9 +25,9 @@ double edge_length(const Sizing& s, double min_radius) {
 }
 
 double seam_edge_length(const Field& field, const Sizing& sizing, const Vec3& p, double own,
-                        const std::vector<std::uint8_t>& branch) {
+                        const std::vector<std::uint8_t>& branch, Field::SeamSideAt at) {
   double best = std::numeric_limits<double>::infinity();
-  for (const Field::SmoothSide& side : field.smooth_sides(p, own / kSeamGradation, branch)) {
+  for (const Field::SmoothSide& side : field.smooth_sides(p, own / kSeamGradation, branch, at)) {
     try {
       const Curvature c = curvature_from_derivatives(side.piece.gradient, side.piece.hessian);
       best = std::min(best, edge_length(sizing, c.min_radius) + kSeamGradation * side.distance);

@@ -34,9 +34,11 @@ inline constexpr double kSeamGradation = 0.4;
 // (Field::smooth_sides): for each, the length the curvature beyond it asks for, plus
 // kSeamGradation times its distance; the smallest, and infinity where none is nearer than
 // `own` / kSeamGradation (`own`: the length p's own curvature asks for, which a seam farther away
-// cannot undercut). With `branch`, the seams of that piece (Field::smooth_sides).
+// cannot undercut). With `branch`, the seams of that piece, their far side evaluated where `at`
+// says (Field::smooth_sides).
 double seam_edge_length(const Field& field, const Sizing& sizing, const Vec3& p, double own,
-                        const std::vector<std::uint8_t>& branch = {});
+                        const std::vector<std::uint8_t>& branch = {},
+                        Field::SeamSideAt at = Field::SeamSideAt::Point);
 
 // Longest chord of a circle of radius r whose sagitta (r - sqrt(r^2 - l^2/4)) is at most eps.
 double chord_for_deviation(double r, double eps);

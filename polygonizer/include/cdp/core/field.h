@@ -258,13 +258,21 @@ class Field {
     double distance = 0;
     FieldPiece piece;
   };
-  std::vector<SmoothSide> smooth_sides(const Vec3& p, double radius) const { return eval_smooth_sides(p, radius, {}); }
+  std::vector<SmoothSide> smooth_sides(const Vec3& p, double radius) const {
+    return eval_smooth_sides(p, radius, {}, SeamSideAt::Point);
+  }
+  // Where smooth_sides evaluates the surface beyond a seam: continued to p (Point), or at the
+  // switch's point nearest p, to first order (Seam), where that surface begins. They differ where
+  // it bends unevenly: a smooth difference's fillet, a quadratic in its clamp's argument, has a
+  // radius of 0.2 where it begins and of 1.4 continued 0.15 onto the face it joins.
+  enum class SeamSideAt : std::uint8_t { Point, Seam };
   // The same on one piece (`branch` from pieces(): its branches fixed, the free ones as the values
   // choose): the seams of one face at a crease, where the field itself takes either face's branch
-  // and sees only that face's seams.
+  // and sees only that face's seams. Evaluated where `at` says.
   // \throw InvalidInputError for a branch the model cannot have made (as piece()); else as value().
-  std::vector<SmoothSide> smooth_sides(const Vec3& p, double radius, const std::vector<std::uint8_t>& branch) const {
-    return eval_smooth_sides(p, radius, branch);
+  std::vector<SmoothSide> smooth_sides(const Vec3& p, double radius, const std::vector<std::uint8_t>& branch,
+                                       SeamSideAt at = SeamSideAt::Point) const {
+    return eval_smooth_sides(p, radius, branch, at);
   }
   // The piece with `branch` (from pieces()) at another point: the same smooth function, its
   // branches fixed, wherever p is. Throws InvalidInputError for a branch the model cannot have
@@ -382,7 +390,8 @@ class Field {
   virtual FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const;
   // smooth_sides: from the record at p and the kinds (a field that stands for another, such as
   // one piece of it, passes the call on).
-  virtual std::vector<SmoothSide> eval_smooth_sides(const Vec3& p, double radius, const std::vector<std::uint8_t>& branch) const;
+  virtual std::vector<SmoothSide> eval_smooth_sides(const Vec3& p, double radius, const std::vector<std::uint8_t>& branch,
+                                                    SeamSideAt at) const;
 
   // Whether the model has branch points at all (cheap; the default: none).
   virtual bool has_branch_points() const { return false; }
