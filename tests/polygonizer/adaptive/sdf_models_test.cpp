@@ -313,6 +313,28 @@ TEST(SdfBoxFilletedHole, AtTheBoxEdgeBesideTheFilletTheFaceOfTheFilletShortensTh
   }
 }
 
+// With two holes crossing, the fillet begins 0.1-0.15 from the box's edges on the faces y = +-0.75.
+// A crease sample there took the fillet's far side continued to the sample, a radius of 1.5-1.8
+// where the fillet begins with 0.2, so the crease kept edges of 0.3 beside the fillet's 0.03: 18.2
+// and 17.4 degrees away from creases at these factors. Crease samples now take it where it begins
+// (Field::SeamSideAt::Seam).
+TEST(SdfBoxCrossingFilletedHoles, BesideTheFilletTheCreaseGradesToWhereTheFilletBegins) {
+  const std::vector<SdfModel> models = sdf_models();
+  const auto m = std::find_if(models.begin(), models.end(),
+                              [](const SdfModel& x) { return x.name == "box_crossing_filleted_holes"; });
+  ASSERT_NE(m, models.end());
+  const auto field = test::field_from_json(m->json);
+  for (const double factor : {2.75, 6.5}) {
+    AdaptiveOptions o;
+    o.factor = factor;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    EXPECT_EQ(r.stats.adaptive->creases.fallback, "") << factor;
+    EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0) << factor;
+    const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
+    EXPECT_GE(away.degrees, 20.0) << factor << ": away from creases, near " << away.where.transpose();
+  }
+}
+
 // 90k triangles and two runs: several times slower under the sanitizers (ctest label
 // slow_under_sanitizers, tests/CMakeLists.txt).
 TEST(SdfCrowd, TwoHundredBlobsJoinedByANarrowNeckMeshWithMinEdgeLowered) {
