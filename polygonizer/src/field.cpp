@@ -63,11 +63,11 @@ std::vector<Field::SmoothSide> Field::eval_smooth_sides(const Vec3& p, double ra
   if (!eval_branch_record(p, branch, record)) return out;
   for (std::size_t k = 0; k < std::min(kinds.size(), record.taken.size()); ++k) {
     if (kinds[k] != BranchKind::Smooth || !(record.distance[k] <= radius)) continue;
-    std::vector<std::uint8_t> branch = record.taken;
-    branch[k] ^= 1u;
+    std::vector<std::uint8_t> beyond = record.taken;
+    beyond[k] ^= 1u;
     n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
     const Vec3 q = at == SeamSideAt::Seam ? Vec3(p + record.seam_step[k]) : p;
-    out.push_back({record.distance[k], eval_piece(q, branch)});
+    out.push_back({record.distance[k], eval_piece(q, beyond)});
   }
   return out;
 }
