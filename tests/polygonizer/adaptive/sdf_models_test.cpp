@@ -11,11 +11,12 @@
 #include <cdp/core/mesh_topology.h>
 #include <cdp/io/field_factory.h>
 
-#include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <map>
 #include <numbers>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -199,6 +200,28 @@ AwayFromCreases min_angle_away_from_creases(const Field& field, const Mesh& mesh
   return best;
 }
 
+// The suite's model called `name`.
+// \throw std::out_of_range where there is none.
+SdfModel sdf_model(const std::string& name) {
+  for (const SdfModel& m : sdf_models())
+    if (m.name == name) return m;
+  throw std::out_of_range("no SDF model " + name);
+}
+
+// At each factor: creases followed, angles of at least 5 degrees at them and 20 away from them.
+void expect_angle_bounds_at_factors(const SdfModel& m, std::initializer_list<double> factors) {
+  const auto field = test::field_from_json(m.json);
+  for (const double factor : factors) {
+    AdaptiveOptions o;
+    o.factor = factor;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    EXPECT_EQ(r.stats.adaptive->creases.fallback, "") << m.name << " " << factor;
+    EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0) << m.name << " " << factor;
+    const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
+    EXPECT_GE(away.degrees, 20.0) << m.name << " " << factor << ": away from creases, near " << away.where.transpose();
+  }
+}
+
 TEST_P(SdfModels, MeshWithTheirCreasesAndGoodTriangles) {
   const SdfModel m = sdf_models()[GetParam().model];
   const auto field = test::field_from_json(m.json);
@@ -273,18 +296,15 @@ TEST(SdfDrilledSphere, EveryQuarterFactorFromOneToSixMeetsTheAngleBounds) {
 // degree cap on a crease edge that the crease probes kept from moving or merging; the repair
 // now merges such an apex onto the crease (repair_angles.cpp).
 TEST(SdfFoglemanFilletedHoles, AtFactorTwoAndAHalfNoCapHangsOverTheCreaseOfTwoHoles) {
-  const std::vector<SdfModel> models = sdf_models();
-  const auto m = std::find_if(models.begin(), models.end(),
-                              [](const SdfModel& x) { return x.name == "fogleman_filleted_holes"; });
-  ASSERT_NE(m, models.end());
-  const auto field = test::field_from_json(m->json);
+  const SdfModel m = sdf_model("fogleman_filleted_holes");
+  const auto field = test::field_from_json(m.json);
   AdaptiveOptions o;
   o.factor = 2.5;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
-  test::expect_sound(r.mesh, m->name);
+  test::expect_sound(r.mesh, m.name);
   const MeshTopology t = analyze_topology(r.mesh);
-  EXPECT_EQ(static_cast<int>(t.components), m->components);
-  EXPECT_EQ(t.genus, m->genus);
+  EXPECT_EQ(static_cast<int>(t.components), m.components);
+  EXPECT_EQ(t.genus, m.genus);
   EXPECT_EQ(r.stats.adaptive->creases.fallback, "");
   EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0);
   const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
@@ -297,20 +317,7 @@ TEST(SdfFoglemanFilletedHoles, AtFactorTwoAndAHalfNoCapHangsOverTheCreaseOfTwoHo
 // of flat face between them was closed with triangles of 19.4 and 19.9 degrees at these factors.
 // Each face's seams now shorten the crease's edges (Field::smooth_sides on a piece).
 TEST(SdfBoxFilletedHole, AtTheBoxEdgeBesideTheFilletTheFaceOfTheFilletShortensTheCrease) {
-  const std::vector<SdfModel> models = sdf_models();
-  const auto m =
-      std::find_if(models.begin(), models.end(), [](const SdfModel& x) { return x.name == "box_filleted_hole"; });
-  ASSERT_NE(m, models.end());
-  const auto field = test::field_from_json(m->json);
-  for (const double factor : {5.5, 6.0}) {
-    AdaptiveOptions o;
-    o.factor = factor;
-    const PolygonizeResult r = polygonize_adaptive(*field, o);
-    EXPECT_EQ(r.stats.adaptive->creases.fallback, "") << factor;
-    EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0) << factor;
-    const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
-    EXPECT_GE(away.degrees, 20.0) << factor << ": away from creases, near " << away.where.transpose();
-  }
+  expect_angle_bounds_at_factors(sdf_model("box_filleted_hole"), {5.5, 6.0});
 }
 
 // With two holes crossing, the fillet begins 0.1-0.15 from the box's edges on the faces y = +-0.75.
@@ -319,20 +326,7 @@ TEST(SdfBoxFilletedHole, AtTheBoxEdgeBesideTheFilletTheFaceOfTheFilletShortensTh
 // and 17.4 degrees away from creases at these factors. Crease samples now take it where it begins
 // (Field::SeamSideAt::Seam).
 TEST(SdfBoxCrossingFilletedHoles, BesideTheFilletTheCreaseGradesToWhereTheFilletBegins) {
-  const std::vector<SdfModel> models = sdf_models();
-  const auto m = std::find_if(models.begin(), models.end(),
-                              [](const SdfModel& x) { return x.name == "box_crossing_filleted_holes"; });
-  ASSERT_NE(m, models.end());
-  const auto field = test::field_from_json(m->json);
-  for (const double factor : {2.75, 6.5}) {
-    AdaptiveOptions o;
-    o.factor = factor;
-    const PolygonizeResult r = polygonize_adaptive(*field, o);
-    EXPECT_EQ(r.stats.adaptive->creases.fallback, "") << factor;
-    EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0) << factor;
-    const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
-    EXPECT_GE(away.degrees, 20.0) << factor << ": away from creases, near " << away.where.transpose();
-  }
+  expect_angle_bounds_at_factors(sdf_model("box_crossing_filleted_holes"), {2.75, 6.5});
 }
 
 // 90k triangles and two runs: several times slower under the sanitizers (ctest label
