@@ -47,6 +47,29 @@ AngleStatistics angle_statistics(const Mesh& mesh) {
   return s;
 }
 
+CreaseAngles crease_angles(const Field& field, const Mesh& mesh, double near) {
+  if (!(near > 0)) near = 1e-6 * field.bounds().diagonal();
+  CreaseAngles r;
+  std::vector<char> on_crease(mesh.positions.size(), 0);
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    on_crease[v] = field.pieces(mesh.positions[v], near).size() > 1;
+    r.crease_vertices += static_cast<std::size_t>(on_crease[v]);
+  }
+  const auto angle = [](const Vec3& u, const Vec3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
+  for (const auto& t : mesh.triangles) {
+    const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+    const double m = std::min({angle(b - a, c - a), angle(c - b, a - b), angle(a - c, b - c)}) * 180 / std::numbers::pi;
+    if (on_crease[t[0]] || on_crease[t[1]] || on_crease[t[2]]) {
+      ++r.triangles_at_creases;
+      r.min_degrees_at_creases = std::min(r.min_degrees_at_creases, m);
+    } else {
+      ++r.triangles_away;
+      if (m < r.min_degrees_away) r.min_degrees_away = m, r.worst_away = (a + b + c) / 3;
+    }
+  }
+  return r;
+}
+
 void add_angle_statistics(const Mesh& mesh, PolygonizeStats& stats) { stats.angles = angle_statistics(mesh); }
 
 }  // namespace cdp

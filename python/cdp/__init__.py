@@ -27,7 +27,7 @@ def _accepts_models(function):
 
 
 for _name in ("polygonize", "marching_cubes", "marching_tetrahedra", "curvature", "project", "trace_creases",
-              "corner_normals", "evaluate"):
+              "corner_normals", "crease_angles", "evaluate"):
     globals()[_name] = _accepts_models(getattr(_cdp, _name))
 
 del _name

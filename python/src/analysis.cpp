@@ -5,6 +5,7 @@
 #include <cdp/core/crease_curves.h>
 #include <cdp/core/curvature.h>
 #include <cdp/core/errors.h>
+#include <cdp/core/mesh_angles.h>
 #include <cdp/core/newton_projection.h>
 #include <cdp/raytrace/evaluate.h>
 #include <cdp/raytrace/phong_normal.h>
@@ -173,6 +174,19 @@ py::array_t<double> corner_normals(const Field& field, py::handle vertices, py::
   return out;
 }
 
+py::dict crease_angles_py(const Field& field, py::handle vertices, py::handle faces, std::optional<double> near) {
+  const Mesh mesh = mesh_from(vertices, faces, py::none());
+  if (near && !(*near > 0 && std::isfinite(*near))) throw InvalidInputError("near must be positive and finite");
+  CreaseAngles a;
+  {
+    py::gil_scoped_release release;
+    a = crease_angles(field, mesh, near.value_or(0));
+  }
+  return py::dict("crease_vertices"_a = a.crease_vertices, "triangles_at_creases"_a = a.triangles_at_creases,
+                  "triangles_away"_a = a.triangles_away, "min_degrees_at_creases"_a = a.min_degrees_at_creases,
+                  "min_degrees_away"_a = a.min_degrees_away, "worst_away"_a = to_array(std::vector<double>{a.worst_away.x(), a.worst_away.y(), a.worst_away.z()}));
+}
+
 py::dict evaluate(const Field& field, py::handle vertices, py::handle faces, py::handle normals, long long views,
                   long long resolution, const std::string& projection, long long samples) {
   // normals: an (N, 3) array, "field" (the field's, each side's at creases, as `evaluate
@@ -282,6 +296,14 @@ void bind_analysis(py::module_& m) {
         "the exact ray-cast surface of its field, without cache and without the \"files\" entry. normals: an (N, 3) "
         "array, \"field\" (the field's normalized gradient, and at vertices on a crease of a CSG field each side's "
         "normal, as evaluate --normals field) or \"mesh\"/None (area-weighted vertex normals).");
+  m.def("crease_angles", &crease_angles_py, py::arg("field"), py::arg("vertices"), py::arg("faces"), py::kw_only(),
+        py::arg("near") = py::none(),
+        "The smallest triangle angles (degrees) at the field's creases and away from them, judged from the field: a "
+        "vertex is on a crease where two pieces of a CSG field (min, max, abs) meet within `near` of it (default 1e-6 "
+        "of the box diagonal), a triangle at a crease when a corner is. A dict: crease_vertices, "
+        "triangles_at_creases, triangles_away, min_degrees_at_creases, min_degrees_away (180 where there is no such "
+        "triangle) and worst_away (the centroid of the triangle of min_degrees_away). The adaptive method's bounds "
+        "are 20 degrees away from creases and 5 at them.");
   m.def("corner_normals", &corner_normals, py::arg("field"), py::arg("vertices"), py::arg("faces"),
         "The normal at each triangle corner, (F, 3, 3): the field's normalized gradient at the vertex, or, at a "
         "vertex on a crease of a CSG field (min, max, abs), the normal of the piece the triangle lies on, so that a "

@@ -118,6 +118,34 @@ def test_trace_creases_of_a_cube_and_a_capped_cylinder():
         cdp.trace_creases(cube, resolution=1)
 
 
+def test_crease_angles_tell_a_meshed_cubes_edges_from_its_faces():
+    """On a cube meshed along its creases, every triangle with a corner on an edge is at a
+    crease; the rest lie inside the faces. The counts add up, and the smallest angle of each
+    group is that of its triangles, computed here from the mesh."""
+    cube = cdp.expression("max(abs(x),max(abs(y),abs(z)))-1", bounds=[[-1.5] * 3, [1.5] * 3])
+    v, f, _ = cdp.polygonize(cube, factor=2)
+    a = cdp.crease_angles(cube, v, f)
+    on_edge = (np.abs(v) > 1 - 1e-9).sum(axis=1) >= 2
+    at = on_edge[f].any(axis=1)
+    assert a["crease_vertices"] == on_edge.sum() > 0
+    assert (a["triangles_at_creases"], a["triangles_away"]) == (at.sum(), (~at).sum())
+    p = v[f]
+    def smallest(p):
+        angles = []
+        for i in range(3):
+            u, w = p[:, (i + 1) % 3] - p[:, i], p[:, (i + 2) % 3] - p[:, i]
+            angles.append(np.degrees(np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), (u * w).sum(axis=1))))
+        return np.min(angles, axis=0)
+    assert np.isclose(a["min_degrees_at_creases"], smallest(p[at]).min())
+    assert np.isclose(a["min_degrees_away"], smallest(p[~at]).min())
+    assert a["worst_away"].shape == (3,)
+    # A smooth field reports no pieces: no triangle is at a crease.
+    b = cdp.crease_angles(cdp.sphere(radius=1), v, f)
+    assert b["crease_vertices"] == b["triangles_at_creases"] == 0 and b["min_degrees_at_creases"] == 180
+    with pytest.raises(ValueError):
+        cdp.crease_angles(cube, v, f, near=-1)
+
+
 def test_corner_normals_are_each_sides_on_a_cubes_edges():
     cube = cdp.expression("max(abs(x),max(abs(y),abs(z)))-1", bounds=[[-1.5] * 3, [1.5] * 3])
     v, f, _ = cdp.polygonize(cube, factor=2)
