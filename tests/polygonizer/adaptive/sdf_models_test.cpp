@@ -8,13 +8,15 @@
 #include <gtest/gtest.h>
 
 #include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/mesh_angles.h>
 #include <cdp/core/mesh_topology.h>
 #include <cdp/io/field_factory.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
+#include <fstream>
 #include <initializer_list>
-#include <map>
-#include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -34,122 +36,22 @@ struct SdfModel {
   bool creased = false;  // has creases the mesher must follow
 };
 
-// {"type": "expression", "value": value, "define": {...}, "bounds": ±half}
-std::string model(const std::string& value, double half, const std::map<std::string, std::string>& define = {}) {
-  std::ostringstream s;
-  s << R"({"type": "expression", "value": ")" << value << R"(", )";
-  if (!define.empty()) {
-    s << R"("define": {)";
-    bool first = true;
-    for (const auto& [name, formula] : define) {
-      s << (first ? "" : ", ") << '"' << name << R"(": ")" << formula << '"';
-      first = false;
-    }
-    s << "}, ";
-  }
-  s << R"("bounds": [[)" << -half << ", " << -half << ", " << -half << "], [" << half << ", " << half << ", " << half
-    << "]]}";
-  return s.str();
-}
-
-// Inigo Quilez's polynomial smooth minimum of a and b with radius k, as named sub-expressions.
-std::map<std::string, std::string> smooth_min(const std::string& a, const std::string& b, double k) {
-  const std::string K = std::to_string(k);
-  return {{"a", a}, {"b", b}, {"h", "clamp(0.5+0.5*(b-a)/" + K + ",0,1)"}, {"u", "b+h*(a-b)-" + K + "*h*(1-h)"}};
-}
-
-const std::string kRoundedBox = "sqrt(max(abs(x)-0.6,0)^2+max(abs(y)-0.4,0)^2+max(abs(z)-0.3,0)^2)-0.15";
-const std::string kSphere = "sqrt((x-0.5)^2+(y-0.3)^2+z^2)-0.45";
-// The rounded box as cdp.sdf writes it (Inigo Quilez's exact distance, length(max(q, 0)) +
-// min(max(q), 0) - r, in one hypot): its max(q) switches at the sharp edges of its core, inside
-// the surface, where the min hides it.
-const std::map<std::string, std::string> kSdfRoundedBox = {
-    {"q0", "abs(x)-0.7"}, {"q1", "abs(y)-0.4"}, {"q2", "abs(z)-0.3"}, {"m", "min(max(q0,q1,q2),0)"},
-    {"r", "hypot(max(q0,0),max(q1,0),max(q2,0),m)+2*m-0.1"}};
-std::map<std::string, std::string> with(std::map<std::string, std::string> a, const std::map<std::string, std::string>& b) {
-  a.insert(b.begin(), b.end());
-  return a;
-}
-
+// The models of experiments/sdf_models/models.json (what each is and why it is there: its
+// "about"), which scripts/sdf_sweep.py sweeps over many more sizings for make reproduce.
 std::vector<SdfModel> sdf_models() {
-  std::vector<SdfModel> v = {
-      {"rounded_box", model(kRoundedBox, 1.1), 1, 0},
-      {"smooth_union", model("u", 1.2, smooth_min(kRoundedBox, kSphere, 0.2)), 1, 0},
-      {"smooth_union_minus_cylinder", model("max(u, 0.2-sqrt(x^2+y^2))", 1.2, smooth_min(kRoundedBox, kSphere, 0.2)), 1,
-       1, true},
-      {"sdf_rounded_box_minus_cylinder", model("max(r, 0.2-hypot(x,y))", 1.0, kSdfRoundedBox), 1, 1, true},
-      // A rounded block with a ball blended on and a hole through both (cdp.sdf: rounded_box((1.6,
-      // 1, 0.8), 0.1) | sphere(0.55, center=(0.6, 0.3, 0.3)).k(0.2) - cylinder(0.2)).
-      {"blended_block",
-       model("max(u, 0.2-hypot(x,y))", 1.3, with(kSdfRoundedBox, smooth_min("r", "hypot(x-0.6,y-0.3,z-0.3)-0.55", 0.2))),
-       1, 1, true},
-      // A capsule chain: each capsule's clamp is C1 where its cylinder meets its caps.
-      {"capsules",
-       model("min(c1, c2)", 1.4,
-             {{"c1", "hypot(x+0.8-1.2*clamp((x+0.8)/1.2,0,1), y, z)-0.25"},
-              {"c2", "hypot(x-0.4, y-clamp(y,0,0.9), z)-0.2"}}),
-       1, 0, true},
-      {"onion", model("abs(" + kRoundedBox + ")-0.04", 1.2), 2, 0},
-      // fogleman/sdf's README model: sphere(1) & box(1.5) - the three cylinders(0.5).
-      {"fogleman_readme",
-       model("max(max(sqrt(x^2+y^2+z^2)-1, max(abs(x),abs(y),abs(z))-0.75), -min(hypot(y,z)-0.5, hypot(x,z)-0.5, "
-             "hypot(x,y)-0.5))",
-             1.2),
-       -1, -1, true},
-      {"drilled_sphere", model("max(sqrt(x^2+y^2+z^2)-1, 0.05-hypot(x,y))", 1.2), 1, 1, true},
-      // Two pipes of equal radius crossing at right angles, in a box: the two ellipses where the
-      // pipes meet cross at the top and bottom, where the pipes are tangent.
-      {"crossed_pipes", model("max(min(hypot(y,z)-0.5, hypot(x,z)-0.5), max(abs(x),abs(y),abs(z))-1)", 1.2), 1, 0,
-       true},
-      // A box with a ball blended onto one edge: the edge's crease fades out inside the blend, from
-      // both ends, and its switch goes on over the ball as a seam between the two faces' patches.
-      {"box_blended_ball",
-       model("u", 1.4, smooth_min("max(abs(x),abs(y),abs(z))-0.75", "hypot(x-0.75,y-0.75,z)-0.5", 0.25)), 1, 0, true},
-      // fogleman/sdf's tetrahedron (max(|x + y| - z, |x - y| + z)) with a ball blended in from
-      // inside, which bulges its faces: each abs hides behind the max on two faces and shows on
-      // the others, so a piece that flips the max must not leave it free.
-      {"tetrahedron_blended_ball",
-       model("u", 1.5, smooth_min("(max(abs(x+y)-z, abs(x-y)+z)-1)*0.5773502691896258", "hypot(x,y,z)-0.5", 0.2)), 1, 0,
-       true},
-      // A box smoothly intersected with a ball (the polynomial smooth maximum, radius 0.2): the
-      // box's corners are rounded off by the ball, its edges fade into the blend.
-      {"box_smooth_intersection_ball",
-       model("b+h*(a-b)+0.2*h*(1-h)", 1.0,
-             {{"a", "max(abs(x),abs(y),abs(z))-0.75"}, {"b", "hypot(x,y,z)-1"}, {"h", "clamp(0.5-0.5*(b-a)/0.2,0,1)"}}),
-       1, 0, true},
-      // A box with a hole cut by a smooth difference (a fillet of 0.1 round the hole): inside the
-      // hole the blend hides the box, where the pieces of its faces are all one function.
-      {"box_filleted_hole",
-       model("d0-(d1+d0)*h+0.1*h*(1-h)", 0.9,
-             {{"d0", "max(abs(x)-0.75,abs(y)-0.75,abs(z)-0.75)"}, {"d1", "hypot(x,y)-0.5"}, {"h", "clamp(0.5-(d1+d0)*5,0,1)"}}),
-       1, 1, true},
-      // Two crossing holes cut by one smooth difference: each face, its fillet and its hole's
-      // wall are one smooth patch, bounded outside by the face's edges (coded by the box's
-      // choice, the holes' hidden) and inside where the holes cross (coded by the holes' choice,
-      // the box's hidden); a box with four mouths joined inside, genus 3.
-      {"box_crossing_filleted_holes",
-       model("d0-(d1+d0)*h+0.1*h*(1-h)", 0.9,
-             {{"d0", "max(abs(x)-0.75,abs(y)-0.75,abs(z)-0.75)"},
-              {"d1", "min(hypot(y,z)-0.5, hypot(x,z)-0.5)"},
-              {"h", "clamp(0.5-(d1+d0)*5,0,1)"}}),
-       1, 3, true},
-      // fogleman/sdf's README model with its holes cut by a smooth difference (k = 0.1): six
-      // mouths joined inside, genus 5.
-      {"fogleman_filleted_holes",
-       model("d0-(d1+d0)*h+0.1*h*(1-h)", 0.9,
-             {{"d0", "max(hypot(x,y,z)-1, max(abs(x),abs(y),abs(z))-0.75)"},
-              {"d1", "min(hypot(y,z)-0.5, hypot(x,z)-0.5, hypot(x,y)-0.5)"},
-              {"h", "clamp(0.5-(d1+d0)*5,0,1)"}}),
-       1, 5, true},
-      // A Menger sponge of level 1: creases meeting at the openings' corners and at the corners
-      // of the cavity, where six meet and each wall plane touches the corner from two quadrants.
-      {"menger_level1",
-       model("max(max(abs(x),abs(y),abs(z))-1, -min(max(abs(x),abs(y))-0.4, max(abs(y),abs(z))-0.4, "
-             "max(abs(x),abs(z))-0.4))",
-             1.3),
-       1, 5, true},
-  };
-  return v;
+  static const std::vector<SdfModel> models = [] {
+    const std::string path = std::string(CDP_SOURCE_DIR) + "/experiments/sdf_models/models.json";
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error("cannot read " + path);
+    const nlohmann::json doc = nlohmann::json::parse(in);
+    std::vector<SdfModel> v;
+    for (const nlohmann::json& m : doc.at("models"))
+      v.push_back({m.at("name").get<std::string>(), m.at("field").dump(),
+                   m.at("components").is_null() ? -1 : m.at("components").get<int>(),
+                   m.at("genus").is_null() ? -1 : m.at("genus").get<int>(), m.at("creased").get<bool>()});
+    return v;
+  }();
+  return models;
 }
 
 struct SdfCase {
@@ -171,33 +73,14 @@ std::string sdf_case_name(const testing::TestParamInfo<SdfCase>& info) {
 
 class SdfModels : public testing::TestWithParam<SdfCase> {};
 
-// The smallest angle of the triangles none of whose corners lies on a crease (where two pieces of
-// the field meet within 1e-6 of the diagonal): the quality bound away from creases, measured from
-// the field rather than from the mesher's own record of its crease vertices.
+// The quality bound away from creases, measured from the field (crease_angles).
 struct AwayFromCreases {
   double degrees = 180;
   Vec3 where = Vec3::Zero();  // the centroid of that triangle
 };
 AwayFromCreases min_angle_away_from_creases(const Field& field, const Mesh& mesh) {
-  const double near = 1e-6 * field.bounds().diagonal();
-  std::vector<char> on_crease(mesh.positions.size());
-  for (std::size_t v = 0; v < mesh.positions.size(); ++v) on_crease[v] = field.pieces(mesh.positions[v], near).size() > 1;
-  AwayFromCreases best;
-  for (const auto& t : mesh.triangles) {
-    if (on_crease[static_cast<std::size_t>(t[0])] || on_crease[static_cast<std::size_t>(t[1])] ||
-        on_crease[static_cast<std::size_t>(t[2])])
-      continue;
-    for (int c = 0; c < 3; ++c) {
-      const Vec3& p = mesh.positions[static_cast<std::size_t>(t[c])];
-      const Vec3 u = mesh.positions[static_cast<std::size_t>(t[(c + 1) % 3])] - p;
-      const Vec3 w = mesh.positions[static_cast<std::size_t>(t[(c + 2) % 3])] - p;
-      const double a = std::atan2(u.cross(w).norm(), u.dot(w)) * 180 / std::numbers::pi;
-      if (a < best.degrees)
-        best = {a, (mesh.positions[static_cast<std::size_t>(t[0])] + mesh.positions[static_cast<std::size_t>(t[1])] +
-                    mesh.positions[static_cast<std::size_t>(t[2])]) / 3};
-    }
-  }
-  return best;
+  const CreaseAngles a = crease_angles(field, mesh);
+  return {a.min_degrees_away, a.worst_away};
 }
 
 // The suite's model called `name`.
@@ -276,7 +159,7 @@ INSTANTIATE_TEST_SUITE_P(Adaptive, SdfModels, testing::ValuesIn(all_cases()), sd
 // (0.4) the factors between the suite's missed the bounds: 17.9 degrees away from the creases at
 // 3.2, 0.37 at the rim at 4.25.
 TEST(SdfDrilledSphere, EveryQuarterFactorFromOneToSixMeetsTheAngleBounds) {
-  const auto field = test::field_from_json(model("max(sqrt(x^2+y^2+z^2)-1, 0.05-hypot(x,y))", 1.2));
+  const auto field = test::field_from_json(sdf_model("drilled_sphere").json);
   for (int quarter = 4; quarter <= 24; ++quarter) {
     AdaptiveOptions o;
     o.factor = quarter / 4.0;
