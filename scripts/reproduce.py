@@ -45,12 +45,14 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--build", default="build")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--only", nargs="*", help="experiments to run (default: all, and the topology sweep: name it as topology_sweep)")
+    ap.add_argument("--only", nargs="*", help="experiments to run (default: all, and the two sweeps: name them as topology_sweep and "
+                    "sdf_sweep)")
     a = ap.parse_args()
     start = time.time()
     exe = os.path.join(a.build, "bin", "experiment")
     with_failures = []
-    for name in [n for n in a.only or EXPERIMENTS if n != "topology_sweep"]:
+    sweeps = ("topology_sweep", "sdf_sweep")
+    for name in [n for n in a.only or EXPERIMENTS if n not in sweeps]:
         code = step("experiment " + name, [exe, os.path.join("experiments", name + ".json"), "--jobs", str(a.jobs),
                                            "--out", os.path.join("results", name)], tolerate=(SOME_RUNS_FAILED,))
         if code == SOME_RUNS_FAILED:
@@ -62,6 +64,9 @@ def main():
     # A sweep of its own (320 runs, about 1.5 minutes on 2 cores): with --only, when named.
     if not a.only or "topology_sweep" in a.only:
         step("topology sweep", [PY, "scripts/topology_sweep.py", "--build", a.build, "--jobs", str(a.jobs)])
+    # The SDF models at 38 sizings each (646 runs, about 1.5 minutes on 2 cores): with --only, when named.
+    if not a.only or "sdf_sweep" in a.only:
+        step("SDF sweep", [PY, "scripts/sdf_sweep.py", "--build", a.build, "--jobs", str(a.jobs)])
     if os.path.exists(os.path.join(ROOT, "scripts", "figures.py")):
         step("figures", [PY, "scripts/figures.py", "--build", a.build, "--jobs", str(a.jobs)])
     step("results/README.md", [PY, "scripts/results_readme.py", "--seconds", str(round(time.time() - start))])

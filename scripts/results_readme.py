@@ -31,11 +31,12 @@ def main():
             text = f.read()
         parts += [text.replace("\n## ", "\n### ").replace("# ", "## ", 1), "",
                   "![sharp features](sharp_features.png)", ""]
-    topology = os.path.join(r, "topology_sweep.md")
-    if os.path.exists(topology):
-        with open(topology) as f:
-            text = f.read()
-        parts += [text.replace("# ", "## ", 1), ""]
+    for name in ("topology_sweep.md", "sdf_sweep.md"):
+        p = os.path.join(r, name)
+        if os.path.exists(p):
+            with open(p) as f:
+                text = f.read()
+            parts += [text.replace("# ", "## ", 1), ""]
     plots = sorted(glob.glob(os.path.join(r, "plots", "*.png")))
     if plots:
         parts += ["## Plots", ""] + ["![{0}](plots/{0})".format(os.path.basename(p)) for p in plots] + [""]
