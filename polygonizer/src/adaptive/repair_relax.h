@@ -23,7 +23,7 @@ namespace cdp::adaptive::repair {
 // in the tangent plane (see repair_relax.cpp), judged and applied as above; a mesh they leave
 // within the aim is not touched by them. The mesh and the evaluation counts are the same on
 // any number of threads.
-// 	hrow CancelledError (polled in every pass over the vertices).
+// \throw CancelledError (polled in every pass over the vertices).
 void relax(RepairContext& ctx);
 
 // The mean over live triangles of the longest edge over the shortest (1 for equilateral ones;
