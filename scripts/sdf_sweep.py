@@ -15,9 +15,10 @@ import concurrent.futures
 import csv
 import json
 import os
-import subprocess
 import sys
 import tempfile
+
+from sweep_lib import polygonize, topology
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MODELS = os.path.join(ROOT, "experiments", "sdf_models", "models.json")
@@ -32,25 +33,6 @@ AT_CREASES, AWAY = 5.0, 20.0
 REFERENCE_CELLS = (1 / 150, 1 / 200)
 # A run longer than this is stopped and counted as an error (the slowest takes a few seconds).
 RUN_SECONDS = 300
-
-
-def topology(stats):
-    """Components and total genus of a closed manifold mesh from its counts (E = 3F/2)."""
-    c, v, f = stats["components"], stats["vertices"], stats["triangles"]
-    return c, c - (v - f // 2) // 2
-
-
-def polygonize(exe, field, args, base):
-    cmd = [exe, "--quiet", "--threads", "1"] + args + [field, "-o", base + ".ply", "--stats", base + ".json"]
-    try:
-        r = subprocess.run(cmd, capture_output=True, text=True, timeout=RUN_SECONDS)
-    except subprocess.TimeoutExpired:
-        return None, "stopped after {} s".format(RUN_SECONDS)
-    if r.returncode != 0:
-        lines = r.stderr.strip().splitlines()
-        return None, lines[-1] if lines else "exit {}".format(r.returncode)
-    with open(base + ".json") as f:
-        return json.load(f), ""
 
 
 def verdict(model, ref, stats, angles):
@@ -95,8 +77,9 @@ def main():
         side = max(hi - lo for lo, hi in zip(*m["field"]["bounds"]))
         refs = []
         for i, share in enumerate(REFERENCE_CELLS):
+            base = os.path.join(work.name, "{}.mc{}".format(m["name"], i))
             stats, error = polygonize(exe, paths[m["name"]], ["--method", "mc", "--cell", repr(side * share)],
-                                      os.path.join(work.name, "{}.mc{}".format(m["name"], i)))
+                                      base + ".ply", base + ".json", RUN_SECONDS)
             if stats is None:
                 raise SystemExit("sdf_sweep: marching cubes failed on {}: {}".format(m["name"], error))
             refs.append(topology(stats))
@@ -108,7 +91,8 @@ def main():
 
     def job(m, kind, value):
         base = os.path.join(work.name, "{}.{}{}".format(m["name"], kind, value))
-        stats, error = polygonize(exe, paths[m["name"]], ["--" + kind, value], base)
+        stats, error = polygonize(exe, paths[m["name"]], ["--" + kind, value], base + ".ply", base + ".json",
+                                  RUN_SECONDS)
         row = {"model": m["name"], "run": "{} {}".format(kind, value)}
         if stats is None:
             row.update(verdict="error", misses=error)

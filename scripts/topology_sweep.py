@@ -13,10 +13,11 @@ import concurrent.futures
 import csv
 import json
 import os
-import subprocess
 import tempfile
 
 import numpy as np
+
+from sweep_lib import polygonize, topology
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -49,25 +50,6 @@ def blobs(seed):
     return {"type": "blobs", "kernel": "wyvill", "threshold": 0.3, "blobs": items}
 
 
-def topology(stats):
-    """Components and total genus of a closed manifold mesh from its counts (E = 3F/2)."""
-    c, v, f = stats["components"], stats["vertices"], stats["triangles"]
-    return c, c - (v - f // 2) // 2
-
-
-def polygonize(exe, field, args, out_ply, out_stats):
-    cmd = [exe, "--quiet", "--threads", "1"] + args + [field, "-o", out_ply, "--stats", out_stats]
-    try:
-        r = subprocess.run(cmd, capture_output=True, text=True, timeout=RUN_SECONDS)
-    except subprocess.TimeoutExpired:
-        return None, "stopped after {} s".format(RUN_SECONDS)
-    if r.returncode != 0:
-        lines = r.stderr.strip().splitlines()
-        return None, lines[-1] if lines else "exit {}".format(r.returncode)
-    with open(out_stats) as f:
-        return json.load(f), ""
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--build", default="build")
@@ -87,7 +69,7 @@ def main():
     def job(name, key, args):
         field = os.path.join(fields_dir, name + ".json")
         base = os.path.join(work.name, "{}.{}".format(name, key))
-        stats, error = polygonize(exe, field, args, base + ".ply", base + ".json")
+        stats, error = polygonize(exe, field, args, base + ".ply", base + ".json", RUN_SECONDS)
         for ext in (".ply", ".json"):
             if os.path.exists(base + ext):
                 os.remove(base + ext)
