@@ -6,6 +6,16 @@
 #include <numbers>
 
 namespace cdp {
+namespace {
+
+// The smallest corner angle of triangle (a, b, c) in degrees, each from atan2(|cross|, dot):
+// accurate for slivers too.
+double smallest_angle_degrees(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const auto angle = [](const Vec3& u, const Vec3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
+  return std::min({angle(b - a, c - a), angle(c - b, a - b), angle(a - c, b - c)}) * 180 / std::numbers::pi;
+}
+
+}  // namespace
 
 AngleStatistics angle_statistics(const Mesh& mesh) {
   constexpr int kBins = 60;
@@ -22,8 +32,7 @@ AngleStatistics angle_statistics(const Mesh& mesh) {
       ++s.degenerate;
       continue;
     }
-    const auto angle = [](const Vec3& u, const Vec3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
-    const double m = std::min({angle(b - a, c - a), angle(c - b, a - b), angle(a - c, b - c)}) * 180 / std::numbers::pi;
+    const double m = smallest_angle_degrees(a, b, c);
     ++s.triangles;
     min_deg = std::min(min_deg, m);
     sum_min += m;
@@ -55,10 +64,9 @@ CreaseAngles crease_angles(const Field& field, const Mesh& mesh, double near) {
     on_crease[v] = field.pieces(mesh.positions[v], near).size() > 1;
     r.crease_vertices += static_cast<std::size_t>(on_crease[v]);
   }
-  const auto angle = [](const Vec3& u, const Vec3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
   for (const auto& t : mesh.triangles) {
     const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
-    const double m = std::min({angle(b - a, c - a), angle(c - b, a - b), angle(a - c, b - c)}) * 180 / std::numbers::pi;
+    const double m = smallest_angle_degrees(a, b, c);
     if (on_crease[t[0]] || on_crease[t[1]] || on_crease[t[2]]) {
       ++r.triangles_at_creases;
       r.min_degrees_at_creases = std::min(r.min_degrees_at_creases, m);

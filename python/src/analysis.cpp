@@ -184,7 +184,8 @@ py::dict crease_angles_py(const Field& field, py::handle vertices, py::handle fa
   }
   return py::dict("crease_vertices"_a = a.crease_vertices, "triangles_at_creases"_a = a.triangles_at_creases,
                   "triangles_away"_a = a.triangles_away, "min_degrees_at_creases"_a = a.min_degrees_at_creases,
-                  "min_degrees_away"_a = a.min_degrees_away, "worst_away"_a = to_array(std::vector<double>{a.worst_away.x(), a.worst_away.y(), a.worst_away.z()}));
+                  "min_degrees_away"_a = a.min_degrees_away,
+                  "worst_away"_a = to_array(std::vector<double>{a.worst_away.x(), a.worst_away.y(), a.worst_away.z()}));
 }
 
 py::dict evaluate(const Field& field, py::handle vertices, py::handle faces, py::handle normals, long long views,

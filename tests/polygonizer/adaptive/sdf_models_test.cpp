@@ -73,16 +73,6 @@ std::string sdf_case_name(const testing::TestParamInfo<SdfCase>& info) {
 
 class SdfModels : public testing::TestWithParam<SdfCase> {};
 
-// The quality bound away from creases, measured from the field (crease_angles).
-struct AwayFromCreases {
-  double degrees = 180;
-  Vec3 where = Vec3::Zero();  // the centroid of that triangle
-};
-AwayFromCreases min_angle_away_from_creases(const Field& field, const Mesh& mesh) {
-  const CreaseAngles a = crease_angles(field, mesh);
-  return {a.min_degrees_away, a.worst_away};
-}
-
 // The suite's model called `name`.
 // \throw std::out_of_range where there is none.
 SdfModel sdf_model(const std::string& name) {
@@ -100,8 +90,9 @@ void expect_angle_bounds_at_factors(const SdfModel& m, std::initializer_list<dou
     const PolygonizeResult r = polygonize_adaptive(*field, o);
     EXPECT_EQ(r.stats.adaptive->creases.fallback, "") << m.name << " " << factor;
     EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0) << m.name << " " << factor;
-    const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
-    EXPECT_GE(away.degrees, 20.0) << m.name << " " << factor << ": away from creases, near " << away.where.transpose();
+    const CreaseAngles away = crease_angles(*field, r.mesh);
+    EXPECT_GE(away.min_degrees_away, 20.0)
+        << m.name << " " << factor << ": away from creases, near " << away.worst_away.transpose();
   }
 }
 
@@ -133,11 +124,12 @@ TEST_P(SdfModels, MeshWithTheirCreasesAndGoodTriangles) {
     EXPECT_GT(r.stats.adaptive->creases.curves, 0u) << m.name;
   }
   const double min_angle = r.stats.adaptive->min_angle_degrees;
-  const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
+  const CreaseAngles away = crease_angles(*field, r.mesh);
   EXPECT_GE(min_angle, m.creased ? 5.0 : 20.0) << m.name;
-  EXPECT_GE(away.degrees, 20.0) << m.name << ": away from creases, near " << away.where.transpose();
+  EXPECT_GE(away.min_degrees_away, 20.0) << m.name << ": away from creases, near " << away.worst_away.transpose();
   std::cout << "sdf-model " << m.name << " " << sdf_case_name({GetParam(), 0}) << ": " << t.triangles << " triangles, "
-            << r.stats.seconds << " s, min angle " << min_angle << ", away from creases " << away.degrees << "\n";
+            << r.stats.seconds << " s, min angle " << min_angle << ", away from creases " << away.min_degrees_away
+            << "\n";
 }
 
 std::vector<SdfCase> all_cases() {
@@ -169,8 +161,8 @@ TEST(SdfDrilledSphere, EveryQuarterFactorFromOneToSixMeetsTheAngleBounds) {
     EXPECT_EQ(t.genus, 1) << o.factor;
     EXPECT_EQ(r.stats.adaptive->creases.fallback, "") << o.factor;
     EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0) << o.factor;
-    const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
-    EXPECT_GE(away.degrees, 20.0) << o.factor << ": away from creases, near " << away.where.transpose();
+    const CreaseAngles away = crease_angles(*field, r.mesh);
+    EXPECT_GE(away.min_degrees_away, 20.0) << o.factor << ": away from creases, near " << away.worst_away.transpose();
   }
 }
 
@@ -190,8 +182,8 @@ TEST(SdfFoglemanFilletedHoles, AtFactorTwoAndAHalfNoCapHangsOverTheCreaseOfTwoHo
   EXPECT_EQ(t.genus, m.genus);
   EXPECT_EQ(r.stats.adaptive->creases.fallback, "");
   EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0);
-  const AwayFromCreases away = min_angle_away_from_creases(*field, r.mesh);
-  EXPECT_GE(away.degrees, 20.0) << "away from creases, near " << away.where.transpose();
+  const CreaseAngles away = crease_angles(*field, r.mesh);
+  EXPECT_GE(away.min_degrees_away, 20.0) << "away from creases, near " << away.worst_away.transpose();
 }
 
 // The box's edge y = z = -0.75 passes 0.15 from where the hole's fillet begins on the face
