@@ -11,6 +11,7 @@
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_angles.h>
+#include <cdp/core/models/level_shift.h>
 #include <cdp/io/atomic_write.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/io/mesh_io.h>
@@ -21,6 +22,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -64,7 +66,7 @@ int main(int argc, char** argv) {
     std::string field_path, out_path, stats_path, method = "adaptive";
     bool quiet = false, progress_lines = false;
     app.add_option("FIELD.json", field_path, "the field file")->required()->type_name("")->check(cdp::app::path_name());
-    app.add_option("-o,--output", out_path, "the mesh file: .ply, .obj or .off")
+    app.add_option("-o,--output", out_path, "the mesh file: .ply, .obj, .off or .stl")
         ->required()
         ->type_name("OUT")
         ->check(cdp::app::path_name());
@@ -95,8 +97,8 @@ int main(int argc, char** argv) {
     if (const std::string flag = flags.not_applying(method); !flag.empty())
       throw cdp::InvalidInputError(flag + " does not apply to --method " + method);
     const std::string ext = std::filesystem::path(out_path).extension().string();
-    if (ext != ".ply" && ext != ".obj" && ext != ".off")
-      throw cdp::InvalidInputError("output " + out_path + ": the extension must be .ply, .obj or .off");
+    if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl")
+      throw cdp::InvalidInputError("output " + out_path + ": the extension must be .ply, .obj, .off or .stl");
 
     // Every output is checked before the work starts: an unwritable --stats is found before
     // minutes of meshing, and no output may replace another output or the field file.
@@ -112,6 +114,8 @@ int main(int argc, char** argv) {
 
     // The options once; each repetition (--repeat) then runs the method again with them.
     cdp::PolygonizeRequest request = cdp::polygonize_request(method, flags.given());
+    std::optional<cdp::LevelShift> shifted;
+    const cdp::Field& surface = request.level != 0 ? shifted.emplace(*field, request.level) : *field;
     cdp::AdaptiveOptions& adaptive_options = request.adaptive;
     cdp::MarchingOptions& marching_options = request.marching;
     adaptive_options.progress = marching_options.progress = progress;
@@ -121,10 +125,10 @@ int main(int argc, char** argv) {
     adaptive_options.phase = reporter.phase_callback();
     const auto run_once = [&]() -> cdp::PolygonizeResult {
       const cdp::app::CancellableRun cancellable;
-      if (adaptive) return name_field(field_path, [&] { return cdp::polygonize_adaptive(*field, adaptive_options); });
+      if (adaptive) return name_field(field_path, [&] { return cdp::polygonize_adaptive(surface, adaptive_options); });
       reporter.phase("meshing");
       return name_field(field_path, [&] {
-        return method == "mc" ? cdp::marching_cubes(*field, marching_options) : cdp::marching_tetrahedra(*field, marching_options);
+        return method == "mc" ? cdp::marching_cubes(surface, marching_options) : cdp::marching_tetrahedra(surface, marching_options);
       });
     };
 
@@ -151,8 +155,8 @@ int main(int argc, char** argv) {
     reporter.phase("writing " + out_path);
     cdp::write_mesh(result.mesh, out_path);
     if (!stats_path.empty()) {
-      // Every method's triangles by their smallest angle (see <cdp/core/mesh_angles.h>).
-      cdp::add_angle_statistics(result.mesh, result.stats);
+      // Every method's triangles by their smallest angle and the mesh's topology: the summary.
+      cdp::add_mesh_summary(result.mesh, result.stats);
       nlohmann::json j = cdp::to_json(result.stats);
       j["field"] = field_path;
       if (repeat > 1) {

@@ -47,7 +47,7 @@ def main():
     # points and its derivatives come from central differences (python/README.md has the steps).
     field = cdp.callable_field(wavy_torus, bounds=((-1.5, -1.5, -0.5), (1.5, 1.5, 0.5)), trace=not args.black_box)
     start = time.perf_counter()
-    V, F, N, stats = cdp.polygonize(field, method="adaptive", factor=args.factor, return_normals=True)
+    V, F, N, stats = cdp.polygonize(field, method="adaptive", factor=args.factor)
     seconds = time.perf_counter() - start
     curvature = cdp.curvature(field, V)
 

@@ -46,7 +46,7 @@ def main():
     print("traced: an expression field" if field.type == "expression" else "a black box: called on every batch")
     start = time.perf_counter()
     try:
-        V, F, stats = cdp.polygonize(field, factor=args.factor)
+        V, F, _, stats = cdp.polygonize(field, factor=args.factor)
     except (cdp.LimitExceededError, cdp.NoSurfaceError) as e:
         print(f"failed after {time.perf_counter() - start:.2f} s: {e}")
         return 1

@@ -73,7 +73,7 @@ def main():
         model.save(args.out / f"{name}.json")
         start = time.perf_counter()
         try:
-            V, F, N, stats = cdp.polygonize(model, tolerance=args.tolerance, return_normals=True)
+            V, F, N, stats = cdp.polygonize(model, tolerance=args.tolerance)
         except (RuntimeError, ValueError) as e:  # cdp.NoSurfaceError, cdp.LimitExceededError, ...
             print(f"{name}: FAILED after {time.perf_counter() - start:.2f} s: {type(e).__name__}: {e}")
             failed.append(name)

@@ -18,6 +18,9 @@ PolygonizeFlags::PolygonizeFlags(CLI::App& app) {
       case OptionKind::Number:
         o = to->add_option(flag, numbers_.emplace_back(0), help)->transform(positive_number());
         break;
+      case OptionKind::Real:
+        o = to->add_option(flag, numbers_.emplace_back(0), help)->transform(number());
+        break;
       case OptionKind::Integer:
         o = to->add_option(flag, integers_.emplace_back(0), help)->transform(integer_in(spec.lo, spec.hi));
         break;
@@ -52,7 +55,8 @@ nlohmann::json PolygonizeFlags::given() const {
     const OptionSpec& spec = *e.spec;
     const std::string name(spec.name);
     switch (spec.kind) {
-      case OptionKind::Number: j[name] = e.option->as<double>(); break;
+      case OptionKind::Number:
+      case OptionKind::Real: j[name] = e.option->as<double>(); break;
       case OptionKind::Integer: j[name] = e.option->as<long long>(); break;
       case OptionKind::Choice: j[name] = e.option->as<std::string>(); break;
       case OptionKind::Flag: j[name] = true; break;

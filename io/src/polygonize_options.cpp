@@ -54,6 +54,8 @@ const std::vector<OptionSpec>& table() {
       {"face_ambiguity", OptionKind::Choice, OptionMethods::MarchingCubes, "RULE", "asymptotic_decider", "",
        {"asymptotic_decider", "join_inside", "separate_inside"}, {}, 0, 0,
        "how Marching Cubes splits an ambiguous face: asymptotic_decider, join_inside or separate_inside"},
+      {"level", OptionKind::Real, OptionMethods::All, "C", "0", "", {}, {}, 0, 0,
+       "mesh the surface F = C instead of F = 0 (an iso-value; the inside is where F < C)"},
       {"seed_resolution", OptionKind::Integer, OptionMethods::All, "N", "32", "", {}, {}, 2, INT_MAX,
        "cells along the longest side of the seed grid"},
       {"max_triangles", OptionKind::Integer, OptionMethods::All, "N", "", "", {}, {}, 1, INT_MAX,
@@ -94,6 +96,12 @@ nlohmann::json checked(const OptionSpec& spec, const nlohmann::json& v) {
       if (!v.is_number()) throw InvalidInputError(name + " must be a positive number, not " + v.dump());
       const double x = v.get<double>();
       if (!(std::isfinite(x) && x > 0)) throw InvalidInputError(name + " must be a positive number, not " + number_text(x));
+      return x;
+    }
+    case OptionKind::Real: {
+      if (!v.is_number()) throw InvalidInputError(name + " must be a number, not " + v.dump());
+      const double x = v.get<double>();
+      if (!std::isfinite(x)) throw InvalidInputError(name + " must be a finite number, not " + number_text(x));
       return x;
     }
     case OptionKind::Integer: {
@@ -143,6 +151,7 @@ void apply(PolygonizeRequest& r, std::string_view name, const nlohmann::json& v)
     m.face_ambiguity = v == "join_inside"       ? FaceAmbiguity::JoinInside
                        : v == "separate_inside" ? FaceAmbiguity::SeparateInside
                                                 : FaceAmbiguity::AsymptoticDecider;
+  else if (name == "level") r.level = v.get<double>();
   else if (name == "seed_resolution") a.seed_resolution = m.seed_resolution = v.get<int>();
   else if (name == "max_triangles") a.max_triangles = m.max_triangles = v.get<std::size_t>();
   else if (name == "threads") a.threads = m.threads = v.get<int>();

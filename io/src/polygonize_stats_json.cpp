@@ -185,6 +185,18 @@ nlohmann::json to_json(const PolygonizeStats& s) {
   if (s.adaptive) add_adaptive(j, *s.adaptive);
   if (s.lattice) add_lattice(j, *s.lattice);
   if (s.angles) j["angles"] = angles_json(*s.angles);
+  if (s.topology && s.angles) {
+    const MeshTopology& t = *s.topology;
+    j["summary"] = {{"watertight", t.watertight()},
+                    {"closed", t.closed()},
+                    {"manifold", t.edge_manifold() && t.vertex_manifold()},
+                    {"oriented", t.oriented()},
+                    {"outward", t.signed_volume > 0},
+                    {"components", t.components},
+                    {"genus", t.genus},
+                    {"smallest_angle_degrees", s.angles->min_degrees},
+                    {"degenerate_triangles", t.degenerate_triangles}};
+  }
   return j;
 }
 

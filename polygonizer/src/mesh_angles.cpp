@@ -80,4 +80,9 @@ CreaseAngles crease_angles(const Field& field, const Mesh& mesh, double near) {
 
 void add_angle_statistics(const Mesh& mesh, PolygonizeStats& stats) { stats.angles = angle_statistics(mesh); }
 
+void add_mesh_summary(const Mesh& mesh, PolygonizeStats& stats) {
+  add_angle_statistics(mesh, stats);
+  stats.topology = analyze_topology(mesh);
+}
+
 }  // namespace cdp

@@ -6,9 +6,12 @@ The functions that take a field also take anything with a `field()` method (a `c
 it is called with no arguments first (its box, padded), otherwise they are `cdp._cdp`'s own.
 """
 import functools as _functools
+import typing as _typing
+import warnings as _warnings
 
 from . import _cdp
 from ._cdp import *  # noqa: F401,F403  (every public name of the compiled module)
+from ._version import __version__  # noqa: F401  (written by python/CMakeLists.txt from the project's version)
 
 __doc__ = _cdp.__doc__
 __all__ = [name for name in dir(_cdp) if not name.startswith("_")]
@@ -26,11 +29,44 @@ def _accepts_models(function):
     return wrapper
 
 
-for _name in ("polygonize", "marching_cubes", "marching_tetrahedra", "curvature", "project", "trace_creases",
-              "corner_normals", "crease_angles", "evaluate"):
+class Mesh(_typing.NamedTuple):
+    """What polygonize, marching_cubes and marching_tetrahedra return: a named tuple, so both
+    mesh.vertices and V, F, N, stats = mesh work.
+
+    vertices: (N, 3) float64. faces: (M, 3) int32, counter-clockwise seen from outside.
+    normals: (N, 3) float64 unit normals (the field's gradient, normalised), or None where the
+    method has none. stats: the run's statistics (build/bin/polygonize's STATS.json as a dict);
+    stats["summary"] first: watertight, closed, manifold, oriented, outward, components, genus,
+    smallest_angle_degrees, degenerate_triangles."""
+
+    vertices: _typing.Any
+    faces: _typing.Any
+    normals: _typing.Any
+    stats: dict
+
+
+def _returns_mesh(function):
+    """function(...) -> (V, F, N, stats) as a Mesh; return_normals, which once chose between a
+    3-tuple and a 4-tuple, is accepted with a DeprecationWarning and changes nothing."""
+
+    @_functools.wraps(function)
+    def wrapper(*args, return_normals=None, **kwargs):
+        if return_normals is not None:
+            _warnings.warn("return_normals is deprecated: the result is a cdp.Mesh whose normals are always there "
+                           "(V, F, N, stats = ...)", DeprecationWarning, stacklevel=2)
+        return Mesh(*function(*args, **kwargs))
+
+    wrapper.__module__ = __name__
+    return wrapper
+
+
+for _name in ("polygonize", "marching_cubes", "marching_tetrahedra"):
+    globals()[_name] = _returns_mesh(_accepts_models(getattr(_cdp, _name)))
+for _name in ("curvature", "project", "trace_creases", "corner_normals", "crease_angles", "evaluate"):
     globals()[_name] = _accepts_models(getattr(_cdp, _name))
 
 del _name
+__all__ += ["Mesh"]
 
 from . import sdf  # noqa: E402  (after the names above, which sdf does not use)
 from .trace import TraceError, trace, trace_formula  # noqa: E402

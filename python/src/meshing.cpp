@@ -10,6 +10,7 @@
 #include <cdp/core/cancel.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_angles.h>
+#include <cdp/core/models/level_shift.h>
 #include <cdp/io/polygonize_options.h>
 #include <cdp/io/polygonize_stats_json.h>
 
@@ -111,9 +112,11 @@ nlohmann::json options_json(const char* function, const py::kwargs& kwargs) {
   return j;
 }
 
-py::tuple run(const Field& field, const std::string& method, const nlohmann::json& options, bool return_normals,
-              py::object progress, py::object phase, const std::optional<CancelToken>& cancel) {
+py::tuple run(const Field& unshifted, const std::string& method, const nlohmann::json& options, py::object progress,
+              py::object phase, const std::optional<CancelToken>& cancel) {
   PolygonizeRequest request = polygonize_request(method, options);
+  std::optional<LevelShift> shifted;
+  const Field& field = request.level != 0 ? shifted.emplace(unshifted, request.level) : unshifted;
   PolygonizeResult result;
   const CancelToken token = cancel ? *cancel : CancelToken();
   SigintCancels sigint(token);
@@ -140,21 +143,22 @@ py::tuple run(const Field& field, const std::string& method, const nlohmann::jso
   }
   reraise_sigint(sigint);
   // The program's STATS.json entries (apps/polygonize.cpp), so that the dicts stay equal.
-  add_angle_statistics(result.mesh, result.stats);
+  add_mesh_summary(result.mesh, result.stats);
   py::object stats = from_json(to_json(result.stats));
   py::array_t<double> vertices = to_array(result.mesh.positions);
   py::array_t<std::int32_t> faces = to_array(result.mesh.triangles);
-  if (!return_normals) return py::make_tuple(vertices, faces, stats);
   py::object normals = result.mesh.normals.size() == result.mesh.positions.size() ? py::object(to_array(result.mesh.normals))
                                                                                  : py::object(py::none());
   return py::make_tuple(vertices, faces, normals, stats);
 }
 
-constexpr const char* kPolygonizeDoc = R"(Meshes the zero set of a field.
+constexpr const char* kPolygonizeDoc = R"(Meshes the zero set of a field (the set F = level with level=).
 
-Returns (vertices (N, 3) float64, faces (M, 3) int32, stats dict), or with return_normals=True
-(vertices, faces, normals (N, 3) float64, stats). Faces are counter-clockwise seen from outside.
-stats is build/bin/polygonize's STATS.json as a dict (without "field").
+Returns a cdp.Mesh, a named tuple (vertices (N, 3) float64, faces (M, 3) int32, normals (N, 3)
+float64 or None where the method has none, stats dict): mesh.vertices or V, F, N, stats = mesh.
+Faces are counter-clockwise seen from outside. stats is build/bin/polygonize's STATS.json as a
+dict (without "field"); stats["summary"] says first whether the mesh is watertight (closed,
+manifold, oriented, outward, no degenerate triangle), its components, genus and smallest angle.
 
 method: "adaptive" (the paper's tracker, the default), "mc" or "mt" (Marching Cubes / Tetrahedra).
 The options are the polygonize program's (the same names, defaults and choices: --min-edge is
@@ -167,10 +171,12 @@ thread, ends the run with cdp.CancelledError.
 Options:
 )";
 
-// The docstring: kPolygonizeDoc and a line for each option of the table.
-std::string polygonize_doc() {
-  std::string doc = kPolygonizeDoc;
+// The docstring: `head` and a line for each option of the table that applies to `method` (all
+// of them for none).
+std::string polygonize_doc(const std::string& head, const char* method = nullptr) {
+  std::string doc = head;
   for (const OptionSpec& spec : polygonize_options()) {
+    if (method && !applies_to(spec, method)) continue;
     const char* methods = spec.methods == OptionMethods::All        ? "all methods"
                           : spec.methods == OptionMethods::Adaptive ? "adaptive"
                           : spec.methods == OptionMethods::Marching ? "mc, mt"
@@ -183,7 +189,7 @@ std::string polygonize_doc() {
 }
 
 py::list options_list() {
-  static const char* const kinds[] = {"number", "integer", "choice", "flag", "boolean"};
+  static const char* const kinds[] = {"number", "integer", "choice", "flag", "boolean", "real"};
   py::list out;
   for (const OptionSpec& spec : polygonize_options()) {
     py::dict d;
@@ -216,27 +222,33 @@ poll. reset() makes the token usable again. Ctrl-C needs no token: it raises Key
       .def("cancel", &CancelToken::cancel, "Ends every run holding this token with cdp.CancelledError.")
       .def("reset", &CancelToken::reset, "Makes the token usable for another run.")
       .def_property_readonly("cancelled", &CancelToken::cancelled);
-  static const std::string doc = polygonize_doc();
+  static const std::string doc = polygonize_doc(kPolygonizeDoc);
+  static const std::string mc_doc = polygonize_doc(
+      "polygonize(field, \"mc\", ...): Marching Cubes, returning a cdp.Mesh; see polygonize. progress(fraction) is "
+      "called from the run; cancel (a cdp.CancelToken) ends it with cdp.CancelledError.\n\nOptions:\n",
+      "mc");
+  static const std::string mt_doc = polygonize_doc(
+      "polygonize(field, \"mt\", ...): Marching Tetrahedra, the paper's baseline, returning a cdp.Mesh; see "
+      "polygonize. progress(fraction) is called from the run; cancel (a cdp.CancelToken) ends it with "
+      "cdp.CancelledError.\n\nOptions:\n",
+      "mt");
   m.def(
       "polygonize",
-      [](const Field& field, const std::string& method, bool return_normals, py::object progress, py::object phase,
+      [](const Field& field, const std::string& method, py::object progress, py::object phase,
          std::optional<CancelToken> cancel, const py::kwargs& options) {
-        return run(field, method, options_json("polygonize", options), return_normals, progress, phase, cancel);
+        return run(field, method, options_json("polygonize", options), progress, phase, cancel);
       },
-      py::arg("field"), py::arg("method") = "adaptive", py::kw_only(), py::arg("return_normals") = false,
-      py::arg("progress") = py::none(), py::arg("phase") = py::none(), py::arg("cancel") = py::none(), doc.c_str());
+      py::arg("field"), py::arg("method") = "adaptive", py::kw_only(), py::arg("progress") = py::none(), py::arg("phase") = py::none(), py::arg("cancel") = py::none(), doc.c_str());
   const auto marching = [](const char* method, const char* name) {
-    return [method, name](const Field& field, bool return_normals, py::object progress, std::optional<CancelToken> cancel,
+    return [method, name](const Field& field, py::object progress, std::optional<CancelToken> cancel,
                           const py::kwargs& options) {
-      return run(field, method, options_json(name, options), return_normals, progress, py::none(), cancel);
+      return run(field, method, options_json(name, options), progress, py::none(), cancel);
     };
   };
   m.def("marching_cubes", marching("mc", "marching_cubes"), py::arg("field"), py::kw_only(),
-        py::arg("return_normals") = false, py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
-        "polygonize(field, \"mc\", ...): Marching Cubes; see polygonize.");
+        py::arg("progress") = py::none(), py::arg("cancel") = py::none(), mc_doc.c_str());
   m.def("marching_tetrahedra", marching("mt", "marching_tetrahedra"), py::arg("field"), py::kw_only(),
-        py::arg("return_normals") = false, py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
-        "polygonize(field, \"mt\", ...): Marching Tetrahedra, the paper's baseline; see polygonize.");
+        py::arg("progress") = py::none(), py::arg("cancel") = py::none(), mt_doc.c_str());
   m.def("polygonize_options", &options_list,
         "The options of polygonize, marching_cubes and marching_tetrahedra: one dict each (name, kind, methods, "
         "default, choices, the program's flag, help), the table the polygonize program and experiment files share.");

@@ -51,6 +51,28 @@ TEST_P(PolygonizeApp, WritesAClosedTorusAndItsStats) {
 INSTANTIATE_TEST_SUITE_P(EveryMethod, PolygonizeApp, ::testing::Values("adaptive", "mc", "mt"),
                          [](const auto& info) { return info.param; });
 
+// --level meshes F = C: x^2 + y^2 + z^2 at 1.44 is the sphere of radius 1.2, for every method;
+// the mesh goes to STL as well as to the other formats.
+TEST(PolygonizeApp, LevelMeshesAnotherValueOfTheFieldAndStlIsWritten) {
+  test::TempDir dir("polygonize_app_level");
+  const auto field = dir.write("square.json", R"J({"type": "expression", "value": "x^2 + y^2 + z^2",
+      "bounds": [[-2,-2,-2],[2,2,2]]})J");
+  for (const std::string method : {"adaptive", "mc", "mt"}) {
+    const auto out = dir.path / ("out_" + method + ".stl");
+    const std::string size = method == "adaptive" ? "--factor 2" : "--cell 0.1";
+    const auto r = test::run_app("polygonize", field.string() + " -o " + out.string() + " --method " + method + " " + size +
+                                                   " --level 1.44");
+    ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
+    const Mesh mesh = read_mesh(out);
+    ASSERT_GT(mesh.num_triangles(), 100u) << method;
+    // Adaptive vertices are projected onto the surface (STL keeps floats); marching's are
+    // interpolated linearly along cell edges of 0.1, where r^2 bends: ~h^2/8 F''/F' = 1e-3.
+    const double within = method == "adaptive" ? 1e-5 : 2e-3;
+    for (const Vec3& p : mesh.positions) EXPECT_NEAR(p.norm(), 1.2, within) << method;
+    EXPECT_TRUE(analyze_topology(mesh).closed()) << method;
+  }
+}
+
 TEST(PolygonizeApp, AdaptiveKeepsTheInnerSphereOfAHollowBallAndSaysNothingIsUncovered) {
   // The case that lost its inner sphere with exit 0 (robustness issue): the program's mesh has
   // both spheres, and its stats say every sign change of the seed grid was meshed.
@@ -188,7 +210,8 @@ TEST(PolygonizeAppErrors, BadArgumentsAndFieldsGiveAOneLineErrorAndNoOutput) {
       {torus.string() + " -o " + out + " --chord 0", "--chord: expects a positive number"},
       {torus.string() + " -o " + out + " --method mc --chord 0.01", "--chord does not apply"},
       {torus.string() + " -o " + out + " --method mt --precision 3", "precision"},
-      {torus.string() + " -o " + (dir.path / "out.stl").string(), ".ply, .obj or .off"},
+      {torus.string() + " -o " + (dir.path / "out.dae").string(), ".ply, .obj, .off or .stl"},
+      {torus.string() + " -o " + out + " --level nan", "--level: expects a number"},
       {(dir.path / "missing.json").string() + " -o " + out, "missing.json"},
       {typo.string() + " -o " + out, "minor_raduis"},
       {nan.string() + " -o " + out, ""},

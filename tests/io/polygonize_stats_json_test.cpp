@@ -129,5 +129,38 @@ TEST(PolygonizeStatsJson, EveryLatticeFieldUnderItsKey) {
     EXPECT_TRUE(at(m, key).is_null()) << key;
 }
 
+// "summary" (add_mesh_summary) reads the mesh: a tetrahedron is watertight with genus 0; the
+// same with a face missing is open, not watertight, without a genus; with a face turned, not
+// oriented.
+TEST(PolygonizeStatsJson, SummaryTellsWhetherTheMeshIsWatertight) {
+  Mesh tetrahedron;
+  tetrahedron.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  tetrahedron.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  const auto summary = [](const Mesh& m) {
+    PolygonizeStats s;
+    add_mesh_summary(m, s);
+    return to_json(s)["summary"];
+  };
+  const nlohmann::json closed = summary(tetrahedron);
+  EXPECT_TRUE(closed["watertight"].get<bool>());
+  EXPECT_TRUE(closed["outward"].get<bool>());
+  EXPECT_EQ(closed["components"], 1);
+  EXPECT_EQ(closed["genus"], 0);
+  EXPECT_NEAR(closed["smallest_angle_degrees"].get<double>(), 45.0, 1e-9);
+  Mesh open = tetrahedron;
+  open.triangles.pop_back();
+  const nlohmann::json o = summary(open);
+  EXPECT_FALSE(o["closed"].get<bool>());
+  EXPECT_FALSE(o["watertight"].get<bool>());
+  EXPECT_EQ(o["genus"], -1);
+  Mesh turned = tetrahedron;
+  std::swap(turned.triangles[3][0], turned.triangles[3][1]);
+  const nlohmann::json t = summary(turned);
+  EXPECT_TRUE(t["closed"].get<bool>());
+  EXPECT_FALSE(t["oriented"].get<bool>());
+  EXPECT_FALSE(t["watertight"].get<bool>());
+  EXPECT_FALSE(summary(Mesh{})["watertight"].get<bool>());  // nothing is not a closed surface
+}
+
 }  // namespace
 }  // namespace cdp

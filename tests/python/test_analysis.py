@@ -54,7 +54,7 @@ def test_evaluate_matches_the_program(tmp_path):
     field_path = tmp_path / "torus.json"
     field_path.write_text(json.dumps({"type": "torus", "major_radius": 1, "minor_radius": 0.4}))
     field = cdp.field_from_json(field_path)
-    V, F, N, _ = cdp.polygonize(field, factor=2, return_normals=True)
+    V, F, N, _ = cdp.polygonize(field, factor=2)
     mesh_path, metrics_path = tmp_path / "torus.ply", tmp_path / "metrics.json"
     cdp.write_mesh(mesh_path, V, F, N)
     subprocess.run([program("evaluate"), field_path, mesh_path, "-o", metrics_path, "--views", "2", "--rays", "24",
@@ -87,7 +87,7 @@ def test_evaluate_a_callable_field():
     box = ((-1.5, -1.5, -0.5), (1.5, 1.5, 0.5))
     expression = cdp.expression("(sqrt(x^2 + y^2) - 1)^2 + z^2 - 0.09", bounds=box)
     field = cdp.callable_field(lambda p: (np.sqrt(p[:, 0] ** 2 + p[:, 1] ** 2) - 1) ** 2 + p[:, 2] ** 2 - 0.09, box, trace=False)
-    V, F, N, _ = cdp.polygonize(expression, factor=3, return_normals=True)
+    V, F, N, _ = cdp.polygonize(expression, factor=3)
     a = cdp.evaluate(expression, V, F, normals=N, views=1, resolution=24, samples=500)
     b = cdp.evaluate(field, V, F, normals=N, views=1, resolution=24, samples=500)
     assert field.python_calls > 0
@@ -123,7 +123,7 @@ def test_crease_angles_tell_a_meshed_cubes_edges_from_its_faces():
     crease; the rest lie inside the faces. The counts add up, and the smallest angle of each
     group is that of its triangles, computed here from the mesh."""
     cube = cdp.expression("max(abs(x),max(abs(y),abs(z)))-1", bounds=[[-1.5] * 3, [1.5] * 3])
-    v, f, _ = cdp.polygonize(cube, factor=2)
+    v, f, _, _ = cdp.polygonize(cube, factor=2)
     a = cdp.crease_angles(cube, v, f)
     on_edge = (np.abs(v) > 1 - 1e-9).sum(axis=1) >= 2
     at = on_edge[f].any(axis=1)
@@ -148,7 +148,7 @@ def test_crease_angles_tell_a_meshed_cubes_edges_from_its_faces():
 
 def test_corner_normals_are_each_sides_on_a_cubes_edges():
     cube = cdp.expression("max(abs(x),max(abs(y),abs(z)))-1", bounds=[[-1.5] * 3, [1.5] * 3])
-    v, f, _ = cdp.polygonize(cube, factor=2)
+    v, f, _, _ = cdp.polygonize(cube, factor=2)
     n = cdp.corner_normals(cube, v, f)
     assert n.shape == (len(f), 3, 3)
     # Every corner's normal is the axis of its triangle's face: one side's, never a blend.
@@ -158,10 +158,10 @@ def test_corner_normals_are_each_sides_on_a_cubes_edges():
     assert np.allclose(n, face[:, None, :], atol=1e-12)
     # A smooth field: the vertex normals at every corner.
     sphere = cdp.sphere(radius=1)
-    v, f, _ = cdp.polygonize(sphere, factor=2)
+    v, f, _, _ = cdp.polygonize(sphere, factor=2)
     assert np.allclose(cdp.corner_normals(sphere, v, f), v[f], atol=1e-9)
     # The Phong error with them is zero on the cube (flat faces, exact normals), not so with blends.
-    v, f, _ = cdp.polygonize(cube, factor=2)
+    v, f, _, _ = cdp.polygonize(cube, factor=2)
     e_field = cdp.evaluate(cube, v, f, normals="field", views=2, resolution=16)
     e_mesh = cdp.evaluate(cube, v, f, normals="mesh", views=2, resolution=16)
     assert "each side's at creases" in e_field["normals"]

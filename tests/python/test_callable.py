@@ -32,8 +32,8 @@ def expression():
 @pytest.mark.parametrize("gradient", [None, torus_gradient])
 def test_callable_field_meshes_like_the_expression(expression, method, options, gradient):
     field = cdp.callable_field(torus, BOX, gradient=gradient)
-    V, F, stats = cdp.polygonize(field, method, **options)
-    V_ref, F_ref, stats_ref = cdp.polygonize(expression, method, **options)
+    V, F, _, stats = cdp.polygonize(field, method, **options)
+    V_ref, F_ref, _, stats_ref = cdp.polygonize(expression, method, **options)
     assert topology(V, F) == topology(V_ref, F_ref) == (1, 1, True)
     assert stats["components"] == 1
     # On the expression's surface: the first-order distance |F| / |grad F| of every vertex.
@@ -59,7 +59,7 @@ def test_python_errors_in_the_field_propagate_and_leave_nothing_broken(expressio
     field = cdp.callable_field(flaky, BOX, trace=False)
     with pytest.raises(ArithmeticError, match="call 30 fails"):
         cdp.polygonize(field, factor=3)
-    V, F, _ = cdp.polygonize(field, factor=3)  # the same field, the same module: fine again
+    V, F, _, _ = cdp.polygonize(field, factor=3)  # the same field, the same module: fine again
     assert topology(V, F) == (1, 1, True)
     with pytest.raises(ValueError, match=r"^callable field: f returned shape \((\d+), 2\) for \1 points; expected \(\1,\)$"):
         cdp.polygonize(cdp.callable_field(lambda p: p[:, :2], BOX), factor=3)
@@ -77,7 +77,7 @@ def test_the_tracker_calls_python_once_per_batch_not_once_per_point(expression):
         return torus(p)
 
     field = cdp.callable_field(recorded, BOX, trace=False)
-    V, F, stats = cdp.polygonize(field, factor=3)
+    V, F, _, stats = cdp.polygonize(field, factor=3)
     evaluations = stats["field_evaluations"]
     # Every evaluation is in exactly one call: the seed grid's values all in the first call
     # (this field has no Lipschitz bound, so there is no refinement and no other value), then 7
@@ -95,10 +95,10 @@ def test_the_tracker_calls_python_once_per_batch_not_once_per_point(expression):
     derivative_calls = len(sizes) - 1
     assert derivative_calls < 0.9 * (evaluations["value_gradient"] + evaluations["gradient_hessian"])
     # Deterministic: the same field and options give the same arrays.
-    V2, F2, _ = cdp.polygonize(field, factor=3)
+    V2, F2, _, _ = cdp.polygonize(field, factor=3)
     assert np.array_equal(V, V2) and np.array_equal(F, F2)
     # And the mesh is the expression's surface, as in the test above.
-    V_ref, F_ref, _ = cdp.polygonize(expression, factor=3)
+    V_ref, F_ref, _, _ = cdp.polygonize(expression, factor=3)
     assert topology(V, F) == topology(V_ref, F_ref) == (1, 1, True)
     distance = np.abs(expression.values(V)) / np.linalg.norm(expression.gradients(V), axis=1)
     assert distance.max() < 1e-6
@@ -118,7 +118,7 @@ def test_the_marching_methods_call_python_in_batches(expression, method, travers
         return torus(p)
 
     field = cdp.callable_field(recorded, BOX, trace=False)
-    V, F, stats = cdp.polygonize(field, method, cell=0.05, traversal=traversal)
+    V, F, _, stats = cdp.polygonize(field, method, cell=0.05, traversal=traversal)
     evaluations = stats["field_evaluations"]
     # Every evaluation is in exactly one call (7 points for a value and gradient by central
     # differences), so the counts in the stats are the work, however it was grouped.
@@ -135,12 +135,12 @@ def test_the_marching_methods_call_python_in_batches(expression, method, travers
     assert len(sizes) < 300
     assert len(sizes) < (0.023 if method == "mc" else 0.0076) * len(F)
     # Deterministic: the same field and options give the same arrays, bit for bit.
-    V2, F2, stats2 = cdp.polygonize(field, method, cell=0.05, traversal=traversal)
+    V2, F2, _, stats2 = cdp.polygonize(field, method, cell=0.05, traversal=traversal)
     assert np.array_equal(V, V2) and np.array_equal(F, F2)
     assert stats2["field_evaluations"] == evaluations
     # And the expression's mesh: a root search on the same corner values, whose probes agree
     # up to the last digits of sqrt in numpy and in the expression.
-    V_ref, F_ref, _ = cdp.polygonize(expression, method, cell=0.05, traversal=traversal)
+    V_ref, F_ref, _, _ = cdp.polygonize(expression, method, cell=0.05, traversal=traversal)
     assert topology(V, F) == topology(V_ref, F_ref) == (1, 1, True)
     assert np.array_equal(F, F_ref)
     assert np.abs(V - V_ref).max() < 1e-6
@@ -156,8 +156,8 @@ def test_a_callable_promised_smooth_skips_the_crease_probes():
     plain = cdp.callable_field(torus, BOX, gradient=torus_gradient)
     smooth = cdp.callable_field(torus, BOX, gradient=torus_gradient, smooth=True)
     assert smooth.smooth is True
-    V, F, _ = cdp.polygonize(plain, factor=3)
-    V_s, F_s, _ = cdp.polygonize(smooth, factor=3)
+    V, F, _, _ = cdp.polygonize(plain, factor=3)
+    V_s, F_s, _, _ = cdp.polygonize(smooth, factor=3)
     assert np.array_equal(V, V_s) and np.array_equal(F, F_s)
     assert smooth.python_calls < plain.python_calls
 
@@ -191,7 +191,7 @@ def test_nan_away_from_the_surface_counts_as_outside():
 
     field = cdp.callable_field(sphere_with_a_hole_in_its_domain, ((-1.5,) * 3, (1.5,) * 3))
     assert isinstance(field, cdp.CallableField)  # a boolean mask: not traced
-    V, F, stats = cdp.polygonize(field, factor=3)
+    V, F, _, stats = cdp.polygonize(field, factor=3)
     assert topology(V, F) == (1, 0, True)
     assert stats["non_finite_samples"] > 0
     assert np.abs(np.linalg.norm(V, axis=1) - 1).max() < 1e-6

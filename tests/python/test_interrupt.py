@@ -52,8 +52,8 @@ def interrupted_after(run):
 
 
 def still_works(reference):
-    sphere, (V, F, stats) = reference
-    V2, F2, stats2 = cdp.polygonize(sphere, factor=2)
+    sphere, (V, F, _, stats) = reference
+    V2, F2, _, stats2 = cdp.polygonize(sphere, factor=2)
     assert np.array_equal(V, V2) and np.array_equal(F, F2)
 
 
@@ -89,7 +89,7 @@ def test_keyboard_interrupt_raised_by_the_function(reference):
     with pytest.raises(KeyboardInterrupt):
         cdp.polygonize(field, factor=3)
     still_works(reference)
-    V, F, _ = cdp.polygonize(field, factor=3)  # the field itself is fine too
+    V, F, _, _ = cdp.polygonize(field, factor=3)  # the field itself is fine too
     assert len(F) > 0
 
 
@@ -119,5 +119,5 @@ def test_a_token_cancelled_from_another_thread_ends_the_run(reference, run):
     assert time.monotonic() - start < DELAY + 2.0
     still_works(reference)
     token.reset()
-    V, F, _ = cdp.polygonize(cdp.sphere(radius=1), factor=2, cancel=token)  # a reset token lets a run finish
+    V, F, _, _ = cdp.polygonize(cdp.sphere(radius=1), factor=2, cancel=token)  # a reset token lets a run finish
     assert len(F) > 0

@@ -9,7 +9,7 @@ import cdp
 
 @pytest.fixture(scope="module")
 def mesh():
-    V, F, N, _ = cdp.polygonize(cdp.torus(major_radius=1, minor_radius=0.4), factor=2, return_normals=True)
+    V, F, N, _ = cdp.polygonize(cdp.torus(major_radius=1, minor_radius=0.4), factor=2)
     return V, F, N
 
 

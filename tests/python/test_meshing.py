@@ -23,7 +23,7 @@ def bits(a):
 
 @pytest.mark.parametrize("method, options", [("adaptive", {"factor": 2}), ("mc", {"cell": 0.1}), ("mt", {"cell": 0.1})])
 def test_sphere_meshes_are_closed_spheres(sphere, method, options):
-    V, F, stats = cdp.polygonize(sphere, method, **options)
+    V, F, _, stats = cdp.polygonize(sphere, method, **options)
     assert V.dtype == np.float64 and V.shape[1] == 3
     assert F.dtype == np.int32 and F.shape[1] == 3
     assert topology(V, F) == (1, 0, True)
@@ -31,15 +31,15 @@ def test_sphere_meshes_are_closed_spheres(sphere, method, options):
     assert stats["method"] == method
     assert stats["triangles"] == len(F) and stats["vertices"] == len(V)
     assert stats["field_evaluations"]["total"] > 0
-    V2, F2, N, stats2 = cdp.polygonize(sphere, method, return_normals=True, **options)
+    V2, F2, N, stats2 = cdp.polygonize(sphere, method, **options)
     assert bits(V2) == bits(V) and bits(F2) == bits(F)
     assert np.allclose(N, V / np.linalg.norm(V, axis=1)[:, None], atol=1e-6)
 
 
 def test_marching_functions_are_polygonize(sphere):
     for function, method in [(cdp.marching_cubes, "mc"), (cdp.marching_tetrahedra, "mt")]:
-        V, F, stats = function(sphere, cell=0.2, traversal="grid")
-        V2, F2, stats2 = cdp.polygonize(sphere, method, cell=0.2, traversal="grid")
+        V, F, _, stats = function(sphere, cell=0.2, traversal="grid")
+        V2, F2, _, stats2 = cdp.polygonize(sphere, method, cell=0.2, traversal="grid")
         assert bits(V) == bits(V2) and bits(F) == bits(F2)
         assert stats["traversal"] == "grid"
 
@@ -132,7 +132,7 @@ def test_same_arrays_as_the_polygonize_program(tmp_path, method, flags, options)
     subprocess.run([program("polygonize"), field_path, "-o", out, "--method", method, "--stats", stats_path, "--quiet",
                     *flags], check=True)
     V_file, F_file, N_file = cdp.read_mesh(out, return_normals=True)
-    V, F, N, stats = cdp.polygonize(cdp.field_from_json(field_path), method, return_normals=True, **options)
+    V, F, N, stats = cdp.polygonize(cdp.field_from_json(field_path), method, **options)
     assert bits(V) == bits(V_file)
     assert bits(F) == bits(F_file)
     assert bits(N) == bits(N_file)
@@ -152,12 +152,12 @@ def test_creases_are_followed_or_ignored():
     # tracker meshes across them.
     cube = cdp.field_from_json({"type": "expression", "value": "max(abs(x+0.0137),max(abs(y+0.0137),abs(z+0.0137)))-1",
                                 "bounds": [[-1.6, -1.6, -1.6], [1.6, 1.6, 1.6]]})
-    V, F, stats = cdp.polygonize(cube, factor=3)
+    V, F, _, stats = cdp.polygonize(cube, factor=3)
     assert stats["creases"]["followed"] and stats["creases"]["curves"] == 12 and stats["creases"]["corners"] == 8
     shifted = V + 0.0137
     on_two_faces = (np.abs(np.abs(shifted) - 1) < 1e-9).sum(axis=1) >= 2
     assert on_two_faces.sum() == stats["creases"]["vertices"]
-    V, F, stats = cdp.polygonize(cube, factor=3, creases="ignore")
+    V, F, _, stats = cdp.polygonize(cube, factor=3, creases="ignore")
     assert not stats["creases"]["followed"] and stats["creases"]["handling"] == "ignore"
 
 
@@ -194,7 +194,7 @@ def test_the_program_python_and_experiment_files_share_one_table_of_options(tmp_
             assert o["default"] == o["choices"][0]
     # Python takes each with its default value (or, without one, a valid one) for each method it applies to.
     sphere = cdp.sphere(radius=1)
-    example = {"number": 0.2, "integer": 8, "boolean": True, "flag": False}
+    example = {"number": 0.2, "integer": 8, "boolean": True, "flag": False, "real": -0.05}
     for method in ("adaptive", "mc", "mt"):
         given = {}
         for o in options:
@@ -202,15 +202,15 @@ def test_the_program_python_and_experiment_files_share_one_table_of_options(tmp_
                 continue
             given[o["name"]] = o["choices"][0] if o["kind"] == "choice" else example[o["kind"]]
         given["seed_resolution"] = 16
-        V, F, stats = cdp.polygonize(sphere, method, **given)
+        V, F, _, stats = cdp.polygonize(sphere, method, **given)
         assert topology(V, F) == (1, 0, True), method
     # An experiment run with every option of its method runs the program with them: its mesh is
     # polygonize's with the same keywords, bit for bit.
     run = {"method": "adaptive", "factor": 2, "min_edge": 0.01, "max_edge": 0.5, "triangle_count": "paper_floor",
            "variant": "improved", "creases": "follow", "curvature": True, "check_self_intersections": True,
-           "seed_resolution": 16, "max_triangles": 100000, "threads": 1}
+           "seed_resolution": 16, "max_triangles": 100000, "threads": 1, "level": -0.05}
     marching = {"method": "mc", "cell": 0.1, "traversal": "grid", "face_ambiguity": "join_inside", "seed_resolution": 16,
-                "threads": 1}
+                "threads": 1, "level": -0.05}
     experiment = tmp_path / "e.json"
     experiment.write_text(json.dumps({"field": {"type": "sphere", "radius": 1}, "runs": [run, marching],
                                       "evaluation": {"views": 1, "resolution": 8}}))
@@ -219,10 +219,52 @@ def test_the_program_python_and_experiment_files_share_one_table_of_options(tmp_
     for options, mesh in ((run, "adaptive_factor2"), (marching, "mc_cell0.1")):
         V_file, F_file = cdp.read_mesh(out / "meshes" / (mesh + ".ply"))
         keywords = {k: v for k, v in options.items() if k != "method"}
-        V, F, _ = cdp.polygonize(sphere, options["method"], **keywords)
+        V, F, _, _ = cdp.polygonize(sphere, options["method"], **keywords)
         assert bits(V) == bits(V_file) and bits(F) == bits(F_file), mesh
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "mc", "cell": 0.1,
                                                                                    "curvature": True}]}))
     r = subprocess.run([program("experiment"), bad, "--commands"], capture_output=True, text=True)
     assert r.returncode != 0 and 'does not apply to method "mc"' in r.stderr
+
+
+@pytest.mark.parametrize("method, options", [("adaptive", {"factor": 2}), ("mc", {"cell": 0.1}), ("mt", {"cell": 0.1})])
+def test_every_method_returns_a_named_mesh_with_a_summary(method, options):
+    torus = cdp.torus(major_radius=1, minor_radius=0.4)
+    mesh = cdp.polygonize(torus, method, **options)
+    assert isinstance(mesh, cdp.Mesh) and isinstance(mesh, tuple) and len(mesh) == 4
+    V, F, N, stats = mesh
+    assert V is mesh.vertices and F is mesh.faces and N is mesh.normals and stats is mesh.stats
+    assert N.shape == V.shape and np.allclose(np.linalg.norm(N, axis=1), 1)
+    components, genus, closed = topology(V, F)  # counted apart in numpy
+    summary = stats["summary"]
+    assert summary["watertight"] and summary["closed"] == closed and summary["manifold"] and summary["outward"]
+    assert (summary["components"], summary["genus"]) == (components, genus) == (1, 1)
+    assert summary["smallest_angle_degrees"] == stats["angles"]["min_degrees"] > 0
+    with pytest.warns(DeprecationWarning, match="return_normals"):
+        again = cdp.polygonize(torus, method, return_normals=True, **options)
+    assert bits(again.vertices) == bits(V)
+
+
+@pytest.mark.parametrize("method, options, within", [("adaptive", {"factor": 2}, 1e-9), ("mc", {"cell": 0.05}, 2e-3),
+                                                     ("mt", {"cell": 0.05}, 2e-3)])
+def test_level_meshes_another_value_of_the_field(method, options, within):
+    # x^2 + y^2 + z^2 = 0.64: the sphere of radius 0.8; the same mesh as the field shifted by hand.
+    square = cdp.expression("x^2 + y^2 + z^2", ((-1, -1, -1), (1, 1, 1)))
+    V, F, _, stats = cdp.polygonize(square, method, level=0.64, **options)
+    assert np.abs(np.linalg.norm(V, axis=1) - 0.8).max() < within
+    assert stats["summary"]["watertight"] and stats["summary"]["genus"] == 0
+    shifted = cdp.polygonize(cdp.expression("x^2 + y^2 + z^2 - 0.64", ((-1, -1, -1), (1, 1, 1))), method, **options)
+    assert np.abs(shifted.vertices - V).max() < 1e-9 and bits(shifted.faces) == bits(F)
+    with pytest.raises(ValueError, match="level must be a finite number, not nan"):
+        cdp.polygonize(square, method, level=float("nan"), **options)
+
+
+def test_level_keeps_the_creases_of_a_csg_field():
+    # The cube max(|x|, |y|, |z|) = 1 at level 0.2 is the cube of half-side 1.2, its 12 edges followed.
+    cube = cdp.expression("max(abs(x), max(abs(y), abs(z))) - 1", ((-1.5, -1.5, -1.5), (1.5, 1.5, 1.5)))
+    V, F, _, stats = cdp.polygonize(cube, level=0.2, factor=2)
+    assert np.abs(np.abs(V).max(axis=1) - 1.2).max() < 1e-9
+    assert stats["creases"]["followed"] and stats["creases"]["curves"] == 12 and stats["creases"]["corners"] == 8
+    assert {tuple(c) for c in np.round(V, 9)} >= {(sx * 1.2, sy * 1.2, sz * 1.2) for sx in (-1, 1) for sy in (-1, 1)
+                                                   for sz in (-1, 1)}

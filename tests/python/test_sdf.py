@@ -385,7 +385,7 @@ def test_the_program_meshes_the_saved_model_as_the_module_does(tmp_path):
     subprocess.run([program("polygonize"), tmp_path / "m.json", "-o", tmp_path / "m.ply", "--factor", "2"], check=True,
                    capture_output=True)
     V, F = cdp.read_mesh(tmp_path / "m.ply")
-    V2, F2, _ = cdp.polygonize(model, factor=2)
+    V2, F2, _, _ = cdp.polygonize(model, factor=2)
     assert np.array_equal(V, V2) and np.array_equal(F, F2)
 
 
@@ -452,9 +452,9 @@ def test_meshing_foglemans_model():
     the middle, a surface of genus 5 (the outer surface and the surface of the cross of tunnels,
     each a sphere with six holes, joined along the six rims: genus 6 - 1). Marching Cubes agrees."""
     model = fogleman()
-    V, F, stats = cdp.marching_cubes(model, cell=0.04)
+    V, F, _, stats = cdp.marching_cubes(model, cell=0.04)
     assert topology(V, F) == (1, 5, True)
-    V, F, stats = cdp.polygonize(model, tolerance=1e-3)
+    V, F, _, stats = cdp.polygonize(model, tolerance=1e-3)
     assert topology(V, F) == (1, 5, True)
     assert stats["components"] == 1 and stats["triangles"] == len(F)
     assert np.abs(model(V)).max() < 1e-6
@@ -474,9 +474,9 @@ def test_rounded_and_blended_parts_with_sharp_booleans_mesh_along_their_creases(
         "ball blended on an edge": box(1.5) | sphere(0.5, center=(0.75, 0.75, 0)).k(0.25),
     }
     model = models[name]
-    V, F, _ = cdp.marching_cubes(model, cell=0.03)
+    V, F, _, _ = cdp.marching_cubes(model, cell=0.03)
     reference = topology(V, F)
-    V, F, stats = cdp.polygonize(model, factor=3)
+    V, F, _, stats = cdp.polygonize(model, factor=3)
     assert topology(V, F) == reference
     assert stats["creases"]["followed"] and stats["creases"]["fallback"] == ""
     assert stats["creases"]["curves"] > 0

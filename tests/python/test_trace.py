@@ -39,13 +39,13 @@ def test_a_clipped_gyroid_callable_meshes_along_its_creases():
     Cubes on the black box (values only) gives the reference topology, the same at cells
     0.04, 0.02 and 0.015."""
     black_box = cdp.callable_field(gyroid_ball, BOX, trace=False)
-    V, F, _ = cdp.marching_cubes(black_box, cell=0.02)
+    V, F, _, _ = cdp.marching_cubes(black_box, cell=0.02)
     reference = topology(V, F)
     assert reference == (1, 13, True)
     field = cdp.callable_field(gyroid_ball, BOX)
     assert not isinstance(field, cdp.CallableField) and field.type == "expression"
     for options in (dict(factor=3), dict(tolerance=1e-3)):
-        V, F, stats = cdp.polygonize(field, **options)
+        V, F, _, stats = cdp.polygonize(field, **options)
         assert topology(V, F) == reference
         assert stats["creases"]["followed"] and stats["creases"]["curves"] >= 1
         assert stats["creases"]["fallback"] == ""
@@ -77,13 +77,13 @@ def test_a_value_used_twice_is_computed_once():
     formula, define = cdp.trace_formula(smooth_union)
     text = formula + " " + " ".join(define.values())
     assert text.count("min(") == 1 and text.count("max(") == 1
-    V, F, stats = cdp.polygonize(cdp.trace(smooth_union, BOX), factor=3)
+    V, F, _, stats = cdp.polygonize(cdp.trace(smooth_union, BOX), factor=3)
     assert topology(V, F) == (1, 0, True)
     assert stats["creases"]["curves"] == 0  # C1 seams are not creases
 
 
 def test_rounded_box_traced_is_smooth_and_exact():
-    V, F, stats = cdp.polygonize(cdp.trace(rounded_box, BOX), factor=3)
+    V, F, _, stats = cdp.polygonize(cdp.trace(rounded_box, BOX), factor=3)
     assert topology(V, F) == (1, 0, True)
     assert stats["creases"]["curves"] == 0
     assert stats["min_angle_degrees"] >= 20

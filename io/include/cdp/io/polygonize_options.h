@@ -23,6 +23,7 @@ enum class OptionKind {
   Choice,   // one of `choices`
   Flag,     // true or false; on the command line a flag without a value turns it on
   Boolean,  // true or false; on the command line a value ("true" or "false"), its default being true
+  Real,     // any finite number
 };
 
 // Which methods an option applies to (the others refuse it).
@@ -64,6 +65,9 @@ bool applies_to(const OptionSpec& spec, std::string_view method);
 // A run of one method with its options.
 struct PolygonizeRequest {
   std::string method = "adaptive";
+  // The value of F whose level set is meshed (option "level"): a run on another level than 0
+  // meshes LevelShift(field, level) (cdp/core/models/level_shift.h).
+  double level = 0;
   AdaptiveOptions adaptive;
   MarchingOptions marching;
 };

@@ -93,6 +93,9 @@ inline bool same_to_rounding(double reference_value, const Eigen::Vector3d& refe
 }
 
 class Field {
+  // F - c stands for F and passes every hook on to it (models/level_shift.h).
+  friend class LevelShift;
+
  public:
   virtual ~Field() = default;
   Field() = default;

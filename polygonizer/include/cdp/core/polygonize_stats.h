@@ -7,6 +7,7 @@
 #include <cdp/core/field.h>
 #include <cdp/core/lattice_report.h>
 #include <cdp/core/mesh_angles.h>
+#include <cdp/core/mesh_topology.h>
 
 #include <cstddef>
 #include <optional>
@@ -26,8 +27,16 @@ struct PolygonizeStats {
   // The method's own report: the adaptive method's, or the lattice methods' (MC, MT).
   std::optional<AdaptiveReport> adaptive;
   std::optional<LatticeReport> lattice;
-  // The mesh's angles, where a caller asked for them (add_angle_statistics).
+  // The mesh's angles, where a caller asked for them (add_angle_statistics, add_mesh_summary).
   std::optional<AngleStatistics> angles;
+  // The mesh's topology, where a caller asked for it (add_mesh_summary): with the angles, the
+  // short summary a user reads first (STATS.json's "summary").
+  std::optional<MeshTopology> topology;
 };
+
+// Sets stats.angles and stats.topology from the mesh, as the polygonize program and the Python
+// module report them for every method.
+// \pre every triangle index is in [0, mesh.num_vertices()).
+void add_mesh_summary(const Mesh& mesh, PolygonizeStats& stats);
 
 }  // namespace cdp

@@ -1,0 +1,53 @@
+// F - level: the surface where a field takes another value than zero (an iso-value, scikit-image's
+// and Manifold's `level`), as a field of its own. Every hook passes on to F with the value
+// shifted: derivatives, pieces and their branch points, seams and bounds are F's (a constant
+// moves none of them), so creases, curvature and the seeding's proofs hold as they do for F.
+#pragma once
+
+#include <cdp/core/field.h>
+
+namespace cdp {
+
+class LevelShift final : public Field {
+ public:
+  // \pre `field` outlives this object.
+  // \throw InvalidInputError for a level that is not finite.
+  LevelShift(const Field& field, double level);
+
+  std::string type_name() const override { return field_.type_name(); }
+  bool thread_safe() const override { return field_.thread_safe(); }
+  bool smooth() const override { return field_.smooth(); }
+  std::optional<double> derivative_step() const override { return field_.derivative_step(); }
+  std::optional<double> lipschitz_bound() const override { return field_.lipschitz_bound(); }
+  std::optional<double> lipschitz_bound(const Box& region) const override { return field_.lipschitz_bound(region); }
+  std::optional<std::pair<double, double>> value_range(const Box& region) const override;
+  std::optional<double> constraint_spacing() const override { return field_.constraint_spacing(); }
+  double level() const { return level_; }
+
+ protected:
+  double eval_value(const Vec3& p) const override { return field_.eval_value(p) - level_; }
+  double eval_value_gradient(const Vec3& p, Vec3& gradient) const override {
+    return field_.eval_value_gradient(p, gradient) - level_;
+  }
+  double eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const override {
+    return field_.eval_gradient_hessian(p, gradient, hessian) - level_;
+  }
+  void eval_values(const Vec3* points, double* out, std::size_t n) const override;
+  void eval_values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const override;
+  void eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
+                               std::size_t n) const override;
+  FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
+  std::vector<SmoothSide> eval_smooth_sides(const Vec3& p, double radius, const std::vector<std::uint8_t>& branch,
+                                            SeamSideAt at) const override;
+  bool has_branch_points() const override { return field_.has_branch_points(); }
+  bool eval_branch_record(const Vec3& p, const std::vector<std::uint8_t>& branch, BranchRecord& record) const override;
+  std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
+  bool eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>& branch, const std::int8_t* bits, bool hessian,
+                       FieldPiece& piece, std::uint64_t& live) const override;
+
+ private:
+  const Field& field_;
+  double level_;
+};
+
+}  // namespace cdp

@@ -1,0 +1,68 @@
+#include <cdp/core/errors.h>
+#include <cdp/core/models/level_shift.h>
+
+#include <cmath>
+
+namespace cdp {
+
+LevelShift::LevelShift(const Field& field, double level) : field_(field), level_(level) {
+  if (!std::isfinite(level)) throw InvalidInputError("level must be a finite number");
+  set_bounds(field.bounds());
+}
+
+std::optional<std::pair<double, double>> LevelShift::value_range(const Box& region) const {
+  auto range = field_.value_range(region);
+  if (range) range->first -= level_, range->second -= level_;
+  return range;
+}
+
+void LevelShift::eval_values(const Vec3* points, double* out, std::size_t n) const {
+  field_.eval_values(points, out, n);
+  for (std::size_t i = 0; i < n; ++i) out[i] -= level_;
+}
+
+void LevelShift::eval_values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const {
+  field_.eval_values_gradients(points, values, gradients, n);
+  for (std::size_t i = 0; i < n; ++i) values[i] -= level_;
+}
+
+void LevelShift::eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
+                                         std::size_t n) const {
+  field_.eval_gradients_hessians(points, values, gradients, hessians, n);
+  for (std::size_t i = 0; i < n; ++i) values[i] -= level_;
+}
+
+FieldPiece LevelShift::eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+  FieldPiece piece = field_.eval_piece(p, branch);
+  piece.value -= level_;
+  return piece;
+}
+
+std::vector<Field::SmoothSide> LevelShift::eval_smooth_sides(const Vec3& p, double radius,
+                                                             const std::vector<std::uint8_t>& branch,
+                                                             SeamSideAt at) const {
+  std::vector<SmoothSide> sides = field_.eval_smooth_sides(p, radius, branch, at);
+  for (SmoothSide& s : sides) s.piece.value -= level_;
+  return sides;
+}
+
+bool LevelShift::eval_branch_record(const Vec3& p, const std::vector<std::uint8_t>& branch, BranchRecord& record) const {
+  if (!field_.eval_branch_record(p, branch, record)) return false;
+  record.value -= level_;
+  return true;
+}
+
+std::pair<double, Vec3> LevelShift::eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+  auto first = field_.eval_first_order(p, branch);
+  first.first -= level_;
+  return first;
+}
+
+bool LevelShift::eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>& branch, const std::int8_t* bits,
+                                 bool hessian, FieldPiece& piece, std::uint64_t& live) const {
+  if (!field_.eval_piece_live(p, branch, bits, hessian, piece, live)) return false;
+  piece.value -= level_;
+  return true;
+}
+
+}  // namespace cdp
