@@ -7,6 +7,7 @@
 #include <cdp/core/oriented_points.h>
 #include <cdp/io/field_factory.h>
 #include <cdp/io/mesh_io.h>
+#include <cdp/io/volume_io.h>
 
 #include <map>
 #include <mutex>
@@ -125,6 +126,39 @@ std::unique_ptr<Field> build_mpu(JsonReader& r) {
   }
 }
 
+// A sampled volume: "file" (.npy or .nrrd, relative to the JSON file), placed by "bounds" (the
+// grid spans the box) or by "origin" and "spacing" (a number or one per axis; an NRRD file's
+// own by default, else 0 and 1).
+std::unique_ptr<Field> build_volume(JsonReader& r) {
+  r.check_keys({"type", "bounds", "file", "level", "inside", "origin", "spacing"});
+  const std::filesystem::path path = r.file("file");
+  VolumeSamples samples;
+  try {
+    samples = read_volume(path);
+  } catch (const InvalidInputError& e) {
+    r.fail("file", e.what());
+  }
+  if (r.has("bounds")) {
+    if (r.has("origin") || r.has("spacing")) r.fail("bounds", "give either bounds or origin and spacing, not both");
+    const Box box = r.box("bounds");
+    samples.origin = box.min;
+    for (int a = 0; a < 3; ++a) samples.spacing[a] = box.size()[a] / static_cast<double>(samples.dims[a] - 1);
+  } else {
+    samples.origin = r.vec3("origin", samples.origin);
+    if (r.has("spacing")) {
+      if (r.raw("spacing").is_number()) samples.spacing = Vec3::Constant(r.positive_number("spacing"));
+      else samples.spacing = r.vec3("spacing");
+    }
+  }
+  const double level = r.number("level", 0.0);
+  const VolumeInside inside = r.choice("inside", {"below", "above"}, "below") == "below" ? VolumeInside::Below : VolumeInside::Above;
+  try {
+    return std::make_unique<Volume>(std::move(samples), level, inside);
+  } catch (const InvalidInputError& e) {
+    r.fail("file", e.what());
+  }
+}
+
 Registry& registry() {
   static Registry* reg = [] {
     auto* r = new Registry;
@@ -135,6 +169,7 @@ Registry& registry() {
     r->builders["expression"] = build_expression;
     r->builders["vis"] = build_vis;
     r->builders["mpu"] = build_mpu;
+    r->builders["volume"] = build_volume;
     for (auto& [name, make] : compiled_models())
       r->builders[name] = [make = std::move(make)](JsonReader&) { return make(); };
     return r;

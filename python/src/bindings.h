@@ -26,6 +26,7 @@ void bind_fields(py::module_& m);
 void bind_meshing(py::module_& m);
 void bind_analysis(py::module_& m);
 void bind_mesh_files(py::module_& m);
+void bind_volume(py::module_& m);
 
 // Points per batched field evaluation the bindings ask for (Field.gradients and .hessians,
 // curvature, project): a callable field's central differences put 25 points per point into one

@@ -13,6 +13,7 @@ PYBIND11_MODULE(_cdp, m) {
   m.attr("__name__") = "cdp";
   cdp::python::bind_errors(m);
   cdp::python::bind_fields(m);
+  cdp::python::bind_volume(m);
   cdp::python::bind_meshing(m);
   cdp::python::bind_analysis(m);
   cdp::python::bind_mesh_files(m);

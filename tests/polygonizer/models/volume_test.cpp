@@ -1,0 +1,190 @@
+// The sampled-volume model (polygonizer/include/cdp/core/models/volume.h): it interpolates its
+// samples, its derivatives are the interpolant's (central differences), its bounds hold, bad
+// grids are refused by name, and sampled distance fields mesh within the interpolation error of
+// the surfaces they sample, with their topology.
+#include <gtest/gtest.h>
+
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/mesh_topology.h>
+#include <cdp/core/models/level_shift.h>
+#include <cdp/core/models/volume.h>
+
+#include <cmath>
+#include <functional>
+#include <random>
+
+namespace cdp {
+namespace {
+
+// n samples per axis of f over the cube [-half, half]^3 (spacing 2 half / (n - 1)).
+VolumeSamples sample_cube(const std::function<double(const Vec3&)>& f, std::size_t n, double half) {
+  VolumeSamples s;
+  s.dims = {n, n, n};
+  s.origin = Vec3::Constant(-half);
+  s.spacing = Vec3::Constant(2 * half / static_cast<double>(n - 1));
+  s.values.reserve(n * n * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j)
+      for (std::size_t k = 0; k < n; ++k)
+        s.values.push_back(f(s.origin + Vec3(double(i), double(j), double(k)).cwiseProduct(s.spacing)));
+  return s;
+}
+
+double sphere_distance(const Vec3& p) { return p.norm() - 1.0; }
+double torus_distance(const Vec3& p) { return Eigen::Vector2d(std::hypot(p.x(), p.y()) - 1.0, p.z()).norm() - 0.4; }
+
+TEST(Volume, InterpolatesItsSamplesAndReadsInsideEitherWay) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  VolumeSamples s;
+  s.dims = {5, 6, 7};
+  s.origin = Vec3(1, -2, 0.5);
+  s.spacing = Vec3(0.5, 0.25, 1.0);
+  for (std::size_t f = 0; f < 5 * 6 * 7; ++f) s.values.push_back(2.0 + u(rng));  // outside everywhere (> level 0.5)
+  for (std::size_t f : {(2 * 6 + 3) * 7 + 3, (1 * 6 + 2) * 7 + 4}) s.values[f] = u(rng) * 0.2;  // two inside
+  // The same samples upside down for a density, whose inside is above the level.
+  VolumeSamples flipped = s;
+  for (double& v : flipped.values) v = 1.0 - v;
+  const Volume below(s, 0.5, VolumeInside::Below), above(flipped, 0.5, VolumeInside::Above);
+  EXPECT_EQ(below.bounds().min, s.origin);
+  EXPECT_TRUE(below.bounds().max.isApprox(Vec3(3, -0.75, 6.5)));
+  for (std::size_t i = 0; i < 5; ++i)
+    for (std::size_t j = 0; j < 6; ++j)
+      for (std::size_t k = 0; k < 7; ++k) {
+        const Vec3 p = s.origin + Vec3(double(i), double(j), double(k)).cwiseProduct(s.spacing);
+        const double sample = s.values[(i * 6 + j) * 7 + k];
+        EXPECT_NEAR(below.value(p), sample - 0.5, 1e-12) << i << " " << j << " " << k;
+        EXPECT_NEAR(above.value(p), 0.5 - (1.0 - sample), 1e-12);
+      }
+}
+
+TEST(Volume, DerivativesAreTheInterpolantsAndItsBoundsHold) {
+  const Volume field(sample_cube(torus_distance, 12, 1.6), 0.0);
+  const Box box = field.bounds();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.1, 1.1);  // beyond the grid too, where it is mirrored
+  const double h = 1e-6;
+  double steepest = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vec3 p = box.min + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(box.size());
+    Vec3 g, g2;
+    Mat3 H;
+    const double v = field.value(p);
+    ASSERT_EQ(v, field.value_gradient(p, g));
+    ASSERT_EQ(v, field.gradient_hessian(p, g2, H));
+    ASSERT_EQ(g, g2);
+    steepest = std::max(steepest, g.norm());
+    for (int a = 0; a < 3; ++a) {
+      Vec3 e = Vec3::Zero();
+      e[a] = h;
+      EXPECT_NEAR((field.value(p + e) - field.value(p - e)) / (2 * h), g[a], 1e-7 * std::max(1.0, g.norm()));
+      const Vec3 dg = (field.gradient(p + e) - field.gradient(p - e)) / (2 * h);
+      for (int b = 0; b < 3; ++b) EXPECT_NEAR(dg[b], H(b, a), 1e-5 * std::max(1.0, H.norm())) << p.transpose();
+    }
+    EXPECT_EQ(H, H.transpose());
+  }
+  ASSERT_TRUE(field.lipschitz_bound());
+  EXPECT_GE(*field.lipschitz_bound(), steepest);
+  // value_range holds on sub-boxes, checked at points inside each.
+  std::uniform_real_distribution<double> w(0, 1);
+  for (int trial = 0; trial < 30; ++trial) {
+    const Vec3 lo = box.min + Vec3(w(rng), w(rng), w(rng)).cwiseProduct(box.size()) * 0.8;
+    const Box region{lo, lo + box.size() * 0.2 * w(rng) + Vec3::Constant(1e-3)};
+    const auto range = field.value_range(region);
+    ASSERT_TRUE(range);
+    for (int k = 0; k < 50; ++k) {
+      const double v = field.value(region.min + Vec3(w(rng), w(rng), w(rng)).cwiseProduct(region.size()));
+      EXPECT_GE(v, range->first - 1e-12);
+      EXPECT_LE(v, range->second + 1e-12);
+    }
+  }
+}
+
+TEST(Volume, RefusesGridsItCannotInterpolateByName) {
+  const auto expect_error = [](VolumeSamples s, double level, const std::string& words) {
+    try {
+      Volume v(std::move(s), level);
+      ADD_FAILURE() << "no error for " << words;
+    } catch (const InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  const VolumeSamples good = sample_cube(sphere_distance, 6, 1.5);
+  VolumeSamples s = good;
+  s.dims = {6, 6, 3};
+  s.values.resize(108);
+  expect_error(s, 0, "at least 4 samples along each axis, found 3 along z");
+  s = good;
+  s.values.pop_back();
+  expect_error(s, 0, "215 values for a grid of 216 samples");
+  s = good;
+  s.spacing.y() = 0;
+  expect_error(s, 0, "spacing along y must be positive");
+  s = good;
+  s.values[(2 * 6 + 3) * 6 + 2] = std::nan("");
+  expect_error(s, 0, "sample [2, 3, 2] is not finite");
+  expect_error(good, 2.0, "sample [0, 0, 0] on the grid's faces is not outside");
+  expect_error(good, std::nan(""), "level must be finite");
+}
+
+struct Sampled {
+  const char* name;
+  double (*distance)(const Vec3&);
+  double half;
+  int genus;
+};
+
+// A distance field sampled at three resolutions meshes closed with its genus, and every vertex
+// lies within the interpolation error of the sampled surface: that error is measured apart, as
+// the largest |S - d| at points spread through a band around the surface (|grad d| = 1, so a
+// vertex where S = 0 is |S - d| from it).
+TEST(Volume, SampledDistanceFieldsMeshWithinTheirInterpolationErrorWithTheirTopology) {
+  for (const Sampled& c : {Sampled{"sphere", sphere_distance, 1.5, 0}, Sampled{"torus", torus_distance, 1.6, 1}}) {
+    double previous = std::numeric_limits<double>::infinity();
+    for (std::size_t n : {24, 40, 64}) {
+      const Volume field(sample_cube(c.distance, n, c.half), 0.0);
+      std::mt19937 rng(11);
+      std::uniform_real_distribution<double> u(-c.half, c.half);
+      const double band = 2 * field.spacing().x();
+      double interpolation = 0;
+      for (int k = 0; k < 200000; ++k) {
+        const Vec3 p(u(rng), u(rng), u(rng));
+        if (std::abs(c.distance(p)) < band) interpolation = std::max(interpolation, std::abs(field.value(p) - c.distance(p)));
+      }
+      const PolygonizeResult r = polygonize_adaptive(field, AdaptiveOptions{});
+      const MeshTopology t = analyze_topology(r.mesh);
+      EXPECT_TRUE(t.watertight()) << c.name << " " << n;
+      EXPECT_EQ(t.components, 1u) << c.name << " " << n;
+      EXPECT_EQ(t.genus, c.genus) << c.name << " " << n;
+      double worst = 0;
+      for (const Vec3& v : r.mesh.positions) worst = std::max(worst, std::abs(c.distance(v)));
+      // 1.5: the band's sampling of |S - d| misses its peaks by a little; 1e-9: Newton's tolerance.
+      EXPECT_LE(worst, 1.5 * interpolation + 1e-9) << c.name << " " << n << " interpolation error " << interpolation;
+      EXPECT_LT(interpolation, previous) << c.name << " " << n;  // finer samples, closer surface
+      previous = interpolation;
+    }
+  }
+}
+
+// LevelShift: F - c passes every hook on, so a sphere's distance at level 0.5 is the sphere of
+// radius 1.5, and the derivatives are F's.
+TEST(LevelShift, ShiftsTheValueAndNothingElse) {
+  const Volume field(sample_cube(sphere_distance, 32, 2.0), 0.0);
+  const LevelShift shifted(field, 0.5);
+  const Vec3 p(0.3, -0.7, 1.1);
+  Vec3 g, gs;
+  Mat3 h, hs;
+  EXPECT_EQ(shifted.gradient_hessian(p, gs, hs), field.gradient_hessian(p, g, h) - 0.5);
+  EXPECT_EQ(g, gs);
+  EXPECT_EQ(h, hs);
+  EXPECT_EQ(shifted.bounds().min, field.bounds().min);
+  const auto range = field.value_range(shifted.bounds()), shifted_range = shifted.value_range(shifted.bounds());
+  EXPECT_EQ(shifted_range->first, range->first - 0.5);
+  const PolygonizeResult r = polygonize_adaptive(shifted, AdaptiveOptions{});
+  for (const Vec3& v : r.mesh.positions) EXPECT_NEAR(v.norm(), 1.5, 1e-3);
+  EXPECT_THROW(LevelShift(field, std::nan("")), InvalidInputError);
+}
+
+}  // namespace
+}  // namespace cdp
