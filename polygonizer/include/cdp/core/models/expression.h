@@ -33,6 +33,10 @@ class Expression : public Field {
   // formula has no box of its own.
   Expression(const std::string& formula, const std::map<std::string, double>& params, const Box& bounds,
              const std::map<std::string, std::string>& definitions = {});
+  // The same in the order of Python's cdp.expression(formula, bounds, params, define).
+  Expression(const std::string& formula, const Box& bounds, const std::map<std::string, double>& params = {},
+             const std::map<std::string, std::string>& definitions = {})
+      : Expression(formula, params, bounds, definitions) {}
   ~Expression() override;
   std::string type_name() const override { return "expression"; }
   bool thread_safe() const override { return true; }  // evaluation reads immutable data only
