@@ -4,7 +4,7 @@
     f = sphere(1) & box(1.5)
     c = cylinder(0.5)
     f -= c.orient(X) | c.orient(Y) | c.orient(Z)
-    V, F, stats = cdp.polygonize(f, tolerance=1e-3)     # or f.field(), f.to_json(), f.save("f.json")
+    V, F, _, stats = cdp.polygonize(f, tolerance=1e-3)     # or f.field(), f.to_json(), f.save("f.json")
 
 A model is an immutable tree of `SDF` nodes. Nothing is evaluated in Python: the tree renders to
 one formula of the `expression` model (`polygonizer/include/cdp/core/models/expression.h`) with
@@ -497,8 +497,9 @@ class SDF:
 
     def to_json(self, bounds=None, pad=0.1):
         """The field file's dict: {"type": "expression", "value": ..., "define": {...}, "bounds":
-        [[...], [...]]} ("define" left out when empty). bounds: the box given to the field (default:
-        the model's box, padded by pad times its longest side on every side)."""
+        [[...], [...]]} ("define" left out when empty). bounds: the box given to the field, used as
+        is (default None: the model's box, padded by pad, default 0.1, times its longest side on
+        every side)."""
         lo, hi = self._field_bounds(bounds, pad)
         formula, define = self.formula()
         spec = {"type": "expression", "value": formula}
@@ -508,15 +509,16 @@ class SDF:
         return spec
 
     def save(self, path, bounds=None, pad=0.1):
-        """Writes to_json(bounds, pad) as a field file (build/bin/polygonize FILE -o OUT.ply)."""
+        """Writes to_json(bounds, pad) as a field file at path (build/bin/polygonize FILE -o OUT.ply);
+        bounds (default None) and pad (default 0.1) as in to_json."""
         spec = self.to_json(bounds, pad)
         with open(_os.fspath(path), "w", encoding="utf-8") as f:
             _json.dump(spec, f, indent=2)
             f.write("\n")
 
     def field(self, bounds=None, pad=0.1):
-        """A cdp.Field (an expression with exact derivatives) of the model; bounds and pad as
-        in to_json."""
+        """A cdp.Field (an expression with exact derivatives) of the model; bounds (default None)
+        and pad (default 0.1) as in to_json."""
         spec = self.to_json(bounds, pad)
         return _cdp.expression(spec["value"], spec["bounds"], define=spec.get("define"))
 
@@ -559,48 +561,65 @@ class SDF:
         return negate(self)
 
     def union(self, *others, k=None):
+        """union(self, *others, k=None): min, or the smooth min of radius k (default None: sharp)."""
         return union(self, *others, k=k)
 
     def intersection(self, *others, k=None):
+        """intersection(self, *others, k=None): max, or the smooth max of radius k (default None: sharp)."""
         return intersection(self, *others, k=k)
 
     def difference(self, *others, k=None):
+        """difference(self, *others, k=None): max(self, -other, ...), or smooth with radius k (default
+        None: sharp)."""
         return difference(self, *others, k=k)
 
     def blend(self, *others, k=0.5):
+        """blend(self, *others, k=0.5): (1 - k) self + k other, folded from the left."""
         return blend(self, *others, k=k)
 
     def negate(self):
+        """negate(self): -F, inside and outside swapped."""
         return negate(self)
 
     def shell(self, thickness):
+        """shell(self, thickness): |F| - thickness/2."""
         return shell(self, thickness)
 
     def dilate(self, r):
+        """dilate(self, r): F - r, grown by r."""
         return dilate(self, r)
 
     def erode(self, r):
+        """erode(self, r): F + r, shrunk by r."""
         return erode(self, r)
 
     def translate(self, offset):
+        """translate(self, offset): the model moved by offset."""
         return translate(self, offset)
 
     def scale(self, factor):
+        """scale(self, factor): the model scaled about the origin (see cdp.sdf.scale)."""
         return scale(self, factor)
 
     def rotate(self, angle, vector=Z):
+        """rotate(self, angle, vector=Z): turned by angle (radians) about vector (default Z)."""
         return rotate(self, angle, vector)
 
     def orient(self, axis):
+        """orient(self, axis): turned so that its +Z axis points along axis."""
         return orient(self, axis)
 
     def repeat(self, spacing, count=None, padding=0):
+        """repeat(self, spacing, count=None, padding=0): copies every spacing, count (default None:
+        infinitely many) on each side, padding 0 or 1 (see cdp.sdf.repeat)."""
         return repeat(self, spacing, count, padding)
 
     def twist(self, k):
+        """twist(self, k): twisted about Z by k radians per unit of z."""
         return twist(self, k)
 
     def bend(self, k):
+        """bend(self, k): bent in the XY plane, (x, y) turned by k x radians."""
         return bend(self, k)
 
 
@@ -627,7 +646,8 @@ def _at(node, center):
 
 
 def sphere(radius=1, center=ORIGIN):
-    """The exact distance to a sphere."""
+    """The exact distance to a sphere of the given radius (default 1) around center (default
+    ORIGIN)."""
     r = _positive(radius, "sphere: radius")
     c = _vec3(center, "sphere: center")
     node = SDF(lambda R, p: f"hypot({p[0]}, {p[1]}, {p[2]}) - {_num(r)}", ((-r,) * 3, (r,) * 3),
@@ -636,7 +656,8 @@ def sphere(radius=1, center=ORIGIN):
 
 
 def box(size=1, center=ORIGIN, a=None, b=None):
-    """A box of side lengths size (one number or three), or with corners a and b:
+    """A box of side lengths size (one number or three; default 1) around center (default ORIGIN),
+    or with corners a and b (default None; both or neither, in place of size and center):
     max(|x| - sx/2, |y| - sy/2, |z| - sz/2). Sharp edges (creases for the mesher); exact inside
     and where the nearest point is on a face, a lower bound near edges and corners outside."""
     if a is not None or b is not None:
@@ -664,7 +685,7 @@ def _rounded_corner(R, d):
 
 def rounded_box(size, radius, center=ORIGIN):
     """Inigo Quilez's exact rounded box: the box of side lengths size with edges and corners
-    rounded by radius (size includes the rounding)."""
+    rounded by radius (size includes the rounding), around center (default ORIGIN)."""
     s = _vec3(size, "rounded_box: size", allow_scalar=True)
     r = _scalar(radius, "rounded_box: radius")
     if r < 0 or any(2 * r > v for v in s):
@@ -771,8 +792,9 @@ def capped_cone(a, b, ra, rb):
 
 
 def plane(normal=UP, point=ORIGIN):
-    """The half-space on the side `normal` points to, as in fogleman/sdf: F = (point - p) . n,
-    the exact signed distance. Unbounded."""
+    """The half-space on the side `normal` (default UP) points to, its boundary through point
+    (default ORIGIN), as in fogleman/sdf: F = (point - p) . n, the exact signed distance.
+    Unbounded."""
     n = _normalize(_vec3(normal, "plane: normal"), "plane: normal")
     q = _vec3(point, "plane: point")
     lo, hi = [-_INF] * 3, [_INF] * 3
@@ -920,7 +942,8 @@ def difference(a, *bs, k=None):
 
 
 def blend(a, *bs, k=0.5):
-    """The linear interpolation (1 - k) a + k b, folded from the left (fogleman/sdf's blend)."""
+    """The linear interpolation (1 - k) a + k b with k (default 0.5), folded from the left over
+    bs (fogleman/sdf's blend)."""
     a = _check(a, "blend")
     k = _scalar(k, "blend: k")
     node = a
@@ -1011,7 +1034,8 @@ def scale(other, factor):
 
 
 def rotate(other, angle, vector=Z):
-    """The model turned by angle (radians) about vector through the origin (right-hand rule)."""
+    """The model turned by angle (radians) about vector (default Z) through the origin
+    (right-hand rule)."""
     a = _scalar(angle, "rotate: angle")
     v = _normalize(_vec3(vector, "rotate: vector"), "rotate: vector")
     r = _rotation(a, v)

@@ -296,7 +296,10 @@ void bind_analysis(py::module_& m) {
         "build/bin/evaluate on arrays: the metrics dict (schema cdp-metrics/1, raytrace/README.md) of a mesh against "
         "the exact ray-cast surface of its field, without cache and without the \"files\" entry. normals: an (N, 3) "
         "array, \"field\" (the field's normalized gradient, and at vertices on a crease of a CSG field each side's "
-        "normal, as evaluate --normals field) or \"mesh\"/None (area-weighted vertex normals).");
+        "normal, as evaluate --normals field) or \"mesh\"/None (the default: area-weighted vertex normals). As the "
+        "program's options: views (default 8) camera directions, each casting resolution x resolution rays (default "
+        "64), projection \"perspective\" (the default) or \"orthographic\"; samples (default 20000) points of the mesh "
+        "measured against the surface.");
   m.def("crease_angles", &crease_angles_py, py::arg("field"), py::arg("vertices"), py::arg("faces"), py::kw_only(),
         py::arg("near") = py::none(),
         "The smallest triangle angles (degrees) at the field's creases and away from them, judged from the field: a "

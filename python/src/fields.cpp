@@ -208,13 +208,17 @@ void bind_fields(py::module_& m) {
         return field_from_dict(spec("sphere", {{"radius", radius}, {"center", center}, {"bounds", bounds}}), "cdp.sphere");
       },
       py::arg("radius"), py::arg("center") = py::none(), py::arg("bounds") = py::none(),
-      "{\"type\": \"sphere\"}: the signed distance to a sphere (center defaults to the origin).");
+      "{\"type\": \"sphere\"}: the signed distance to a sphere of the given radius around center (default None: the "
+      "origin). bounds ((xmin, ymin, zmin), (xmax, ymax, zmax)), default None: the sphere's box grown by 10% of the "
+      "radius.");
   m.def(
       "ellipsoid",
       [](py::object radii, py::object center, py::object bounds) {
         return field_from_dict(spec("ellipsoid", {{"radii", radii}, {"center", center}, {"bounds", bounds}}), "cdp.ellipsoid");
       },
-      py::arg("radii"), py::arg("center") = py::none(), py::arg("bounds") = py::none(), "{\"type\": \"ellipsoid\"}.");
+      py::arg("radii"), py::arg("center") = py::none(), py::arg("bounds") = py::none(),
+      "{\"type\": \"ellipsoid\"}: the axis-aligned ellipsoid with radii (rx, ry, rz) around center (default None: the "
+      "origin); bounds (default None: its box grown by 10% of each radius) as for sphere.");
   m.def(
       "torus",
       [](py::object major_radius, py::object minor_radius, py::object center, py::object bounds) {
@@ -225,7 +229,9 @@ void bind_fields(py::module_& m) {
                                "cdp.torus");
       },
       py::arg("major_radius"), py::arg("minor_radius"), py::arg("center") = py::none(), py::arg("bounds") = py::none(),
-      "{\"type\": \"torus\"}: the signed distance to a ring torus around the z axis.");
+      "{\"type\": \"torus\"}: the signed distance to a ring torus around the z axis through center (default None: "
+      "the origin), 0 < minor_radius < major_radius; bounds (default None: its box grown by 10% of minor_radius) as "
+      "for sphere.");
   m.def(
       "blobs",
       [](py::object blobs, py::object threshold, py::object kernel, py::object bounds) {
@@ -251,8 +257,9 @@ void bind_fields(py::module_& m) {
             spec("blobs", {{"blobs", items}, {"threshold", threshold}, {"kernel", kernel}, {"bounds", bounds}}), "cdp.blobs");
       },
       py::arg("blobs"), py::arg("threshold"), py::arg("kernel") = py::none(), py::arg("bounds") = py::none(),
-      "{\"type\": \"blobs\"}: blobs is a list of {\"center\", \"radius\", \"strength\"} dicts or (center, radius[, "
-      "strength]) tuples; kernel \"wyvill\" (default) or \"blinn\".");
+      "{\"type\": \"blobs\"}: the surface where the sum of the blobs' kernels reaches threshold. blobs is a list of "
+      "{\"center\", \"radius\", \"strength\"} dicts or (center, radius[, strength]) tuples; kernel (default None) "
+      "\"wyvill\" (the default) or \"blinn\"; bounds (default None: the box of every blob's reach) as for sphere.");
   m.def(
       "expression",
       [](py::object formula, py::object bounds, py::object params, py::object define) {
@@ -269,8 +276,11 @@ void bind_fields(py::module_& m) {
         py::arg("hessian") = py::none(), py::kw_only(), py::arg("lipschitz") = py::none(),
         py::arg("gradient_step") = py::none(), py::arg("hessian_step") = py::none(), py::arg("smooth") = false,
         "A field from Python functions called on (N, 3) float64 arrays: f -> (N,), gradient -> (N, 3), hessian -> "
-        "(N, 3, 3). Missing derivatives come from central differences (steps 1e-5 and 1e-4 of the box diagonal unless "
-        "given). smooth=True promises a regular zero set (the gradient continuous and nonzero where the surface "
+        "(N, 3, 3); bounds ((xmin, ymin, zmin), (xmax, ymax, zmax)) holds the surface. Missing derivatives come from "
+        "central differences: gradient_step (default None: 1e-5 of the box diagonal) for first derivatives, "
+        "hessian_step (default None: 1e-4 of it) for second differences of f. lipschitz (default None: estimated "
+        "where an algorithm needs it, as evaluate's ray casting does) bounds |f(a) - f(b)| / |a - b| in the box. "
+        "smooth=True (default False) promises a regular zero set (the gradient continuous and nonzero where the surface "
         "passes: no min, max, abs or branch on the coordinates there, no node): the adaptive method's repair then "
         "skips its crease probes, three calls per vertex it touches. See python/README.md for how often the algorithms call them.");
 }

@@ -56,8 +56,9 @@ void bind_mesh_files(py::module_& m) {
       },
       py::arg("path"), py::arg("vertices"), py::arg("faces"), py::arg("normals") = py::none(), py::kw_only(),
       py::arg("binary") = true, py::arg("scalars") = py::none(),
-      "Writes a mesh, the format by extension: PLY (binary little-endian float64; ASCII with binary=False), OBJ, OFF "
-      "(shortest round-trip decimals) or STL (float32). scalars {name: (N,) array} become PLY vertex properties "
+      "Writes a mesh, the format by extension: PLY (binary little-endian float64; ASCII with binary=False; default "
+      "True), OBJ, OFF (shortest round-trip decimals) or STL (float32). normals (default None: none written) an (N, "
+      "3) array of vertex normals, written by PLY, OBJ and OFF (NOFF), not STL. scalars (default None) {name: (N,) array} become PLY vertex properties "
       "(build/bin/render --color NAME draws them); the other formats have no place for them. Written through a temporary file and a rename, so a failure "
       "leaves no file; one that cannot be written raises OSError with the system's reason.");
 }
