@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 PYTHON ?= /usr/bin/python3
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build test test-sanitize reproduce experiment bench bench-short bench-record dashboard test-browser clean
+.PHONY: all deps build test test-sanitize reproduce experiment bench bench-short bench-record dashboard viewer test-browser clean
 
 all: build
 
@@ -52,9 +52,17 @@ dashboard:
 	$(PYTHON) scripts/make_dashboard.py --history results/bench/history --latest results/bench/latest.json \
 	    --table results/table1.json --out results/dashboard/index.html
 
-test-browser: dashboard
+# The mesh viewer, results/viewer/ (make reproduce makes it too). In a fresh clone, where the meshes of
+# make reproduce are missing, its meshes are made again by the experiment program: built first then.
+viewer:
+	@bash scripts/install-deps.sh --viewer
+	@$(PYTHON) scripts/make_viewer.py --build $(BUILD) --have-meshes || $(MAKE) build
+	$(PYTHON) scripts/make_viewer.py --build $(BUILD)
+
+test-browser: dashboard viewer
 	@bash scripts/install-deps.sh --browser
 	$(PYTHON) scripts/test_dashboard_browser.py results/dashboard/index.html
+	node viewer/test/browser.mjs results/viewer/index.html --screenshots results/viewer/screenshots
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD)

@@ -470,12 +470,18 @@ th{background:#eee}tr.regression td{background:#fdd}tr.improvement td{background
 code{background:#f4f4f4;padding:0 2px}.summary{font-weight:bold}"""
 
 
+# A relative link: results/viewer/ is made by make reproduce (scripts/make_viewer.py) beside this page.
+VIEWER_LINK = ('<p>The meshes themselves, to turn and compare: <a href="../viewer/index.html">the mesh viewer</a> '
+               "(ours beside Marching Tetrahedra and Marching Cubes at matched triangle counts, with each run's "
+               "figures).</p>")
+
+
 def build_page(runs, table_path):
     title = "Performance dashboard"
     if runs:
         title += " — " + label(runs[-1])
     parts = ["<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title><style>{}</style>"
-             "</head><body><h1>{}</h1>".format(E(title), CSS, E(title)),
+             "</head><body><h1>{}</h1>".format(E(title), CSS, E(title)), VIEWER_LINK,
              context_section(runs), regression_section(runs), inrun_section(runs), time_to_accuracy_section(runs),
              quality_section(table_path),
              series_section(runs), METHOD.format(z=bl.Z, floor=100 * bl.NOISE_FLOOR), "</body></html>\n"]

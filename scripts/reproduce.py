@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""make reproduce: every experiment, then Table 1, the claims, the plots, the figures and
+"""make reproduce: every experiment, then Table 1, the claims, the plots, the figures, the mesh viewer and
 results/README.md. Each step prints what it does; a failing step stops the run with its message."""
 import argparse
 import os
@@ -41,18 +41,39 @@ def step(title, cmd, tolerate=()):
     return r.returncode
 
 
+# scripts/make_viewer.py's exit status when it wrote the mesh data but not the bundle.
+VIEWER_NOT_BUNDLED = 3
+
+
+def viewer(build):
+    """The mesh viewer (results/viewer/). Its npm packages come from the npm registry the first time:
+    without it the reproduction goes on, and says at the end what is missing."""
+    t0 = time.time()
+    print("reproduce: viewer", flush=True)
+    deps = subprocess.run(["bash", "scripts/install-deps.sh", "--viewer"], cwd=ROOT)
+    r = subprocess.run([PY, "scripts/make_viewer.py", "--build", build], cwd=ROOT)
+    if r.returncode not in (0, VIEWER_NOT_BUNDLED):
+        sys.exit("reproduce: step failed ({}): scripts/make_viewer.py".format(r.returncode))
+    print("reproduce: viewer done in {:.0f} s".format(time.time() - t0), flush=True)
+    if r.returncode == VIEWER_NOT_BUNDLED:
+        return ("the viewer's page has its meshes but not viewer.js ({}): `make viewer` once the npm registry "
+                "is reachable".format("installing node or its npm packages failed" if deps.returncode else
+                                      "its npm packages are missing"))
+    return None
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--build", default="build")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--only", nargs="*", help="experiments to run (default: all, and the two sweeps: name them as topology_sweep and "
-                    "sdf_sweep)")
+    ap.add_argument("--only", nargs="*", help="experiments to run (default: all, and the two sweeps and the mesh viewer: name "
+                    "them as topology_sweep, sdf_sweep and viewer)")
     a = ap.parse_args()
     start = time.time()
     exe = os.path.join(a.build, "bin", "experiment")
     with_failures = []
-    sweeps = ("topology_sweep", "sdf_sweep")
-    for name in [n for n in a.only or EXPERIMENTS if n not in sweeps]:
+    named_steps = ("topology_sweep", "sdf_sweep", "viewer")
+    for name in [n for n in a.only or EXPERIMENTS if n not in named_steps]:
         code = step("experiment " + name, [exe, os.path.join("experiments", name + ".json"), "--jobs", str(a.jobs),
                                            "--out", os.path.join("results", name)], tolerate=(SOME_RUNS_FAILED,))
         if code == SOME_RUNS_FAILED:
@@ -69,8 +90,13 @@ def main():
         step("SDF sweep", [PY, "scripts/sdf_sweep.py", "--build", a.build, "--jobs", str(a.jobs)])
     if os.path.exists(os.path.join(ROOT, "scripts", "figures.py")):
         step("figures", [PY, "scripts/figures.py", "--build", a.build, "--jobs", str(a.jobs)])
+    # Needs every shown model's meshes (missing ones are run again) and, the first time, the npm
+    # registry: with --only, when named.
+    viewer_note = viewer(a.build) if not a.only or "viewer" in a.only else None
     step("results/README.md", [PY, "scripts/results_readme.py", "--seconds", str(round(time.time() - start))])
     print("reproduce: finished in {:.1f} min".format((time.time() - start) / 60))
+    if viewer_note:
+        print("reproduce: " + viewer_note)
     for name in [n for n in with_failures if n in KNOWN_FAILURES]:
         print("reproduce: runs failed in {}: known, {}".format(name, KNOWN_FAILURES[name]))
     with_failures = [n for n in with_failures if n not in KNOWN_FAILURES]

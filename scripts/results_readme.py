@@ -8,6 +8,12 @@ import os
 import results_lib as rl
 
 
+VIEWER = ("The meshes themselves, to turn, zoom and compare (ours beside Marching Tetrahedra and Marching Cubes at "
+          "matched triangle counts, with each run's figures): [viewer/index.html](viewer/index.html), opened in a "
+          "browser straight from the disk (see viewer/README.md in the repository). Its meshes and script are not "
+          "committed: `make reproduce` or `make viewer` writes them.")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--results", default=os.path.join(rl.ROOT, "results"))
@@ -19,6 +25,8 @@ def main():
              "the committed files are those of the last run." +
              (" That run took {:.1f} minutes including the experiments.".format(a.seconds / 60) if a.seconds else ""),
              ""]
+    if os.path.exists(os.path.join(r, "viewer", "index.html")):
+        parts += [VIEWER, ""]
     for name in ("table1.md", "claims.md", "claims_by_model.md"):
         p = os.path.join(r, name)
         if os.path.exists(p):

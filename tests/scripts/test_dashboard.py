@@ -305,8 +305,10 @@ class Dashboard(unittest.TestCase):
         ratios = {e["name"]: e["value"] for e in bigger if e["unit"] == "ratio"}
         self.assertAlmostEqual(ratios["ratio adaptive/mt triangles_per_second bench_adaptive:BM_Adaptive/torus/factor:3/manual_time"], 2.0)
         self.assertAlmostEqual(ratios["ratio batched/scalar bench_fields:BM_Field/torus/values_batched"], 1.0)
-        # Self-contained: nothing but embedded images.
-        self.assertIsNone(re.search(r'(src|href)="(?!data:)', page))
+        # Self-contained: nothing but embedded images, and a link to the mesh viewer beside it (loads nothing).
+        viewer_link = '<a href="../viewer/index.html">'
+        self.assertIn(viewer_link, page)
+        self.assertIsNone(re.search(r'(src|href)="(?!data:)', page.replace(viewer_link, "")))
 
     def test_time_to_accuracy_section_and_unreached_targets(self):
         old = run("a" * 40, "2026-01-01T00:00:00+00:00")
