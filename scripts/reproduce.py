@@ -31,10 +31,10 @@ KNOWN_FAILURES = {
 SOME_RUNS_FAILED = 2
 
 
-def step(title, cmd, tolerate=()):
+def step(title, cmd, tolerate=(), env=None):
     t0 = time.time()
     print("reproduce: " + title, flush=True)
-    r = subprocess.run(cmd, cwd=ROOT)
+    r = subprocess.run(cmd, cwd=ROOT, env=env)
     if r.returncode != 0 and r.returncode not in tolerate:
         sys.exit("reproduce: step failed ({}): {}".format(r.returncode, " ".join(cmd)))
     print("reproduce: {} done in {:.0f} s".format(title, time.time() - t0), flush=True)
@@ -67,12 +67,12 @@ def main():
     ap.add_argument("--build", default="build")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--only", nargs="*", help="experiments to run (default: all, and the two sweeps and the mesh viewer: name "
-                    "them as topology_sweep, sdf_sweep and viewer)")
+                    "them as topology_sweep, sdf_sweep, viewer and volume_example)")
     a = ap.parse_args()
     start = time.time()
     exe = os.path.join(a.build, "bin", "experiment")
     with_failures = []
-    named_steps = ("topology_sweep", "sdf_sweep", "viewer")
+    named_steps = ("topology_sweep", "sdf_sweep", "viewer", "volume_example")
     for name in [n for n in a.only or EXPERIMENTS if n not in named_steps]:
         code = step("experiment " + name, [exe, os.path.join("experiments", name + ".json"), "--jobs", str(a.jobs),
                                            "--out", os.path.join("results", name)], tolerate=(SOME_RUNS_FAILED,))
@@ -90,6 +90,11 @@ def main():
         step("SDF sweep", [PY, "scripts/sdf_sweep.py", "--build", a.build, "--jobs", str(a.jobs)])
     if os.path.exists(os.path.join(ROOT, "scripts", "figures.py")):
         step("figures", [PY, "scripts/figures.py", "--build", a.build, "--jobs", str(a.jobs)])
+    # A sampled volume (a brain MRI from python3-nibabel) beside scikit-image: with --only, when named.
+    if not a.only or "volume_example" in a.only:
+        env = dict(os.environ, PYTHONPATH=os.path.join(os.path.abspath(a.build), "python"))
+        step("volume example", [PY, "examples/mesh_volume.py", "--out", os.path.join("results", "volume_example"),
+                                "--render", os.path.join(a.build, "bin", "render")], env=env)
     # Needs every shown model's meshes (missing ones are run again) and, the first time, the npm
     # registry: with --only, when named.
     viewer_note = viewer(a.build) if not a.only or "viewer" in a.only else None
