@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
     bool quiet = false, progress_lines = false;
     cdp::EvaluateOptions options;
     app.add_option("FIELD.json", field_path, "the field file")->required()->type_name("")->check(cdp::app::path_name());
-    app.add_option("MESH.ply", mesh_path, "the mesh: .ply, .obj or .off")->required()->type_name("")->check(cdp::app::path_name());
+    app.add_option("MESH.ply", mesh_path, "the mesh: .ply, .obj, .off or .stl")->required()->type_name("")->check(cdp::app::path_name());
     app.add_option("-o", out_path, "the metrics file")->required()->type_name("METRICS.json")->check(cdp::app::path_name());
     app.add_option("--rays", options.camera.resolution, "N x N rays per view, N in [1, 8192]")
         ->capture_default_str()

@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
     cdp::app::configure(app);
     std::string mesh_path, out_path, field_path, color = "none", range, up = "y", focus;
     cdp::RenderOptions options;
-    app.add_option("MESH", mesh_path, "the mesh: .ply, .obj or .off")->required()->type_name("")->check(cdp::app::path_name());
+    app.add_option("MESH", mesh_path, "the mesh: .ply, .obj, .off or .stl")->required()->type_name("")->check(cdp::app::path_name());
     app.add_option("-o", out_path, "the picture (PNG)")->required()->type_name("OUT.png")->check(cdp::app::path_name());
     app.add_option("--width", options.view.width, "picture width in pixels, in [1, 8192]")
         ->capture_default_str()

@@ -58,6 +58,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("."), help="output folder (default: .)")
     parser.add_argument("--factor", type=float, default=2, help="the paper's heuristic factor (default 2)")
+    parser.add_argument("--smoothing", type=float, default=SMOOTHING_VOXELS,
+                        help=f"Gaussian smoothing in voxels before meshing, 0 for none (default {SMOOTHING_VOXELS})")
+    parser.add_argument("--level", type=float, help="the isovalue (default: Otsu's threshold of the scan)")
     parser.add_argument("--render", type=pathlib.Path, default=ROOT / "build" / "bin" / "render",
                         help="build/bin/render, for the picture")
     args = parser.parse_args()
@@ -73,10 +76,13 @@ def main():
         report.append(line)
 
     raw, spacing, name = load_volume()
-    level = float(filters.threshold_otsu(raw))
-    volume = ndimage.gaussian_filter(np.pad(raw, PAD, mode="constant", constant_values=raw.min()), SMOOTHING_VOXELS)
+    level = float(filters.threshold_otsu(raw)) if args.level is None else args.level
+    volume = np.pad(raw, PAD, mode="constant", constant_values=raw.min())
+    if args.smoothing > 0:
+        volume = ndimage.gaussian_filter(volume, args.smoothing)
     origin = tuple(-PAD * s for s in spacing)
-    say(f"{name}: {raw.shape} samples at {spacing} mm, Otsu level {level:.1f}, smoothed by {SMOOTHING_VOXELS} voxels")
+    say(f"{name}: {raw.shape} samples at {spacing} mm, level {level:.1f}"
+        f"{' (Otsu)' if args.level is None else ''}, smoothed by {args.smoothing} voxels")
 
     field = cdp.volume_field(volume, spacing=spacing, origin=origin, level=level, inside="above")
     start = time.perf_counter()
