@@ -12,12 +12,20 @@
 #include <fstream>
 #include <iterator>
 #include <map>
-#include <regex>
+#include <charconv>
+#include <cmath>
+#include <string_view>
 #include <sstream>
 
 namespace cdp {
 
 namespace {
+
+// Headers longer than this are refused before they are parsed: numpy writes a few hundred bytes,
+// NRRD headers are lines of text; a malformed file must not make the parser's work unbounded.
+constexpr std::size_t kMaxHeader = std::size_t{1} << 20;
+// Most numbers in one header field (a shape, "sizes", "space directions").
+constexpr std::size_t kMaxNumbers = 64;
 
 // A scalar type as stored: its size, kind ('f' float, 'i' signed, 'u' unsigned, 'b' bool) and
 // whether its bytes are big-endian.
@@ -101,6 +109,26 @@ std::array<std::size_t, 3> three_sizes(const std::vector<unsigned long long>& si
   return n;
 }
 
+// The integers of a list ("33, 41, 25", "33 41 25"), separated by commas and blanks; anything
+// else (a sign, a fraction, a number beyond 64 bits) is an error naming `key`.
+std::vector<unsigned long long> integers_in(std::string_view text, const std::string& name, const std::string& key) {
+  std::vector<unsigned long long> out;
+  std::size_t p = 0;
+  while (p < text.size()) {
+    if (text[p] == ',' || text[p] == ' ' || text[p] == '\t') {
+      ++p;
+      continue;
+    }
+    unsigned long long v = 0;
+    const auto r = std::from_chars(text.data() + p, text.data() + text.size(), v);
+    if (r.ec != std::errc() || out.size() == kMaxNumbers)
+      throw InvalidInputError(name + ": \"" + key + "\" must list whole numbers of samples");
+    out.push_back(v);
+    p = static_cast<std::size_t>(r.ptr - text.data());
+  }
+  return out;
+}
+
 VolumeSamples read_npy(const std::string& bytes, const std::string& name) {
   static const char kMagic[] = "\x93NUMPY";
   if (bytes.size() < 10 || bytes.compare(0, 6, kMagic, 6) != 0) throw InvalidInputError(name + ": not an .npy file");
@@ -118,29 +146,43 @@ VolumeSamples read_npy(const std::string& bytes, const std::string& name) {
     throw InvalidInputError(name + ": unknown .npy version " + std::to_string(major));
   }
   if (bytes.size() < start + header_len) throw InvalidInputError(name + ": truncated .npy header");
+  if (header_len > kMaxHeader) throw InvalidInputError(name + ": .npy header longer than " + std::to_string(kMaxHeader) + " bytes");
   const std::string header = bytes.substr(start, header_len);
-  std::smatch m;
-  if (!std::regex_search(header, m, std::regex(R"('descr'\s*:\s*'([<>|=])([fiub])(\d+)')"))) {
-    const bool named = std::regex_search(header, m, std::regex(R"('descr'\s*:\s*'([^']{1,16})')"));
-    throw InvalidInputError(name + ": the array's type" + (named ? " " + m[1].str() : std::string()) +
-                            " is not a real, integer or bool scalar");
-  }
+  // The value after 'key': in numpy's header dict (a Python literal written by numpy itself).
+  const auto value_of = [&](const std::string& key) -> std::string_view {
+    const std::size_t at = header.find("'" + key + "'");
+    if (at == std::string::npos) throw InvalidInputError(name + ": malformed .npy header (no " + key + ")");
+    std::size_t p = header.find_first_not_of(" \t", at + key.size() + 2);
+    if (p == std::string::npos || header[p] != ':') throw InvalidInputError(name + ": malformed .npy header (" + key + ")");
+    p = header.find_first_not_of(" \t", p + 1);
+    if (p == std::string::npos) throw InvalidInputError(name + ": malformed .npy header (" + key + ")");
+    return std::string_view(header).substr(p);
+  };
+  const std::string_view descr_value = value_of("descr");
+  const std::size_t close = descr_value.find('\'', 1);
+  if (descr_value.empty() || descr_value[0] != '\'' || close == std::string_view::npos || close > 33)
+    throw InvalidInputError(name + ": the array's type is not a real, integer or bool scalar");
+  const std::string_view descr = descr_value.substr(1, close - 1);
   Scalar s;
-  s.big_endian = m[1] == ">";
-  s.kind = m[2].str()[0];
-  s.size = std::stoul(m[3]);
+  const bool order_known = !descr.empty() && (descr[0] == '<' || descr[0] == '>' || descr[0] == '|' || descr[0] == '=');
+  const bool kind_known = descr.size() >= 3 && (descr[1] == 'f' || descr[1] == 'i' || descr[1] == 'u' || descr[1] == 'b');
+  const auto parsed = kind_known ? std::from_chars(descr.data() + 2, descr.data() + descr.size(), s.size)
+                                 : std::from_chars_result{descr.data(), std::errc::invalid_argument};
+  if (!order_known || !kind_known || parsed.ec != std::errc() || parsed.ptr != descr.data() + descr.size())
+    throw InvalidInputError(name + ": the array's type " + std::string(descr) + " is not a real, integer or bool scalar");
+  s.big_endian = descr[0] == '>' || (descr[0] == '=' && std::endian::native == std::endian::big);
+  s.kind = descr[1];
   if (!(s.size == 1 || s.size == 2 || s.size == 4 || s.size == 8) || (s.kind == 'f' && s.size < 4))
-    throw InvalidInputError(name + ": unsupported array type " + m[1].str() + m[2].str() + m[3].str());
-  if (!std::regex_search(header, m, std::regex(R"('fortran_order'\s*:\s*(True|False))")))
-    throw InvalidInputError(name + ": malformed .npy header (no fortran_order)");
-  const bool fortran = m[1] == "True";
-  if (!std::regex_search(header, m, std::regex(R"('shape'\s*:\s*\(([^)]*)\))")))
-    throw InvalidInputError(name + ": malformed .npy header (no shape)");
-  std::vector<unsigned long long> sizes;
-  const std::string shape = m[1];
-  static const std::regex digits(R"(\d+)");
-  for (std::sregex_iterator it(shape.begin(), shape.end(), digits), end; it != end; ++it)
-    sizes.push_back(std::stoull(it->str()));
+    throw InvalidInputError(name + ": unsupported array type " + std::string(descr));
+  const std::string_view order = value_of("fortran_order");
+  if (!order.starts_with("True") && !order.starts_with("False"))
+    throw InvalidInputError(name + ": malformed .npy header (fortran_order)");
+  const bool fortran = order.starts_with("True");
+  const std::string_view shape_value = value_of("shape");
+  const std::size_t shape_end = shape_value.find(')');
+  if (shape_value.empty() || shape_value[0] != '(' || shape_end == std::string_view::npos)
+    throw InvalidInputError(name + ": malformed .npy header (shape)");
+  const std::vector<unsigned long long> sizes = integers_in(shape_value.substr(1, shape_end - 1), name, "shape");
   const auto n = three_sizes(sizes, name);
   const std::size_t data = start + header_len;
   if (bytes.size() - data < n[0] * n[1] * n[2] * s.size) throw InvalidInputError(name + ": truncated .npy data");
@@ -161,7 +203,8 @@ std::string gunzip(const std::string& in, std::size_t expected, const std::strin
   const int rc = inflate(&z, Z_FINISH);
   const std::size_t got = z.total_out;
   inflateEnd(&z);
-  if ((rc != Z_STREAM_END && rc != Z_BUF_ERROR && rc != Z_OK) || got < expected)
+  // Z_STREAM_END only: the stream ended where the data do and its checksum held.
+  if (rc != Z_STREAM_END || got != expected)
     throw InvalidInputError(name + ": corrupt or truncated gzip data (" + std::to_string(got) + " of " +
                             std::to_string(expected) + " bytes)");
   return out;
@@ -185,14 +228,28 @@ Scalar nrrd_type(const std::string& type, const std::string& name) {
     return t;
   }();
   const auto it = types.find(type);
-  if (it == types.end()) throw InvalidInputError(name + ": unsupported NRRD type \"" + type + "\"");
+  if (it == types.end()) throw InvalidInputError(name + ": unsupported NRRD type \"" + type.substr(0, 32) + "\"");
   return it->second;
 }
 
-std::vector<double> numbers_in(const std::string& text) {
+// The numbers of an NRRD field ("(0.5,0,0) (0,2,0) (0,0,1)", "1 2 3"): parentheses, commas and
+// blanks separate them. Anything else is an error naming the field: no number of the file is
+// read by a function that throws its own exceptions or reads past the text.
+std::vector<double> numbers_in(std::string_view text, const std::string& name, const std::string& key) {
   std::vector<double> out;
-  static const std::regex number(R"([-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|nan|NaN)");
-  for (std::sregex_iterator it(text.begin(), text.end(), number), end; it != end; ++it) out.push_back(std::stod(it->str()));
+  std::size_t p = 0;
+  while (p < text.size()) {
+    if (std::string_view("(), \t").find(text[p]) != std::string_view::npos) {
+      ++p;
+      continue;
+    }
+    double v = 0;
+    const auto r = std::from_chars(text.data() + p, text.data() + text.size(), v);
+    if (r.ec != std::errc() || !std::isfinite(v) || out.size() == kMaxNumbers)
+      throw InvalidInputError(name + ": \"" + key + "\" must hold finite numbers");
+    out.push_back(v);
+    p = static_cast<std::size_t>(r.ptr - text.data());
+  }
   return out;
 }
 
@@ -202,6 +259,7 @@ VolumeSamples read_nrrd(const std::string& bytes, const std::string& name) {
   std::size_t pos = bytes.find('\n');
   bool blank = false;
   while (pos != std::string::npos && pos + 1 < bytes.size()) {
+    if (pos > kMaxHeader) throw InvalidInputError(name + ": NRRD header longer than " + std::to_string(kMaxHeader) + " bytes");
     const std::size_t next = bytes.find('\n', pos + 1);
     if (next == std::string::npos) break;
     std::string line = bytes.substr(pos + 1, next - pos - 1);
@@ -223,12 +281,10 @@ VolumeSamples read_nrrd(const std::string& bytes, const std::string& name) {
   };
   if (!field("data file").empty() || !field("datafile").empty())
     throw InvalidInputError(name + ": the data lies in another file (detached NRRD headers are not read)");
-  if (field("dimension") != "3") throw InvalidInputError(name + ": a volume needs dimension 3, found \"" + field("dimension") + "\"");
+  if (field("dimension") != "3") throw InvalidInputError(name + ": a volume needs dimension 3, found \"" + field("dimension").substr(0, 32) + "\"");
   Scalar s = nrrd_type(field("type"), name);
   s.big_endian = field("endian") == "big";
-  std::vector<unsigned long long> sizes;
-  for (double v : numbers_in(field("sizes"))) sizes.push_back(static_cast<unsigned long long>(std::max(v, 0.0)));
-  const auto n = three_sizes(sizes, name);
+  const auto n = three_sizes(integers_in(field("sizes"), name, "sizes"), name);
   for (const char* skip : {"byte skip", "byteskip", "line skip", "lineskip"})
     if (!field(skip).empty() && field(skip) != "0") throw InvalidInputError(name + ": \"" + skip + "\" is not supported");
 
@@ -237,7 +293,7 @@ VolumeSamples read_nrrd(const std::string& bytes, const std::string& name) {
   // Axis-aligned directions only; a negative one flips its axis.
   std::array<bool, 3> flip{false, false, false};
   if (!field("space directions").empty()) {
-    const std::vector<double> d = numbers_in(field("space directions"));
+    const std::vector<double> d = numbers_in(field("space directions"), name, "space directions");
     if (d.size() != 9) throw InvalidInputError(name + ": \"space directions\" must give three 3-D vectors");
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b)
@@ -247,12 +303,12 @@ VolumeSamples read_nrrd(const std::string& bytes, const std::string& name) {
       flip[a] = d[4 * a] < 0;
     }
   } else if (!field("spacings").empty()) {
-    const std::vector<double> d = numbers_in(field("spacings"));
+    const std::vector<double> d = numbers_in(field("spacings"), name, "spacings");
     if (d.size() != 3) throw InvalidInputError(name + ": \"spacings\" must give three numbers");
     for (int a = 0; a < 3; ++a) v.spacing[a] = d[a];
   }
   if (!field("space origin").empty()) {
-    const std::vector<double> o = numbers_in(field("space origin"));
+    const std::vector<double> o = numbers_in(field("space origin"), name, "space origin");
     if (o.size() != 3) throw InvalidInputError(name + ": \"space origin\" must give a 3-D point");
     v.origin = Vec3(o[0], o[1], o[2]);
   }
@@ -265,7 +321,7 @@ VolumeSamples read_nrrd(const std::string& bytes, const std::string& name) {
   if (encoding == "gzip" || encoding == "gz") {
     data = gunzip(data, expected, name);
   } else if (encoding != "raw") {
-    throw InvalidInputError(name + ": unsupported NRRD encoding \"" + encoding + "\" (raw and gzip are read)");
+    throw InvalidInputError(name + ": unsupported NRRD encoding \"" + encoding.substr(0, 32) + "\" (raw and gzip are read)");
   }
   if (data.size() < expected) throw InvalidInputError(name + ": truncated NRRD data");
   // NRRD's first axis varies fastest.

@@ -36,7 +36,7 @@ class Mesh(_typing.NamedTuple):
     vertices: (N, 3) float64. faces: (M, 3) int32, counter-clockwise seen from outside.
     normals: (N, 3) float64 unit normals (the field's gradient, normalised), or None where the
     method has none. stats: the run's statistics (build/bin/polygonize's STATS.json as a dict);
-    stats["summary"] first: watertight, closed, manifold, oriented, outward, components, genus,
+    stats["summary"], the figures to read first: watertight, closed, manifold, oriented, outward, components, genus,
     smallest_angle_degrees, degenerate_triangles."""
 
     vertices: _typing.Any

@@ -157,7 +157,7 @@ constexpr const char* kPolygonizeDoc = R"(Meshes the zero set of a field (the se
 Returns a cdp.Mesh, a named tuple (vertices (N, 3) float64, faces (M, 3) int32, normals (N, 3)
 float64 or None where the method has none, stats dict): mesh.vertices or V, F, N, stats = mesh.
 Faces are counter-clockwise seen from outside. stats is build/bin/polygonize's STATS.json as a
-dict (without "field"); stats["summary"] says first whether the mesh is watertight (closed,
+dict (without "field"); stats["summary"], the entry to read first, says whether the mesh is watertight (closed,
 manifold, oriented, outward, no degenerate triangle), its components, genus and smallest angle.
 
 method: "adaptive" (the paper's tracker, the default), "mc" or "mt" (Marching Cubes / Tetrahedra).

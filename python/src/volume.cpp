@@ -30,7 +30,20 @@ Vec3 spacing_from(py::handle object) {
 
 std::shared_ptr<Field> volume_field(py::handle values, py::handle bounds, py::handle spacing, py::handle origin,
                                     double level, const std::string& inside) {
-  const auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(values);
+  // The shape before the copy to float64: a grid beyond the model's limit is refused before
+  // gigabytes are allocated for it.
+  const py::array any = py::array::ensure(values);
+  if (!any) throw InvalidInputError(std::string(kWhere) + ": values must be a 3-D array of numbers");
+  if (any.ndim() == 3) {
+    std::size_t total = 1;
+    for (int a = 0; a < 3; ++a) {
+      const auto n = static_cast<std::size_t>(any.shape(a));
+      if (n != 0 && total > Volume::kMaxSamples / n)
+        throw InvalidInputError(std::string(kWhere) + ": more than " + std::to_string(Volume::kMaxSamples) + " samples");
+      total *= n;
+    }
+  }
+  const auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(any);
   if (!array) throw InvalidInputError(std::string(kWhere) + ": values must be a 3-D array of numbers");
   if (array.ndim() != 3)
     throw InvalidInputError(std::string(kWhere) + ": values must be a 3-D array, not " + std::to_string(array.ndim()) + "-D");
@@ -76,12 +89,16 @@ samples along each axis. It is interpolated by a tricubic B-spline through the s
 gradients, Hessians and curvature are exact for the interpolant, and the surface has no creases.
 bounds ((xmin, ymin, zmin), (xmax, ymax, zmax)): the grid spans the box (default None); or
 spacing (a number or three, default 1) and origin ((x, y, z), default (0, 0, 0)).
-level (default 0.0): the surface is where the interpolant equals it.
+level (default 0.0): the surface is where the interpolant equals it. Give a volume's level here:
+polygonize's level= shifts F = S - level (or level - S) after this, with inside="above" the other
+way round, and skips the check below.
 inside (default "below"): "below" when values below the level are inside (a signed distance),
 "above" when values above it are (a density: bone in a CT scan).
 
-The surface must stay inside the grid: every sample on the grid's faces must be outside (pad with
-numpy.pad(values, 1, constant_values=...) otherwise); the field's box is the grid's. A bad argument
+The surface must stay inside the grid: the interpolant must be outside on the grid's faces,
+checked on the coefficients of the two layers next to each (pad with numpy.pad(values, 3,
+constant_values=...) otherwise); the field's box is the grid's, and beyond it F is its value at
+the nearest point of the box plus the distance to the box. A bad argument
 is a ValueError naming it. In JSON: {"type": "volume", "file": "scan.npy" or ".nrrd", ...}.)");
 }
 

@@ -1,6 +1,7 @@
 // Volume files (io/include/cdp/io/volume_io.h): .npy and NRRD give the samples they hold, in the
 // order and place they say; every truncation of a file and every malformed header is an error
-// naming the file, never a crash or a read past the bytes (this test runs under the sanitizers).
+// naming the file, never a crash, another exception or a read past the bytes (this test runs
+// under the sanitizers).
 #include <gtest/gtest.h>
 
 #include <cdp/core/errors.h>
@@ -71,6 +72,9 @@ TEST(VolumeFiles, EveryTruncationAndMalformedHeaderIsAnErrorNamingTheFile) {
   const std::string good_nrrd = "NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n\n" + bytes_of(v);
   ASSERT_NO_THROW(read_volume(write(dir, "ok.npy", good_npy)));
   ASSERT_NO_THROW(read_volume(write(dir, "ok.nrrd", good_nrrd)));
+  // 60,000 blanks in the shape's tuple: still a tuple, read in one pass.
+  EXPECT_EQ(read_volume(write(dir, "spaces.npy", npy("<f4", false, std::string(60000, ' ') + "4, 4, 4", bytes_of(v)))).dims,
+            (std::array<std::size_t, 3>{4, 4, 4}));
   for (const auto& [name, good] : {std::pair{std::string("cut.npy"), good_npy}, std::pair{std::string("cut.nrrd"), good_nrrd}})
     for (std::size_t length = 0; length < good.size(); ++length) {
       const auto path = write(dir, name, good.substr(0, length));
@@ -91,6 +95,17 @@ TEST(VolumeFiles, EveryTruncationAndMalformedHeaderIsAnErrorNamingTheFile) {
       {"type.nrrd", "NRRD0004\ntype: block\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n\n" + bytes_of(v)},
       {"four_d.nrrd", "NRRD0004\ntype: float\ndimension: 4\nsizes: 4 4 4 1\nencoding: raw\n\n" + bytes_of(v)},
       {"volume.vti", "<VTKFile/>"},
+      // Headers made to hurt a parser: long runs (a regex recursed on them until the stack
+      // overflowed), numbers beyond every type, sizes that are not whole numbers.
+      {"wide_type.npy", npy("<f99999999999999999999", false, "4, 4, 4", bytes_of(v))},
+      {"wide_shape.npy", npy("<f4", false, "99999999999999999999999, 4, 4", bytes_of(v))},
+      {"digits.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: " + std::string(300000, '4') +
+                          " 4 4\nencoding: raw\n\n" + bytes_of(v)},
+      {"nan_size.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: nan 4 4\nencoding: raw\n\n" + bytes_of(v)},
+      {"huge_size.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 1e30 4 4\nencoding: raw\n\n" + bytes_of(v)},
+      {"inf_spacing.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4 4\nspacings: 1e999 1 1\n"
+                           "encoding: raw\n\n" + bytes_of(v)},
+      {"long_header.nrrd", "NRRD0004\n# " + std::string(2 << 20, 'x') + "\ntype: float\n\n"},
   };
   for (const auto& [name, bytes] : bad) {
     const auto path = write(dir, name, bytes);

@@ -31,6 +31,7 @@ def test_sphere_meshes_are_closed_spheres(sphere, method, options):
     assert stats["method"] == method
     assert stats["triangles"] == len(F) and stats["vertices"] == len(V)
     assert stats["field_evaluations"]["total"] > 0
+    # Once more: the same mesh bit for bit (a run keeps no state), with the field's normals.
     V2, F2, N, stats2 = cdp.polygonize(sphere, method, **options)
     assert bits(V2) == bits(V) and bits(F2) == bits(F)
     assert np.allclose(N, V / np.linalg.norm(V, axis=1)[:, None], atol=1e-6)
@@ -208,9 +209,9 @@ def test_the_program_python_and_experiment_files_share_one_table_of_options(tmp_
     # polygonize's with the same keywords, bit for bit.
     run = {"method": "adaptive", "factor": 2, "min_edge": 0.01, "max_edge": 0.5, "triangle_count": "paper_floor",
            "variant": "improved", "creases": "follow", "curvature": True, "check_self_intersections": True,
-           "seed_resolution": 16, "max_triangles": 100000, "threads": 1, "level": -0.05}
+           "seed_resolution": 16, "max_triangles": 100000, "threads": 1}
     marching = {"method": "mc", "cell": 0.1, "traversal": "grid", "face_ambiguity": "join_inside", "seed_resolution": 16,
-                "threads": 1, "level": -0.05}
+                "threads": 1}
     experiment = tmp_path / "e.json"
     experiment.write_text(json.dumps({"field": {"type": "sphere", "radius": 1}, "runs": [run, marching],
                                       "evaluation": {"views": 1, "resolution": 8}}))
@@ -226,6 +227,11 @@ def test_the_program_python_and_experiment_files_share_one_table_of_options(tmp_
                                                                                    "curvature": True}]}))
     r = subprocess.run([program("experiment"), bad, "--commands"], capture_output=True, text=True)
     assert r.returncode != 0 and 'does not apply to method "mc"' in r.stderr
+    # An experiment measures F = 0 (evaluate, the ground truth): a level is refused, not mismeasured.
+    bad.write_text(json.dumps({"field": {"type": "sphere", "radius": 1}, "runs": [{"method": "mc", "cell": 0.1,
+                                                                                   "level": 0.05}]}))
+    r = subprocess.run([program("experiment"), bad, "--commands"], capture_output=True, text=True)
+    assert r.returncode != 0 and "experiment runs measure the surface F = 0" in r.stderr
 
 
 @pytest.mark.parametrize("method, options", [("adaptive", {"factor": 2}), ("mc", {"cell": 0.1}), ("mt", {"cell": 0.1})])
@@ -258,6 +264,18 @@ def test_level_meshes_another_value_of_the_field(method, options, within):
     assert np.abs(shifted.vertices - V).max() < 1e-9 and bits(shifted.faces) == bits(F)
     with pytest.raises(ValueError, match="level must be a finite number, not nan"):
         cdp.polygonize(square, method, level=float("nan"), **options)
+
+
+def test_level_keeps_the_smooth_seams_of_a_rounded_box():
+    # A rounded box's seams are C1 (no creases) wherever its level set is: at level 1.15 of
+    # "base + 1" it is the same surface, and mesh, as "base - 0.15" (branch kinds and smooth
+    # sides are those of the shifted field, not of its own zero set, where they differ).
+    bounds = ((-1, -1, -1), (1, 1, 1))
+    base = "sqrt(max(abs(x)-0.6,0)^2 + max(abs(y)-0.4,0)^2 + max(abs(z)-0.3,0)^2)"
+    direct = cdp.polygonize(cdp.expression(base + " - 0.15", bounds), factor=3)
+    shifted = cdp.polygonize(cdp.expression(base + " + 1", bounds), level=1.15, factor=3)
+    assert len(shifted.faces) == len(direct.faces) and np.abs(shifted.vertices - direct.vertices).max() < 1e-9
+    assert shifted.stats["creases"]["curves"] == direct.stats["creases"]["curves"] == 0
 
 
 def test_level_keeps_the_creases_of_a_csg_field():

@@ -76,7 +76,7 @@ def test_bad_volumes_are_value_errors_naming_the_problem():
         (lambda: cdp.volume_field(d[0], box), "values must be a 3-D array, not 2-D"),
         (lambda: cdp.volume_field(d[:, :, :3], box), "at least 4 samples along each axis, found 3 along z"),
         (lambda: cdp.volume_field(np.where(X > 1, np.nan, d), box), "is not finite"),
-        (lambda: cdp.volume_field(d - 5, box), "on the grid's faces is not outside the level"),
+        (lambda: cdp.volume_field(d - 5, box), "the interpolant reaches the level on the grid's faces"),
         (lambda: cdp.volume_field(d, box, inside="inside"), 'inside must be "below" or "above"'),
         (lambda: cdp.volume_field(d, box, spacing=0.1), "either bounds or spacing and origin"),
         (lambda: cdp.volume_field(d, spacing=-1), "spacing must be positive"),
@@ -111,10 +111,11 @@ def sampled_at_nodes(field, shape, origin, spacing):
 def test_npy_and_nrrd_files_give_the_arrays_they_hold(tmp_path):
     rng = np.random.default_rng(2)
     a = rng.integers(0, 100, (6, 7, 8)).astype(np.int16)
-    a[[0, -1], :, :] = a[:, [0, -1], :] = a[:, :, [0, -1]] = -50  # outside on the faces (inside below 0 is none)
+    # Outside (below 0, the inside being above) in the two layers next to each face; random within.
+    a[[0, 1, -2, -1], :, :] = a[:, [0, 1, -2, -1], :] = a[:, :, [0, 1, -2, -1]] = -1000
     a[2:4, 3:5, 3:5] = -100
     for name, array in [("c.npy", a.astype("<f8")), ("f.npy", np.asfortranarray(a.astype("<f4"))),
-                        ("big.npy", a.astype(">i2")), ("bytes.npy", (a + 100).astype(np.uint8))]:
+                        ("big.npy", a.astype(">i2")), ("bytes.npy", np.clip(a + 100, 0, 255).astype(np.uint8))]:
         np.save(tmp_path / name, array)
         level = 100 if name == "bytes.npy" else 0
         field = cdp.field_from_json({"type": "volume", "file": name, "level": level, "inside": "above"}, tmp_path)
@@ -154,7 +155,7 @@ def test_bad_volume_files_are_one_line_errors(tmp_path):
              ("cut.nrrd", "truncated NRRD data"),
              ("x.vti", 'unknown volume format ".vti"'),
              ("missing.npy", "missing.npy"),
-             ("ok.npy", "on the grid's faces is not outside the level")]
+             ("ok.npy", "the interpolant reaches the level on the grid's faces")]
     for name, words in cases:
         with pytest.raises((ValueError, OSError)) as e:  # a missing file is FileNotFoundError
             cdp.field_from_json({"type": "volume", "file": name, "level": 2.0}, tmp_path)

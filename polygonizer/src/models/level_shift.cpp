@@ -38,14 +38,6 @@ FieldPiece LevelShift::eval_piece(const Vec3& p, const std::vector<std::uint8_t>
   return piece;
 }
 
-std::vector<Field::SmoothSide> LevelShift::eval_smooth_sides(const Vec3& p, double radius,
-                                                             const std::vector<std::uint8_t>& branch,
-                                                             SeamSideAt at) const {
-  std::vector<SmoothSide> sides = field_.eval_smooth_sides(p, radius, branch, at);
-  for (SmoothSide& s : sides) s.piece.value -= level_;
-  return sides;
-}
-
 bool LevelShift::eval_branch_record(const Vec3& p, const std::vector<std::uint8_t>& branch, BranchRecord& record) const {
   if (!field_.eval_branch_record(p, branch, record)) return false;
   record.value -= level_;

@@ -122,15 +122,9 @@ Volume::Volume(VolumeSamples samples, double level, VolumeInside inside)
   };
   for (std::size_t f = 0; f < total; ++f)
     if (!std::isfinite(coefficients_[f])) throw InvalidInputError("volume: sample " + where(f) + " is not finite");
-  for (std::size_t f = 0; f < total; ++f) {
-    const std::size_t k = f % dims_[2], j = f / dims_[2] % dims_[1], i = f / (dims_[1] * dims_[2]);
-    const bool on_face = i == 0 || j == 0 || k == 0 || i + 1 == dims_[0] || j + 1 == dims_[1] || k + 1 == dims_[2];
-    if (on_face && !(sign_ * (coefficients_[f] - level_) > 0))
-      throw InvalidInputError("volume: sample " + where(f) + " on the grid's faces is not outside the level " +
-                              "(the surface reaches the edge of the data); pad the volume with outside values");
-  }
-  set_bounds({origin_, origin_ + ((Eigen::Array3d() << dims_[0] - 1.0, dims_[1] - 1.0, dims_[2] - 1.0).finished() *
-                                  spacing_.array()).matrix()});
+  far_corner_ = origin_ + ((Eigen::Array3d() << dims_[0] - 1.0, dims_[1] - 1.0, dims_[2] - 1.0).finished() *
+                           spacing_.array()).matrix();
+  set_bounds({origin_, far_corner_});
 
   // Prefilter along each axis in turn (the tensor product's filter is separable).
   const std::array<std::size_t, 3> stride{dims_[1] * dims_[2], dims_[2], 1};
@@ -146,6 +140,21 @@ Volume::Volume(VolumeSamples samples, double level, VolumeInside inside)
       }
   }
 
+  // The interpolant on a face of the grid is a convex combination of the coefficients of the two
+  // layers next to it (the B-spline's weights at a node, 1/6 4/6 1/6, with the mirrored neighbour
+  // the inner one): with all of those outside, the whole boundary is, and the surface stays
+  // inside the grid. Samples alone would not do: the spline dips between outside samples next
+  // to a deep inside.
+  for (std::size_t f = 0; f < total; ++f) {
+    const std::size_t k = f % dims_[2], j = f / dims_[2] % dims_[1], i = f / (dims_[1] * dims_[2]);
+    const auto near_face = [](std::size_t m, std::size_t n) { return m <= 1 || m + 2 >= n; };
+    if ((near_face(i, dims_[0]) || near_face(j, dims_[1]) || near_face(k, dims_[2])) &&
+        !(sign_ * (coefficients_[f] - level_) > 0))
+      throw InvalidInputError("volume: the interpolant reaches the level on the grid's faces near sample " + where(f) +
+                              " (the surface reaches the edge of the data); pad the volume with two or more layers of "
+                              "outside values");
+  }
+
   double slope[3] = {0, 0, 0};
   for (std::size_t f = 0; f < total; ++f)
     for (int a = 0; a < 3; ++a) {
@@ -153,13 +162,25 @@ Volume::Volume(VolumeSamples samples, double level, VolumeInside inside)
       if (m + 1 < dims_[a])
         slope[a] = std::max(slope[a], std::abs(coefficients_[f + stride[a]] - coefficients_[f]) / spacing_[a]);
     }
-  lipschitz_ = std::sqrt(slope[0] * slope[0] + slope[1] * slope[1] + slope[2] * slope[2]);
+  // Outside the grid the distance to it is added (slope 1 across the clamped axes).
+  lipschitz_ = std::sqrt(slope[0] * slope[0] + slope[1] * slope[1] + slope[2] * slope[2] + 1.0);
 }
 
 template <int Order>
 double Volume::evaluate(const Vec3& p, Vec3* gradient, Mat3* hessian) const {
+  if (!p.allFinite()) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    if constexpr (Order >= 1) gradient->setConstant(nan);
+    if constexpr (Order >= 2) hessian->setConstant(nan);
+    return nan;
+  }
+  // Beyond the grid, F at the nearest point of the grid's box plus the distance to it: positive
+  // (the faces are outside), so no copy of the surface appears out there, as the mirrored
+  // spline would make one every 2 (n - 1) samples.
+  const Vec3 q = p.cwiseMax(origin_).cwiseMin(far_corner_);
+  const Vec3 off = p - q;
   AxisWeights ax[3];
-  for (int a = 0; a < 3; ++a) ax[a] = axis_weights((p[a] - origin_[a]) / spacing_[a], dims_[a], spacing_[a]);
+  for (int a = 0; a < 3; ++a) ax[a] = axis_weights((q[a] - origin_[a]) / spacing_[a], dims_[a], spacing_[a]);
   // sum[ox][oy][oz]: the spline's derivative of those orders along x, y and z (ox + oy + oz <= Order),
   // contracted one axis at a time.
   double sum[3][3][3] = {};
@@ -188,7 +209,28 @@ double Volume::evaluate(const Vec3& p, Vec3* gradient, Mat3* hessian) const {
     h(1, 2) = h(2, 1) = sum[0][1][1];
     h *= sign_;
   }
-  return sign_ * (sum[0][0][0] - level_);
+  const double value = sign_ * (sum[0][0][0] - level_);
+  const double distance = off.norm();
+  if (distance == 0) return value;
+  // Along a clamped axis the first term is constant; the distance |p - q| adds n = off / |off|
+  // to the gradient and (I - n n^T) / |off|, on the clamped axes, to the Hessian.
+  const Vec3 n = off / distance;
+  if constexpr (Order >= 1) {
+    for (int a = 0; a < 3; ++a)
+      if (off[a] != 0) (*gradient)[a] = 0;
+    *gradient += n;
+  }
+  if constexpr (Order >= 2) {
+    Mat3 clamped = Mat3::Zero();
+    for (int a = 0; a < 3; ++a)
+      if (off[a] != 0) {
+        hessian->row(a).setZero();
+        hessian->col(a).setZero();
+        clamped(a, a) = 1;
+      }
+    *hessian += (clamped - n * n.transpose()) / distance;
+  }
+  return value + distance;
 }
 
 double Volume::eval_value(const Vec3& p) const { return evaluate<0>(p, nullptr, nullptr); }
@@ -200,29 +242,31 @@ double Volume::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessia
 }
 
 std::optional<std::pair<double, double>> Volume::value_range(const Box& region) const {
-  // The coefficients whose support meets the region, per axis (mirrored indices beyond the grid).
-  std::array<std::vector<std::size_t>, 3> used;
+  if (!(region.min.allFinite() && region.max.allFinite())) return std::nullopt;
+  // The part of the region inside the grid's box (its nearest points, where the region lies
+  // beyond): the distance term adds between 0 and the region's farthest reach beyond the box.
+  const Vec3 lo_point = region.min.cwiseMax(origin_).cwiseMin(far_corner_);
+  const Vec3 hi_point = region.max.cwiseMax(origin_).cwiseMin(far_corner_);
+  const double beyond = (region.min - lo_point).cwiseAbs().cwiseMax((region.max - hi_point).cwiseAbs()).norm();
+  std::array<std::size_t, 3> first{}, last{};
   for (int a = 0; a < 3; ++a) {
-    const double lo = std::floor((region.min[a] - origin_[a]) / spacing_[a]) - 1;
-    const double hi = std::floor((region.max[a] - origin_[a]) / spacing_[a]) + 2;
-    if (!(std::isfinite(lo) && std::isfinite(hi))) return std::nullopt;
-    std::vector<bool> seen(dims_[a], false);
-    // A window wider than the mirror's period covers every index.
-    const double width = std::min(hi - lo, 2.0 * static_cast<double>(dims_[a]));
-    for (long long j = static_cast<long long>(lo); j <= static_cast<long long>(lo + width); ++j) seen[mirror(j, dims_[a])] = true;
-    for (std::size_t m = 0; m < dims_[a]; ++m)
-      if (seen[m]) used[a].push_back(m);
+    // The coefficients whose support meets [lo, hi] along this axis; the mirrored ones beyond
+    // the ends are layers 1 and n - 2, within that range already.
+    const auto lo = static_cast<long long>(std::floor((lo_point[a] - origin_[a]) / spacing_[a])) - 1;
+    const auto hi = static_cast<long long>(std::floor((hi_point[a] - origin_[a]) / spacing_[a])) + 2;
+    first[a] = static_cast<std::size_t>(std::max(0LL, lo));
+    last[a] = static_cast<std::size_t>(std::min(static_cast<long long>(dims_[a]) - 1, hi));
   }
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (std::size_t i : used[0])
-    for (std::size_t j : used[1])
-      for (std::size_t k : used[2]) {
+  for (std::size_t i = first[0]; i <= last[0]; ++i)
+    for (std::size_t j = first[1]; j <= last[1]; ++j)
+      for (std::size_t k = first[2]; k <= last[2]; ++k) {
         const double c = coefficient(i, j, k);
         lo = std::min(lo, c);
         hi = std::max(hi, c);
       }
-  if (sign_ > 0) return std::make_pair(lo - level_, hi - level_);
-  return std::make_pair(level_ - hi, level_ - lo);
+  if (sign_ > 0) return std::make_pair(lo - level_, hi - level_ + beyond);
+  return std::make_pair(level_ - hi, level_ - lo + beyond);
 }
 
 }  // namespace cdp

@@ -38,32 +38,35 @@ TEST(Volume, InterpolatesItsSamplesAndReadsInsideEitherWay) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
   VolumeSamples s;
-  s.dims = {5, 6, 7};
+  s.dims = {7, 8, 9};
   s.origin = Vec3(1, -2, 0.5);
   s.spacing = Vec3(0.5, 0.25, 1.0);
-  for (std::size_t f = 0; f < 5 * 6 * 7; ++f) s.values.push_back(2.0 + u(rng));  // outside everywhere (> level 0.5)
-  for (std::size_t f : {(2 * 6 + 3) * 7 + 3, (1 * 6 + 2) * 7 + 4}) s.values[f] = u(rng) * 0.2;  // two inside
+  // Outside everywhere (> level 0.5) but for two samples in the middle. The spline's coefficients
+  // ring around jumps (by up to 3 times a jump between neighbours), so the outside is smooth.
+  for (std::size_t f = 0; f < 7 * 8 * 9; ++f) s.values.push_back(2.0 + 0.05 * u(rng));
+  for (std::size_t f : {(3 * 8 + 3) * 9 + 4, (3 * 8 + 4) * 9 + 4}) s.values[f] = u(rng) * 0.2;  // two inside
   // The same samples upside down for a density, whose inside is above the level.
   VolumeSamples flipped = s;
   for (double& v : flipped.values) v = 1.0 - v;
   const Volume below(s, 0.5, VolumeInside::Below), above(flipped, 0.5, VolumeInside::Above);
   EXPECT_EQ(below.bounds().min, s.origin);
-  EXPECT_TRUE(below.bounds().max.isApprox(Vec3(3, -0.75, 6.5)));
-  for (std::size_t i = 0; i < 5; ++i)
-    for (std::size_t j = 0; j < 6; ++j)
-      for (std::size_t k = 0; k < 7; ++k) {
+  EXPECT_TRUE(below.bounds().max.isApprox(Vec3(4, -0.25, 8.5)));
+  for (std::size_t i = 0; i < 7; ++i)
+    for (std::size_t j = 0; j < 8; ++j)
+      for (std::size_t k = 0; k < 9; ++k) {
         const Vec3 p = s.origin + Vec3(double(i), double(j), double(k)).cwiseProduct(s.spacing);
-        const double sample = s.values[(i * 6 + j) * 7 + k];
+        const double sample = s.values[(i * 8 + j) * 9 + k];
         EXPECT_NEAR(below.value(p), sample - 0.5, 1e-12) << i << " " << j << " " << k;
         EXPECT_NEAR(above.value(p), 0.5 - (1.0 - sample), 1e-12);
       }
 }
 
 TEST(Volume, DerivativesAreTheInterpolantsAndItsBoundsHold) {
-  const Volume field(sample_cube(torus_distance, 12, 1.6), 0.0);
+  const Volume field(sample_cube(torus_distance, 16, 2.0), 0.0);
   const Box box = field.bounds();
   std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-0.1, 1.1);  // beyond the grid too, where it is mirrored
+  // Beyond the grid too, where F is its value at the nearest point of the box plus the distance.
+  std::uniform_real_distribution<double> u(-0.1, 1.1);
   const double h = 1e-6;
   double steepest = 0;
   for (int trial = 0; trial < 200; ++trial) {
@@ -86,6 +89,14 @@ TEST(Volume, DerivativesAreTheInterpolantsAndItsBoundsHold) {
   }
   ASSERT_TRUE(field.lipschitz_bound());
   EXPECT_GE(*field.lipschitz_bound(), steepest);
+  // Far beyond the grid: outside, by at least the distance to the box (no mirrored copies of the
+  // torus every 2 (n - 1) samples), and a point that is not finite gives NaN, not a read.
+  for (const Vec3& far : {Vec3(12.5, 0, 0), Vec3(0, -40, 3), Vec3(1e300, 0, 0), Vec3(-1e19, 1e19, 0)}) {
+    const double beyond = (far - far.cwiseMax(box.min).cwiseMin(box.max)).norm();
+    EXPECT_GE(field.value(far), beyond) << far.transpose();  // equal once the distance swamps F's value
+    EXPECT_GT(field.value(far), 0) << far.transpose();
+  }
+  EXPECT_TRUE(std::isnan(field.value(Vec3(std::nan(""), 0, 0))));
   // value_range holds on sub-boxes, checked at points inside each.
   std::uniform_real_distribution<double> w(0, 1);
   for (int trial = 0; trial < 30; ++trial) {
@@ -124,8 +135,18 @@ TEST(Volume, RefusesGridsItCannotInterpolateByName) {
   s = good;
   s.values[(2 * 6 + 3) * 6 + 2] = std::nan("");
   expect_error(s, 0, "sample [2, 3, 2] is not finite");
-  expect_error(good, 2.0, "sample [0, 0, 0] on the grid's faces is not outside");
+  expect_error(good, 2.0, "reaches the level on the grid's faces near sample [0, 0, ");
   expect_error(good, std::nan(""), "level must be finite");
+  // Outside samples on every face, but a deep inside next to one: the spline dips below the level
+  // between them on the face (samples alone would pass it).
+  s = good;
+  for (double& v : s.values) v = 100;
+  for (std::size_t j = 2; j < 4; ++j)
+    for (std::size_t k = 2; k < 4; ++k) {
+      s.values[(0 * 6 + j) * 6 + k] = 0.01;
+      for (std::size_t i = 1; i < 5; ++i) s.values[(i * 6 + j) * 6 + k] = -100;
+    }
+  expect_error(s, 0, "reaches the level on the grid's faces near sample [");
 }
 
 struct Sampled {

@@ -1,7 +1,11 @@
 // F - level: the surface where a field takes another value than zero (an iso-value, scikit-image's
-// and Manifold's `level`), as a field of its own. Every hook passes on to F with the value
-// shifted: derivatives, pieces and their branch points, seams and bounds are F's (a constant
-// moves none of them), so creases, curvature and the seeding's proofs hold as they do for F.
+// and Manifold's `level`), as a field of its own. The evaluation hooks pass on to F with the value
+// shifted: derivatives, pieces, branch records and bounds are F's (a constant moves none of
+// them), so creases, curvature and the seeding's proofs hold as they do for F. What Field derives
+// from those hooks it derives again for F - level, on its own surface: which branch points are
+// creases and which smooth seams (Field::branch_kinds, found near the zero set) and the smooth
+// sides of a seam, which come from those kinds; passing smooth_sides on to F would use F's
+// kinds, classified on F = 0.
 #pragma once
 
 #include <cdp/core/field.h>
@@ -37,8 +41,6 @@ class LevelShift final : public Field {
   void eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
                                std::size_t n) const override;
   FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
-  std::vector<SmoothSide> eval_smooth_sides(const Vec3& p, double radius, const std::vector<std::uint8_t>& branch,
-                                            SeamSideAt at) const override;
   bool has_branch_points() const override { return field_.has_branch_points(); }
   bool eval_branch_record(const Vec3& p, const std::vector<std::uint8_t>& branch, BranchRecord& record) const override;
   std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;

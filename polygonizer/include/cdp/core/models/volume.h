@@ -6,7 +6,8 @@
 // curvature the adaptive method sizes triangles by is the interpolant's own, and the surface
 // has no crease (Field::smooth). The coefficients are prefiltered (Unser's recursive filter
 // with mirror boundaries) so that S equals the samples at the grid nodes: the interpolant
-// interpolates, it does not smooth. Beyond the grid S continues mirrored.
+// interpolates, it does not smooth. Beyond the grid's box F is its value at the nearest point of
+// the box plus the distance to the box: outside, like the box's faces.
 #pragma once
 
 #include <cdp/core/field.h>
@@ -42,9 +43,10 @@ class Volume : public Field {
   // The field's box is the grid's, origin to origin + (dims - 1) * spacing.
   // \throw InvalidInputError for fewer than kMinSamples along an axis or more than kMaxSamples
   //        in all, a values array of another size, a spacing not positive and finite, a
-  //        non-finite origin, sample or level, or a sample on the grid's faces that is not
-  //        outside (the surface would reach the edge of the data, where the interpolant has no
-  //        information: pad the volume with outside values).
+  //        non-finite origin, sample or level, or an interpolant that is not outside everywhere
+  //        on the grid's faces (the surface would reach the edge of the data: pad the volume
+  //        with two or more layers of outside values). Checked on the coefficients of the two
+  //        layers next to each face, which bound it there.
   Volume(VolumeSamples samples, double level, VolumeInside inside = VolumeInside::Below);
 
   std::string type_name() const override { return "volume"; }
@@ -52,7 +54,7 @@ class Volume : public Field {
   bool smooth() const override { return true; }       // C2 everywhere
   // From the coefficients' differences: a spline's derivative along an axis is a quadratic
   // B-spline of its coefficients' differences divided by the spacing, with weights that are
-  // non-negative and sum to one.
+  // non-negative and sum to one; beyond the grid the distance to it adds a slope of 1.
   std::optional<double> lipschitz_bound() const override { return lipschitz_; }
   // The spline lies within its coefficients' range over a region (weights non-negative, sum 1):
   // the range of the coefficients whose support meets the region.
@@ -76,7 +78,7 @@ class Volume : public Field {
   }
 
   std::array<std::size_t, 3> dims_;
-  Vec3 origin_, spacing_;
+  Vec3 origin_, spacing_, far_corner_;  // the grid's box: origin_ to far_corner_
   double level_;
   double sign_;  // +1 when the inside is below the level, -1 above
   std::vector<double> coefficients_;
