@@ -96,8 +96,8 @@ inside (default "below"): "below" when values below the level are inside (a sign
 "above" when values above it are (a density: bone in a CT scan).
 
 The surface must stay inside the grid: the interpolant must be outside on the grid's faces,
-checked on the coefficients of the two layers next to each (pad with numpy.pad(values, 3,
-constant_values=...) otherwise); the field's box is the grid's, and beyond it F is its value at
+checked on the coefficients of the two layers next to each (pad with numpy.pad(values, 5,
+constant_values=...) otherwise: they ring next to a steep jump, such as a scan's cut edge); the field's box is the grid's, and beyond it F is its value at
 the nearest point of the box plus the distance to the box. A bad argument
 is a ValueError naming it. In JSON: {"type": "volume", "file": "scan.npy" or ".nrrd", ...}.)");
 }
