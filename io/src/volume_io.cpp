@@ -15,6 +15,7 @@
 #include <charconv>
 #include <cmath>
 #include <string_view>
+#include <type_traits>
 #include <sstream>
 
 namespace cdp {
@@ -109,24 +110,38 @@ std::array<std::size_t, 3> three_sizes(const std::vector<unsigned long long>& si
   return n;
 }
 
-// The integers of a list ("33, 41, 25", "33 41 25"), separated by commas and blanks; anything
-// else (a sign, a fraction, a number beyond 64 bits) is an error naming `key`.
-std::vector<unsigned long long> integers_in(std::string_view text, const std::string& name, const std::string& key) {
-  std::vector<unsigned long long> out;
+// The numbers of a header's list, read with from_chars between `separators`: "33, 41, 25" (a
+// shape, "sizes": whole numbers) or "(0.5,0,0) (0,2,0) (0,0,1)" (geometry: finite numbers).
+// Anything else is an error naming `key`: no number of a file is read by a function that throws
+// its own exceptions or reads past the text.
+template <class T>
+std::vector<T> list_in(std::string_view text, std::string_view separators, const std::string& name,
+                       const std::string& key, const char* expected) {
+  std::vector<T> out;
   std::size_t p = 0;
   while (p < text.size()) {
-    if (text[p] == ',' || text[p] == ' ' || text[p] == '\t') {
+    if (separators.find(text[p]) != std::string_view::npos) {
       ++p;
       continue;
     }
-    unsigned long long v = 0;
+    T v{};
     const auto r = std::from_chars(text.data() + p, text.data() + text.size(), v);
-    if (r.ec != std::errc() || out.size() == kMaxNumbers)
-      throw InvalidInputError(name + ": \"" + key + "\" must list whole numbers of samples");
+    bool finite = true;
+    if constexpr (std::is_floating_point_v<T>) finite = std::isfinite(v);
+    if (r.ec != std::errc() || !finite || out.size() == kMaxNumbers)
+      throw InvalidInputError(name + ": \"" + key + "\" must " + expected);
     out.push_back(v);
     p = static_cast<std::size_t>(r.ptr - text.data());
   }
   return out;
+}
+
+std::vector<unsigned long long> integers_in(std::string_view text, const std::string& name, const std::string& key) {
+  return list_in<unsigned long long>(text, ", \t", name, key, "list whole numbers of samples");
+}
+
+std::vector<double> numbers_in(std::string_view text, const std::string& name, const std::string& key) {
+  return list_in<double>(text, "(), \t", name, key, "hold finite numbers");
 }
 
 VolumeSamples read_npy(const std::string& bytes, const std::string& name) {
@@ -230,27 +245,6 @@ Scalar nrrd_type(const std::string& type, const std::string& name) {
   const auto it = types.find(type);
   if (it == types.end()) throw InvalidInputError(name + ": unsupported NRRD type \"" + type.substr(0, 32) + "\"");
   return it->second;
-}
-
-// The numbers of an NRRD field ("(0.5,0,0) (0,2,0) (0,0,1)", "1 2 3"): parentheses, commas and
-// blanks separate them. Anything else is an error naming the field: no number of the file is
-// read by a function that throws its own exceptions or reads past the text.
-std::vector<double> numbers_in(std::string_view text, const std::string& name, const std::string& key) {
-  std::vector<double> out;
-  std::size_t p = 0;
-  while (p < text.size()) {
-    if (std::string_view("(), \t").find(text[p]) != std::string_view::npos) {
-      ++p;
-      continue;
-    }
-    double v = 0;
-    const auto r = std::from_chars(text.data() + p, text.data() + text.size(), v);
-    if (r.ec != std::errc() || !std::isfinite(v) || out.size() == kMaxNumbers)
-      throw InvalidInputError(name + ": \"" + key + "\" must hold finite numbers");
-    out.push_back(v);
-    p = static_cast<std::size_t>(r.ptr - text.data());
-  }
-  return out;
 }
 
 VolumeSamples read_nrrd(const std::string& bytes, const std::string& name) {
