@@ -21,6 +21,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <ctime>
 #include <map>
 #include <memory>
 #include <string>
@@ -331,6 +332,88 @@ void BM_AdaptiveThreads(benchmark::State& state) {
                               : "igea_vis4004/adaptive/threads");
 }
 BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 2)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// Issue 58's blocks (AdaptiveOptions::blocks): each iteration meshes the field by tracking alone
+// on one thread, then with blocks on one thread and on two, in turn, and requires the two block
+// meshes to be the same bit for bit. Counters: speedup_1_to_2 (blocks, one thread over two; aim
+// 1.8), blocks_over_serial (blocks on one thread over tracking alone; aim at most 1.1),
+// cpu_2_over_1 (process CPU time per triangle, two threads over one; aim at most 1.15), and the
+// speedups the measured block times project at 8 and 16 threads: the one-thread run's time
+// outside its blocks taken as serial (the parallel passes' share of it counted as serial too),
+// plus the blocks scheduled greedily, longest first, onto that many threads (aim 6 and 10 on the
+// torus at 2 * 10^6 triangles and the bunny at factor 5). Shapes: 0 the torus of
+// experiments/fields/torus.json at factor 40 (4 * 10^5 triangles), 1 tanglecube at factor 12,
+// 2 the bunny VIS-800 at factor 5, 3 the random blobs at tolerance 1e-3.
+double greedy_makespan(std::vector<double> times, int threads) {
+  std::sort(times.rbegin(), times.rend());
+  std::vector<double> load(static_cast<std::size_t>(threads), 0.0);
+  for (const double t : times) *std::min_element(load.begin(), load.end()) += t;
+  return *std::max_element(load.begin(), load.end());
+}
+
+double cpu_seconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+void BM_AdaptiveBlocks(benchmark::State& state) {
+  const int shape = static_cast<int>(state.range(0));
+  static const std::unique_ptr<Field> torus = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/torus.json");
+  static const std::unique_ptr<Field> tangle = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/tanglecube.json");
+  static const std::unique_ptr<Field> blobs = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/random_blobs.json");
+  const Field& field = shape == 0 ? *torus : shape == 1 ? *tangle : shape == 2 ? bunny() : *blobs;
+  AdaptiveOptions serial;
+  serial.threads = 1;
+  if (shape == 3) serial.sizing = SizingMode::Tolerance, serial.tolerance = 1e-3;
+  else serial.factor = shape == 0 ? 40 : shape == 1 ? 12 : 5;
+  AdaptiveOptions blocks1 = serial;
+  blocks1.blocks = true;
+  AdaptiveOptions blocks2 = blocks1;
+  blocks2.threads = 2;
+  double t_serial = 0, t1 = 0, t2 = 0, cpu1 = 0, cpu2 = 0, p8 = 0, p16 = 0, triangles = 0, nblocks = 0;
+  for (auto _ : state) {
+    const PolygonizeResult rs = polygonize_adaptive(field, serial);
+    double c0 = cpu_seconds();
+    const PolygonizeResult r1 = polygonize_adaptive(field, blocks1);
+    cpu1 += cpu_seconds() - c0;
+    c0 = cpu_seconds();
+    const PolygonizeResult r2 = polygonize_adaptive(field, blocks2);
+    cpu2 += cpu_seconds() - c0;
+    const BlocksReport& b = r1.stats.adaptive->blocks;
+    if (!b.used) {
+      state.SkipWithError(("no blocks: " + b.fallback).c_str());
+      return;
+    }
+    if (r1.mesh.positions != r2.mesh.positions || r1.mesh.triangles != r2.mesh.triangles) {
+      state.SkipWithError("the block meshes on one and two threads differ");
+      return;
+    }
+    state.SetIterationTime(r2.stats.seconds);
+    t_serial += rs.stats.seconds;
+    t1 += r1.stats.seconds;
+    t2 += r2.stats.seconds;
+    double in_blocks = 0;
+    for (const double t : b.block_seconds) in_blocks += t;
+    const double outside = r1.stats.seconds - in_blocks;
+    p8 += r1.stats.seconds / (outside + greedy_makespan(b.block_seconds, 8));
+    p16 += r1.stats.seconds / (outside + greedy_makespan(b.block_seconds, 16));
+    triangles = static_cast<double>(r1.stats.triangles);
+    nblocks = static_cast<double>(b.meshed_blocks);
+  }
+  const auto n = static_cast<double>(state.iterations());
+  state.counters["seconds_serial"] = t_serial / n;
+  state.counters["seconds_blocks_1"] = t1 / n;
+  state.counters["seconds_blocks_2"] = t2 / n;
+  state.counters["speedup_1_to_2"] = t1 / t2;
+  state.counters["blocks_over_serial"] = t1 / t_serial;
+  state.counters["cpu_2_over_1"] = cpu2 / cpu1;
+  state.counters["projected_speedup_8"] = p8 / n;
+  state.counters["projected_speedup_16"] = p16 / n;
+  state.counters["triangles"] = triangles;
+  state.counters["meshed_blocks"] = nblocks;
+  state.SetLabel(shape == 0   ? "torus_f40/adaptive/blocks"
+                 : shape == 1 ? "tanglecube_f12/adaptive/blocks"
+                 : shape == 2 ? "bunny_vis800_f5/adaptive/blocks"
+                              : "random_blobs_tol1e-3/adaptive/blocks");
+}
+BENCHMARK(BM_AdaptiveBlocks)->ArgName("shape")->DenseRange(0, 3)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // One SDF model at factor 3, for BM_AdaptiveSdf and BM_AdaptiveSdfCrowdSlow: each iteration
 // meshes it with its creases followed (the defaults), then ignored, then a smooth sphere (an

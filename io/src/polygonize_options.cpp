@@ -42,6 +42,10 @@ const std::vector<OptionSpec>& table() {
        "across curvature)"},
       {"curvature", OptionKind::Flag, OptionMethods::Adaptive, "", "false", "", {}, {}, 0, 0,
        "mac and shape_index per vertex (vertex scalars; PLY files keep them)"},
+      {"blocks", OptionKind::Boolean, OptionMethods::Adaptive, "BOOL", "false", "", {}, {}, 0, 0,
+       "cut the box into blocks of about 10^4 triangles, trace the seams where the surface crosses the cuts, and "
+       "mesh the blocks from them on all threads (a surface without followed creases; the same mesh on any number "
+       "of threads; stats blocks)"},
       {"check_self_intersections", OptionKind::Boolean, OptionMethods::Adaptive, "BOOL", "true", "", {}, {}, 0, 0,
        "refuse a mesh whose triangles intersect (the last of the final checks; false skips it, for speed on a "
        "surface known to mesh)"},
@@ -144,6 +148,7 @@ void apply(PolygonizeRequest& r, std::string_view name, const nlohmann::json& v)
   else if (name == "creases") a.creases = v == "ignore" ? CreaseHandling::Ignore : CreaseHandling::Follow;
   else if (name == "curvature") a.curvature_properties = v.get<bool>();
   else if (name == "check_self_intersections") a.check_self_intersections = v.get<bool>();
+  else if (name == "blocks") a.blocks = v.get<bool>();
   else if (name == "cell") m.cell_size = v.get<double>();
   else if (name == "precision") m.precision = v.get<int>();
   else if (name == "traversal") m.traversal = v == "grid" ? Traversal::Grid : Traversal::Continuation;

@@ -67,6 +67,28 @@ nlohmann::json creases_json(const CreaseReport& c) {
           {"across_black_box", c.across_black_box}};
 }
 
+nlohmann::json blocks_json(const BlocksReport& b) {
+  return {{"requested", b.requested},
+          {"used", b.used},
+          {"blocks", b.blocks},
+          {"cuts", b.cuts},
+          {"meshed_blocks", b.meshed_blocks},
+          {"corners", b.corners},
+          {"seams", b.seams},
+          {"seam_vertices", b.seam_vertices},
+          {"components", b.components},
+          {"steps", b.steps},
+          {"threads", b.threads},
+          {"layout_seconds", b.layout_seconds},
+          {"seconds", b.seconds},
+          {"block_seconds", b.block_seconds},
+          {"fallback", b.fallback},
+          {"wall_triangles", b.wall_triangles},
+          {"wall_min_angle_degrees", b.wall_min_angle_degrees},
+          {"wall_under_30_share", b.wall_under_30_share},
+          {"wall_mean_edge_ratio", b.wall_mean_edge_ratio}};
+}
+
 nlohmann::json quality_json(const QualityReport& q) {
   nlohmann::json j{{"repair_below_degrees", q.repair_below_degrees},
                    {"bad_before", q.bad_before},
@@ -112,6 +134,7 @@ void add_adaptive(nlohmann::json& j, const AdaptiveReport& r) {
   add_seeding(j, r.seeding);
   add_tracker(j, r.tracker);
   j["creases"] = creases_json(r.creases);
+  j["blocks"] = blocks_json(r.blocks);
   j["quality"] = quality_json(r.quality);
   j["necks"] = {{"walks", r.necks.walks},
                 {"critical_points", r.necks.critical_points},

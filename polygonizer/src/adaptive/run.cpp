@@ -2,6 +2,7 @@
 // recoveries it makes when an attempt fails (kRecoveries).
 #include "run.h"
 
+#include "blocks.h"
 #include "failure_message.h"
 #include "resolve_settings.h"
 #include "run_state.h"
@@ -103,14 +104,40 @@ void Run::prepare() {
     ctx.enter("creases");  // the tracing too; AdaptiveOptions::phase hears of it where it finds creases
     creases = lay_out_creases(ctx.field, ctx.options, settings, seeds.estimated_area, &seeds.grid);
   }
+  // Blocks where no crease patches were meshed: the patches' fronts run serially for now.
+  if (ctx.options.blocks && ctx.options.variant == Variant::Improved && !creases.mesh) {
+    ctx.enter("tracking", "meshing blocks");
+    blocks = mesh_blocks(ctx.field, ctx.options, settings, seeds);
+  }
+}
+
+const CreaseMesh* Run::finished() const {
+  if (creases.mesh) return &*creases.mesh;
+  if (blocks.mesh) return &*blocks.mesh;
+  return nullptr;
+}
+
+void Run::track() {
+  track_surface(ctx, seeds, finished(), creases.components + blocks.components, settings, mesh(), tracking);
+}
+
+void Run::drop_blocks(const char* why) {
+  if (!blocks.mesh) return;
+  blocks.fallback = why;
+  blocks.mesh.reset();
+  blocks.components = 0;
 }
 
 bool Run::fall_back(const std::exception& e) {
-  if (!creases.mesh) return false;
-  creases.fallback = e.what();
-  creases.mesh.reset();
-  creases.components = 0;
-  track_surface(ctx, seeds, creases, settings, mesh(), tracking);
+  if (blocks.mesh) {
+    drop_blocks(e.what());
+  } else {
+    if (!creases.mesh) return false;
+    creases.fallback = e.what();
+    creases.mesh.reset();
+    creases.components = 0;
+  }
+  track();
   return true;
 }
 
@@ -135,10 +162,10 @@ void Run::attempt() {
   // patches that intersect) is not the end: the surface is meshed again as a smooth one
   // (fall_back), and the stats say why.
   try {
-    track_surface(ctx, seeds, creases, settings, mesh(), tracking);
+    track();
     // The patches' topology before the repair works on it; intersections after (the repair
     // removes some that chords on the two faces of an acute crease make).
-    if (creases.mesh) {
+    if (finished()) {
       ctx.enter("checks");
       check_mesh(mesh(), expected_components(), false, ctx.options.threads, ctx.options.cancel);
     }
@@ -190,6 +217,8 @@ bool Run::needs_shorter_edges() {
 
 bool Run::recover(const Recovery& r, bool after_limit) {
   if (doomed || (after_limit && !r.after_limit)) return false;
+  // The blocks were meshed with the first attempt's settings, which a recovery changes.
+  drop_blocks("a recovery meshes by tracking alone");
   const bool may_mesh_again = remeshing_allowed(ctx.options);
   switch (r.kind) {
     case RecoveryKind::AroundNecks:

@@ -5,9 +5,50 @@
 #include "stage_checks.h"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace cdp::adaptive {
+
+namespace {
+
+// The triangles a cut plane passes through, and their quality (BlocksReport).
+void add_wall_quality(const Mesh& mesh, BlocksReport& b) {
+  double min_angle = 180, ratio_sum = 0;
+  std::size_t count = 0, under = 0;
+  for (const auto& t : mesh.triangles) {
+    const Vec3& p = mesh.positions[static_cast<std::size_t>(t[0])];
+    const Vec3& q = mesh.positions[static_cast<std::size_t>(t[1])];
+    const Vec3& s = mesh.positions[static_cast<std::size_t>(t[2])];
+    bool crossed = false;
+    for (int a = 0; a < 3 && !crossed; ++a)
+      for (const double c : b.cuts[a])
+        if (std::min({p[a], q[a], s[a]}) <= c && std::max({p[a], q[a], s[a]}) >= c) {
+          crossed = true;
+          break;
+        }
+    if (!crossed) continue;
+    const double e0 = (q - p).norm(), e1 = (s - q).norm(), e2 = (p - s).norm();
+    // The smallest angle is opposite the shortest edge.
+    const auto corner = [](const Vec3& at, const Vec3& u, const Vec3& w) {
+      const Vec3 x = u - at, y = w - at;
+      return std::atan2(x.cross(y).norm(), x.dot(y)) * 180 / std::numbers::pi;
+    };
+    const double angle = std::min({corner(p, q, s), corner(q, s, p), corner(s, p, q)});
+    ++count;
+    min_angle = std::min(min_angle, angle);
+    if (angle < 30) ++under;
+    ratio_sum += std::max({e0, e1, e2}) / std::min({e0, e1, e2});
+  }
+  b.wall_triangles = count;
+  if (count == 0) return;
+  b.wall_min_angle_degrees = min_angle;
+  b.wall_under_30_share = static_cast<double>(under) / static_cast<double>(count);
+  b.wall_mean_edge_ratio = ratio_sum / static_cast<double>(count);
+}
+
+}  // namespace
 
 void Run::write_stats() {
   PolygonizeStats& st = result.stats;
@@ -73,6 +114,24 @@ void Run::write_stats() {
   // A mesh made across a crease of a black box (see kink_in_black_box) that held together: the
   // crease is cut across by chords, not followed.
   c.across_black_box = kink_in_black_box(ctx.field, tracking.tightest);
+
+  BlocksReport& b = r.blocks;
+  b.requested = ctx.options.blocks;
+  b.used = blocks.mesh.has_value();
+  b.blocks = blocks.blocks;
+  b.cuts = blocks.cuts;
+  b.meshed_blocks = blocks.meshed_blocks;
+  b.corners = blocks.corners;
+  b.seams = blocks.seams;
+  b.seam_vertices = blocks.seam_vertices;
+  b.components = blocks.components;
+  b.steps = blocks.mesh ? blocks.mesh->steps : 0;
+  b.threads = blocks.threads;
+  b.layout_seconds = blocks.layout_seconds;
+  b.seconds = blocks.seconds;
+  b.block_seconds = blocks.block_seconds;
+  b.fallback = blocks.fallback;
+  add_wall_quality(result.mesh, b);
 
   r.quality = quality;
   r.quality.repair_below_degrees = kRepairBelowDegrees;

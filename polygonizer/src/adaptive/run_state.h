@@ -2,6 +2,7 @@
 // recoveries changed. Private to run.cpp and run_report.cpp.
 #pragma once
 
+#include "blocks.h"
 #include "missed_necks.h"
 #include "quality.h"
 #include "run.h"
@@ -31,13 +32,19 @@ class Run {
   PolygonizeResult mesh_with_recoveries(Bend& bend);
 
  private:
-  // The stages before the first triangle: settings, seed grid, crease layout.
+  // The stages before the first triangle: settings, seed grid, crease layout, blocks.
   void prepare();
   // One attempt: tracking, repair, checks (throws their errors).
   void attempt();
   // Drops a crease layout whose meshing failed with `e` and meshes the surface as smooth;
   // false where there was none.
   bool fall_back(const std::exception& e);
+  // The mesh adopted as finished before the tracker seeds: the crease patches' or the blocks'.
+  const CreaseMesh* finished() const;
+  // track_surface after it.
+  void track();
+  // Drops the blocks' mesh (their `fallback` says why): the surface is tracked alone from then on.
+  void drop_blocks(const char* why);
   // The tracked mesh's neck search (check_necks, into `necks`), its repair, its checks.
   std::size_t repair_and_check();
   // Adds a ball of finer edges around each neck the last attempt stepped over.
@@ -53,7 +60,7 @@ class Run {
 
   Mesh& mesh() { return result.mesh; }
   // The components the checks expect: one per seed, and the crease patches'.
-  std::size_t expected_components() const { return tracking.seeding.seeds + creases.components; }
+  std::size_t expected_components() const { return tracking.seeding.seeds + creases.components + blocks.components; }
 
   RunContext ctx;
   RunRequest request;
@@ -65,6 +72,7 @@ class Run {
   SeedGridStage seeds;
   double seed_grid_seconds = 0;
   CreaseLayout creases;
+  BlockMeshing blocks;  // AdaptiveOptions::blocks
   PolygonizeResult result;
   Tracking tracking;
   QualityReport quality;

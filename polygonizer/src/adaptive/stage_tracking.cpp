@@ -10,9 +10,9 @@
 namespace cdp::adaptive {
 namespace {
 
-// One meshing: the crease patches' mesh adopted as finished surface, then every component the
+// One meshing: the crease patches' or blocks' mesh adopted as finished surface, then every component the
 // seeding finds uncovered.
-void mesh_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseLayout& creases, Settings& settings,
+void mesh_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseMesh* finished, Settings& settings,
                   bool rollback, Mesh& mesh, Tracking& tracking) {
   mesh = Mesh{};
   settings.rollback = rollback;
@@ -20,11 +20,11 @@ void mesh_surface(const RunContext& run, const SeedGridStage& seeds, const Creas
   Tracker& tracker = tracking.tracker.emplace(run.field, settings, mesh);
   if (seeds.estimated_area > 0) tracker.set_estimated_area(seeds.estimated_area);
   if (run.options.progress) tracker.set_progress(run.options.progress);
-  if (creases.mesh) {
-    mesh.positions = creases.mesh->mesh.positions;
-    mesh.normals = creases.mesh->mesh.normals;
-    mesh.triangles = creases.mesh->mesh.triangles;
-    tracker.adopt_finished(creases.mesh->target, creases.mesh->mac, creases.mesh->shape_index);
+  if (finished) {
+    mesh.positions = finished->mesh.positions;
+    mesh.normals = finished->mesh.normals;
+    mesh.triangles = finished->mesh.triangles;
+    tracker.adopt_finished(finished->target, finished->mac, finished->shape_index);
   }
   {
     // The tracker's field calls come one or two points at a time: a costly field may run half
@@ -44,12 +44,12 @@ void mesh_surface(const RunContext& run, const SeedGridStage& seeds, const Creas
 
 }  // namespace
 
-void track_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseLayout& creases,
-                   Settings& settings, Mesh& mesh, Tracking& tracking) {
+void track_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseMesh* finished,
+                   std::size_t finished_components, Settings& settings, Mesh& mesh, Tracking& tracking) {
   run.enter("tracking", "meshing");
   tracking.remeshed = false;
   try {
-    mesh_surface(run, seeds, creases, settings, settings.anticipate, mesh, tracking);  // careful runs roll back from the start
+    mesh_surface(run, seeds, finished, settings, settings.anticipate, mesh, tracking);  // careful runs roll back from the start
   } catch (const StalledFrontError& stalled) {
     if (settings.anticipate) throw;
     // The rollbacks undo such places where they begin. Surfaces that mesh without them are
@@ -58,10 +58,10 @@ void track_surface(const RunContext& run, const SeedGridStage& seeds, const Crea
     // the printed triangle count on the bunny VIS-800 at factor 1), the first run's error stands.
     try {
       tracking.remeshed = true;
-      mesh_surface(run, seeds, creases, settings, true, mesh, tracking);
+      mesh_surface(run, seeds, finished, settings, true, mesh, tracking);
       if (tracking.seeding.uncovered > 0) throw NoSurfaceError("uncovered sign changes");
       run.enter("checks");
-      check_mesh(mesh, tracking.seeding.seeds + creases.components, run.options.check_self_intersections,
+      check_mesh(mesh, tracking.seeding.seeds + finished_components, run.options.check_self_intersections,
                  run.options.threads, run.options.cancel);
     } catch (const CancelledError&) {
       throw;

@@ -32,14 +32,15 @@ struct Tracking {
   }
 };
 
-// Meshes the whole surface into `mesh` (emptied first): the crease patches' mesh, then the
+// Meshes the whole surface into `mesh` (emptied first): `finished` (the crease patches' or the
+// blocks' mesh, of `finished_components` components) adopted as it is, if given, then the
 // tracker from the seeds. A stalled front (StalledFrontError) is where a front that ran over
 // finished mesh ends, thousands of steps later (the MPU models at some factors): the surface is
 // then meshed again from the start with the rollbacks on (`remeshed`).
 // \throw NoSurfaceError when the field has no sign change, when no seed could be meshed, when
 //        sign changes are left uncovered; the first run's StalledFrontError when the second
 //        fails; LimitExceededError for the tracker's bounds; CancelledError.
-void track_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseLayout& creases,
-                   Settings& settings, Mesh& mesh, Tracking& tracking);
+void track_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseMesh* finished,
+                   std::size_t finished_components, Settings& settings, Mesh& mesh, Tracking& tracking);
 
 }  // namespace cdp::adaptive

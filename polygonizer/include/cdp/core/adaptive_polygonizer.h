@@ -68,6 +68,13 @@ struct AdaptiveOptions {
   // there run half their sums on a second (a Vis from Vis::kSplitGradientHessianCentres
   // centres; stats "split_evaluations"). The mesh is the same, bit for bit, on any number.
   int threads = 0;
+  // Block-parallel tracking (Variant::Improved, a surface without followed creases): the box is
+  // cut into blocks of about 10^4 triangles by planes that depend only on the field and the
+  // options, the curves where the surface crosses them are traced once (seams), and every block
+  // is meshed from its seams by fronts of its own, on `threads` threads for a thread-safe field.
+  // The mesh is the same on any number of threads; it is another mesh than the one tracking alone
+  // makes. A layout or a block that fails falls back to tracking alone (stats blocks.fallback).
+  bool blocks = false;
   // Adds vertex_scalars "mac" (maximum absolute curvature) and "shape_index" to the mesh.
   bool curvature_properties = false;
   // Bounds; hitting one throws LimitExceededError. 0: derived from the box and min_edge

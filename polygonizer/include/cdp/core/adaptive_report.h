@@ -70,6 +70,23 @@ struct CreaseReport {
   bool across_black_box = false;
 };
 
+// Block-parallel tracking (AdaptiveOptions::blocks; polygonizer/src/adaptive/blocks.h).
+struct BlocksReport {
+  bool requested = false;
+  bool used = false;  // the mesh was made from blocks (else tracking alone: `fallback` says why)
+  std::array<int, 3> blocks{1, 1, 1};  // along x, y, z
+  std::array<std::vector<double>, 3> cuts;  // the cut planes' positions along each axis
+  std::size_t meshed_blocks = 0, corners = 0, seams = 0, seam_vertices = 0, components = 0, steps = 0;
+  unsigned threads = 1;  // that meshed the blocks
+  double layout_seconds = 0, seconds = 0;
+  std::vector<double> block_seconds;  // each block's tracking, in block order
+  std::string fallback;
+  // The finished mesh's triangles that a cut plane passes through (the seams' neighbours), and
+  // their quality: smallest angle, share under 30 degrees, mean longest / shortest edge.
+  std::size_t wall_triangles = 0;
+  double wall_min_angle_degrees = 0, wall_under_30_share = 0, wall_mean_edge_ratio = 0;
+};
+
 // The repair stage (polygonizer/src/adaptive/quality.h; STATS "quality.*").
 struct QualityReport {
   double repair_below_degrees = 0;  // triangles whose smallest angle is under this are repaired
@@ -148,6 +165,7 @@ struct AdaptiveReport {
   SeedingReport seeding;
   TrackerReport tracker;
   CreaseReport creases;
+  BlocksReport blocks;
   QualityReport quality;
   NeckReport necks;
   RecoveryReport recoveries;

@@ -1,0 +1,801 @@
+#include "blocks.h"
+
+#include "edge_length.h"
+#include "missed_necks.h"
+#include "../parallel.h"
+
+#include <cdp/core/curvature.h>
+#include <cdp/core/mesh_topology.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <string>
+#include <utility>
+
+namespace cdp::adaptive {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Triangles a block is cut for, as the seed grid estimates the surface: enough that a block's
+// fronts outweigh its seams (a seam vertex costs a traced curve's Hessians and two blocks'
+// bridges; a block of 10^4 triangles has a few hundred), and few enough that two threads get
+// eight or more blocks from 1.6 * 10^5 triangles (tanglecube at factor 12), so that the last
+// block to finish leaves the other thread idle briefly.
+constexpr double kTrianglesPerBlock = 2500;
+// A surface estimated below this many blocks is meshed by tracking alone: a cut costs more than
+// it gains on a surface meshed in a few milliseconds.
+constexpr double kFewestBlocks = 2;
+constexpr int kMaxBlocksPerAxis = 16;
+// A cut plane passes through the middle of a seed-grid cell (never through its nodes), moved by
+// up to kCutShift cells from its share of the box where the surface grazes it: a plane nearly
+// tangent to the surface cuts it in curves that bend sharply or nearly touch (tiny loops, two
+// seams close together on one face), which the fronts on either side mesh badly.
+constexpr int kCutShift = 2;
+// A plane is good when, at every sample of it within one sample spacing of the surface, the
+// surface's normal leans at least 30 degrees away from the plane's (the gradient's share in the
+// plane is at least sin 30 = 0.5); otherwise the candidate that leans most is taken.
+constexpr double kGoodLean = 0.5;
+// Samples per seed-grid cell along a block edge (roots of F on the line) and across a cut plane
+// (its grazing and the loops of the seams inside a face).
+constexpr int kLineSamples = 4;
+constexpr int kPlaneSamples = 2;
+// Bisection steps for a root on a block edge: 2^-60 of a sample spacing, below rounding.
+constexpr int kRootBisections = 60;
+// Newton steps onto a seam (F = 0 in the cut plane), and their tolerance as a share of the box
+// diagonal (the tracker's projections converge to 1e-10 of it).
+constexpr int kSeamNewtonSteps = 12;
+constexpr double kSeamTolerance = 1e-10;
+// A seam is traced in steps of this share of the target edge length at the point, halved while
+// its tangent turns more than kTraceTurn radians a step, down to kShortestTraceStep of min_edge.
+constexpr double kTraceShare = 0.25;
+constexpr double kTraceTurn = 0.3;
+constexpr double kShortestTraceStep = 0.05;
+// Traced points of all seams together (a bound on the work, as trace_creases' max_points).
+constexpr std::size_t kMaxTracePoints = 20'000'000;
+// A traced seam ends at the corner of its face's side that it crosses within this share of its
+// last step (a corner is F = 0 on the side, the crossing its chord's intersection with it).
+constexpr double kCornerReach = 0.5;
+// A crossing of a plane's samples (linear between two samples) lies within about a spacing of
+// the seam through it; a traced chord strays from its seam by its sagitta, under 0.04 of its
+// length at a turn of kTraceTurn. A crossing farther than kCovered spacings plus kChordStray
+// chords from every traced seam of its face starts a loop.
+constexpr double kCovered = 1.5;
+constexpr double kChordStray = 0.1;
+// A traced seam longer than this many times its face's perimeter has lost its way.
+constexpr double kLongestSeam = 1000;
+// Fewest edges of a seam: two between corners (two seams between the same two corners bound a
+// patch of at least four vertices), three for a loop.
+constexpr std::size_t kMinOpenEdges = 2, kMinLoopEdges = 3;
+// The margin of a block's point and patch tests, as a share of the step or edge length: a point
+// on a seam lies on the block's wall to rounding, and a chord between two seam vertices of one
+// wall lies in it.
+constexpr double kOutsideBlock = 0.1;
+
+Vec3 axis_vector(int a) { return Vec3::Unit(a); }
+
+// A cut plane sampled over the box: values and gradients at kPlaneSamples per seed cell.
+struct PlaneSamples {
+  int a = 0, b = 1, d = 2;  // the plane's normal axis and the two axes in it (a+1, a+2 mod 3)
+  double c = 0;             // p[a] = c
+  int nb = 0, nd = 0;       // intervals along b and d
+  Vec3 origin;
+  double sb = 0, sd = 0;    // spacings
+  std::vector<double> values;
+  std::vector<Vec3> gradients;
+  Vec3 point(int i, int j) const {
+    Vec3 p = origin;
+    p[b] += sb * i;
+    p[d] += sd * j;
+    return p;
+  }
+  std::size_t index(int i, int j) const { return static_cast<std::size_t>(j) * (nb + 1) + i; }
+};
+
+PlaneSamples sample_plane(const Field& field, int a, double c, double cell) {
+  PlaneSamples s;
+  s.a = a, s.b = (a + 1) % 3, s.d = (a + 2) % 3, s.c = c;
+  const Box& box = field.bounds();
+  const Vec3 size = box.size();
+  s.nb = std::max(1, static_cast<int>(std::ceil(kPlaneSamples * size[s.b] / cell)));
+  s.nd = std::max(1, static_cast<int>(std::ceil(kPlaneSamples * size[s.d] / cell)));
+  s.sb = size[s.b] / s.nb, s.sd = size[s.d] / s.nd;
+  s.origin = box.min;
+  s.origin[a] = c;
+  std::vector<Vec3> points;
+  points.reserve(static_cast<std::size_t>(s.nb + 1) * (s.nd + 1));
+  for (int j = 0; j <= s.nd; ++j)
+    for (int i = 0; i <= s.nb; ++i) points.push_back(s.point(i, j));
+  s.values.resize(points.size());
+  s.gradients.resize(points.size());
+  field.values_gradients(points.data(), s.values.data(), s.gradients.data(), points.size());
+  return s;
+}
+
+// The smallest lean (share of the gradient in the plane) over the samples within a spacing of
+// the surface; 1 where none is.
+double plane_lean(const PlaneSamples& s) {
+  const double spacing = std::max(s.sb, s.sd);
+  double lean = 1;
+  for (std::size_t k = 0; k < s.values.size(); ++k) {
+    const Vec3& g = s.gradients[k];
+    const double gn = g.norm();
+    if (!(gn > 0) || !std::isfinite(s.values[k]) || std::abs(s.values[k]) > spacing * gn) continue;
+    lean = std::min(lean, std::sqrt(std::max(0.0, gn * gn - g[s.a] * g[s.a])) / gn);
+  }
+  return lean;
+}
+
+struct Cuts {
+  std::array<std::vector<double>, 3> walls;  // per axis: the box's min, the cuts, the box's max
+  std::array<std::vector<PlaneSamples>, 3> planes;  // per axis, per cut
+  int count(int a) const { return static_cast<int>(walls[a].size()) - 1; }
+};
+
+// The blocks along each axis: about kTrianglesPerBlock triangles each, shared out in proportion
+// to the box's sides. All ones where the surface is too small to cut.
+std::array<int, 3> block_counts(const Field& field, const SeedGridStage& seeds) {
+  std::array<int, 3> n{1, 1, 1};
+  const double edge = 0.5 * seeds.hash_cell;  // hash_cell is twice the median target edge
+  if (!(seeds.estimated_area > 0) || !(edge > 0)) return n;
+  const double triangles = seeds.estimated_area / (0.25 * std::sqrt(3.0) * edge * edge);
+  const double blocks = triangles / kTrianglesPerBlock;
+  if (blocks < kFewestBlocks) return n;
+  const Vec3 size = field.bounds().size();
+  const double side = std::cbrt(size.prod() / blocks);
+  for (int a = 0; a < 3; ++a)
+    n[a] = std::clamp(static_cast<int>(std::lround(size[a] / side)), 1, kMaxBlocksPerAxis);
+  return n;
+}
+
+// The cuts along each axis (see kCutShift and kGoodLean); each plane keeps its samples.
+Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int, 3>& n, const CancelToken& cancel) {
+  Cuts cuts;
+  const Box& box = field.bounds();
+  for (int a = 0; a < 3; ++a) {
+    cuts.walls[a].push_back(box.min[a]);
+    int last = -1;  // the cell of the cut before: cuts stay in increasing cells, at least one apart
+    for (int i = 1; i < n[a]; ++i) {
+      const double ideal = box.min[a] + box.size()[a] * i / n[a];
+      const int cell = std::clamp(static_cast<int>(std::floor((ideal - grid.origin[a]) / grid.h)), 0, grid.n[a] - 1);
+      std::optional<PlaneSamples> best;
+      double best_lean = -1;
+      int best_cell = -1;
+      for (int shift = 0; shift <= 2 * kCutShift; ++shift) {
+        const int k = cell + (shift % 2 == 1 ? -(shift + 1) / 2 : shift / 2);  // 0, -1, +1, -2, +2
+        if (k <= last || k > grid.n[a] - 1 - (n[a] - 1 - i)) continue;
+        cancel.check("adaptive");
+        PlaneSamples s = sample_plane(field, a, grid.origin[a] + (k + 0.5) * grid.h, grid.h);
+        const double lean = plane_lean(s);
+        if (lean > best_lean) best_lean = lean, best = std::move(s), best_cell = k;
+        if (best_lean >= kGoodLean) break;
+      }
+      if (!best) throw CreaseLayoutError("adaptive: the box is too small for " + std::to_string(n[a]) + " blocks");
+      last = best_cell;
+      cuts.walls[a].push_back(best->c);
+      cuts.planes[a].push_back(std::move(*best));
+    }
+    cuts.walls[a].push_back(box.max[a]);
+  }
+  return cuts;
+}
+
+// Seam vertices: the corners first, then each face's seams' inner vertices.
+struct SeamVertices {
+  std::vector<Vec3> points;
+  int add(const Vec3& p) {
+    points.push_back(p);
+    return static_cast<int>(points.size()) - 1;
+  }
+};
+
+// A point where the surface crosses a block edge.
+struct Corner {
+  double t;  // coordinate along the edge's axis
+  int vertex;
+};
+
+// The lines along which block walls meet: along axis `along`, at wall indices (i, j) of the two
+// other axes in increasing axis order.
+struct Lines {
+  std::array<std::vector<std::vector<Corner>>, 3> roots;  // [along][i * (walls of second) + j]
+  std::array<int, 3> stride{};
+  const std::vector<Corner>& at(int along, int i, int j) const {
+    return roots[along][static_cast<std::size_t>(i) * stride[along] + j];
+  }
+};
+
+std::pair<int, int> other_axes(int a) { return {a == 0 ? 1 : 0, a == 2 ? 1 : 2}; }
+
+// Every root of F on every line where interior walls meet (find_corners): sampled at
+// kLineSamples per seed cell, each sign change bisected. A root on the box's own side (a line
+// with a wall of the box) means the surface reaches the box there, which the layout refuses.
+Lines find_corners(const Field& field, const Cuts& cuts, double cell, SeamVertices& sv, const CancelToken& cancel) {
+  Lines lines;
+  const Box& box = field.bounds();
+  for (int along = 0; along < 3; ++along) {
+    const auto [p, q] = other_axes(along);
+    const int np = cuts.count(p), nq = cuts.count(q);
+    lines.stride[along] = nq + 1;
+    lines.roots[along].assign(static_cast<std::size_t>(np + 1) * (nq + 1), {});
+    const int samples = std::max(2, static_cast<int>(std::ceil(kLineSamples * box.size()[along] / cell)));
+    const double step = box.size()[along] / samples;
+    std::vector<Vec3> points(static_cast<std::size_t>(samples) + 1);
+    std::vector<double> values(points.size());
+    for (int i = 0; i <= np; ++i)
+      for (int j = 0; j <= nq; ++j) {
+        const bool interior_i = i > 0 && i < np, interior_j = j > 0 && j < nq;
+        if (!interior_i && !interior_j) continue;  // an edge of the box: no interior face has it
+        cancel.check("adaptive");
+        Vec3 base = box.min;
+        base[p] = cuts.walls[p][static_cast<std::size_t>(i)];
+        base[q] = cuts.walls[q][static_cast<std::size_t>(j)];
+        const auto at = [&](double t) {
+          Vec3 x = base;
+          x[along] = t;
+          return x;
+        };
+        for (int k = 0; k <= samples; ++k) points[static_cast<std::size_t>(k)] = at(box.min[along] + step * k);
+        field.values(points.data(), values.data(), points.size());
+        std::vector<Corner>& out = lines.roots[along][static_cast<std::size_t>(i) * (nq + 1) + j];
+        for (int k = 0; k < samples; ++k) {
+          double lo = box.min[along] + step * k, hi = lo + step;
+          double flo = values[static_cast<std::size_t>(k)], fhi = values[static_cast<std::size_t>(k) + 1];
+          if (!std::isfinite(flo) || !std::isfinite(fhi))
+            throw CreaseLayoutError("adaptive: the field is not finite on a block's edge near " + format_point(at(lo)));
+          if ((flo < 0) == (fhi < 0)) continue;
+          if (!interior_i || !interior_j)
+            throw CreaseLayoutError("adaptive: the surface reaches the box's side near " + format_point(at(lo)));
+          for (int it = 0; it < kRootBisections; ++it) {
+            const double mid = 0.5 * (lo + hi);
+            const double fm = field.value(at(mid));
+            if ((fm < 0) == (flo < 0)) lo = mid, flo = fm;
+            else hi = mid, fhi = fm;
+          }
+          const double t = 0.5 * (lo + hi);
+          out.push_back({t, sv.add(at(t))});
+        }
+      }
+  }
+  return lines;
+}
+
+// One face of a block, in the cut plane p[a] = c: the rectangle [b0, b1] x [d0, d1] of axes b, d.
+struct Face {
+  int a, b, d;
+  int cut;                 // index of the plane in Cuts::planes[a]
+  std::array<int, 2> cell; // the face's block indices along b and d
+  double c, b0, b1, d0, d1;
+  bool inside(const Vec3& x) const { return x[b] >= b0 && x[b] <= b1 && x[d] >= d0 && x[d] <= d1; }
+};
+
+// A corner on a face's side, with the direction into the face across that side.
+struct FaceCorner {
+  int vertex;
+  Vec3 point, inward;
+  int side;  // 0..3: d = d0, d = d1, b = b0, b = b1
+  bool used = false;
+};
+
+// A seam of one face: vertices from corner to corner, or a loop.
+struct Seam {
+  std::vector<int> vertices;
+  bool closed = false;
+};
+
+struct SeamTracer {
+  const Field& field;
+  const Sizing& sizing;
+  bool grading;
+  double tolerance;  // of the Newton steps onto a seam
+  std::size_t& points_left;
+
+  // x moved onto F = 0 within its plane (axis a fixed); nothing where Newton fails.
+  std::optional<Vec3> onto_seam(Vec3 x, int a) const {
+    for (int it = 0; it < kSeamNewtonSteps; ++it) {
+      Vec3 g;
+      const double v = field.value_gradient(x, g);
+      g[a] = 0;
+      const double gg = g.squaredNorm();
+      if (!std::isfinite(v) || !(gg > 0)) return std::nullopt;
+      if (std::abs(v) <= tolerance * std::sqrt(gg)) return x;
+      x -= v / gg * g;
+    }
+    return std::nullopt;
+  }
+
+  // The seam's direction at x: the plane's normal crossed with the gradient, unit.
+  std::optional<Vec3> tangent(const Vec3& x, int a) const {
+    const Vec3 t = axis_vector(a).cross(field.gradient(x));
+    const double n = t.norm();
+    if (!(n > 0) || !std::isfinite(n)) return std::nullopt;
+    return t / n;
+  }
+
+  // The edge length the surface asks for at x (its curvature and, with grading, its C1 seams').
+  double target(const Vec3& x) const {
+    Vec3 g;
+    Mat3 h;
+    field.gradient_hessian(x, g, h);
+    double len = sizing.max_edge;
+    try {
+      len = edge_length(sizing, curvature_from_derivatives(g, h).min_radius);
+    } catch (const NoSurfaceError&) {
+      return sizing.min_edge;
+    }
+    if (grading) len = std::min(len, seam_edge_length(field, sizing, x, len));
+    return len;
+  }
+
+  // Traces the seam through `start` (on it) in direction `sign` of tangent(), until it leaves the
+  // face (returns the crossing's side and point) or, for a loop, comes back to the start.
+  struct Traced {
+    std::vector<Vec3> points;
+    std::vector<double> targets;
+    int side = -1;  // the side it left by; -1 for a loop
+    Vec3 exit;
+    double last_step = 0;
+  };
+  Traced trace(const Face& f, const Vec3& start, double sign, bool loop) const {
+    Traced out;
+    out.points.push_back(start);
+    out.targets.push_back(target(start));
+    Vec3 x = start;
+    double travelled = 0;
+    for (;;) {
+      if (points_left == 0) throw LimitExceededError("adaptive: the seams of the blocks pass " + std::to_string(kMaxTracePoints) + " traced points");
+      --points_left;
+      const std::optional<Vec3> t0 = tangent(x, f.a);
+      if (!t0) throw CreaseLayoutError("adaptive: a seam's tangent vanishes near " + format_point(x));
+      double step = kTraceShare * out.targets.back();
+      std::optional<Vec3> next;
+      for (;;) {
+        next = onto_seam(x + sign * step * *t0, f.a);
+        if (next) {
+          const std::optional<Vec3> t1 = tangent(*next, f.a);
+          if (t1 && t1->dot(*t0) >= std::cos(kTraceTurn) && (*next - x).norm() <= 2 * step) break;
+        }
+        step *= 0.5;
+        if (step < kShortestTraceStep * sizing.min_edge)
+          throw CreaseLayoutError("adaptive: a seam turns too sharply to trace near " + format_point(x) +
+                                  " (the surface grazes a block's wall)");
+      }
+      const Vec3 y = *next;
+      if (!f.inside(y)) {
+        // The crossing of the chord x -> y with the face's side it leaves by.
+        double best = 2;
+        const std::array<std::pair<int, double>, 4> sides{{{f.d, f.d0}, {f.d, f.d1}, {f.b, f.b0}, {f.b, f.b1}}};
+        for (int s = 0; s < 4; ++s) {
+          const auto [axis, wall] = sides[static_cast<std::size_t>(s)];
+          const double den = y[axis] - x[axis];
+          if (den == 0) continue;
+          const double u = (wall - x[axis]) / den;
+          if (u < 0 || u > 1 || u >= best) continue;
+          const Vec3 z = x + u * (y - x);
+          const int other = axis == f.b ? f.d : f.b;
+          const double lo = axis == f.b ? f.d0 : f.b0, hi = axis == f.b ? f.d1 : f.b1;
+          if (z[other] < lo - 1e-12 * (hi - lo) || z[other] > hi + 1e-12 * (hi - lo)) continue;
+          best = u, out.side = s, out.exit = z;
+        }
+        if (out.side < 0) throw CreaseLayoutError("adaptive: a seam leaves its face at no side near " + format_point(y));
+        out.last_step = (y - x).norm();
+        return out;
+      }
+      travelled += (y - x).norm();
+      if (travelled > kLongestSeam * 2 * (f.b1 - f.b0 + f.d1 - f.d0))
+        throw CreaseLayoutError("adaptive: a seam traced from " + format_point(start) + " does not end");
+      if (loop && travelled > 3 * step && (y - start).norm() < step) return out;
+      out.points.push_back(y);
+      out.targets.push_back(target(y));
+      x = y;
+    }
+  }
+};
+
+// The polyline's vertices about one target apart (equal steps of the integral of ds / target,
+// the target also bounded by the seam's own turning), moved onto the seam. `first` and `last`
+// are the corners' vertices of an open seam (ends of `points`), -1 for a loop.
+Seam resample(const SeamTracer& tracer, const Face& f, const std::vector<Vec3>& points, std::vector<double> h,
+              int first, int last, SeamVertices& sv) {
+  Seam out;
+  out.closed = first < 0;
+  const std::size_t n = points.size();
+  const std::size_t segments = out.closed ? n : n - 1;
+  const auto at = [&](std::size_t i) -> const Vec3& { return points[i % n]; };
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool interior = out.closed || (i > 0 && i + 1 < n);
+    if (!interior) continue;
+    const Vec3 u = points[i] - at(i + n - 1), w = at(i + 1) - points[i];
+    const double turn = std::atan2(u.cross(w).norm(), u.dot(w));
+    if (turn > 0) h[i] = std::min(h[i], edge_length(tracer.sizing, 0.5 * (u.norm() + w.norm()) / turn));
+    h[i] = std::max(h[i], tracer.sizing.min_edge);
+  }
+  std::vector<double> cumulative(segments + 1, 0.0);
+  for (std::size_t j = 0; j < segments; ++j)
+    cumulative[j + 1] = cumulative[j] + (at(j + 1) - at(j)).norm() * 0.5 * (1 / h[j] + 1 / h[(j + 1) % n]);
+  const double total = cumulative.back();
+  const std::size_t edges =
+      std::max(out.closed ? kMinLoopEdges : kMinOpenEdges, static_cast<std::size_t>(std::ceil(total - 1e-9)));
+  if (!out.closed) out.vertices.push_back(first);
+  std::size_t j = 0;
+  for (std::size_t k = out.closed ? 0 : 1; k < edges; ++k) {
+    const double s = total * static_cast<double>(k) / static_cast<double>(edges);
+    while (j + 1 < segments && cumulative[j + 1] < s) ++j;
+    const double span = cumulative[j + 1] - cumulative[j];
+    const double t = span > 0 ? std::clamp((s - cumulative[j]) / span, 0.0, 1.0) : 0.0;
+    const Vec3 guess = at(j) + t * (at(j + 1) - at(j));
+    const std::optional<Vec3> x = k == 0 ? std::optional<Vec3>(points[0]) : tracer.onto_seam(guess, f.a);
+    if (!x || (*x - guess).norm() > 0.5 * std::max(h[j], h[(j + 1) % n]))
+      throw CreaseLayoutError("adaptive: a seam vertex could not be put on its seam near " + format_point(guess));
+    out.vertices.push_back(sv.add(*x));
+  }
+  if (!out.closed) out.vertices.push_back(last);
+  return out;
+}
+
+// The seams of face f: from each corner on its sides to the corner where it leaves, then a loop
+// through each crossing of the plane's samples inside the face that no seam passes near.
+std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const PlaneSamples& plane, const Lines& lines,
+                             const Cuts& cuts, SeamVertices& sv) {
+  std::vector<FaceCorner> corners;
+  {
+    // Sides d = d0, d = d1 run along b; b = b0, b = b1 along d. Lines are indexed by the wall
+    // indices of the two other axes in increasing axis order.
+    const auto collect = [&](int along, int side, int wall_axis, int wall_index, double lo, double hi, const Vec3& inward) {
+      const auto [p, q] = other_axes(along);
+      const int ip = p == f.a ? f.cut + 1 : wall_index, iq = q == f.a ? f.cut + 1 : wall_index;
+      (void)wall_axis;
+      for (const Corner& c : lines.at(along, ip, iq))
+        if (c.t > lo && c.t < hi) {
+          const Vec3& x = sv.points[static_cast<std::size_t>(c.vertex)];
+          corners.push_back({c.vertex, x, inward, side});
+        }
+    };
+    const int jb = f.cell[0], jd = f.cell[1];
+    collect(f.b, 0, f.d, jd, f.b0, f.b1, axis_vector(f.d));
+    collect(f.b, 1, f.d, jd + 1, f.b0, f.b1, -axis_vector(f.d));
+    collect(f.d, 2, f.b, jb, f.d0, f.d1, axis_vector(f.b));
+    collect(f.d, 3, f.b, jb + 1, f.d0, f.d1, -axis_vector(f.b));
+  }
+  (void)cuts;
+  std::vector<Seam> seams;
+  std::vector<std::vector<Vec3>> traced;  // every traced polyline, for the loop search
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    if (corners[i].used) continue;
+    const FaceCorner& from = corners[i];
+    const std::optional<Vec3> t = tracer.tangent(from.point, f.a);
+    if (!t || std::abs(t->dot(from.inward)) < 1e-3)
+      throw CreaseLayoutError("adaptive: the surface grazes a block's edge near " + format_point(from.point));
+    const double sign = t->dot(from.inward) > 0 ? 1 : -1;
+    SeamTracer::Traced tr = tracer.trace(f, from.point, sign, false);
+    // The corner it ends at: on the side it left by, the nearest to the crossing, unused.
+    int end = -1;
+    double best = kCornerReach * std::max(tr.last_step, tracer.sizing.min_edge);
+    for (std::size_t k = 0; k < corners.size(); ++k) {
+      if (k == i || corners[k].side != tr.side) continue;
+      const double dist = (corners[k].point - tr.exit).norm();
+      if (dist < best) best = dist, end = static_cast<int>(k);
+    }
+    if (end < 0 || corners[static_cast<std::size_t>(end)].used)
+      throw CreaseLayoutError("adaptive: a seam reaches a block's edge where no corner was found near " +
+                              format_point(tr.exit) + " (the surface grazes the edge)");
+    corners[i].used = corners[static_cast<std::size_t>(end)].used = true;
+    tr.points.push_back(corners[static_cast<std::size_t>(end)].point);
+    tr.targets.push_back(tracer.target(tr.points.back()));
+    seams.push_back(resample(tracer, f, tr.points, tr.targets, from.vertex, corners[static_cast<std::size_t>(end)].vertex, sv));
+    traced.push_back(std::move(tr.points));
+  }
+  // Loops: a crossing of the plane's samples inside the face, farther from every traced
+  // polyline than a sample spacing plus the polyline's step, starts one.
+  const double spacing = std::max(plane.sb, plane.sd);
+  const auto covered = [&](const Vec3& x) {
+    for (const std::vector<Vec3>& line : traced)
+      for (std::size_t k = 0; k + 1 < line.size(); ++k) {
+        const Vec3 u = line[k + 1] - line[k];
+        const double len2 = u.squaredNorm();
+        const double s = len2 > 0 ? std::clamp((x - line[k]).dot(u) / len2, 0.0, 1.0) : 0.0;
+        if ((line[k] + s * u - x).norm() <= kCovered * spacing + kChordStray * std::sqrt(len2)) return true;
+      }
+    return false;
+  };
+  const int i0 = std::max(0, static_cast<int>(std::floor((f.b0 - plane.origin[f.b]) / plane.sb)));
+  const int i1 = std::min(plane.nb, static_cast<int>(std::ceil((f.b1 - plane.origin[f.b]) / plane.sb)));
+  const int j0 = std::max(0, static_cast<int>(std::floor((f.d0 - plane.origin[f.d]) / plane.sd)));
+  const int j1 = std::min(plane.nd, static_cast<int>(std::ceil((f.d1 - plane.origin[f.d]) / plane.sd)));
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i)
+      for (int dir = 0; dir < 2; ++dir) {
+        const int i2 = i + (dir == 0), j2 = j + (dir == 1);
+        if (i2 > plane.nb || j2 > plane.nd) continue;
+        const double va = plane.values[plane.index(i, j)], vb = plane.values[plane.index(i2, j2)];
+        if (!std::isfinite(va) || !std::isfinite(vb) || (va < 0) == (vb < 0)) continue;
+        const Vec3 x = plane.point(i, j) + va / (va - vb) * (plane.point(i2, j2) - plane.point(i, j));
+        if (!f.inside(x) || covered(x)) continue;
+        const std::optional<Vec3> start = tracer.onto_seam(x, f.a);
+        if (!start || !f.inside(*start) || covered(*start)) continue;
+        SeamTracer::Traced tr = tracer.trace(f, *start, 1, true);
+        if (tr.side >= 0)
+          throw CreaseLayoutError("adaptive: a seam leaves its face where no corner was found near " +
+                                  format_point(tr.exit) + " (the surface grazes a block's edge)");
+        if (tr.points.size() < 3) throw CreaseLayoutError("adaptive: a seam loop too small to mesh near " + format_point(x));
+        seams.push_back(resample(tracer, f, tr.points, tr.targets, -1, -1, sv));
+        traced.push_back(std::move(tr.points));
+      }
+  return seams;
+}
+
+// One side of a seam as a block's boundary: vertices with the block's patch on the left seen
+// from outside.
+struct Dart {
+  std::vector<int> vertices;
+  int from = -1, to = -1;  // corner vertices of an open seam
+};
+
+// The two darts of a seam of face f: the first for the block below the plane, the second above.
+// With the gradient g at a vertex, the direction a x g has the side p[a] > c on its left seen
+// from outside (g x (a x g) leans along +a).
+std::array<Dart, 2> orient(const Field& field, const Face& f, const Seam& s, const SeamVertices& sv) {
+  const std::size_t n = s.vertices.size();
+  const std::size_t m = s.closed ? 0 : n / 2;
+  const Vec3& x = sv.points[static_cast<std::size_t>(s.vertices[m])];
+  const Vec3 dir = sv.points[static_cast<std::size_t>(s.vertices[(m + 1) % n])] -
+                   sv.points[static_cast<std::size_t>(s.vertices[(m + n - 1) % n])];
+  const bool along = dir.dot(axis_vector(f.a).cross(field.gradient(x))) > 0;
+  Dart up{s.vertices, s.closed ? -1 : s.vertices.front(), s.closed ? -1 : s.vertices.back()};
+  Dart down = up;
+  std::reverse(down.vertices.begin(), down.vertices.end());
+  std::swap(down.from, down.to);
+  if (!along) std::swap(up, down);
+  return {std::move(down), std::move(up)};
+}
+
+// A block's boundary cycles: loops as they are, open darts joined at their corners.
+std::vector<std::vector<int>> block_cycles(const std::vector<Dart>& darts) {
+  std::vector<std::vector<int>> cycles;
+  std::vector<int> leaving;  // dart index by corner vertex, searched linearly (a block has few)
+  std::vector<bool> used(darts.size(), false);
+  const auto next_from = [&](int corner) {
+    int found = -1;
+    for (std::size_t k = 0; k < darts.size(); ++k)
+      if (darts[k].from == corner) {
+        if (found >= 0) throw CreaseLayoutError("adaptive: two seams of a block leave one corner");
+        found = static_cast<int>(k);
+      }
+    return found;
+  };
+  for (std::size_t i = 0; i < darts.size(); ++i) {
+    if (used[i]) continue;
+    if (darts[i].from < 0) {
+      used[i] = true;
+      cycles.push_back(darts[i].vertices);
+      continue;
+    }
+    std::vector<int> cycle;
+    std::size_t k = i;
+    for (std::size_t guard = 0; guard <= darts.size(); ++guard) {
+      if (used[k]) throw CreaseLayoutError("adaptive: a block's seams do not close into a cycle");
+      used[k] = true;
+      const Dart& d = darts[k];
+      cycle.insert(cycle.end(), d.vertices.begin(), d.vertices.end() - 1);  // its end starts the next
+      const int next = next_from(d.to);
+      if (next < 0) throw CreaseLayoutError("adaptive: a block's seam ends at a corner no other leaves");
+      if (static_cast<std::size_t>(next) == i) break;
+      k = static_cast<std::size_t>(next);
+    }
+    cycles.push_back(std::move(cycle));
+  }
+  return cycles;
+}
+
+// A block's part of the mesh, as its tracker left it.
+struct BlockPart {
+  Mesh mesh;
+  std::vector<std::vector<int>> ids;  // the part's vertex ids of the cycles' vertices
+  std::vector<double> target, mac, shape_index;
+  std::size_t steps = 0, splits = 0, merges = 0, forced_closures = 0, patch_refusals = 0;
+  double seconds = 0;
+};
+
+}  // namespace
+
+BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, const Settings& settings,
+                         const SeedGridStage& seeds, std::uint64_t shuffle) {
+  const auto start = Clock::now();
+  BlockMeshing out;
+  const std::array<int, 3> n = block_counts(field, seeds);
+  if (n[0] * n[1] * n[2] < 2) return out;
+  out.blocks = n;
+  try {
+    const Cuts cuts = choose_cuts(field, seeds.grid, n, options.cancel);
+    for (int a = 0; a < 3; ++a) out.cuts[a].assign(cuts.walls[a].begin() + 1, cuts.walls[a].end() - 1);
+    SeamVertices sv;
+    const Lines lines = find_corners(field, cuts, seeds.grid.h, sv, options.cancel);
+    out.corners = sv.points.size();
+    std::size_t points_left = kMaxTracePoints;
+    const SeamTracer tracer{field, settings.sizing, settings.grading, kSeamTolerance * settings.diagonal, points_left};
+    const auto block_index = [&](int i, int j, int k) { return static_cast<std::size_t>((k * n[1] + j) * n[0] + i); };
+    const std::size_t nblocks = static_cast<std::size_t>(n[0]) * n[1] * n[2];
+    std::vector<std::vector<Dart>> darts(nblocks);
+    for (int a = 0; a < 3; ++a) {
+      const int b = (a + 1) % 3, d = (a + 2) % 3;
+      for (int cut = 0; cut + 1 < cuts.count(a); ++cut)
+        for (int jd = 0; jd < cuts.count(d); ++jd)
+          for (int jb = 0; jb < cuts.count(b); ++jb) {
+            options.cancel.check("adaptive");
+            const double c = cuts.walls[a][static_cast<std::size_t>(cut) + 1];
+            const Face f{a, b, d, cut, {jb, jd}, c, cuts.walls[b][static_cast<std::size_t>(jb)],
+                         cuts.walls[b][static_cast<std::size_t>(jb) + 1], cuts.walls[d][static_cast<std::size_t>(jd)],
+                         cuts.walls[d][static_cast<std::size_t>(jd) + 1]};
+            for (const Seam& s : trace_face(tracer, f, cuts.planes[a][static_cast<std::size_t>(cut)], lines, cuts, sv)) {
+              std::array<int, 3> lo{}, hi{};
+              lo[a] = cut, hi[a] = cut + 1;
+              lo[b] = hi[b] = jb;
+              lo[d] = hi[d] = jd;
+              auto [below, above] = orient(field, f, s, sv);
+              darts[block_index(lo[0], lo[1], lo[2])].push_back(std::move(below));
+              darts[block_index(hi[0], hi[1], hi[2])].push_back(std::move(above));
+              ++out.seams;
+            }
+          }
+    }
+    // Every corner ends two seams of each of its four blocks' faces: one unused means a seam
+    // the faces' tracing missed.
+    std::vector<int> ends(out.corners, 0);
+    for (const auto& ds : darts)
+      for (const Dart& dt : ds)
+        if (dt.from >= 0) ++ends[static_cast<std::size_t>(dt.from)], ++ends[static_cast<std::size_t>(dt.to)];
+    for (std::size_t c = 0; c < out.corners; ++c)
+      if (ends[c] != 8)
+        throw CreaseLayoutError("adaptive: a block corner ends " + std::to_string(ends[c] / 2) +
+                                " seams instead of 4 near " + format_point(sv.points[c]));
+    out.seam_vertices = sv.points.size();
+    // The seam vertices measured once, for both blocks that start from them.
+    std::vector<Tracker::Placed> placed(sv.points.size());
+    {
+      std::vector<double> values(sv.points.size());
+      std::vector<Vec3> gradients(sv.points.size());
+      std::vector<Mat3> hessians(sv.points.size());
+      field.gradients_hessians(sv.points.data(), values.data(), gradients.data(), hessians.data(), sv.points.size());
+      for (std::size_t v = 0; v < sv.points.size(); ++v) {
+        placed[v] = {sv.points[v], curvature_from_derivatives(gradients[v], hessians[v]),
+                     step_to_critical_point(gradients[v], hessians[v])};
+        if (settings.grading)
+          placed[v].seam_target = seam_edge_length(field, settings.sizing, sv.points[v],
+                                                   edge_length(settings.sizing, placed[v].curvature.min_radius));
+      }
+    }
+    std::vector<std::vector<std::vector<int>>> cycles(nblocks);
+    for (std::size_t blk = 0; blk < nblocks; ++blk) cycles[blk] = block_cycles(darts[blk]);
+    out.layout_seconds = seconds_since(start);
+
+    // The blocks, largest first (by their seam vertices), each into its own slot.
+    std::vector<std::size_t> order;
+    for (std::size_t blk = 0; blk < nblocks; ++blk)
+      if (!cycles[blk].empty()) order.push_back(blk);
+    const auto weight = [&](std::size_t blk) {
+      std::size_t w = 0;
+      for (const auto& c : cycles[blk]) w += c.size();
+      return w;
+    };
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return weight(x) > weight(y); });
+    if (shuffle != 0) std::shuffle(order.begin(), order.end(), std::mt19937_64(shuffle));
+    std::vector<BlockPart> parts(nblocks);
+    const auto mesh_block = [&](std::size_t blk) {
+      const auto t0 = Clock::now();
+      const int bi = static_cast<int>(blk % n[0]), bj = static_cast<int>(blk / n[0] % n[1]),
+                bk = static_cast<int>(blk / (static_cast<std::size_t>(n[0]) * n[1]));
+      const Vec3 lo(cuts.walls[0][bi], cuts.walls[1][bj], cuts.walls[2][bk]);
+      const Vec3 hi(cuts.walls[0][bi + 1], cuts.walls[1][bj + 1], cuts.walls[2][bk + 1]);
+      const auto within = [lo, hi](const Vec3& x, double margin) {
+        return (x.array() >= lo.array() - margin).all() && (x.array() <= hi.array() + margin).all();
+      };
+      std::vector<std::vector<Tracker::Placed>> loops;
+      for (const std::vector<int>& cycle : cycles[blk]) {
+        std::vector<Tracker::Placed>& loop = loops.emplace_back();
+        for (const int v : cycle) loop.push_back(placed[static_cast<std::size_t>(v)]);
+      }
+      BlockPart& part = parts[blk];
+      Tracker tracker(field, settings, part.mesh);
+      if (seeds.estimated_area > 0) tracker.set_estimated_area(seeds.estimated_area);
+      tracker.set_patch_test([&field, within](const Vec3& a, const Vec3& b) {
+        Vec3 m = 0.5 * (a + b);
+        for (int it = 0; it < 3; ++it) {
+          Vec3 g;
+          const double v = field.value_gradient(m, g);
+          if (!(g.squaredNorm() > 0)) return false;
+          m -= v / g.squaredNorm() * g;
+        }
+        return within(m, kOutsideBlock * (a - b).norm());
+      });
+      tracker.set_point_test([within](const Vec3& x, double step) { return within(x, kOutsideBlock * step); });
+      part.ids = tracker.mesh_from_loops(loops);
+      part.target = tracker.vertex_edge_length();
+      part.mac = tracker.vertex_mac();
+      part.shape_index = tracker.vertex_shape_index();
+      part.steps = tracker.steps();
+      part.splits = tracker.splits();
+      part.merges = tracker.merges();
+      part.forced_closures = tracker.forced_closures();
+      part.patch_refusals = tracker.patch_refusals();
+      part.seconds = seconds_since(t0);
+    };
+    out.threads = field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
+                                                           static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
+                                      : 1;
+    detail::parallel_blocks(order.size(), 1, out.threads, [&](std::size_t begin, std::size_t end, unsigned) {
+      for (std::size_t i = begin; i < end; ++i) mesh_block(order[i]);
+    });
+
+    // One mesh, in block order: the seam vertices, then each block's own.
+    CreaseMesh cm;
+    Mesh& mesh = cm.mesh;
+    const std::size_t ns = sv.points.size();
+    mesh.positions = sv.points;
+    mesh.normals.assign(ns, Vec3::Zero());
+    cm.target.assign(ns, std::numeric_limits<double>::infinity());
+    cm.mac.assign(ns, 0.0);
+    cm.shape_index.assign(ns, 0.0);
+    out.block_seconds.assign(nblocks, 0.0);
+    for (std::size_t blk = 0; blk < nblocks; ++blk) {
+      BlockPart& part = parts[blk];
+      out.block_seconds[blk] = part.seconds;
+      if (part.mesh.positions.empty()) continue;
+      ++out.meshed_blocks;
+      if (part.forced_closures > 0)
+        throw CreaseLayoutError("adaptive: a block's front had to be closed without its tests");
+      std::vector<int> to_global(part.mesh.positions.size(), -1);
+      for (std::size_t l = 0; l < part.ids.size(); ++l)
+        for (std::size_t k = 0; k < part.ids[l].size(); ++k)
+          to_global[static_cast<std::size_t>(part.ids[l][k])] = cycles[blk][l][k];
+      for (std::size_t v = 0; v < part.mesh.positions.size(); ++v) {
+        int& g = to_global[v];
+        if (g < 0) {
+          g = static_cast<int>(mesh.positions.size());
+          mesh.positions.push_back(part.mesh.positions[v]);
+          mesh.normals.push_back(part.mesh.normals[v]);
+          cm.target.push_back(part.target[v]);
+          cm.mac.push_back(part.mac[v]);
+          cm.shape_index.push_back(part.shape_index[v]);
+        } else {
+          const auto gv = static_cast<std::size_t>(g);
+          mesh.normals[gv] += part.mesh.normals[v];
+          cm.target[gv] = std::min(cm.target[gv], part.target[v]);
+          if (part.mac[v] >= cm.mac[gv]) cm.mac[gv] = part.mac[v], cm.shape_index[gv] = part.shape_index[v];
+        }
+      }
+      for (const auto& t : part.mesh.triangles)
+        mesh.triangles.push_back({to_global[static_cast<std::size_t>(t[0])], to_global[static_cast<std::size_t>(t[1])],
+                                  to_global[static_cast<std::size_t>(t[2])]});
+      cm.steps += part.steps;
+      cm.splits += part.splits;
+      cm.merges += part.merges;
+      cm.patch_refusals += part.patch_refusals;
+      part = BlockPart{};  // copied: freed as the assembly goes
+    }
+    for (std::size_t v = 0; v < ns; ++v) {
+      if (!(mesh.normals[v].squaredNorm() > 0))
+        throw CreaseLayoutError("adaptive: a seam vertex no block reached near " + format_point(mesh.positions[v]));
+      mesh.normals[v].normalize();
+    }
+    cm.crease_vertices = 0;  // seam vertices are ordinary surface points: the repair may move them
+    out.components = analyze_topology(mesh).components;
+    out.mesh = std::move(cm);
+  } catch (const CreaseLayoutError& e) {
+    out.fallback = e.what();
+  } catch (const LimitExceededError& e) {  // a stalled front among them
+    out.fallback = e.what();
+  } catch (const NoSurfaceError& e) {
+    out.fallback = e.what();
+  }
+  out.seconds = seconds_since(start);
+  return out;
+}
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,58 @@
+// Block-parallel tracking (AdaptiveOptions::blocks): the box is cut into blocks by planes that
+// depend only on the field and the options (never on the thread count), the curves where the
+// surface crosses the cuts are traced once and sampled with the sizing the surface asks for
+// there (seams), and each block's piece of surface is meshed from its seams by fronts of its own,
+// as a crease patch is meshed from its creases (crease_patches.h). Blocks run on all threads;
+// their meshes are assembled in block order, so the mesh is the same on any number of threads
+// and in any order the blocks are run. Components that cross no cut are left to the seeding.
+//
+// The steps, each in one place (blocks.cpp):
+//   choose_cuts     the cut planes: near equal shares of the box, through the middle of seed-grid
+//                   cells, moved by up to kCutShift cells where the surface grazes the plane
+//   find_corners    where the surface crosses a block edge (F = 0 on a line), once per edge
+//   trace_face      every seam of one face of a block: from corner to corner, and loops found
+//                   from the plane's samples
+//   block_cycles    each block's boundary cycles, its seams oriented with its patch on their left
+//   mesh_blocks     one tracker per block from its cycles, on all threads, then one mesh
+#pragma once
+
+#include "crease_patches.h"
+#include "stage_seed_grid.h"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cdp::adaptive {
+
+struct BlockMeshing {
+  // The blocks' meshes as one, seam vertices first (every component that crosses a cut, closed),
+  // in the form crease patches come in, to be adopted as finished surface; none when the
+  // surface was not cut (too small for blocks) or the layout failed (`fallback`).
+  std::optional<CreaseMesh> mesh;
+  std::size_t components = 0;       // of `mesh`
+  std::array<int, 3> blocks{1, 1, 1};  // along x, y, z
+  std::array<std::vector<double>, 3> cuts;  // the cut planes along each axis
+  std::size_t corners = 0, seams = 0, seam_vertices = 0, meshed_blocks = 0;
+  // Each block's tracking time (seconds), in block order: what the projected speedups at more
+  // threads are computed from.
+  std::vector<double> block_seconds;
+  double layout_seconds = 0;  // choosing the cuts, tracing and sampling the seams
+  double seconds = 0;         // the whole stage, wall clock
+  unsigned threads = 1;       // that meshed the blocks
+  std::string fallback;       // why the surface was meshed without blocks, or empty
+};
+
+// Cuts the surface into blocks and meshes every block with seams (see above), on
+// options.threads threads for a thread-safe field. Returns no mesh (and `fallback` saying why)
+// where the seams cannot be laid out or a block's fronts fail: the caller then meshes the whole
+// surface by tracking alone. Only for a surface without followed creases. The blocks run largest
+// first; with `shuffle` nonzero, in an order drawn from it instead (the tests' check that the
+// order changes nothing).
+// \throw CancelledError, and what the field's evaluations throw.
+BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, const Settings& settings,
+                         const SeedGridStage& seeds, std::uint64_t shuffle = 0);
+
+}  // namespace cdp::adaptive

@@ -1,0 +1,114 @@
+// Block-parallel tracking (polygonizer/src/adaptive/blocks.h): the seams laid out, the blocks
+// meshed from them into one sound mesh, the same bit for bit on any number of threads and in any
+// block order, and the triangles at the cut planes as good as the rest.
+#include <gtest/gtest.h>
+
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/mesh_topology.h>
+
+#include "common/test_fields.h"
+#include "polygonizer/adaptive/stage_fixtures.h"
+#include "polygonizer/mesh_checks.h"
+#include "src/adaptive/blocks.h"
+#include "src/adaptive/stage_seed_grid.h"
+
+namespace cdp::adaptive {
+namespace {
+
+// A torus (R = 1, r = 0.4) of about 3.5 * 10^4 triangles at factor 12: cut into 3 x 3 x 1 blocks,
+// so that its seams meet at corners on the four z-parallel lines where blocks meet (the line
+// through the hole of a 2 x 2 cut would cross nothing).
+const char* const kBlockTorus = R"({"type": "expression", "value": "(sqrt(x^2+y^2)-1)^2 + z^2 - 0.16",
+                                    "bounds": [[-1.6, -1.6, -0.6], [1.6, 1.6, 0.6]]})";
+
+AdaptiveOptions with_blocks(int threads, double factor = 12) {
+  AdaptiveOptions o;
+  o.factor = factor;
+  o.blocks = true;
+  o.threads = threads;
+  return o;
+}
+
+void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& what) {
+  SCOPED_TRACE(what);
+  ASSERT_EQ(a.positions.size(), b.positions.size());
+  ASSERT_EQ(a.triangles.size(), b.triangles.size());
+  for (std::size_t i = 0; i < a.positions.size(); ++i) ASSERT_EQ(a.positions[i], b.positions[i]) << "vertex " << i;
+  for (std::size_t i = 0; i < a.triangles.size(); ++i) ASSERT_EQ(a.triangles[i], b.triangles[i]) << "triangle " << i;
+}
+
+TEST(AdaptiveBlocks, ATorusCutIntoBlocksMeshesSoundWithGoodTrianglesAtTheWalls) {
+  const auto f = test::field_from_json(kBlockTorus);
+  const PolygonizeResult r = polygonize_adaptive(*f, with_blocks(2));
+  const BlocksReport& b = r.stats.adaptive->blocks;
+  ASSERT_TRUE(b.used) << b.fallback;
+  EXPECT_EQ(b.blocks, (std::array<int, 3>{3, 3, 1}));
+  EXPECT_EQ(b.corners, 8u);  // each of the four lines crosses the tube twice
+  EXPECT_EQ(b.components, 1u);
+  EXPECT_EQ(r.stats.adaptive->seeding.seeds, 0u);  // every component crossed a cut
+  const MeshTopology t = analyze_topology(r.mesh);
+  EXPECT_TRUE(t.watertight()) << t.boundary_edges << " boundary, " << t.nonmanifold_edges << " non-manifold";
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.genus, 1);
+  EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
+  // The bounds of issue 58 on the triangles the cut planes pass through.
+  ASSERT_GT(b.wall_triangles, 100u);
+  EXPECT_GE(b.wall_min_angle_degrees, 20.0);
+  EXPECT_LE(b.wall_under_30_share, 0.01);
+  EXPECT_LE(b.wall_mean_edge_ratio, 1.25);
+}
+
+TEST(AdaptiveBlocks, TheMeshIsTheSameOnOneTwoAndThreeThreads) {
+  const auto f = test::field_from_json(kBlockTorus);
+  const PolygonizeResult one = polygonize_adaptive(*f, with_blocks(1));
+  ASSERT_TRUE(one.stats.adaptive->blocks.used) << one.stats.adaptive->blocks.fallback;
+  for (const int threads : {2, 3}) {
+    const PolygonizeResult r = polygonize_adaptive(*f, with_blocks(threads));
+    EXPECT_EQ(r.stats.adaptive->blocks.threads, static_cast<unsigned>(threads));
+    expect_same_mesh(one.mesh, r.mesh, std::to_string(threads) + " threads");
+  }
+}
+
+TEST(AdaptiveBlocks, TheBlocksMeshTheSameInAnyOrder) {
+  test_stages::Stages s(kBlockTorus, with_blocks(2));
+  const SeedGridStage seeds = sample_seed_grid_stage(*s.field, s.options, s.settings);
+  Settings settings = s.settings;
+  settings.hash_cell = seeds.hash_cell;
+  const BlockMeshing first = mesh_blocks(*s.field, s.options, settings, seeds);
+  ASSERT_TRUE(first.mesh) << first.fallback;
+  for (const std::uint64_t shuffle : {1u, 2u, 3u}) {
+    const BlockMeshing other = mesh_blocks(*s.field, s.options, settings, seeds, shuffle);
+    ASSERT_TRUE(other.mesh) << other.fallback;
+    expect_same_mesh(first.mesh->mesh, other.mesh->mesh, "order " + std::to_string(shuffle));
+  }
+}
+
+TEST(AdaptiveBlocks, AComponentThatCrossesNoCutIsLeftToTheSeeding) {
+  // The torus and a small ball inside one block, away from every cut.
+  const auto f = test::field_from_json(R"J({"type": "expression",
+      "value": "min((sqrt(x^2+y^2)-1)^2 + z^2 - 0.16, sqrt((x-1.3)^2+(y-1.3)^2+z^2) - 0.15)",
+      "bounds": [[-1.6, -1.6, -0.6], [1.6, 1.6, 0.6]]})J");
+  const PolygonizeResult r = polygonize_adaptive(*f, with_blocks(2));
+  const BlocksReport& b = r.stats.adaptive->blocks;
+  ASSERT_TRUE(b.used) << b.fallback;
+  EXPECT_EQ(b.components, 1u);
+  EXPECT_EQ(r.stats.adaptive->seeding.seeds, 1u);
+  const MeshTopology t = analyze_topology(r.mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.components, 2u);
+  EXPECT_EQ(r.stats.components, 2u);
+  EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
+}
+
+TEST(AdaptiveBlocks, ASurfaceTooSmallForBlocksIsTrackedAlone) {
+  const auto f = test::field_from_json(kBlockTorus);
+  const PolygonizeResult r = polygonize_adaptive(*f, with_blocks(2, 2));
+  const BlocksReport& b = r.stats.adaptive->blocks;
+  EXPECT_TRUE(b.requested);
+  EXPECT_FALSE(b.used);
+  EXPECT_EQ(b.blocks, (std::array<int, 3>{1, 1, 1}));
+  EXPECT_TRUE(b.fallback.empty()) << b.fallback;
+}
+
+}  // namespace
+}  // namespace cdp::adaptive
