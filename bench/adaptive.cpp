@@ -399,8 +399,8 @@ void BM_AdaptiveBlocks(benchmark::State& state) {
   }
   const auto n = static_cast<double>(state.iterations());
   state.counters["seconds_serial"] = t_serial / n;
-  state.counters["seconds_blocks_1"] = t1 / n;
-  state.counters["seconds_blocks_2"] = t2 / n;
+  state.counters["seconds_1_thread"] = t1 / n;  // with blocks, as the dashboard's table of speedups reads them
+  state.counters["seconds_2_threads"] = t2 / n;
   state.counters["speedup_1_to_2"] = t1 / t2;
   state.counters["blocks_over_serial"] = t1 / t_serial;
   state.counters["cpu_2_over_1"] = cpu2 / cpu1;

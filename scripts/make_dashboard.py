@@ -227,9 +227,11 @@ def inrun_section(runs):
     rows = bl.thread_speedups(latest)
     out.append("<h3>Speedup from one thread to two (the same mesh on both)</h3>")
     if rows:
-        out.append(table(["Benchmark", "Label", "1 thread (s)", "2 threads (s)", "Speedup"],
+        out.append(table(["Benchmark", "Label", "1 thread (s)", "2 threads (s)", "Speedup", "Projected at 8",
+                          "Projected at 16"],
                          [[E(r["benchmark"]), E(r["label"]), fnum(r["one"], "{:.4g}"), fnum(r["two"], "{:.4g}"),
-                           fnum(r["speedup"], "{:.3f}")] for r in rows]))
+                           fnum(r["speedup"], "{:.3f}"), fnum(r["p8"], "{:.2f}"), fnum(r["p16"], "{:.2f}")]
+                          for r in rows]))
         series = ratio_series(runs, bl.thread_speedups, "benchmark", "speedup")
         out.append(img(ratio_plot(runs, series, "time on 1 thread / time on 2", "speedup"),
                        "thread speedup over commits"))

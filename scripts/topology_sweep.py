@@ -55,6 +55,7 @@ def main():
     ap.add_argument("--build", default="build")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--out", default=os.path.join(ROOT, "results", "topology_sweep"))
+    ap.add_argument("--extra", default="", help="options added to every adaptive run (\"--blocks true\")")
     a = ap.parse_args()
     exe = os.path.join(a.build, "bin", "polygonize")
     fields_dir = os.path.join(a.out, "fields")
@@ -80,7 +81,7 @@ def main():
         for i, cell in enumerate(REFERENCE_CELLS):
             jobs.append((name, "mc{}".format(i), ["--method", "mc", "--cell", str(cell)]))
         for kind, value in RUNS:
-            jobs.append((name, kind + value, ["--" + kind, value]))
+            jobs.append((name, kind + value, ["--" + kind, value] + a.extra.split()))
     done = {}
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
         for name, key, stats, error in pool.map(lambda j: job(*j), jobs):
@@ -114,7 +115,8 @@ def main():
                          # the shortest edge it could make: below it the surface has detail its
                          # edges cannot follow, outside what issue 12 promises.
                          "min_radius": stats["curvature"]["min_radius"] if stats else "",
-                         "min_edge": stats["edge_length"]["min"] if stats else "", "error": error})
+                         "min_edge": stats["edge_length"]["min"] if stats else "",
+                         "blocks": stats.get("blocks", {}).get("meshed_blocks", 0) if stats else "", "error": error})
     with open(os.path.join(a.out, "summary.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
         w.writeheader()

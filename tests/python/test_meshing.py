@@ -286,3 +286,19 @@ def test_level_keeps_the_creases_of_a_csg_field():
     assert stats["creases"]["followed"] and stats["creases"]["curves"] == 12 and stats["creases"]["corners"] == 8
     assert {tuple(c) for c in np.round(V, 9)} >= {(sx * 1.2, sy * 1.2, sz * 1.2) for sx in (-1, 1) for sy in (-1, 1)
                                                    for sz in (-1, 1)}
+
+
+def test_blocks_give_the_same_mesh_on_one_and_two_threads():
+    # A torus of about 3.5e4 triangles at factor 12, cut into 3 x 3 x 1 blocks (issue 58).
+    torus = cdp.torus(major_radius=1, minor_radius=0.4)
+    one = cdp.polygonize(torus, factor=12, blocks=True, threads=1)
+    two = cdp.polygonize(torus, factor=12, blocks=True, threads=2)
+    assert one.stats["blocks"]["used"], one.stats["blocks"]["fallback"]
+    assert one.stats["blocks"]["meshed_blocks"] >= 4
+    assert two.stats["blocks"]["threads"] == 2
+    assert np.array_equal(one.vertices, two.vertices) and np.array_equal(one.faces, two.faces)
+    summary = one.stats["summary"]
+    assert summary["watertight"] and summary["genus"] == 1 and summary["components"] == 1
+    # Without blocks the surface is tracked alone, into another mesh of the same surface.
+    alone = cdp.polygonize(torus, factor=12, threads=1)
+    assert not alone.stats["blocks"]["used"] and not alone.stats["blocks"]["requested"]

@@ -143,10 +143,7 @@ struct Cuts {
 // to the box's sides. All ones where the surface is too small to cut.
 std::array<int, 3> block_counts(const Field& field, const SeedGridStage& seeds) {
   std::array<int, 3> n{1, 1, 1};
-  const double edge = 0.5 * seeds.hash_cell;  // hash_cell is twice the median target edge
-  if (!(seeds.estimated_area > 0) || !(edge > 0)) return n;
-  const double triangles = seeds.estimated_area / (0.25 * std::sqrt(3.0) * edge * edge);
-  const double blocks = triangles / kTrianglesPerBlock;
+  const double blocks = seeds.estimated_triangles / kTrianglesPerBlock;
   if (blocks < kFewestBlocks) return n;
   const Vec3 size = field.bounds().size();
   const double side = std::cbrt(size.prod() / blocks);
@@ -600,6 +597,7 @@ struct BlockPart {
   std::vector<std::vector<int>> ids;  // the part's vertex ids of the cycles' vertices
   std::vector<double> target, mac, shape_index;
   std::size_t steps = 0, splits = 0, merges = 0, forced_closures = 0, patch_refusals = 0;
+  std::vector<CriticalStart> critical_starts;
   double seconds = 0;
 };
 
@@ -609,6 +607,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
                          const SeedGridStage& seeds, std::uint64_t shuffle) {
   const auto start = Clock::now();
   BlockMeshing out;
+  out.estimated_triangles = seeds.estimated_triangles;
   const std::array<int, 3> n = block_counts(field, seeds);
   if (n[0] * n[1] * n[2] < 2) return out;
   out.blocks = n;
@@ -724,6 +723,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       part.merges = tracker.merges();
       part.forced_closures = tracker.forced_closures();
       part.patch_refusals = tracker.patch_refusals();
+      part.critical_starts = tracker.critical_starts();
       part.seconds = seconds_since(t0);
     };
     out.threads = field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
@@ -777,6 +777,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       cm.splits += part.splits;
       cm.merges += part.merges;
       cm.patch_refusals += part.patch_refusals;
+      out.critical_starts.insert(out.critical_starts.end(), part.critical_starts.begin(), part.critical_starts.end());
       part = BlockPart{};  // copied: freed as the assembly goes
     }
     for (std::size_t v = 0; v < ns; ++v) {

@@ -17,6 +17,7 @@
 #pragma once
 
 #include "crease_patches.h"
+#include "missed_necks.h"
 #include "stage_seed_grid.h"
 
 #include <array>
@@ -36,6 +37,10 @@ struct BlockMeshing {
   std::array<int, 3> blocks{1, 1, 1};  // along x, y, z
   std::array<std::vector<double>, 3> cuts;  // the cut planes along each axis
   std::size_t corners = 0, seams = 0, seam_vertices = 0, meshed_blocks = 0;
+  double estimated_triangles = 0;  // what the blocks were counted from (SeedGridStage::estimated_triangles)
+  // The blocks' trackers' vertices near critical points of F (Tracker::critical_starts), in
+  // block order: where the neck search (check_necks) looks for necks their fronts stepped over.
+  std::vector<CriticalStart> critical_starts;
   // Each block's tracking time (seconds), in block order: what the projected speedups at more
   // threads are computed from.
   std::vector<double> block_seconds;

@@ -144,7 +144,11 @@ bool Run::fall_back(const std::exception& e) {
 std::size_t Run::repair_and_check() {
   // A neck stepped over fails before the repair (check_necks: the repair makes no handle).
   ctx.enter("checks");
-  check_necks(ctx.field, mesh(), tracking.tracker->critical_starts(), resolved.sizing.min_edge, necks);
+  // The blocks' trackers' critical starts too: a neck their fronts stepped over is found only
+  // from them (blobs39 of the topology sweep at chord 1e-2 lost a handle without them).
+  std::vector<CriticalStart> starts = tracking.tracker->critical_starts();
+  if (blocks.mesh) starts.insert(starts.begin(), blocks.critical_starts.begin(), blocks.critical_starts.end());
+  check_necks(ctx.field, mesh(), starts, resolved.sizing.min_edge, necks);
   quality = {};
   quality = repair_mesh(ctx, resolved, seeds, creases, tracking, mesh());
   if (resolved.curvature_properties) {

@@ -122,6 +122,7 @@ void Run::write_stats() {
   b.cuts = blocks.cuts;
   b.meshed_blocks = blocks.meshed_blocks;
   b.corners = blocks.corners;
+  b.estimated_triangles = blocks.estimated_triangles;
   b.seams = blocks.seams;
   b.seam_vertices = blocks.seam_vertices;
   b.components = blocks.components;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <vector>
 
 namespace cdp::adaptive {
@@ -32,6 +33,12 @@ SeedGridStage sample_seed_grid_stage(const Field& field, const AdaptiveOptions& 
     }
   }
   out.hash_cell = settings.hash_cell;
+  if (!lengths.empty() && out.estimated_area > 0) {
+    // Triangles of side e cover sqrt(3)/4 e^2 each: the area over the mean of that.
+    double inverse_area = 0;
+    for (const double e : lengths) inverse_area += 1 / (0.25 * std::sqrt(3.0) * e * e);
+    out.estimated_triangles = out.estimated_area * inverse_area / static_cast<double>(lengths.size());
+  }
   if (!lengths.empty()) {
     std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
     out.hash_cell = 2 * lengths[lengths.size() / 2];

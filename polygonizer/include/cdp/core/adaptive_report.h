@@ -77,6 +77,7 @@ struct BlocksReport {
   std::array<int, 3> blocks{1, 1, 1};  // along x, y, z
   std::array<std::vector<double>, 3> cuts;  // the cut planes' positions along each axis
   std::size_t meshed_blocks = 0, corners = 0, seams = 0, seam_vertices = 0, components = 0, steps = 0;
+  double estimated_triangles = 0;  // the surface's triangles as the seed grid estimates them
   unsigned threads = 1;  // that meshed the blocks
   double layout_seconds = 0, seconds = 0;
   std::vector<double> block_seconds;  // each block's tracking, in block order

@@ -5,6 +5,7 @@
 
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/mesh_topology.h>
+#include <cdp/io/field_factory.h>
 
 #include "common/test_fields.h"
 #include "polygonizer/adaptive/stage_fixtures.h"
@@ -98,6 +99,23 @@ TEST(AdaptiveBlocks, AComponentThatCrossesNoCutIsLeftToTheSeeding) {
   EXPECT_EQ(t.components, 2u);
   EXPECT_EQ(r.stats.components, 2u);
   EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
+}
+
+TEST(AdaptiveBlocks, ANeckTheBlocksFrontsSteppedOverIsFound) {
+  // blobs39 of the topology sweep (59 Wyvill blobs, 5 components, genus 4) at chord 1e-2: a
+  // block's front stepped over a neck and closed a handle, and the neck search, which started
+  // only from the seeding tracker's vertices near critical points, did not see it (genus 3,
+  // exit 0). It starts from the blocks' too now, and the run is made again without blocks.
+  const auto f = load_field(std::string(CDP_SOURCE_DIR) + "/tests/polygonizer/fields/topology_sweep_blobs39.json");
+  AdaptiveOptions o = with_blocks(1);
+  o.sizing = SizingMode::Chord;
+  o.tolerance = 1e-2;
+  const PolygonizeResult r = polygonize_adaptive(*f, o);
+  EXPECT_GT(r.stats.adaptive->blocks.meshed_blocks, 0u);
+  const MeshTopology t = analyze_topology(r.mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.components, 5u);
+  EXPECT_EQ(t.genus, 4);
 }
 
 TEST(AdaptiveBlocks, ASurfaceTooSmallForBlocksIsTrackedAlone) {
