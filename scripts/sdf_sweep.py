@@ -56,6 +56,7 @@ def main():
     ap.add_argument("--build", default="build")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--out", default=os.path.join(ROOT, "results", "sdf_sweep"))
+    ap.add_argument("--extra", default="", help="options added to every adaptive run (\"--blocks true\")")
     a = ap.parse_args()
     sys.path.insert(0, os.path.join(os.path.abspath(a.build), "python"))
     import cdp  # the build's module: the measure of angles at creases is the library's
@@ -91,7 +92,7 @@ def main():
 
     def job(m, kind, value):
         base = os.path.join(work.name, "{}.{}{}".format(m["name"], kind, value))
-        stats, error = polygonize(exe, paths[m["name"]], ["--" + kind, value], base + ".ply", base + ".json",
+        stats, error = polygonize(exe, paths[m["name"]], ["--" + kind, value] + a.extra.split(), base + ".ply", base + ".json",
                                   RUN_SECONDS)
         row = {"model": m["name"], "run": "{} {}".format(kind, value)}
         if stats is None:

@@ -54,12 +54,18 @@ constexpr int kRootBisections = 60;
 constexpr int kSeamNewtonSteps = 12;
 constexpr double kSeamTolerance = 1e-10;
 // A seam is traced in steps of this share of the target edge length at the point, halved while
-// its tangent turns more than kTraceTurn radians a step, down to kShortestTraceStep of min_edge.
+// its tangent turns more than kTraceTurn radians a step (or Newton takes the step back), down to
+// kShortestTraceStep of min_edge.
 constexpr double kTraceShare = 0.25;
 constexpr double kTraceTurn = 0.3;
-constexpr double kShortestTraceStep = 0.05;
-// Traced points of all seams together (a bound on the work, as trace_creases' max_points).
-constexpr std::size_t kMaxTracePoints = 20'000'000;
+constexpr double kShortestTraceStep = 0.1;
+// Traced points of all seams together: at most this many per estimated triangle of the mesh, and
+// at least kFewestTracePoints (a bound on the work: a seam is traced in steps of a quarter of
+// an edge or more, and seams hold far fewer vertices than the mesh has triangles). A crease
+// meshed as smooth (CreaseHandling::Ignore) traced 2 * 10^7 points in 471 s on the blended
+// block at tolerance 1e-3 under a bound of 2 * 10^7, before the blocks fell back.
+constexpr double kTracePointsPerTriangle = 2;
+constexpr std::size_t kFewestTracePoints = 100'000;
 // A traced seam ends at the corner of its face's side that it crosses within this share of its
 // last step (a corner is F = 0 on the side, the crossing its chord's intersection with it).
 constexpr double kCornerReach = 0.5;
@@ -70,7 +76,7 @@ constexpr double kCornerReach = 0.5;
 constexpr double kCovered = 1.5;
 constexpr double kChordStray = 0.1;
 // A traced seam longer than this many times its face's perimeter has lost its way.
-constexpr double kLongestSeam = 1000;
+constexpr double kLongestSeam = 100;
 // Fewest edges of a seam: two between corners (two seams between the same two corners bound a
 // patch of at least four vertices), three for a loop.
 constexpr std::size_t kMinOpenEdges = 2, kMinLoopEdges = 3;
@@ -293,6 +299,8 @@ struct SeamTracer {
   bool grading;
   double tolerance;  // of the Newton steps onto a seam
   std::size_t& points_left;
+  std::size_t points_bound;
+  const CancelToken& cancel;
 
   // x moved onto F = 0 within its plane (axis a fixed); nothing where Newton fails.
   std::optional<Vec3> onto_seam(Vec3 x, int a) const {
@@ -347,8 +355,10 @@ struct SeamTracer {
     Vec3 x = start;
     double travelled = 0;
     for (;;) {
-      if (points_left == 0) throw LimitExceededError("adaptive: the seams of the blocks pass " + std::to_string(kMaxTracePoints) + " traced points");
-      --points_left;
+      if (points_left == 0)
+        throw CreaseLayoutError("adaptive: the seams of the blocks pass " + std::to_string(points_bound) +
+                                " traced points near " + format_point(x));
+      if (--points_left % 1024 == 0) cancel.check("adaptive");
       const std::optional<Vec3> t0 = tangent(x, f.a);
       if (!t0) throw CreaseLayoutError("adaptive: a seam's tangent vanishes near " + format_point(x));
       double step = kTraceShare * out.targets.back();
@@ -357,12 +367,16 @@ struct SeamTracer {
         next = onto_seam(x + sign * step * *t0, f.a);
         if (next) {
           const std::optional<Vec3> t1 = tangent(*next, f.a);
-          if (t1 && t1->dot(*t0) >= std::cos(kTraceTurn) && (*next - x).norm() <= 2 * step) break;
+          // A step must land between half and twice its length on: where Newton brings it back
+          // to x (a crease meshed as smooth, the blended block with creases ignored), the trace
+          // stood still for 10^5 steps.
+          const double moved = (*next - x).norm();
+          if (t1 && t1->dot(*t0) >= std::cos(kTraceTurn) && moved >= 0.5 * step && moved <= 2 * step) break;
         }
         step *= 0.5;
         if (step < kShortestTraceStep * sizing.min_edge)
           throw CreaseLayoutError("adaptive: a seam turns too sharply to trace near " + format_point(x) +
-                                  " (the surface grazes a block's wall)");
+                                  " (a crease, or the surface grazing the wall)");
       }
       const Vec3 y = *next;
       if (!f.inside(y)) {
@@ -617,8 +631,11 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     SeamVertices sv;
     const Lines lines = find_corners(field, cuts, seeds.grid.h, sv, options.cancel);
     out.corners = sv.points.size();
-    std::size_t points_left = kMaxTracePoints;
-    const SeamTracer tracer{field, settings.sizing, settings.grading, kSeamTolerance * settings.diagonal, points_left};
+    const std::size_t points_bound = std::max(
+        kFewestTracePoints, static_cast<std::size_t>(kTracePointsPerTriangle * seeds.estimated_triangles));
+    std::size_t points_left = points_bound;
+    const SeamTracer tracer{field,       settings.sizing, settings.grading, kSeamTolerance * settings.diagonal,
+                            points_left, points_bound,    options.cancel};
     const auto block_index = [&](int i, int j, int k) { return static_cast<std::size_t>((k * n[1] + j) * n[0] + i); };
     const std::size_t nblocks = static_cast<std::size_t>(n[0]) * n[1] * n[2];
     std::vector<std::vector<Dart>> darts(nblocks);
