@@ -43,7 +43,7 @@ const std::vector<OptionSpec>& table() {
       {"curvature", OptionKind::Flag, OptionMethods::Adaptive, "", "false", "", {}, {}, 0, 0,
        "mac and shape_index per vertex (vertex scalars; PLY files keep them)"},
       {"blocks", OptionKind::Boolean, OptionMethods::Adaptive, "BOOL", "false", "", {}, {}, 0, 0,
-       "cut the box into blocks of about 10^4 triangles, trace the seams where the surface crosses the cuts, and "
+       "cut the box into blocks of about 2500 triangles, trace the seams where the surface crosses the cuts, and "
        "mesh the blocks from them on all threads (a surface without followed creases; the same mesh on any number "
        "of threads; stats blocks)"},
       {"check_self_intersections", OptionKind::Boolean, OptionMethods::Adaptive, "BOOL", "true", "", {}, {}, 0, 0,
@@ -65,8 +65,8 @@ const std::vector<OptionSpec>& table() {
       {"max_triangles", OptionKind::Integer, OptionMethods::All, "N", "", "", {}, {}, 1, INT_MAX,
        "stop with an error beyond N triangles"},
       {"threads", OptionKind::Integer, OptionMethods::All, "N", "0", "", {}, {}, 0, INT_MAX,
-       "threads of the seed grid (thread-safe fields), the adaptive method's relaxation and final check, and a "
-       "second for half of each costly evaluation while it tracks (a VIS from 1024 centres) (0: all cores this "
+       "threads of the seed grid (thread-safe fields), the adaptive method's blocks (--blocks), relaxation and final "
+       "check, and a second for half of each costly evaluation while it tracks (a VIS from 1024 centres) (0: all cores this "
        "process may use, at most 8); the mesh is the same on any number"},
   };
   return options;
