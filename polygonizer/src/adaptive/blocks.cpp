@@ -10,9 +10,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <limits>
-#include <numeric>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -35,6 +36,8 @@ constexpr double kTrianglesPerBlock = 2500;
 // A surface estimated below this many blocks is meshed by tracking alone: a cut costs more than
 // it gains on a surface meshed in a few milliseconds.
 constexpr double kFewestBlocks = 2;
+// At most 16^3 = 4096 blocks: at 2500 triangles each, 10^7 triangles; beyond that blocks grow
+// rather than multiply (their seams' share keeps falling).
 constexpr int kMaxBlocksPerAxis = 16;
 // A cut plane passes through the middle of a seed-grid cell (never through its nodes), moved by
 // up to kCutShift cells from its share of the box where the surface grazes it: a plane nearly
@@ -45,6 +48,9 @@ constexpr int kCutShift = 2;
 // surface's normal leans at least 30 degrees away from the plane's (the gradient's share in the
 // plane is at least sin 30 = 0.5); otherwise the candidate that leans most is taken.
 constexpr double kGoodLean = 0.5;
+// Below this lean (sin 5 degrees) on every candidate the surface is nearly tangent to the cut:
+// the layout is refused rather than meshed with a seam that may pass between the samples.
+constexpr double kLeastLean = 0.087;
 // Samples per seed-grid cell along a block edge (roots of F on the line) and across a cut plane
 // (its grazing and the loops of the seams inside a face).
 constexpr int kLineSamples = 4;
@@ -62,21 +68,26 @@ constexpr double kTraceShare = 0.25;
 constexpr double kTraceTurn = 0.3;
 constexpr double kShortestTraceStep = 0.1;
 // Traced points of all seams together: at most this many per estimated triangle of the mesh, and
-// at least kFewestTracePoints (a bound on the work: a seam is traced in steps of a quarter of
-// an edge or more, and seams hold far fewer vertices than the mesh has triangles). A crease
-// meshed as smooth (CreaseHandling::Ignore) traced 2 * 10^7 points in 471 s on the blended
-// block at tolerance 1e-3 under a bound of 2 * 10^7, before the blocks fell back.
+// at least kFewestTracePoints. A bound on the work, far above what tracing takes: a seam is
+// traced in steps of about a quarter of an edge, and a block's seams, crossing a surface of
+// about kTrianglesPerBlock triangles, hold about a hundred vertices.
 constexpr double kTracePointsPerTriangle = 2;
 constexpr std::size_t kFewestTracePoints = 100'000;
 // A traced seam ends at the corner of its face's side that it crosses within this share of its
-// last step (a corner is F = 0 on the side, the crossing its chord's intersection with it).
+// last step or of min_edge, the larger (a corner is F = 0 on the side, the crossing its chord's
+// intersection with it).
 constexpr double kCornerReach = 0.5;
-// A crossing of a plane's samples (linear between two samples) lies within about a spacing of
-// the seam through it; a traced chord strays from its seam by its sagitta, under 0.04 of its
-// length at a turn of kTraceTurn. A crossing farther than kCovered spacings plus kChordStray
-// chords from every traced seam of its face starts a loop.
-constexpr double kCovered = 1.5;
+// A traced chord strays from its seam by its sagitta, under 0.04 of its length at a turn of
+// kTraceTurn: a point of a seam within this share of a chord's length lies on the chord's seam.
 constexpr double kChordStray = 0.1;
+// A seam that leaves a corner within this cosine of the block edge's direction grazes the edge
+// (it would run along the side, out of the face as soon as into it).
+constexpr double kEdgeGraze = 1e-3;
+// A chord's crossing with a side counts within this share of the side's length past its ends
+// (rounding of the crossing's coordinates).
+constexpr double kSideRounding = 1e-12;
+// A loop closes where a chord passes within a step of its start, once it has gone this many steps.
+constexpr double kLoopShortest = 3;
 // A traced seam longer than this many times its face's perimeter has lost its way.
 constexpr double kLongestSeam = 100;
 // Fewest edges of a seam: two between corners (two seams between the same two corners bound a
@@ -177,12 +188,16 @@ Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int,
         const int k = cell + (shift % 2 == 1 ? -(shift + 1) / 2 : shift / 2);  // 0, -1, +1, -2, +2
         if (k <= last || k > grid.n[a] - 1 - (n[a] - 1 - i)) continue;
         cancel.check("adaptive");
-        PlaneSamples s = sample_plane(field, a, grid.origin[a] + (k + 0.5) * grid.h, grid.h);
+        const double c = grid.origin[a] + (k + 0.5) * grid.h;
+        if (!(c > box.min[a] && c < box.max[a])) continue;  // the grid's last layer may pass the box
+        PlaneSamples s = sample_plane(field, a, c, grid.h);
         const double lean = plane_lean(s);
         if (lean > best_lean) best_lean = lean, best = std::move(s), best_cell = k;
         if (best_lean >= kGoodLean) break;
       }
       if (!best) throw CreaseLayoutError("adaptive: the box is too small for " + std::to_string(n[a]) + " blocks");
+      if (best_lean < kLeastLean)
+        throw CreaseLayoutError("adaptive: every cut plane near " + std::to_string(best->c) + " grazes the surface");
       last = best_cell;
       cuts.walls[a].push_back(best->c);
       cuts.planes[a].push_back(std::move(*best));
@@ -394,7 +409,7 @@ struct SeamTracer {
           const Vec3 z = x + u * (y - x);
           const int other = axis == f.b ? f.d : f.b;
           const double lo = axis == f.b ? f.d0 : f.b0, hi = axis == f.b ? f.d1 : f.b1;
-          if (z[other] < lo - 1e-12 * (hi - lo) || z[other] > hi + 1e-12 * (hi - lo)) continue;
+          if (z[other] < lo - kSideRounding * (hi - lo) || z[other] > hi + kSideRounding * (hi - lo)) continue;
           best = u, out.side = s, out.exit = z;
         }
         if (out.side < 0) throw CreaseLayoutError("adaptive: a seam leaves its face at no side near " + format_point(y));
@@ -404,7 +419,11 @@ struct SeamTracer {
       travelled += (y - x).norm();
       if (travelled > kLongestSeam * 2 * (f.b1 - f.b0 + f.d1 - f.d0))
         throw CreaseLayoutError("adaptive: a seam traced from " + format_point(start) + " does not end");
-      if (loop && travelled > 3 * step && (y - start).norm() < step) return out;
+      if (loop && travelled > kLoopShortest * step) {
+        const Vec3 u = y - x;
+        const double s = std::clamp((start - x).dot(u) / u.squaredNorm(), 0.0, 1.0);
+        if ((x + s * u - start).norm() < step) return out;  // the chord passes the start
+      }
       out.points.push_back(y);
       out.targets.push_back(target(y));
       x = y;
@@ -456,15 +475,14 @@ Seam resample(const SeamTracer& tracer, const Face& f, const std::vector<Vec3>& 
 // The seams of face f: from each corner on its sides to the corner where it leaves, then a loop
 // through each crossing of the plane's samples inside the face that no seam passes near.
 std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const PlaneSamples& plane, const Lines& lines,
-                             const Cuts& cuts, SeamVertices& sv) {
+                             SeamVertices& sv) {
   std::vector<FaceCorner> corners;
   {
     // Sides d = d0, d = d1 run along b; b = b0, b = b1 along d. Lines are indexed by the wall
     // indices of the two other axes in increasing axis order.
-    const auto collect = [&](int along, int side, int wall_axis, int wall_index, double lo, double hi, const Vec3& inward) {
+    const auto collect = [&](int along, int side, int wall_index, double lo, double hi, const Vec3& inward) {
       const auto [p, q] = other_axes(along);
       const int ip = p == f.a ? f.cut + 1 : wall_index, iq = q == f.a ? f.cut + 1 : wall_index;
-      (void)wall_axis;
       for (const Corner& c : lines.at(along, ip, iq))
         if (c.t > lo && c.t < hi) {
           const Vec3& x = sv.points[static_cast<std::size_t>(c.vertex)];
@@ -472,19 +490,18 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
         }
     };
     const int jb = f.cell[0], jd = f.cell[1];
-    collect(f.b, 0, f.d, jd, f.b0, f.b1, axis_vector(f.d));
-    collect(f.b, 1, f.d, jd + 1, f.b0, f.b1, -axis_vector(f.d));
-    collect(f.d, 2, f.b, jb, f.d0, f.d1, axis_vector(f.b));
-    collect(f.d, 3, f.b, jb + 1, f.d0, f.d1, -axis_vector(f.b));
+    collect(f.b, 0, jd, f.b0, f.b1, axis_vector(f.d));
+    collect(f.b, 1, jd + 1, f.b0, f.b1, -axis_vector(f.d));
+    collect(f.d, 2, jb, f.d0, f.d1, axis_vector(f.b));
+    collect(f.d, 3, jb + 1, f.d0, f.d1, -axis_vector(f.b));
   }
-  (void)cuts;
   std::vector<Seam> seams;
   std::vector<std::vector<Vec3>> traced;  // every traced polyline, for the loop search
   for (std::size_t i = 0; i < corners.size(); ++i) {
     if (corners[i].used) continue;
     const FaceCorner& from = corners[i];
     const std::optional<Vec3> t = tracer.tangent(from.point, f.a);
-    if (!t || std::abs(t->dot(from.inward)) < 1e-3)
+    if (!t || std::abs(t->dot(from.inward)) < kEdgeGraze)
       throw CreaseLayoutError("adaptive: the surface grazes a block's edge near " + format_point(from.point));
     const double sign = t->dot(from.inward) > 0 ? 1 : -1;
     SeamTracer::Traced tr = tracer.trace(f, from.point, sign, false);
@@ -505,16 +522,28 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
     seams.push_back(resample(tracer, f, tr.points, tr.targets, from.vertex, corners[static_cast<std::size_t>(end)].vertex, sv));
     traced.push_back(std::move(tr.points));
   }
-  // Loops: a crossing of the plane's samples inside the face, farther from every traced
-  // polyline than a sample spacing plus the polyline's step, starts one.
-  const double spacing = std::max(plane.sb, plane.sd);
-  const auto covered = [&](const Vec3& x) {
+  // Loops: every sample edge with a sign change inside the face is crossed by the seam through
+  // it. One that no traced chord crosses starts a loop from its crossing moved onto the seam,
+  // unless that point lies on a traced seam (within kChordStray of a chord: the chord missed
+  // the edge near its end).
+  const auto cross2 = [&](const Vec3& u, const Vec3& w) { return u[f.b] * w[f.d] - u[f.d] * w[f.b]; };
+  const auto crossed = [&](const Vec3& p, const Vec3& q) {
+    for (const std::vector<Vec3>& line : traced)
+      for (std::size_t k = 0; k + 1 < line.size(); ++k) {
+        const Vec3 &x = line[k], &y = line[k + 1];
+        const double s1 = cross2(q - p, x - p), s2 = cross2(q - p, y - p);
+        const double s3 = cross2(y - x, p - x), s4 = cross2(y - x, q - x);
+        if (((s1 <= 0 && s2 >= 0) || (s1 >= 0 && s2 <= 0)) && ((s3 <= 0 && s4 >= 0) || (s3 >= 0 && s4 <= 0))) return true;
+      }
+    return false;
+  };
+  const auto on_traced = [&](const Vec3& z) {
     for (const std::vector<Vec3>& line : traced)
       for (std::size_t k = 0; k + 1 < line.size(); ++k) {
         const Vec3 u = line[k + 1] - line[k];
         const double len2 = u.squaredNorm();
-        const double s = len2 > 0 ? std::clamp((x - line[k]).dot(u) / len2, 0.0, 1.0) : 0.0;
-        if ((line[k] + s * u - x).norm() <= kCovered * spacing + kChordStray * std::sqrt(len2)) return true;
+        const double s = len2 > 0 ? std::clamp((z - line[k]).dot(u) / len2, 0.0, 1.0) : 0.0;
+        if ((line[k] + s * u - z).norm() <= kChordStray * std::sqrt(len2)) return true;
       }
     return false;
   };
@@ -529,10 +558,17 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
         if (i2 > plane.nb || j2 > plane.nd) continue;
         const double va = plane.values[plane.index(i, j)], vb = plane.values[plane.index(i2, j2)];
         if (!std::isfinite(va) || !std::isfinite(vb) || (va < 0) == (vb < 0)) continue;
-        const Vec3 x = plane.point(i, j) + va / (va - vb) * (plane.point(i2, j2) - plane.point(i, j));
-        if (!f.inside(x) || covered(x)) continue;
+        const Vec3 p = plane.point(i, j), q = plane.point(i2, j2);
+        const Vec3 x = p + va / (va - vb) * (q - p);
+        if (!f.inside(x) || crossed(p, q)) continue;
         const std::optional<Vec3> start = tracer.onto_seam(x, f.a);
-        if (!start || !f.inside(*start) || covered(*start)) continue;
+        if (!start)
+          throw CreaseLayoutError("adaptive: a crossing of a block's wall could not be put on its seam near " +
+                                  format_point(x));
+        if (on_traced(*start)) continue;
+        if (!f.inside(*start))
+          throw CreaseLayoutError("adaptive: a seam crossing a block's wall near " + format_point(x) +
+                                  " was not traced from a corner");
         SeamTracer::Traced tr = tracer.trace(f, *start, 1, true);
         if (tr.side >= 0)
           throw CreaseLayoutError("adaptive: a seam leaves its face where no corner was found near " +
@@ -543,6 +579,10 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
       }
   return seams;
 }
+
+// A seam's chord and the seam's tangent at its middle vertex agree in direction by at least
+// this cosine (they are nearly parallel: a chord of a sampled seam turns by less than a radian).
+constexpr double kOrientMargin = 0.1;
 
 // One side of a seam as a block's boundary: vertices with the block's patch on the left seen
 // from outside.
@@ -560,7 +600,11 @@ std::array<Dart, 2> orient(const Field& field, const Face& f, const Seam& s, con
   const Vec3& x = sv.points[static_cast<std::size_t>(s.vertices[m])];
   const Vec3 dir = sv.points[static_cast<std::size_t>(s.vertices[(m + 1) % n])] -
                    sv.points[static_cast<std::size_t>(s.vertices[(m + n - 1) % n])];
-  const bool along = dir.dot(axis_vector(f.a).cross(field.gradient(x))) > 0;
+  const Vec3 t = axis_vector(f.a).cross(field.gradient(x));
+  const double along_t = dir.dot(t);
+  if (!(std::abs(along_t) > kOrientMargin * dir.norm() * t.norm()))
+    throw CreaseLayoutError("adaptive: a seam's direction is unclear near " + format_point(x));
+  const bool along = along_t > 0;
   Dart up{s.vertices, s.closed ? -1 : s.vertices.front(), s.closed ? -1 : s.vertices.back()};
   Dart down = up;
   std::reverse(down.vertices.begin(), down.vertices.end());
@@ -572,7 +616,6 @@ std::array<Dart, 2> orient(const Field& field, const Face& f, const Seam& s, con
 // A block's boundary cycles: loops as they are, open darts joined at their corners.
 std::vector<std::vector<int>> block_cycles(const std::vector<Dart>& darts) {
   std::vector<std::vector<int>> cycles;
-  std::vector<int> leaving;  // dart index by corner vertex, searched linearly (a block has few)
   std::vector<bool> used(darts.size(), false);
   const auto next_from = [&](int corner) {
     int found = -1;
@@ -615,6 +658,7 @@ struct BlockPart {
   std::size_t steps = 0, splits = 0, merges = 0, forced_closures = 0, patch_refusals = 0;
   std::vector<CriticalStart> critical_starts;
   double seconds = 0;
+  std::exception_ptr error;  // what its tracker threw, kept for the block order to decide
 };
 
 }  // namespace
@@ -651,7 +695,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
             const Face f{a, b, d, cut, {jb, jd}, c, cuts.walls[b][static_cast<std::size_t>(jb)],
                          cuts.walls[b][static_cast<std::size_t>(jb) + 1], cuts.walls[d][static_cast<std::size_t>(jd)],
                          cuts.walls[d][static_cast<std::size_t>(jd) + 1]};
-            for (const Seam& s : trace_face(tracer, f, cuts.planes[a][static_cast<std::size_t>(cut)], lines, cuts, sv)) {
+            for (const Seam& s : trace_face(tracer, f, cuts.planes[a][static_cast<std::size_t>(cut)], lines, sv)) {
               std::array<int, 3> lo{}, hi{};
               lo[a] = cut, hi[a] = cut + 1;
               lo[b] = hi[b] = jb;
@@ -705,7 +749,8 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return weight(x) > weight(y); });
     if (shuffle != 0) std::shuffle(order.begin(), order.end(), std::mt19937_64(shuffle));
     std::vector<BlockPart> parts(nblocks);
-    const auto mesh_block = [&](std::size_t blk) {
+    // One block: its tracker from its cycles (every error kept in its slot by mesh_block).
+    const auto mesh_one_block = [&](std::size_t blk) {
       const auto t0 = Clock::now();
       const int bi = static_cast<int>(blk % n[0]), bj = static_cast<int>(blk / n[0] % n[1]),
                 bk = static_cast<int>(blk / (static_cast<std::size_t>(n[0]) * n[1]));
@@ -745,12 +790,30 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       part.critical_starts = tracker.critical_starts();
       part.seconds = seconds_since(t0);
     };
+    const auto mesh_block = [&](std::size_t blk) {
+      try {
+        mesh_one_block(blk);
+      } catch (...) {
+        parts[blk].error = std::current_exception();
+      }
+    };
     out.threads = field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
                                                            static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
                                       : 1;
     detail::parallel_blocks(order.size(), 1, out.threads, [&](std::size_t begin, std::size_t end, unsigned) {
       for (std::size_t i = begin; i < end; ++i) mesh_block(order[i]);
     });
+    // Every block ran, whatever the others threw: a cancellation wins, then the first failing
+    // block in block order (not in time), so that the outcome is the same on any thread count.
+    for (const BlockPart& part : parts)
+      if (part.error) try {
+          std::rethrow_exception(part.error);
+        } catch (const CancelledError&) {
+          throw;
+        } catch (...) {
+        }
+    for (const BlockPart& part : parts)
+      if (part.error) std::rethrow_exception(part.error);
 
     // One mesh, in block order: the seam vertices, then each block's own.
     CreaseMesh cm;
@@ -799,6 +862,10 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       out.critical_starts.insert(out.critical_starts.end(), part.critical_starts.begin(), part.critical_starts.end());
       part = BlockPart{};  // copied: freed as the assembly goes
     }
+    // Each block's tracker keeps the bounds on its own; the whole mesh keeps max_triangles too.
+    if (settings.max_triangles > 0 && mesh.triangles.size() > settings.max_triangles)
+      throw LimitExceededError("adaptive: the blocks made " + std::to_string(mesh.triangles.size()) +
+                               " triangles, over max_triangles " + std::to_string(settings.max_triangles));
     for (std::size_t v = 0; v < ns; ++v) {
       if (!(mesh.normals[v].squaredNorm() > 0))
         throw CreaseLayoutError("adaptive: a seam vertex no block reached near " + format_point(mesh.positions[v]));
@@ -813,6 +880,8 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     out.fallback = e.what();
   } catch (const NoSurfaceError& e) {
     out.fallback = e.what();
+  } catch (const std::logic_error& e) {  // a tracker's own invariant, broken by a block's loops
+    out.fallback = std::string("adaptive: a block's tracker failed: ") + e.what();
   }
   out.seconds = seconds_since(start);
   return out;

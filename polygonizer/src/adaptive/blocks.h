@@ -2,7 +2,8 @@
 // depend only on the field and the options (never on the thread count), the curves where the
 // surface crosses the cuts are traced once and sampled with the sizing the surface asks for
 // there (seams), and each block's piece of surface is meshed from its seams by fronts of its own,
-// as a crease patch is meshed from its creases (crease_patches.h). Blocks run on all threads;
+// as a crease patch is meshed from its creases (crease_patches.h). Blocks run on
+// AdaptiveOptions::threads threads;
 // their meshes are assembled in block order, so the mesh is the same on any number of threads
 // and in any order the blocks are run. Components that cross no cut are left to the seeding.
 //
@@ -31,7 +32,7 @@ namespace cdp::adaptive {
 struct BlockMeshing {
   // The blocks' meshes as one, seam vertices first (every component that crosses a cut, closed),
   // in the form crease patches come in, to be adopted as finished surface; none when the
-  // surface was not cut (too small for blocks) or the layout failed (`fallback`).
+  // surface was not cut (too small for blocks) or the layout or a block failed (`fallback`).
   std::optional<CreaseMesh> mesh;
   std::size_t components = 0;       // of `mesh`
   std::array<int, 3> blocks{1, 1, 1};  // along x, y, z
@@ -52,11 +53,12 @@ struct BlockMeshing {
 
 // Cuts the surface into blocks and meshes every block with seams (see above), on
 // options.threads threads for a thread-safe field. Returns no mesh (and `fallback` saying why)
-// where the seams cannot be laid out or a block's fronts fail: the caller then meshes the whole
-// surface by tracking alone. Only for a surface without followed creases. The blocks run largest
-// first; with `shuffle` nonzero, in an order drawn from it instead (the tests' check that the
-// order changes nothing).
-// \throw CancelledError, and what the field's evaluations throw.
+// where the seams cannot be laid out or a block's fronts fail (a NoSurfaceError,
+// LimitExceededError or std::logic_error of its tracker; every block runs, and the first failing
+// in block order decides): the caller then meshes the whole surface by tracking alone. Only for
+// a surface without followed creases. The blocks run largest first; with `shuffle` nonzero, in
+// an order drawn from it instead (the tests' check that the order changes nothing).
+// \throw CancelledError, and what the field's evaluations throw (the first block's in block order).
 BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, const Settings& settings,
                          const SeedGridStage& seeds, std::uint64_t shuffle = 0);
 

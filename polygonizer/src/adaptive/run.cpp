@@ -83,7 +83,7 @@ Run::~Run() {
   // Plain data only: the tracker keeps its callbacks (a Python caller's, say) to be let go of
   // here, on the caller's thread.
   if (tracking.tracker) tracking.tracker->release_in_background();
-  detail::release_in_background(result.mesh, creases, seeds.grid);
+  detail::release_in_background(result.mesh, creases, blocks, seeds.grid);
 }
 
 void Run::prepare() {

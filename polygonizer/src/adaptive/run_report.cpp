@@ -4,8 +4,8 @@
 #include "run_state.h"
 #include "stage_checks.h"
 
-#include <chrono>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 

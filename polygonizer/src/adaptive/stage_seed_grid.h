@@ -25,11 +25,10 @@ struct SeedGridStage {
   // Twice the median edge length the sizing asks for at up to 64 crossings (a deterministic
   // sample spread over the surface); `settings.hash_cell` where none could be measured.
   double hash_cell = 0;
-  // The triangles the mesh will have, about: the area over the mean area of an equilateral
-  // triangle with the sizing's edge at the same sample of crossings; 0 where the area is not
-  // measured. What the blocks are counted from (blocks.h); the meshes of the experiments' fields
-  // have 1.05-2.2 times as many (the sample misses some of the finest regions: the Igea VIS-4004
-  // at factor 3 has 2.2 times, the torus at factor 40 1.07).
+  // The triangles the mesh will have, about: the area times the mean, over the same sample of
+  // crossings, of one over the area of an equilateral triangle with the sizing's edge there; 0
+  // where the area is not measured. What the blocks are counted from (blocks.h); it runs low
+  // (stage_seed_grid.cpp).
   double estimated_triangles = 0;
 };
 

@@ -101,6 +101,47 @@ TEST(AdaptiveBlocks, AComponentThatCrossesNoCutIsLeftToTheSeeding) {
   EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
 }
 
+TEST(AdaptiveBlocks, ALoopWhollyInsideAFaceIsFoundFromThePlanesSamples) {
+  // A small ball on the cut x = 0.45 (the torus's cuts at factor 12 are at +-0.45), away from
+  // every line where walls meet: its seam is a loop no corner starts, found from the samples.
+  const auto f = test::field_from_json(R"J({"type": "expression",
+      "value": "min((sqrt(x^2+y^2)-1)^2 + z^2 - 0.16, sqrt((x-0.45)^2+(y-1.5)^2+z^2) - 0.08)",
+      "bounds": [[-1.6, -1.6, -0.6], [1.6, 1.6, 0.6]]})J");
+  const PolygonizeResult r = polygonize_adaptive(*f, with_blocks(2));
+  const BlocksReport& b = r.stats.adaptive->blocks;
+  ASSERT_TRUE(b.used) << b.fallback;
+  ASSERT_EQ(b.cuts[0].size(), 2u);
+  EXPECT_NEAR(b.cuts[0][1], 0.45, 1e-9);
+  EXPECT_EQ(b.corners, 8u);
+  EXPECT_EQ(b.seams, 17u);  // the torus's 16 and the ball's loop
+  EXPECT_EQ(b.components, 2u);
+  EXPECT_EQ(r.stats.adaptive->seeding.seeds, 0u);
+  const MeshTopology t = analyze_topology(r.mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.components, 2u);
+  EXPECT_EQ(t.genus, 1);
+}
+
+TEST(AdaptiveBlocks, ACreaseMeshedAsSmoothFallsBackToTrackingAloneAtOnce) {
+  // Two capsules (experiments/sdf_models) with their creases ignored: a seam turns sharply where
+  // it crosses a crease, so the layout is refused and the surface tracked alone, with its reason.
+  const auto f = test::field_from_json(R"J({"type": "expression", "value": "min(c1, c2)",
+      "define": {"c1": "hypot(x+0.8-1.2*clamp((x+0.8)/1.2,0,1), y, z)-0.25",
+                 "c2": "hypot(x-0.4, y-clamp(y,0,0.9), z)-0.2"},
+      "bounds": [[-1.4, -1.4, -1.4], [1.4, 1.4, 1.4]]})J");
+  AdaptiveOptions o = with_blocks(2, 8);
+  o.creases = CreaseHandling::Ignore;
+  const PolygonizeResult r = polygonize_adaptive(*f, o);
+  const BlocksReport& b = r.stats.adaptive->blocks;
+  EXPECT_FALSE(b.used);
+  EXPECT_NE(b.fallback.find("seam turns too sharply"), std::string::npos) << b.fallback;
+  EXPECT_EQ(b.meshed_blocks, 0u);  // refused while laying out, before any block ran
+  const MeshTopology t = analyze_topology(r.mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.genus, 0);
+}
+
 TEST(AdaptiveBlocks, ANeckTheBlocksFrontsSteppedOverIsFound) {
   // blobs39 of the topology sweep (59 Wyvill blobs, 5 components, genus 4) at chord 1e-2: a
   // block's front stepped over a neck and closed a handle, and the neck search, which started
