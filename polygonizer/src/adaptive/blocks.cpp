@@ -48,9 +48,13 @@ constexpr int kCutShift = 2;
 // surface's normal leans at least 30 degrees away from the plane's (the gradient's share in the
 // plane is at least sin 30 = 0.5); otherwise the candidate that leans most is taken.
 constexpr double kGoodLean = 0.5;
-// Below this lean (sin 5 degrees) on every candidate the surface is nearly tangent to the cut:
-// the layout is refused rather than meshed with a seam that may pass between the samples.
-constexpr double kLeastLean = 0.087;
+// Below this lean on every candidate the surface is tangent to the cut to rounding: the layout
+// is refused. A near tangency is not: the lean is the least over the whole plane, and the blob
+// fields of the topology sweep have one near many planes (with sin 5 degrees here, 30 of its runs
+// were cut into blocks instead of 113, all 113 correct); a loop it leaves is found from the
+// samples, or one smaller than their spacing is crossed by the fronts of the block that holds
+// the rest of its surface, within kOutsideBlock of a step.
+constexpr double kLeastLean = 1e-6;
 // Samples per seed-grid cell along a block edge (roots of F on the line) and across a cut plane
 // (its grazing and the loops of the seams inside a face).
 constexpr int kLineSamples = 4;
@@ -537,16 +541,18 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
       }
     return false;
   };
-  const auto on_traced = [&](const Vec3& z) {
+  // Whether z lies within `reach` plus kChordStray of a chord's length of a traced chord.
+  const auto on_traced = [&](const Vec3& z, double reach) {
     for (const std::vector<Vec3>& line : traced)
       for (std::size_t k = 0; k + 1 < line.size(); ++k) {
         const Vec3 u = line[k + 1] - line[k];
         const double len2 = u.squaredNorm();
         const double s = len2 > 0 ? std::clamp((z - line[k]).dot(u) / len2, 0.0, 1.0) : 0.0;
-        if ((line[k] + s * u - z).norm() <= kChordStray * std::sqrt(len2)) return true;
+        if ((line[k] + s * u - z).norm() <= reach + kChordStray * std::sqrt(len2)) return true;
       }
     return false;
   };
+  const double spacing = std::max(plane.sb, plane.sd);
   const int i0 = std::max(0, static_cast<int>(std::floor((f.b0 - plane.origin[f.b]) / plane.sb)));
   const int i1 = std::min(plane.nb, static_cast<int>(std::ceil((f.b1 - plane.origin[f.b]) / plane.sb)));
   const int j0 = std::max(0, static_cast<int>(std::floor((f.d0 - plane.origin[f.d]) / plane.sd)));
@@ -565,7 +571,10 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
         if (!start)
           throw CreaseLayoutError("adaptive: a crossing of a block's wall could not be put on its seam near " +
                                   format_point(x));
-        if (on_traced(*start)) continue;
+        if (on_traced(*start, 0)) continue;
+        // Moved out of the face by Newton: a crossing next to a side, on the seam that leaves by
+        // that side if one was traced within a sample spacing of it.
+        if (!f.inside(*start) && on_traced(x, spacing)) continue;
         if (!f.inside(*start))
           throw CreaseLayoutError("adaptive: a seam crossing a block's wall near " + format_point(x) +
                                   " was not traced from a corner");
@@ -575,6 +584,7 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
                                   format_point(tr.exit) + " (the surface grazes a block's edge)");
         if (tr.points.size() < 3) throw CreaseLayoutError("adaptive: a seam loop too small to mesh near " + format_point(x));
         seams.push_back(resample(tracer, f, tr.points, tr.targets, -1, -1, sv));
+        tr.points.push_back(tr.points.front());  // the closing chord too, for the crossings it makes
         traced.push_back(std::move(tr.points));
       }
   return seams;
