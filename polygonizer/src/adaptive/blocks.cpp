@@ -374,20 +374,21 @@ struct SeamTracer {
     out.points.push_back(start);
     out.targets.push_back(target(start));
     Vec3 x = start;
+    // The tangent at x: the accepted step's own, measured when it was judged.
+    std::optional<Vec3> t0 = tangent(x, f.a);
     double travelled = 0;
     for (;;) {
       if (points_left == 0)
         throw CreaseLayoutError("adaptive: the seams of the blocks pass " + std::to_string(points_bound) +
                                 " traced points near " + format_point(x));
       if (--points_left % 1024 == 0) cancel.check("adaptive");
-      const std::optional<Vec3> t0 = tangent(x, f.a);
       if (!t0) throw CreaseLayoutError("adaptive: a seam's tangent vanishes near " + format_point(x));
       double step = kTraceShare * out.targets.back();
-      std::optional<Vec3> next;
+      std::optional<Vec3> next, t1;
       for (;;) {
         next = onto_seam(x + sign * step * *t0, f.a);
         if (next) {
-          const std::optional<Vec3> t1 = tangent(*next, f.a);
+          t1 = tangent(*next, f.a);
           // A step must land between half and twice its length on: where Newton brings it back
           // to x (a crease meshed as smooth, the blended block with creases ignored), the trace
           // stood still for 10^5 steps.
@@ -431,6 +432,7 @@ struct SeamTracer {
       out.points.push_back(y);
       out.targets.push_back(target(y));
       x = y;
+      t0 = t1;
     }
   }
 };
@@ -677,16 +679,16 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
                          const SeedGridStage& seeds, std::uint64_t shuffle) {
   const auto start = Clock::now();
   BlockMeshing out;
-  out.estimated_triangles = seeds.estimated_triangles;
+  out.report.estimated_triangles = seeds.estimated_triangles;
   const std::array<int, 3> n = block_counts(field, seeds);
   if (n[0] * n[1] * n[2] < 2) return out;
-  out.blocks = n;
+  out.report.blocks = n;
   try {
     const Cuts cuts = choose_cuts(field, seeds.grid, n, options.cancel);
-    for (int a = 0; a < 3; ++a) out.cuts[a].assign(cuts.walls[a].begin() + 1, cuts.walls[a].end() - 1);
+    for (int a = 0; a < 3; ++a) out.report.cuts[a].assign(cuts.walls[a].begin() + 1, cuts.walls[a].end() - 1);
     SeamVertices sv;
     const Lines lines = find_corners(field, cuts, seeds.grid.h, sv, options.cancel);
-    out.corners = sv.points.size();
+    out.report.corners = sv.points.size();
     const std::size_t points_bound = std::max(
         kFewestTracePoints, static_cast<std::size_t>(kTracePointsPerTriangle * seeds.estimated_triangles));
     std::size_t points_left = points_bound;
@@ -713,21 +715,21 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
               auto [below, above] = orient(field, f, s, sv);
               darts[block_index(lo[0], lo[1], lo[2])].push_back(std::move(below));
               darts[block_index(hi[0], hi[1], hi[2])].push_back(std::move(above));
-              ++out.seams;
+              ++out.report.seams;
             }
           }
     }
     // Every corner ends two seams of each of its four blocks' faces: one unused means a seam
     // the faces' tracing missed.
-    std::vector<int> ends(out.corners, 0);
+    std::vector<int> ends(out.report.corners, 0);
     for (const auto& ds : darts)
       for (const Dart& dt : ds)
         if (dt.from >= 0) ++ends[static_cast<std::size_t>(dt.from)], ++ends[static_cast<std::size_t>(dt.to)];
-    for (std::size_t c = 0; c < out.corners; ++c)
+    for (std::size_t c = 0; c < out.report.corners; ++c)
       if (ends[c] != 8)
         throw CreaseLayoutError("adaptive: a block corner ends " + std::to_string(ends[c] / 2) +
                                 " seams instead of 4 near " + format_point(sv.points[c]));
-    out.seam_vertices = sv.points.size();
+    out.report.seam_vertices = sv.points.size();
     // The seam vertices measured once, for both blocks that start from them.
     std::vector<Tracker::Placed> placed(sv.points.size());
     {
@@ -745,7 +747,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     }
     std::vector<std::vector<std::vector<int>>> cycles(nblocks);
     for (std::size_t blk = 0; blk < nblocks; ++blk) cycles[blk] = block_cycles(darts[blk]);
-    out.layout_seconds = seconds_since(start);
+    out.report.layout_seconds = seconds_since(start);
 
     // The blocks, largest first (by their seam vertices), each into its own slot.
     std::vector<std::size_t> order;
@@ -807,10 +809,10 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
         parts[blk].error = std::current_exception();
       }
     };
-    out.threads = field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
+    out.report.threads = field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
                                                            static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
                                       : 1;
-    detail::parallel_blocks(order.size(), 1, out.threads, [&](std::size_t begin, std::size_t end, unsigned) {
+    detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
       for (std::size_t i = begin; i < end; ++i) mesh_block(order[i]);
     });
     // Every block ran, whatever the others threw: a cancellation wins, then the first failing
@@ -826,45 +828,18 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       if (part.error) std::rethrow_exception(part.error);
 
     // One mesh, in block order: the seam vertices, then each block's own.
-    CreaseMesh cm;
-    Mesh& mesh = cm.mesh;
     const std::size_t ns = sv.points.size();
-    mesh.positions = sv.points;
-    mesh.normals.assign(ns, Vec3::Zero());
-    cm.target.assign(ns, std::numeric_limits<double>::infinity());
-    cm.mac.assign(ns, 0.0);
-    cm.shape_index.assign(ns, 0.0);
-    out.block_seconds.assign(nblocks, 0.0);
+    CreaseMesh cm = start_shared(sv.points);
+    const Mesh& mesh = cm.mesh;
+    out.report.block_seconds.assign(nblocks, 0.0);
     for (std::size_t blk = 0; blk < nblocks; ++blk) {
       BlockPart& part = parts[blk];
-      out.block_seconds[blk] = part.seconds;
+      out.report.block_seconds[blk] = part.seconds;
       if (part.mesh.positions.empty()) continue;
-      ++out.meshed_blocks;
+      ++out.report.meshed_blocks;
       if (part.forced_closures > 0)
         throw CreaseLayoutError("adaptive: a block's front had to be closed without its tests");
-      std::vector<int> to_global(part.mesh.positions.size(), -1);
-      for (std::size_t l = 0; l < part.ids.size(); ++l)
-        for (std::size_t k = 0; k < part.ids[l].size(); ++k)
-          to_global[static_cast<std::size_t>(part.ids[l][k])] = cycles[blk][l][k];
-      for (std::size_t v = 0; v < part.mesh.positions.size(); ++v) {
-        int& g = to_global[v];
-        if (g < 0) {
-          g = static_cast<int>(mesh.positions.size());
-          mesh.positions.push_back(part.mesh.positions[v]);
-          mesh.normals.push_back(part.mesh.normals[v]);
-          cm.target.push_back(part.target[v]);
-          cm.mac.push_back(part.mac[v]);
-          cm.shape_index.push_back(part.shape_index[v]);
-        } else {
-          const auto gv = static_cast<std::size_t>(g);
-          mesh.normals[gv] += part.mesh.normals[v];
-          cm.target[gv] = std::min(cm.target[gv], part.target[v]);
-          if (part.mac[v] >= cm.mac[gv]) cm.mac[gv] = part.mac[v], cm.shape_index[gv] = part.shape_index[v];
-        }
-      }
-      for (const auto& t : part.mesh.triangles)
-        mesh.triangles.push_back({to_global[static_cast<std::size_t>(t[0])], to_global[static_cast<std::size_t>(t[1])],
-                                  to_global[static_cast<std::size_t>(t[2])]});
+      add_part(cm, part.mesh, part.ids, cycles[blk], part.target, part.mac, part.shape_index);
       cm.steps += part.steps;
       cm.splits += part.splits;
       cm.merges += part.merges;
@@ -876,24 +851,20 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     if (settings.max_triangles > 0 && mesh.triangles.size() > settings.max_triangles)
       throw LimitExceededError("adaptive: the blocks made " + std::to_string(mesh.triangles.size()) +
                                " triangles, over max_triangles " + std::to_string(settings.max_triangles));
-    for (std::size_t v = 0; v < ns; ++v) {
-      if (!(mesh.normals[v].squaredNorm() > 0))
-        throw CreaseLayoutError("adaptive: a seam vertex no block reached near " + format_point(mesh.positions[v]));
-      mesh.normals[v].normalize();
-    }
+    finish_shared(cm, ns, "a seam vertex no block reached");
     cm.crease_vertices = 0;  // seam vertices are ordinary surface points: the repair may move them
     out.components = analyze_topology(mesh).components;
     out.mesh = std::move(cm);
   } catch (const CreaseLayoutError& e) {
-    out.fallback = e.what();
+    out.report.fallback = e.what();
   } catch (const LimitExceededError& e) {  // a stalled front among them
-    out.fallback = e.what();
+    out.report.fallback = e.what();
   } catch (const NoSurfaceError& e) {
-    out.fallback = e.what();
+    out.report.fallback = e.what();
   } catch (const std::logic_error& e) {  // a tracker's own invariant, broken by a block's loops
-    out.fallback = std::string("adaptive: a block's tracker failed: ") + e.what();
+    out.report.fallback = std::string("adaptive: a block's tracker failed: ") + e.what();
   }
-  out.seconds = seconds_since(start);
+  out.report.seconds = seconds_since(start);
   return out;
 }
 

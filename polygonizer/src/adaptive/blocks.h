@@ -21,10 +21,10 @@
 #include "missed_necks.h"
 #include "stage_seed_grid.h"
 
-#include <array>
+#include <cdp/core/adaptive_report.h>
+
 #include <cstdint>
 #include <optional>
-#include <string>
 #include <vector>
 
 namespace cdp::adaptive {
@@ -32,27 +32,21 @@ namespace cdp::adaptive {
 struct BlockMeshing {
   // The blocks' meshes as one, seam vertices first (every component that crosses a cut, closed),
   // in the form crease patches come in, to be adopted as finished surface; none when the
-  // surface was not cut (too small for blocks) or the layout or a block failed (`fallback`).
+  // surface was not cut (too small for blocks) or the layout or a block failed
+  // (`report.fallback`).
   std::optional<CreaseMesh> mesh;
-  std::size_t components = 0;       // of `mesh`
-  std::array<int, 3> blocks{1, 1, 1};  // along x, y, z
-  std::array<std::vector<double>, 3> cuts;  // the cut planes along each axis
-  std::size_t corners = 0, seams = 0, seam_vertices = 0, meshed_blocks = 0;
-  double estimated_triangles = 0;  // what the blocks were counted from (SeedGridStage::estimated_triangles)
+  std::size_t components = 0;  // of `mesh`
   // The blocks' trackers' vertices near critical points of F (Tracker::critical_starts), in
   // block order: where the neck search (check_necks) looks for necks their fronts stepped over.
   std::vector<CriticalStart> critical_starts;
-  // Each block's tracking time (seconds), in block order: what the projected speedups at more
-  // threads are computed from.
-  std::vector<double> block_seconds;
-  double layout_seconds = 0;  // choosing the cuts, tracing and sampling the seams
-  double seconds = 0;         // the whole stage, wall clock
-  unsigned threads = 1;       // that meshed the blocks
-  std::string fallback;       // why the surface was meshed without blocks, or empty
+  // The stage's part of the run's stats (adaptive_report.h): the blocks, cuts, seams, times
+  // (block_seconds: what the projected speedups at more threads are computed from) and the
+  // fallback; the run adds what it alone knows (requested, used, components, steps, wall_*).
+  BlocksReport report;
 };
 
 // Cuts the surface into blocks and meshes every block with seams (see above), on
-// options.threads threads for a thread-safe field. Returns no mesh (and `fallback` saying why)
+// options.threads threads for a thread-safe field. Returns no mesh (and `report.fallback` saying why)
 // where the seams cannot be laid out or a block's fronts fail (a NoSurfaceError,
 // LimitExceededError or std::logic_error of its tracker; every block runs, and the first failing
 // in block order decides): the caller then meshes the whole surface by tracking alone. Only for

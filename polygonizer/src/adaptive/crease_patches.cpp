@@ -701,6 +701,55 @@ bool in_patch(const Field& field, const Branch& branch, const Vec3& x, double d,
 
 }  // namespace
 
+CreaseMesh start_shared(const std::vector<Vec3>& shared) {
+  CreaseMesh out;
+  const std::size_t n = shared.size();
+  out.mesh.positions = shared;
+  out.mesh.normals.assign(n, Vec3::Zero());
+  out.target.assign(n, std::numeric_limits<double>::infinity());
+  out.mac.assign(n, 0.0);
+  out.shape_index.assign(n, 0.0);
+  return out;
+}
+
+void add_part(CreaseMesh& out, const Mesh& part, const std::vector<std::vector<int>>& loop_ids,
+              const std::vector<std::vector<int>>& shared_ids, std::span<const double> target,
+              std::span<const double> mac, std::span<const double> shape_index) {
+  Mesh& mesh = out.mesh;
+  std::vector<int> to_global(part.positions.size(), -1);
+  for (std::size_t l = 0; l < loop_ids.size(); ++l)
+    for (std::size_t k = 0; k < loop_ids[l].size(); ++k)
+      to_global[static_cast<std::size_t>(loop_ids[l][k])] = shared_ids[l][k];
+  for (std::size_t v = 0; v < part.positions.size(); ++v) {
+    int& g = to_global[v];
+    if (g < 0) {
+      g = static_cast<int>(mesh.positions.size());
+      mesh.positions.push_back(part.positions[v]);
+      mesh.normals.push_back(part.normals[v]);
+      out.target.push_back(target[v]);
+      out.mac.push_back(mac[v]);
+      out.shape_index.push_back(shape_index[v]);
+    } else {
+      const auto gv = static_cast<std::size_t>(g);
+      mesh.normals[gv] += part.normals[v];
+      out.target[gv] = std::min(out.target[gv], target[v]);
+      if (mac[v] >= out.mac[gv]) out.mac[gv] = mac[v], out.shape_index[gv] = shape_index[v];
+    }
+  }
+  for (const auto& t : part.triangles)
+    mesh.triangles.push_back({to_global[static_cast<std::size_t>(t[0])], to_global[static_cast<std::size_t>(t[1])],
+                              to_global[static_cast<std::size_t>(t[2])]});
+}
+
+void finish_shared(CreaseMesh& out, std::size_t shared, const std::string& unreached) {
+  Mesh& mesh = out.mesh;
+  for (std::size_t v = 0; v < shared; ++v) {
+    if (!(mesh.normals[v].squaredNorm() > 0))
+      throw CreaseLayoutError("adaptive: " + unreached + " near " + format_point(mesh.positions[v]));
+    mesh.normals[v].normalize();
+  }
+}
+
 CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& creases, const Settings& settings,
                                double estimated_area, double look_ahead_gradation) {
   CreaseMesh out;
@@ -732,12 +781,7 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
 
   const std::vector<PatchGroup> groups = group_cycles(field, cycles, cv.points);
   const std::size_t nc = cv.points.size();
-  Mesh& mesh = out.mesh;
-  mesh.positions = cv.points;
-  mesh.normals.assign(nc, Vec3::Zero());
-  out.target.assign(nc, std::numeric_limits<double>::infinity());
-  out.mac.assign(nc, 0.0);
-  out.shape_index.assign(nc, 0.0);
+  out = start_shared(cv.points);
   for (const PatchGroup& patch : groups) {
     const std::vector<std::size_t>& group = patch.cycles;
     const Branch& branch = patch.piece;
@@ -763,46 +807,16 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
     tracker.set_point_test(
         [&field, &branch, sagitta](const Vec3& x, double d) { return in_patch(field, branch, x, d, sagitta); });
     const std::vector<std::vector<int>> ids = tracker.mesh_from_loops(loops);
-    // The part's vertices: the loops' are crease vertices, the rest are appended.
-    std::vector<int> to_global(part.positions.size(), -1);
-    for (std::size_t l = 0; l < ids.size(); ++l)
-      for (std::size_t k = 0; k < ids[l].size(); ++k)
-        to_global[static_cast<std::size_t>(ids[l][k])] = cycles[group[l]].vertices[k];
-    const auto& target = tracker.vertex_edge_length();
-    const auto& mac = tracker.vertex_mac();
-    const auto& shape = tracker.vertex_shape_index();
-    for (std::size_t v = 0; v < part.positions.size(); ++v) {
-      int& g = to_global[v];
-      if (g < 0) {
-        g = static_cast<int>(mesh.positions.size());
-        mesh.positions.push_back(part.positions[v]);
-        mesh.normals.push_back(part.normals[v]);
-        out.target.push_back(target[v]);
-        out.mac.push_back(mac[v]);
-        out.shape_index.push_back(shape[v]);
-      } else {
-        // A crease vertex: the mean of its pieces' normals (per-side normals are the mesh's
-        // corners' business), the smallest target, the largest curvature.
-        const auto gv = static_cast<std::size_t>(g);
-        mesh.normals[gv] += part.normals[v];
-        out.target[gv] = std::min(out.target[gv], target[v]);
-        if (mac[v] >= out.mac[gv]) out.mac[gv] = mac[v], out.shape_index[gv] = shape[v];
-      }
-    }
-    for (const auto& t : part.triangles)
-      mesh.triangles.push_back({to_global[static_cast<std::size_t>(t[0])], to_global[static_cast<std::size_t>(t[1])],
-                                to_global[static_cast<std::size_t>(t[2])]});
+    std::vector<std::vector<int>> shared;
+    for (const std::size_t i : group) shared.push_back(cycles[i].vertices);
+    add_part(out, part, ids, shared, tracker.vertex_edge_length(), tracker.vertex_mac(), tracker.vertex_shape_index());
     out.steps += tracker.steps();
     out.splits += tracker.splits();
     out.merges += tracker.merges();
     out.forced_closures += tracker.forced_closures();
     out.patch_refusals += tracker.patch_refusals();
   }
-  for (std::size_t v = 0; v < nc; ++v) {
-    if (!(mesh.normals[v].squaredNorm() > 0))
-      throw CreaseLayoutError("adaptive: a crease vertex no patch reached near " + format_point(mesh.positions[v]));
-    mesh.normals[v].normalize();
-  }
+  finish_shared(out, nc, "a crease vertex no patch reached");
   out.crease_vertices = nc;
   out.pieces = groups.size();
   return out;

@@ -25,6 +25,8 @@
 #include <cdp/core/errors.h>
 
 #include <cstddef>
+#include <span>
+#include <string>
 #include <vector>
 
 namespace cdp::adaptive {
@@ -48,6 +50,22 @@ struct CreaseMesh {
   // Bridges, closures and placements the patch tests refused (Tracker::patch_refusals).
   std::size_t patch_refusals = 0;
 };
+
+// A mesh whose first vertices are `shared` (on creases, or on the blocks' seams), to be joined by
+// the parts meshed from loops of them (add_part): no normal yet, an infinite target, no curvature.
+CreaseMesh start_shared(const std::vector<Vec3>& shared);
+// Adds `part`, meshed by a tracker from loops of shared vertices, to `out`: the part's vertex
+// loop_ids[l][k] is out's shared vertex shared_ids[l][k], whose normal sums the parts' (the mean
+// once finish_shared normalizes it; per-side normals at a crease are the mesh's corners'
+// business), whose target is the smallest and whose curvature the largest of them; the part's
+// other vertices are appended with their target, mac and shape index (the tracker's), then its
+// triangles.
+void add_part(CreaseMesh& out, const Mesh& part, const std::vector<std::vector<int>>& loop_ids,
+              const std::vector<std::vector<int>>& shared_ids, std::span<const double> target,
+              std::span<const double> mac, std::span<const double> shape_index);
+// Normalizes the first `shared` vertices' summed normals.
+// \throw CreaseLayoutError "adaptive: <unreached> near <point>" for one no part reached.
+void finish_shared(CreaseMesh& out, std::size_t shared, const std::string& unreached);
 
 // Lays out `creases` (from trace_creases on `field`) and meshes every patch they bound, its
 // fronts looking ahead with `look_ahead_gradation` (Settings::look_ahead_gradation;

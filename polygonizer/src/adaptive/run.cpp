@@ -123,7 +123,7 @@ void Run::track() {
 
 void Run::drop_blocks(const char* why) {
   if (!blocks.mesh) return;
-  blocks.fallback = why;
+  blocks.report.fallback = why;
   blocks.mesh.reset();
   blocks.components = 0;
 }

@@ -116,22 +116,11 @@ void Run::write_stats() {
   c.across_black_box = kink_in_black_box(ctx.field, tracking.tightest);
 
   BlocksReport& b = r.blocks;
+  b = blocks.report;
   b.requested = ctx.options.blocks;
   b.used = blocks.mesh.has_value();
-  b.blocks = blocks.blocks;
-  b.cuts = blocks.cuts;
-  b.meshed_blocks = blocks.meshed_blocks;
-  b.corners = blocks.corners;
-  b.estimated_triangles = blocks.estimated_triangles;
-  b.seams = blocks.seams;
-  b.seam_vertices = blocks.seam_vertices;
   b.components = blocks.components;
   b.steps = blocks.mesh ? blocks.mesh->steps : 0;
-  b.threads = blocks.threads;
-  b.layout_seconds = blocks.layout_seconds;
-  b.seconds = blocks.seconds;
-  b.block_seconds = blocks.block_seconds;
-  b.fallback = blocks.fallback;
   add_wall_quality(result.mesh, b);
 
   r.quality = quality;

@@ -76,10 +76,10 @@ TEST(AdaptiveBlocks, TheBlocksMeshTheSameInAnyOrder) {
   Settings settings = s.settings;
   settings.hash_cell = seeds.hash_cell;
   const BlockMeshing first = mesh_blocks(*s.field, s.options, settings, seeds);
-  ASSERT_TRUE(first.mesh) << first.fallback;
+  ASSERT_TRUE(first.mesh) << first.report.fallback;
   for (const std::uint64_t shuffle : {1u, 2u, 3u}) {
     const BlockMeshing other = mesh_blocks(*s.field, s.options, settings, seeds, shuffle);
-    ASSERT_TRUE(other.mesh) << other.fallback;
+    ASSERT_TRUE(other.mesh) << other.report.fallback;
     expect_same_mesh(first.mesh->mesh, other.mesh->mesh, "order " + std::to_string(shuffle));
   }
 }
