@@ -3,6 +3,7 @@
 #include "edge_length.h"
 #include "missed_necks.h"
 #include "../parallel.h"
+#include "../union_find.h"
 
 #include <cdp/core/curvature.h>
 #include <cdp/core/mesh_topology.h>
@@ -669,14 +670,58 @@ struct BlockPart {
   std::vector<double> target, mac, shape_index;
   std::size_t steps = 0, splits = 0, merges = 0, forced_closures = 0, patch_refusals = 0;
   std::vector<CriticalStart> critical_starts;
+  QualityReport quality;
   double seconds = 0;
   std::exception_ptr error;  // what its tracker threw, kept for the block order to decide
 };
 
+// Repairs a block's mesh with its seams kept (quality.h), then renumbers what the part keeps per
+// vertex: the seams' ids, and the target and curvature, measured again where the repair moved
+// or added a vertex (a target from the sizing alone there: the blocks' fronts are done).
+void repair_block(const Field& field, const Settings& settings, QualityOptions qo, BlockPart& part) {
+  qo.keep_boundary = true;
+  qo.count_near_boundary = false;
+  qo.threads = 1;  // the blocks are the parallel part
+  // The aim is the whole mesh's mean, which no block knows: repair_mesh searches the whole mesh
+  // where that is over it.
+  qo.aim_mean_edge_ratio = 0;
+  const std::vector<Vec3> before = part.mesh.positions;
+  std::vector<int> renumbered;
+  part.quality = improve_mesh(field, part.mesh, qo, &renumbered);
+  for (auto& ids : part.ids)
+    for (int& v : ids) {
+      v = renumbered[static_cast<std::size_t>(v)];
+      if (v < 0) throw std::logic_error("adaptive: a block's repair removed a seam vertex");
+    }
+  const std::size_t n = part.mesh.positions.size();
+  std::vector<double> target(n), mac(n), shape(n);
+  std::vector<char> kept(n, 0), moved(n, 0);  // from an input vertex; and moved by the repair
+  for (std::size_t v = 0; v < renumbered.size(); ++v) {
+    if (renumbered[v] < 0) continue;
+    const auto r = static_cast<std::size_t>(renumbered[v]);
+    kept[r] = 1;
+    target[r] = part.target[v];
+    mac[r] = part.mac[v];
+    shape[r] = part.shape_index[v];
+    moved[r] = part.mesh.positions[r] != before[v];
+  }
+  for (std::size_t v = 0; v < n; ++v) {
+    if (kept[v] && !moved[v]) continue;
+    const Curvature c = curvature_at(field, part.mesh.positions[v]);
+    mac[v] = c.mac;
+    shape[v] = c.shape_index;
+    if (!kept[v]) target[v] = edge_length(settings.sizing, c.min_radius);
+  }
+  part.target = std::move(target);
+  part.mac = std::move(mac);
+  part.shape_index = std::move(shape);
+}
+
+
 }  // namespace
 
 BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, const Settings& settings,
-                         const SeedGridStage& seeds, std::uint64_t shuffle) {
+                         const SeedGridStage& seeds, const QualityOptions* repair, std::uint64_t shuffle) {
   const auto start = Clock::now();
   BlockMeshing out;
   out.report.estimated_triangles = seeds.estimated_triangles;
@@ -800,6 +845,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       part.forced_closures = tracker.forced_closures();
       part.patch_refusals = tracker.patch_refusals();
       part.critical_starts = tracker.critical_starts();
+      if (repair) repair_block(field, settings, *repair, part);
       part.seconds = seconds_since(t0);
     };
     const auto mesh_block = [&](std::size_t blk) {
@@ -844,6 +890,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       cm.splits += part.splits;
       cm.merges += part.merges;
       cm.patch_refusals += part.patch_refusals;
+      add_repair_counts(out.quality, part.quality);
       out.critical_starts.insert(out.critical_starts.end(), part.critical_starts.begin(), part.critical_starts.end());
       part = BlockPart{};  // copied: freed as the assembly goes
     }
@@ -853,7 +900,15 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
                                " triangles, over max_triangles " + std::to_string(settings.max_triangles));
     finish_shared(cm, ns, "a seam vertex no block reached");
     cm.crease_vertices = 0;  // seam vertices are ordinary surface points: the repair may move them
-    out.components = analyze_topology(mesh).components;
+    // Components by shared vertices (the checks after the repair find any that meet at a vertex
+    // alone): a pass over the triangles, where analyze_topology's edge sort was a second serial
+    // pass over the mesh, as long as a sixth of the blocks' own time on two threads.
+    UnionFind joined(mesh.positions.size());
+    for (const auto& t : mesh.triangles) {
+      joined.unite(t[0], t[1]);
+      joined.unite(t[0], t[2]);
+    }
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) out.components += joined.find(static_cast<int>(v)) == static_cast<int>(v);
     out.mesh = std::move(cm);
   } catch (const CreaseLayoutError& e) {
     out.report.fallback = e.what();

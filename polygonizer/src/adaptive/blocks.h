@@ -19,6 +19,7 @@
 
 #include "crease_patches.h"
 #include "missed_necks.h"
+#include "quality.h"
 #include "stage_seed_grid.h"
 
 #include <cdp/core/adaptive_report.h>
@@ -39,6 +40,10 @@ struct BlockMeshing {
   // The blocks' trackers' vertices near critical points of F (Tracker::critical_starts), in
   // block order: where the neck search (check_necks) looks for necks their fronts stepped over.
   std::vector<CriticalStart> critical_starts;
+  // With a repair (mesh_blocks' `repair`): what the blocks' repairs did, summed over them (their
+  // seams kept; the triangles beyond the tolerance near a seam are left to the band's repair,
+  // repair_band, and not counted here).
+  QualityReport quality;
   // The stage's part of the run's stats (adaptive_report.h): the blocks, cuts, seams, times
   // (block_seconds: what the projected speedups at more threads are computed from) and the
   // fallback; the run adds what it alone knows (requested, used, components, steps, wall_*).
@@ -52,8 +57,12 @@ struct BlockMeshing {
 // in block order decides): the caller then meshes the whole surface by tracking alone. Only for
 // a surface without followed creases. The blocks run largest first; with `shuffle` nonzero, in
 // an order drawn from it instead (the tests' check that the order changes nothing).
+// `repair` (optional): each block's mesh is repaired in its task (improve_mesh with its seams
+// kept, QualityOptions::keep_boundary), and its vertices' curvature measured again where the
+// repair moved them; the band around the seams is the caller's to repair (repair_band).
 // \throw CancelledError, and what the field's evaluations throw (the first block's in block order).
 BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, const Settings& settings,
-                         const SeedGridStage& seeds, std::uint64_t shuffle = 0);
+                         const SeedGridStage& seeds, const QualityOptions* repair = nullptr,
+                         std::uint64_t shuffle = 0);
 
 }  // namespace cdp::adaptive

@@ -50,6 +50,7 @@ QualityReport run_repair(RepairContext& ctx) {
     beyond = measure_densely(ctx, ctx.merged(left, ctx.since_check_));
   }
   for (const Beyond& b : beyond) {
+    if (!ctx.options_.count_near_boundary && ctx.near_boundary(b.T)) continue;  // the caller measures it again
     ++ctx.report_.over_tolerance;
     if (!(b.d <= ctx.report_.over_tolerance_worst)) {
       ctx.report_.over_tolerance_worst = b.d;
@@ -63,14 +64,46 @@ QualityReport run_repair(RepairContext& ctx) {
 }  // namespace
 }  // namespace repair
 
-QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions& options) {
+QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions& options,
+                           std::vector<int>* renumbered) {
   if (mesh.normals.size() != mesh.positions.size())
     throw std::logic_error("improve_mesh: the mesh needs one normal per vertex");
+  if (renumbered) {
+    renumbered->resize(mesh.positions.size());
+    std::iota(renumbered->begin(), renumbered->end(), 0);
+  }
   if (mesh.triangles.empty()) return {};
   repair::RepairContext ctx(field, mesh, options);
   QualityReport report = repair::run_repair(ctx);
+  if (renumbered) *renumbered = std::move(ctx.renumbered_);
   ctx.release();
   return report;
+}
+
+void add_repair_counts(QualityReport& sum, const QualityReport& r) {
+  sum.repair_below_degrees = r.repair_below_degrees;
+  sum.bad_before += r.bad_before;
+  sum.bad_after += r.bad_after;
+  sum.flips += r.flips;
+  sum.moves += r.moves;
+  sum.collapses += r.collapses;
+  sum.relaxed += r.relaxed;
+  sum.relax_flips += r.relax_flips;
+  sum.relax_searched += r.relax_searched;
+  sum.relax_search_sweeps = std::max(sum.relax_search_sweeps, r.relax_search_sweeps);
+  sum.relax_crossings += r.relax_crossings;
+  sum.splits += r.splits;
+  sum.inserts += r.inserts;
+  sum.last_resorts += r.last_resorts;
+  sum.crease_vertices += r.crease_vertices;
+  sum.measured_densely += r.measured_densely;
+  sum.refine_measured += r.refine_measured;
+  sum.refine_cleared += r.refine_cleared;
+  sum.over_tolerance += r.over_tolerance;
+  if (!(r.over_tolerance_worst <= sum.over_tolerance_worst)) {
+    sum.over_tolerance_worst = r.over_tolerance_worst;
+    sum.over_tolerance_near = r.over_tolerance_near;
+  }
 }
 
 }  // namespace cdp::adaptive

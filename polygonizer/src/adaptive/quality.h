@@ -23,6 +23,7 @@
 #include <cdp/core/mesh.h>
 
 #include <cstddef>
+#include <vector>
 
 namespace cdp::adaptive {
 
@@ -58,11 +59,28 @@ struct QualityOptions {
   // any number.
   int threads = 0;
   CancelToken cancel;  // polled in every round and sweep (cancel.h)
+  // An open mesh (a block's piece of surface, a band cut out of a mesh): the vertices on its
+  // boundary edges stay where they are and keep their index (never moved, removed or merged),
+  // and no boundary edge is flipped or split, so that the piece still fits what lies beyond it.
+  bool keep_boundary = false;
+  // With keep_boundary, whether over_tolerance counts the triangles beyond the tolerance that
+  // touch a boundary vertex or a neighbour of one: false where the caller repairs that band
+  // again and measures it there (the blocks, blocks.h).
+  bool count_near_boundary = true;
 };
 
 // Repairs `mesh` in place (positions, normals, triangles; vertices and triangles that
-// collapses remove are dropped, so indices change where anything was collapsed). The mesh must be
-// closed, oriented and manifold, with one unit normal per vertex.
-QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions& options);
+// collapses remove are dropped, so indices change where anything was collapsed; vertices the
+// splits add come last). `renumbered` (optional): each input vertex's index in the result, -1
+// for one removed.
+// \pre the mesh is oriented and manifold, with one unit normal per vertex, and closed unless
+//      options.keep_boundary.
+QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions& options,
+                           std::vector<int>* renumbered = nullptr);
+
+// Adds the counts of one repair's report to `sum` (repairs of parts of one mesh: the blocks',
+// the band's): counts summed, the search sweeps' most, the worst distance beyond the tolerance
+// kept with where it was.
+void add_repair_counts(QualityReport& sum, const QualityReport& r);
 
 }  // namespace cdp::adaptive

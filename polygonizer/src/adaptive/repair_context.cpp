@@ -145,6 +145,22 @@ bool RepairContext::on_crease(int v) {
   return crease;
 }
 
+void RepairContext::mark_boundary() {
+  fixed_.assign(mesh_.positions.size(), 0);
+  for (int t = 0; t < tri_count(); ++t) {
+    poll(static_cast<std::size_t>(t));
+    const Tri& x = mesh_.triangles[t];
+    for (int k = 0; k < 3; ++k)
+      if (across(t, x[k], x[(k + 1) % 3]) < 0) fixed_[x[k]] = fixed_[x[(k + 1) % 3]] = 1;
+  }
+  // Only the boundary's own vertices are kept, so its neighbours are the same ones at the end.
+  near_fixed_ = fixed_;
+  for (std::size_t v = 0; v < fixed_.size(); ++v)
+    if (fixed_[v])
+      for (int u : vt_[v])
+        for (int w : mesh_.triangles[u]) near_fixed_[w] = 1;
+}
+
 int RepairContext::across(int t, int a, int b) const {
   int found = -1;
   for (int u : vt_[a]) {
@@ -289,10 +305,13 @@ void RepairContext::compact() {
   out.normals.reserve(mesh_.positions.size());
   out.triangles.reserve(mesh_.triangles.size());
   int next = 0;
+  for (int v : dead_vertex_)
+    if (static_cast<std::size_t>(v) < renumbered_.size()) renumbered_[v] = -1;
   for (std::size_t v = 0; v < mesh_.positions.size(); ++v) {
     poll(v);
     if (remap[v] < 0) continue;
     remap[v] = next++;
+    if (v < renumbered_.size()) renumbered_[v] = remap[v];
     out.positions.push_back(mesh_.positions[v]);
     out.normals.push_back(mesh_.normals[v]);
   }

@@ -164,6 +164,9 @@ class RepairContext {
       throw;
     }
     stamp_.assign(mesh_.triangles.size(), 0);
+    renumbered_.resize(mesh_.positions.size());
+    std::iota(renumbered_.begin(), renumbered_.end(), 0);
+    if (options_.keep_boundary) mark_boundary();
   }
   ~RepairContext() { release_if_cancelled(); }
 
@@ -331,6 +334,19 @@ class RepairContext {
 
   // ---- crease vertices
   bool on_crease(int v);
+
+  // ---- the boundary kept (QualityOptions::keep_boundary)
+  // Marks the ends of every edge with one triangle.
+  void mark_boundary();
+  // Whether v lies on the boundary (never moved, removed or merged). Vertices the splits add
+  // never do.
+  bool fixed(int v) const { return static_cast<std::size_t>(v) < fixed_.size() && fixed_[v]; }
+  // Whether triangle T has a corner on the boundary or next to it.
+  bool near_boundary(const Tri& T) const {
+    for (int v : T)
+      if (static_cast<std::size_t>(v) < near_fixed_.size() && near_fixed_[v]) return true;
+    return false;
+  }
 
   // ---- adjacency
   // The triangle other than t on edge (a, b), or -1.
@@ -550,6 +566,11 @@ class RepairContext {
   unsigned workers_;  // threads of the parallel passes (QualityOptions::threads)
   std::vector<std::vector<int>> vt_;
   std::vector<signed char> crease_;
+  // The input's boundary vertices, and those and their neighbours (mark_boundary); empty
+  // without QualityOptions::keep_boundary.
+  std::vector<char> fixed_, near_fixed_;
+  // Each input vertex's index after compact, -1 when removed.
+  std::vector<int> renumbered_;
   std::vector<char> alive_;
   std::vector<std::uint32_t> stamp_;
   std::uint32_t stamp_id_ = 0;

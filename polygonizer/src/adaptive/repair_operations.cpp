@@ -73,7 +73,7 @@ bool RepairContext::try_flip(int t, int k, bool for_ratio) {
 }
 
 bool RepairContext::try_move(int v) {
-  if (on_crease(v)) return false;
+  if (fixed(v) || on_crease(v)) return false;
   const std::vector<int> ring = neighbours(v);
   if (ring.size() < 3) return false;
   Vec3 centroid = Vec3::Zero();
@@ -153,7 +153,7 @@ bool RepairContext::try_move(int v) {
 
 bool RepairContext::try_collapse(int t, int a, int b, bool apex_onto_crease) {
   const int u = across(t, a, b);
-  if (u < 0) return false;
+  if (u < 0 || fixed(a) || fixed(b)) return false;
   const bool ca = on_crease(a), cb = on_crease(b);
   if (ca && cb && !apex_onto_crease) return false;
   int c = -1, d = -1;

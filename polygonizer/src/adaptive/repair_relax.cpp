@@ -227,7 +227,7 @@ RelaxMoves relax_targets(RepairContext& ctx, const std::vector<char>& mark, bool
   eligible.reserve(mark.size());
   for (int v = 0; v < static_cast<int>(mark.size()); ++v) {
     ctx.poll(static_cast<std::size_t>(v));
-    if (mark[v] && ctx.vt_[v].size() >= 3 && !ctx.on_crease(v)) eligible.push_back(v);
+    if (mark[v] && ctx.vt_[v].size() >= 3 && !ctx.fixed(v) && !ctx.on_crease(v)) eligible.push_back(v);
   }
   std::vector<Vec3> target = ctx.polled_vector<Vec3>(eligible.size(), Vec3::Zero());
   std::vector<double> reach = ctx.polled_vector<double>(eligible.size(), 0);

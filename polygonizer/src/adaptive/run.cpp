@@ -107,7 +107,8 @@ void Run::prepare() {
   // Blocks where no crease patches were meshed: the patches' fronts run serially for now.
   if (ctx.options.blocks && ctx.options.variant == Variant::Improved && !creases.mesh) {
     ctx.enter("tracking", "meshing blocks");
-    blocks = mesh_blocks(ctx.field, ctx.options, settings, seeds);
+    const QualityOptions repair = repair_options(ctx, resolved, creases);
+    blocks = mesh_blocks(ctx.field, ctx.options, settings, seeds, &repair);
   }
 }
 
@@ -150,10 +151,11 @@ std::size_t Run::repair_and_check() {
   if (blocks.mesh) starts.insert(starts.begin(), blocks.critical_starts.begin(), blocks.critical_starts.end());
   check_necks(ctx.field, mesh(), starts, resolved.sizing.min_edge, necks);
   quality = {};
-  quality = repair_mesh(ctx, resolved, seeds, creases, tracking, mesh());
+  BandChanges band;
+  quality = repair_mesh(ctx, resolved, seeds, creases, blocks, tracking, mesh(), band);
   if (resolved.curvature_properties) {
     if (ctx.options.variant != Variant::Improved) ctx.phases.enter("quality");
-    add_curvature_properties(ctx.field, *tracking.tracker, quality, mesh());
+    add_curvature_properties(ctx.field, *tracking.tracker, quality, band, mesh());
   }
   ctx.enter("checks", "checking the mesh");
   return check_mesh(mesh(), expected_components(), ctx.options.check_self_intersections, ctx.options.threads,
@@ -168,8 +170,10 @@ void Run::attempt() {
   try {
     track();
     // The patches' topology before the repair works on it; intersections after (the repair
-    // removes some that chords on the two faces of an acute crease make).
-    if (finished()) {
+    // removes some that chords on the two faces of an acute crease make). Not the blocks': their
+    // pieces were each repaired already, and a NoSurfaceError of the checks after the band's
+    // repair falls back to tracking alone the same way.
+    if (creases.mesh) {
       ctx.enter("checks");
       check_mesh(mesh(), expected_components(), false, ctx.options.threads, ctx.options.cancel);
     }

@@ -5,6 +5,10 @@
 
 #include <cdp/core/curvature.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
 #include <numbers>
 #include <utility>
 #include <vector>
@@ -48,14 +52,38 @@ void check_overlap(const RunContext& run, const SeedGridStage& seeds, const Crea
   }
 }
 
+// The triangles whose smallest angle is under `bound` (radians, under 60 degrees): the angle at
+// the corner facing the shortest edge, compared by its tangent (no arc tangent a triangle).
+std::size_t count_under(const Mesh& mesh, double bound) {
+  const double tan_bound = std::tan(bound);
+  std::size_t n = 0;
+  for (const auto& t : mesh.triangles) {
+    std::array<double, 3> l2;
+    for (int c = 0; c < 3; ++c) l2[c] = (mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[(c + 2) % 3]]).squaredNorm();
+    const int k = static_cast<int>(std::min_element(l2.begin(), l2.end()) - l2.begin());
+    const Vec3& p = mesh.positions[t[k]];
+    const Vec3 u = mesh.positions[t[(k + 1) % 3]] - p, v = mesh.positions[t[(k + 2) % 3]] - p;
+    n += !(u.cross(v).norm() >= tan_bound * u.dot(v));
+  }
+  return n;
+}
+
+// The mean over the triangles of the longest edge over the shortest (the relaxation's measure).
+double mean_edge_ratio(const Mesh& mesh) {
+  double sum = 0;
+  for (const auto& t : mesh.triangles) {
+    std::array<double, 3> l2;
+    for (int c = 0; c < 3; ++c) l2[c] = (mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[(c + 2) % 3]]).squaredNorm();
+    const auto [lo, hi] = std::minmax_element(l2.begin(), l2.end());
+    sum += *lo > 0 ? std::sqrt(*hi / *lo) : std::numeric_limits<double>::infinity();
+  }
+  return mesh.triangles.empty() ? 0 : sum / static_cast<double>(mesh.triangles.size());
+}
+
 }  // namespace
 
-QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const SeedGridStage& seeds,
-                          const CreaseLayout& creases, const Tracking& tracking, Mesh& mesh) {
+QualityOptions repair_options(const RunContext& run, const Settings& resolved, const CreaseLayout& creases) {
   const AdaptiveOptions& options = run.options;
-  if (options.variant != Variant::Improved) return {};
-  check_overlap(run, seeds, creases, tracking, mesh);
-  run.enter("quality", "repairing triangles");
   QualityOptions qo;
   qo.improve_below = kRepairBelowDegrees * std::numbers::pi / 180;
   qo.tolerance = resolved.sizing.mode == SizingMode::Tolerance ? requested_tolerance(options, resolved) : 0;
@@ -82,10 +110,156 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
   const bool across_creases = run.field.has_pieces() && !creases.mesh && !no_crease;
   qo.aim_mean_edge_ratio = across_creases ? 0 : kBoundMeanEdgeRatio;
   qo.measure_near_bound = !across_creases;
-  return improve_mesh(run.field, mesh, qo);
+  return qo;
 }
 
-void add_curvature_properties(const Field& field, const Tracker& tracker, const QualityReport& quality, Mesh& mesh) {
+QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const SeedGridStage& seeds,
+                          const CreaseLayout& creases, const BlockMeshing& blocks, const Tracking& tracking, Mesh& mesh,
+                          BandChanges& band) {
+  band = {};
+  if (run.options.variant != Variant::Improved) return {};
+  check_overlap(run, seeds, creases, tracking, mesh);
+  run.enter("quality", "repairing triangles");
+  const QualityOptions qo = repair_options(run, resolved, creases);
+  if (!blocks.mesh) return improve_mesh(run.field, mesh, qo);
+  QualityReport report = blocks.quality;
+  QualityOptions in_band = qo;
+  in_band.aim_mean_edge_ratio = 0;  // as the blocks': the whole mesh's mean decides (below)
+  QualityReport own =
+      repair_band(run.field, mesh, blocks.report.seam_vertices, blocks.mesh->mesh.positions.size(), in_band, band);
+  add_repair_counts(report, own);
+  // The relaxation's search (QualityOptions::aim_mean_edge_ratio) aims at the whole mesh's mean
+  // edge ratio, which neither a block nor the band knows: where it is over the aim, the whole
+  // mesh is repaired again with the search, as a mesh tracked alone would be (rare: the blocks'
+  // meshes are better shaped; a block's own mean over it made the random blobs at 1e-3 search in
+  // four of their eight blocks, 1.5 times the evaluations of the whole run).
+  if (qo.aim_mean_edge_ratio > 0 && mean_edge_ratio(mesh) > qo.aim_mean_edge_ratio) {
+    const QualityReport whole = improve_mesh(run.field, mesh, qo);
+    add_repair_counts(report, whole);
+    // It measured every triangle against the tolerance: its count is the mesh's.
+    report.over_tolerance = whole.over_tolerance;
+    report.over_tolerance_worst = whole.over_tolerance_worst;
+    report.over_tolerance_near = whole.over_tolerance_near;
+    band = {};  // every vertex measured again (add_curvature_properties)
+  }
+  // Afresh: the blocks' counts include triangles beside a seam that the band's repair changed.
+  report.bad_after = count_under(mesh, qo.improve_below);
+  return report;
+}
+
+QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std::size_t finished, QualityOptions qo,
+                          BandChanges& band) {
+  const std::size_t nv = mesh.positions.size();
+  // The seams and their neighbours.
+  std::vector<char> near(nv, 0);
+  for (std::size_t v = 0; v < std::min(seams, nv); ++v) near[v] = 1;
+  for (const auto& t : mesh.triangles)
+    if (static_cast<std::size_t>(std::min({t[0], t[1], t[2]})) < seams)
+      for (int v : t) near[static_cast<std::size_t>(v)] = 1;
+  // The band: its triangles in mesh order, its vertices numbered in mesh order.
+  std::vector<char> in_band(mesh.triangles.size(), 0);
+  std::vector<int> local(nv, -1);
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    const auto& t = mesh.triangles[i];
+    for (int v : t)
+      if (near[static_cast<std::size_t>(v)] || static_cast<std::size_t>(v) >= finished) in_band[i] = 1;
+    if (in_band[i])
+      for (int v : t) local[static_cast<std::size_t>(v)] = 0;
+  }
+  Mesh part;
+  std::vector<int> global;  // part's vertex -> mesh's
+  for (std::size_t v = 0; v < nv; ++v)
+    if (local[v] == 0) {
+      local[v] = static_cast<int>(global.size());
+      global.push_back(static_cast<int>(v));
+      part.positions.push_back(mesh.positions[v]);
+      part.normals.push_back(mesh.normals[v]);
+    }
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+    if (in_band[i]) {
+      const auto& t = mesh.triangles[i];
+      part.triangles.push_back({local[t[0]], local[t[1]], local[t[2]]});
+    }
+  qo.keep_boundary = true;
+  qo.count_near_boundary = true;
+  std::vector<int> renumbered;
+  const QualityReport report = improve_mesh(field, part, qo, &renumbered);
+
+  // Back into the mesh: its vertices in their order without those removed, then those added.
+  std::vector<int> part_to_mesh(part.positions.size(), -1);
+  std::vector<char> removed(nv, 0);
+  for (std::size_t l = 0; l < global.size(); ++l) {
+    if (renumbered[l] < 0)
+      removed[static_cast<std::size_t>(global[l])] = 1;
+    else
+      part_to_mesh[static_cast<std::size_t>(renumbered[l])] = global[l];
+  }
+  band.renumbered.assign(nv, -1);
+  Mesh out;
+  out.positions.reserve(nv + part.positions.size() - global.size());
+  out.normals.reserve(out.positions.capacity());
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (removed[v]) continue;
+    band.renumbered[v] = static_cast<int>(out.positions.size());
+    out.positions.push_back(mesh.positions[v]);
+    out.normals.push_back(mesh.normals[v]);
+  }
+  for (std::size_t p = 0; p < part.positions.size(); ++p) {
+    int at;
+    if (part_to_mesh[p] >= 0) {
+      at = band.renumbered[static_cast<std::size_t>(part_to_mesh[p])];
+      if (out.positions[static_cast<std::size_t>(at)] == part.positions[p]) continue;
+    } else {
+      at = static_cast<int>(out.positions.size());
+      out.positions.emplace_back();
+      out.normals.emplace_back();
+    }
+    part_to_mesh[p] = -2 - at;  // placed
+    out.positions[static_cast<std::size_t>(at)] = part.positions[p];
+    out.normals[static_cast<std::size_t>(at)] = part.normals[p];
+    band.moved.push_back(at);
+  }
+  // The part's vertex p is the output's vertex out_of(p).
+  const auto out_of = [&](int p) {
+    const int m = part_to_mesh[static_cast<std::size_t>(p)];
+    return m <= -2 ? -2 - m : band.renumbered[static_cast<std::size_t>(m)];
+  };
+  out.triangles.reserve(mesh.triangles.size() + part.triangles.size());
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+    if (!in_band[i]) {
+      const auto& t = mesh.triangles[i];
+      out.triangles.push_back({band.renumbered[t[0]], band.renumbered[t[1]], band.renumbered[t[2]]});
+    }
+  for (const auto& t : part.triangles) out.triangles.push_back({out_of(t[0]), out_of(t[1]), out_of(t[2])});
+  std::sort(band.moved.begin(), band.moved.end());
+  mesh.positions = std::move(out.positions);
+  mesh.normals = std::move(out.normals);
+  mesh.triangles = std::move(out.triangles);
+  return report;
+}
+
+void add_curvature_properties(const Field& field, const Tracker& tracker, const QualityReport& quality,
+                              const BandChanges& band, Mesh& mesh) {
+  if (!band.renumbered.empty()) {
+    // The tracker's (the blocks' measured again where their repairs moved vertices), renumbered,
+    // and measured where the band's repair moved or added a vertex.
+    const std::vector<double>& tmac = tracker.vertex_mac();
+    const std::vector<double>& tshape = tracker.vertex_shape_index();
+    std::vector<double> mac(mesh.positions.size()), shape(mesh.positions.size());
+    for (std::size_t v = 0; v < band.renumbered.size(); ++v)
+      if (band.renumbered[v] >= 0) {
+        mac[static_cast<std::size_t>(band.renumbered[v])] = tmac[v];
+        shape[static_cast<std::size_t>(band.renumbered[v])] = tshape[v];
+      }
+    for (int v : band.moved) {
+      const Curvature c = curvature_at(field, mesh.positions[static_cast<std::size_t>(v)]);
+      mac[static_cast<std::size_t>(v)] = c.mac;
+      shape[static_cast<std::size_t>(v)] = c.shape_index;
+    }
+    mesh.vertex_scalars["mac"] = std::move(mac);
+    mesh.vertex_scalars["shape_index"] = std::move(shape);
+    return;
+  }
   if (quality.moves + quality.relaxed + quality.collapses + quality.splits + quality.inserts == 0) {
     mesh.vertex_scalars["mac"] = tracker.vertex_mac();
     mesh.vertex_scalars["shape_index"] = tracker.vertex_shape_index();

@@ -3,12 +3,14 @@
 // where the repair moved vertices.
 #pragma once
 
+#include "blocks.h"
 #include "quality.h"
 #include "run_context.h"
 #include "stage_creases.h"
 #include "stage_tracking.h"
 
 #include <cstddef>
+#include <vector>
 
 namespace cdp::adaptive {
 
@@ -17,17 +19,44 @@ namespace cdp::adaptive {
 // and aiming the repair at the higher bound leaves the lower one a margin.
 inline constexpr double kRepairBelowDegrees = 30;
 
+// The repair's options for a run: its sizing, tolerance and aims (the blocks' repairs take them
+// too, with their seams kept).
+QualityOptions repair_options(const RunContext& run, const Settings& resolved, const CreaseLayout& creases);
+
+// What the repair of a mesh meshed in blocks (repair_band) changed: each vertex's index after it
+// (-1 for one removed) and the vertices, numbered after it, that it moved or added. Empty where
+// the whole mesh was repaired.
+struct BandChanges {
+  std::vector<int> renumbered;
+  std::vector<int> moved;
+};
+
 // Repairs `mesh` (tracked, the crease patches' components included in `creases`), where the
 // variant repairs. A mesh whose area is well over the seed grid's estimate is checked first
-// (check_mesh): it has a front that ran over finished mesh, which no repair mends.
+// (check_mesh): it has a front that ran over finished mesh, which no repair mends. A mesh
+// adopted from `blocks`, whose blocks each repaired their own, has only the band around their
+// seams and what the tracker added repaired (repair_band; `band` says what changed), and the
+// report sums the blocks' repairs and the band's, with the triangles under the repair's bound
+// counted afresh.
 // `resolved`: the run's settings as the options resolve them.
 // \return what the repair did (empty for Variant::Paper).
 // \throw NoSurfaceError from that check; CancelledError.
 QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const SeedGridStage& seeds,
-                          const CreaseLayout& creases, const Tracking& tracking, Mesh& mesh);
+                          const CreaseLayout& creases, const BlockMeshing& blocks, const Tracking& tracking, Mesh& mesh,
+                          BandChanges& band);
+
+// Repairs, with `qo` and the rest of the mesh kept as it is, the triangles of `mesh` that touch
+// one of its first `seams` vertices (the blocks' seams) or a neighbour of one, and those with a
+// vertex numbered `finished` or more (what the tracker meshed beside the blocks): cut out as one
+// open mesh, repaired with its boundary kept (QualityOptions::keep_boundary), put back with its
+// vertices in their places, those the repair added appended, those it removed dropped.
+QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std::size_t finished, QualityOptions qo,
+                          BandChanges& band);
 
 // The "mac" and "shape_index" vertex scalars (AdaptiveOptions::curvature_properties): the
-// tracker's own where the repair changed nothing, else measured again at every vertex.
-void add_curvature_properties(const Field& field, const Tracker& tracker, const QualityReport& quality, Mesh& mesh);
+// tracker's own where the repair changed nothing, else measured again at every vertex (at the
+// vertices `band` lists, after a band's repair).
+void add_curvature_properties(const Field& field, const Tracker& tracker, const QualityReport& quality,
+                              const BandChanges& band, Mesh& mesh);
 
 }  // namespace cdp::adaptive

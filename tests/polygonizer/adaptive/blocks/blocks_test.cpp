@@ -13,6 +13,8 @@
 #include "src/adaptive/blocks.h"
 #include "src/adaptive/stage_seed_grid.h"
 
+#include <numbers>
+
 namespace cdp::adaptive {
 namespace {
 
@@ -59,11 +61,11 @@ TEST(AdaptiveBlocks, ATorusCutIntoBlocksMeshesSoundWithGoodTrianglesAtTheWalls) 
   EXPECT_LE(b.wall_mean_edge_ratio, 1.25);
 }
 
-TEST(AdaptiveBlocks, TheMeshIsTheSameOnOneTwoAndThreeThreads) {
+TEST(AdaptiveBlocks, TheMeshIsTheSameOnOneTwoThreeAndEightThreads) {
   const auto f = test::field_from_json(kBlockTorus);
   const PolygonizeResult one = polygonize_adaptive(*f, with_blocks(1));
   ASSERT_TRUE(one.stats.adaptive->blocks.used) << one.stats.adaptive->blocks.fallback;
-  for (const int threads : {2, 3}) {
+  for (const int threads : {2, 3, 8}) {
     const PolygonizeResult r = polygonize_adaptive(*f, with_blocks(threads));
     EXPECT_EQ(r.stats.adaptive->blocks.threads, static_cast<unsigned>(threads));
     expect_same_mesh(one.mesh, r.mesh, std::to_string(threads) + " threads");
@@ -75,10 +77,17 @@ TEST(AdaptiveBlocks, TheBlocksMeshTheSameInAnyOrder) {
   const SeedGridStage seeds = sample_seed_grid_stage(*s.field, s.options, s.settings);
   Settings settings = s.settings;
   settings.hash_cell = seeds.hash_cell;
-  const BlockMeshing first = mesh_blocks(*s.field, s.options, settings, seeds);
+  // Each block repaired in its task, as a run does.
+  QualityOptions repair;
+  repair.improve_below = 30 * std::numbers::pi / 180;
+  repair.diagonal = settings.diagonal;
+  repair.min_edge = settings.sizing.min_edge;
+  repair.aim_mean_edge_ratio = 1.25;
+  const BlockMeshing first = mesh_blocks(*s.field, s.options, settings, seeds, &repair);
   ASSERT_TRUE(first.mesh) << first.report.fallback;
+  EXPECT_GT(first.quality.relaxed, 0u);
   for (const std::uint64_t shuffle : {1u, 2u, 3u}) {
-    const BlockMeshing other = mesh_blocks(*s.field, s.options, settings, seeds, shuffle);
+    const BlockMeshing other = mesh_blocks(*s.field, s.options, settings, seeds, &repair, shuffle);
     ASSERT_TRUE(other.mesh) << other.report.fallback;
     expect_same_mesh(first.mesh->mesh, other.mesh->mesh, "order " + std::to_string(shuffle));
   }

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <map>
+#include <set>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -248,6 +250,79 @@ TEST(AdaptiveQuality, ARefusedRelaxationMoveWithAToleranceCountsTheSameOnAnyThre
   EXPECT_EQ(one.relax_crossings, two.relax_crossings);
   EXPECT_GT(evals_one, 0u);
   EXPECT_EQ(evals_one, evals_two);
+}
+
+// A block's piece of surface (blocks.h) is repaired with its seams kept: an open mesh whose
+// boundary vertices must stay where they are, under their own ids, and whose boundary edges must
+// stay, or the piece no longer fits its neighbours.
+TEST(AdaptiveQuality, AnOpenMeshKeepsItsBoundaryVerticesAndEdges) {
+  const auto field = test::field_from_json(R"({"type": "expression",
+      "value": "x^4 - 5*x^2 + y^4 - 5*y^2 + z^4 - 5*z^2 + 11.8", "bounds": [[-3, -3, -3], [3, 3, 3]]})");
+  AdaptiveOptions paper;  // no repair: triangles under 30 degrees to repair
+  paper.variant = Variant::Paper;
+  paper.factor = 1;
+  const Mesh closed = polygonize_adaptive(*field, paper).mesh;
+  // The part x > 0.2 of the tanglecube: open, with boundary loops where the plane cuts it.
+  Mesh open;
+  std::vector<int> id(closed.positions.size(), -1);
+  for (const auto& t : closed.triangles) {
+    if (!((closed.positions[t[0]] + closed.positions[t[1]] + closed.positions[t[2]]).x() > 0.6)) continue;
+    std::array<int, 3> u;
+    for (int k = 0; k < 3; ++k) {
+      int& v = id[static_cast<std::size_t>(t[k])];
+      if (v < 0) {
+        v = static_cast<int>(open.positions.size());
+        open.positions.push_back(closed.positions[t[k]]);
+        open.normals.push_back(closed.normals[t[k]]);
+      }
+      u[k] = v;
+    }
+    open.triangles.push_back(u);
+  }
+  // Boundary edges (one triangle) by their ends' positions.
+  const auto boundary = [](const Mesh& m) {
+    std::map<std::pair<int, int>, int> count;
+    for (const auto& t : m.triangles)
+      for (int k = 0; k < 3; ++k) ++count[std::minmax(t[k], t[(k + 1) % 3])];
+    std::vector<std::pair<Vec3, Vec3>> out;
+    for (const auto& [e, c] : count)
+      if (c == 1) out.push_back({m.positions[e.first], m.positions[e.second]});
+    return out;
+  };
+  const auto before = boundary(open);
+  ASSERT_GT(before.size(), 20u);
+  adaptive::QualityOptions q;
+  q.improve_below = 30 * std::numbers::pi / 180;
+  q.diagonal = 10.4;
+  q.min_edge = 1e-3;
+  q.aim_mean_edge_ratio = 1.25;
+  q.keep_boundary = true;
+  Mesh repaired = open;
+  std::vector<int> renumbered;
+  const QualityReport r = adaptive::improve_mesh(*field, repaired, q, &renumbered);
+  EXPECT_GT(r.bad_before, 0u);
+  EXPECT_GT(r.relaxed + r.moves, 0u);
+  EXPECT_LT(r.bad_after, r.bad_before);
+  EXPECT_EQ(boundary(repaired), before);
+  ASSERT_EQ(renumbered.size(), open.positions.size());
+  // Each boundary vertex under its new id, where it was.
+  std::set<int> on_boundary;
+  for (const auto& t : open.triangles)
+    for (int k = 0; k < 3; ++k) {
+      int shared = 0;
+      for (const auto& u : open.triangles)
+        for (int j = 0; j < 3; ++j) shared += std::minmax(u[j], u[(j + 1) % 3]) == std::minmax(t[k], t[(k + 1) % 3]);
+      if (shared == 1) on_boundary.insert({t[k], t[(k + 1) % 3]});
+    }
+  for (const int v : on_boundary) {
+    ASSERT_GE(renumbered[static_cast<std::size_t>(v)], 0) << "boundary vertex " << v << " removed";
+    EXPECT_EQ(repaired.positions[static_cast<std::size_t>(renumbered[static_cast<std::size_t>(v)])], open.positions[static_cast<std::size_t>(v)]);
+  }
+  const MeshTopology t = analyze_topology(repaired);
+  EXPECT_EQ(t.boundary_edges, before.size());
+  EXPECT_TRUE(t.edge_manifold());
+  EXPECT_TRUE(t.oriented());
+  EXPECT_EQ(t.components, analyze_topology(open).components);
 }
 
 }  // namespace
