@@ -106,6 +106,13 @@ void Run::prepare() {
   }
   // Blocks where no crease patches were meshed: the patches' fronts run serially for now.
   if (ctx.options.blocks && ctx.options.variant == Variant::Improved && !creases.mesh) {
+    // Those bounds are on one tracker's work (its steps; its searches averaged over windows of
+    // Tracker's kSearchWindow steps, more than a block takes): each block's tracker would keep
+    // them on its own, the whole run not.
+    if (ctx.options.max_steps > 0 || ctx.options.max_search_visits > 0) {
+      blocks.report.fallback = "the caller's max_steps or max_search_visits bound one tracker: tracked alone";
+      return;
+    }
     ctx.enter("tracking", "meshing blocks");
     const QualityOptions repair = repair_options(ctx, resolved, creases);
     blocks = mesh_blocks(ctx.field, ctx.options, settings, seeds, &repair);

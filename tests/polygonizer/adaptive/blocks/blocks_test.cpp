@@ -178,5 +178,22 @@ TEST(AdaptiveBlocks, ASurfaceTooSmallForBlocksIsTrackedAlone) {
   EXPECT_TRUE(b.fallback.empty()) << b.fallback;
 }
 
+// max_steps and max_search_visits bound one tracker's work (the searches averaged over windows
+// longer than a block's run): with blocks asked for, a run the caller bounds so is tracked alone,
+// and the bound ends it as it would without blocks.
+TEST(AdaptiveBlocks, ACallersBoundOnSearchesHoldsWithBlocksAskedFor) {
+  const auto f = test::field_from_json(kBlockTorus);
+  AdaptiveOptions o = with_blocks(2);
+  const PolygonizeResult plain = polygonize_adaptive(*f, o);
+  ASSERT_TRUE(plain.stats.adaptive->blocks.used) << plain.stats.adaptive->blocks.fallback;
+  o.max_steps = 10 * plain.stats.triangles;  // far more than the mesh needs
+  const PolygonizeResult bounded = polygonize_adaptive(*f, o);
+  EXPECT_FALSE(bounded.stats.adaptive->blocks.used);
+  EXPECT_NE(bounded.stats.adaptive->blocks.fallback.find("max_steps"), std::string::npos);
+  o.max_steps = 0;
+  o.max_search_visits = 1;
+  EXPECT_THROW(polygonize_adaptive(*f, o), LimitExceededError);
+}
+
 }  // namespace
 }  // namespace cdp::adaptive
