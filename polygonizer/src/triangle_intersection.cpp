@@ -426,7 +426,10 @@ double turn_angle(double y, double x) {
   return x > 0.0 ? atan_unit(y / x) : kPi + atan_unit(y / x);
 }
 
-std::vector<unsigned char> flat_stars(const Mesh& mesh, unsigned workers, const CancelToken* cancel) {
+// `wanted` (optional, one flag per vertex): only those vertices are certified (the others are
+// left uncertified): the vertices of the triangles a restricted check tests.
+std::vector<unsigned char> flat_stars(const Mesh& mesh, unsigned workers, const CancelToken* cancel,
+                                      const std::vector<char>* wanted = nullptr) {
   const std::size_t nv = mesh.positions.size();
   const VertexTriangles stars(mesh, cancel, "self-intersections");
   std::vector<unsigned char> flat(nv, 0);
@@ -488,7 +491,7 @@ std::vector<unsigned char> flat_stars(const Mesh& mesh, unsigned workers, const 
   constexpr std::size_t kBlock = 4096;
   detail::parallel_blocks(nv, kBlock, nv >= 2 * kBlock ? workers : 1, [&](std::size_t begin, std::size_t end, unsigned) {
     if (cancel) cancel->check("self-intersections");
-    for (std::size_t v = begin; v < end; ++v) flat[v] = certify(v) ? 1 : 0;
+    for (std::size_t v = begin; v < end; ++v) flat[v] = (!wanted || (*wanted)[v]) && certify(v) ? 1 : 0;
   });
   return flat;
 }
@@ -531,8 +534,13 @@ std::uint64_t cell_hash(int x, int y, int z) {
 // overlapping pair is tested exactly once, even when distinct cells share a bucket. Large
 // triangles are tested against all others (two large ones from the lower index): at most about
 // (16 + sqrt n) n box comparisons.
+// With `involved`, only the pairs with at least one involved triangle (a bucket with none is
+// passed over).
 void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollector& out, int threads,
-                     const CancelToken* cancel) {
+                     const CancelToken* cancel, const std::vector<char>* involved = nullptr) {
+  const auto either = [involved](int f, int g) {
+    return !involved || (*involved)[static_cast<std::size_t>(f)] || (*involved)[static_cast<std::size_t>(g)];
+  };
   // The preparation's loops poll too: at 2*10^6 triangles they take a few hundred milliseconds.
   const auto poll = [cancel](std::size_t i) {
     if (cancel && i % kPollEvery == 0) cancel->check("self-intersections");
@@ -660,7 +668,13 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   const std::size_t block = std::max(kMinBlock, buckets / (kBlocksPerWorker * workers));
   std::vector<PairCollector> found(workers, PairCollector(out.max_pairs()));
   // Pairs that share a vertex with a flat star do not intersect (see flat_stars): skipped.
-  const std::vector<unsigned char> flat = flat_stars(mesh, workers, cancel);
+  std::vector<char> wanted;  // with `involved`: the vertices of the triangles left in
+  if (involved) {
+    wanted.assign(mesh.positions.size(), 0);
+    for (const int f : live)
+      for (const int v : mesh.triangles[static_cast<std::size_t>(f)]) wanted[static_cast<std::size_t>(v)] = 1;
+  }
+  const std::vector<unsigned char> flat = flat_stars(mesh, workers, cancel, involved ? &wanted : nullptr);
   struct Member {
     Box box;
     int lo[3];
@@ -681,20 +695,23 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
       if (start[b + 1] - start[b] < 2) continue;
       // A triangle with several cells in the bucket appears several times, consecutively.
       list.clear();
+      bool any = !involved;
       for (std::uint32_t e = start[b]; e < start[b + 1]; ++e) {
         const int f = members[e];
         if (!list.empty() && list.back().id == f) continue;
+        any = any || (*involved)[static_cast<std::size_t>(f)];
         const CellRange& r = ranges[static_cast<std::size_t>(f)];
         const auto& t = mesh.triangles[static_cast<std::size_t>(f)];
         const auto flat_or_none = [&](int v) { return flat[static_cast<std::size_t>(v)] ? v : -1; };
         list.push_back({boxes[static_cast<std::size_t>(f)], {r.lo[0], r.lo[1], r.lo[2]}, f,
                         {flat_or_none(t[0]), flat_or_none(t[1]), flat_or_none(t[2])}});
       }
+      if (!any) continue;
       for (std::size_t i = 0; i + 1 < list.size(); ++i) {
         const Member& p = list[i];
         for (std::size_t j = i + 1; j < list.size(); ++j) {
           const Member& q = list[j];
-          if (!boxes_overlap(p.box, q.box)) continue;
+          if (!boxes_overlap(p.box, q.box) || !either(p.id, q.id)) continue;
           // The pair is tested in the bucket of the cell c of the lower corner of the boxes'
           // intersection (in both boxes, so both triangles are listed there): once. c's place
           // in its block (the bucket's low bits) is enough: a triangle spans fewer than 8 cells
@@ -715,7 +732,7 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
     const Box& p = boxes[static_cast<std::size_t>(f)];
     for (const int g : live) {
       if (g == f || (is_large[static_cast<std::size_t>(g)] && g < f)) continue;
-      if (!boxes_overlap(p, boxes[static_cast<std::size_t>(g)])) continue;
+      if (!boxes_overlap(p, boxes[static_cast<std::size_t>(g)]) || !either(f, g)) continue;
       test(std::min(f, g), std::max(f, g));
     }
   }
@@ -814,6 +831,76 @@ std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::
   const std::vector<Box> boxes = boxes_for_intersection(mesh, nullptr, "self_intersecting_pairs", cancel);
   PairCollector out(max_pairs);
   hash_grid_pairs(mesh, boxes, out, threads, cancel);
+  return out.sorted_pairs();
+}
+
+namespace {
+
+// Empties the box of every triangle not involved whose box touches no cell of a coarse grid that
+// an involved triangle's box touches: it overlaps no involved box, so it is in no pair to test,
+// and the hash grid (whose cost is most of all triangles' entries) leaves it out. Cells of
+// kCoarseCellEdges median involved box sides; with more than kMaxCoarseCells cells, nothing is
+// left out.
+void leave_out_far_from_involved(std::vector<Box>& boxes, const std::vector<char>& involved, const CancelToken* cancel) {
+  constexpr double kCoarseCellEdges = 2;
+  constexpr double kMaxCoarseCells = 1 << 27;  // a bit each: 16 MB
+  const auto live = [&](std::size_t f) { return (boxes[f].min.array() <= boxes[f].max.array()).all(); };
+  std::vector<double> sides;
+  Box all{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
+  for (std::size_t f = 0; f < boxes.size(); ++f) {
+    if (cancel && f % kPollEvery == 0) cancel->check("self-intersections");
+    if (!live(f)) continue;
+    all.min = all.min.cwiseMin(boxes[f].min);
+    all.max = all.max.cwiseMax(boxes[f].max);
+    if (involved[f]) sides.push_back((boxes[f].max - boxes[f].min).maxCoeff());
+  }
+  if (sides.empty() || !(all.min.array() <= all.max.array()).all()) return;
+  std::nth_element(sides.begin(), sides.begin() + static_cast<std::ptrdiff_t>(sides.size() / 2), sides.end());
+  const double h = kCoarseCellEdges * sides[sides.size() / 2];
+  if (!(h > 0)) return;
+  const Vec3 extent = all.max - all.min;
+  std::array<long long, 3> dims{};
+  double cells = 1;
+  for (int a = 0; a < 3; ++a) {
+    dims[a] = static_cast<long long>(extent[a] / h) + 1;
+    cells *= static_cast<double>(dims[a]);
+  }
+  if (!(cells <= kMaxCoarseCells)) return;
+  const auto cell = [&](double x, int a) {
+    return std::clamp(static_cast<long long>((x - all.min[a]) / h), 0LL, dims[a] - 1);
+  };
+  std::vector<bool> marked(static_cast<std::size_t>(cells), false);
+  // Calls fn(index) for every coarse cell box f touches, until fn returns true.
+  const auto any_cell = [&](std::size_t f, const auto& fn) {
+    const Box& b = boxes[f];
+    for (long long z = cell(b.min.z(), 2); z <= cell(b.max.z(), 2); ++z)
+      for (long long y = cell(b.min.y(), 1); y <= cell(b.max.y(), 1); ++y)
+        for (long long x = cell(b.min.x(), 0); x <= cell(b.max.x(), 0); ++x)
+          if (fn(static_cast<std::size_t>((z * dims[1] + y) * dims[0] + x))) return true;
+    return false;
+  };
+  for (std::size_t f = 0; f < boxes.size(); ++f) {
+    if (cancel && f % kPollEvery == 0) cancel->check("self-intersections");
+    if (involved[f] && live(f)) any_cell(f, [&](std::size_t c) { return marked[c] = true, false; });
+  }
+  for (std::size_t f = 0; f < boxes.size(); ++f) {
+    if (cancel && f % kPollEvery == 0) cancel->check("self-intersections");
+    if (!involved[f] && live(f) && !any_cell(f, [&](std::size_t c) { return bool(marked[c]); }))
+      boxes[f] = {Vec3::Ones(), Vec3::Zero()};
+  }
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> self_intersecting_pairs_involving(const Mesh& mesh, const std::vector<char>& involved,
+                                                                   std::size_t max_pairs, int threads,
+                                                                   const CancelToken* cancel) {
+  if (involved.size() != mesh.triangles.size())
+    throw InvalidInputError("self_intersecting_pairs_involving: expects one flag per triangle");
+  std::vector<Box> boxes = boxes_for_intersection(mesh, nullptr, "self_intersecting_pairs", cancel);
+  leave_out_far_from_involved(boxes, involved, cancel);
+  PairCollector out(max_pairs);
+  hash_grid_pairs(mesh, boxes, out, threads, cancel, &involved);
   return out.sorted_pairs();
 }
 

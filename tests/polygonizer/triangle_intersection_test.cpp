@@ -399,5 +399,30 @@ TEST(TriangleIntersection, InvalidMeshesThrow) {
   EXPECT_THROW(triangles_intersect(m, 0, 4), InvalidInputError);
 }
 
+// The check restricted to pairs with an involved triangle finds exactly the full check's pairs
+// that have one, on soups of varied sizes (the coarse grid that leaves the others out, the large
+// triangles' loop) and on overlapping spheres, with a share of the triangles involved from none
+// to all.
+TEST(TriangleIntersection, PairsInvolvingFlaggedTrianglesAreTheFullChecksWithOne) {
+  std::vector<Mesh> meshes{varied_soup(21, 3000, false), varied_soup(22, 3000, true),
+                           merged(icosphere(3), icosphere(3, Vec3(0.31, 0.7, -0.2), 0.8)), huge_over_small(450)};
+  std::mt19937_64 rng(5);
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
+    const Mesh& m = meshes[i];
+    const Pairs all = self_intersecting_pairs(m, kAll);
+    ASSERT_GT(all.size(), 10u) << i;
+    for (const double share : {0.0, 0.02, 0.3, 1.0}) {
+      std::vector<char> involved(m.triangles.size());
+      std::bernoulli_distribution pick(share);
+      for (auto& f : involved) f = pick(rng);
+      Pairs expected;
+      for (const auto& [f, g] : all)
+        if (involved[static_cast<std::size_t>(f)] || involved[static_cast<std::size_t>(g)]) expected.push_back({f, g});
+      EXPECT_EQ(self_intersecting_pairs_involving(m, involved, kAll, 2), expected) << "mesh " << i << " share " << share;
+    }
+  }
+  EXPECT_THROW(self_intersecting_pairs_involving(meshes[0], std::vector<char>(3, 1)), InvalidInputError);
+}
+
 }  // namespace
 }  // namespace cdp

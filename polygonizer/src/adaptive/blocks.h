@@ -40,6 +40,14 @@ struct BlockMeshing {
   // The blocks' trackers' vertices near critical points of F (Tracker::critical_starts), in
   // block order: where the neck search (check_necks) looks for necks their fronts stepped over.
   std::vector<CriticalStart> critical_starts;
+  // Each meshed block's own vertices in `mesh` ([begin, end), seam vertices excluded) and its box:
+  // a triangle of three of them whose box lies strictly inside it was in its block's check for
+  // self-intersections and can meet no other block's (sealed_triangles).
+  struct Own {
+    std::size_t begin, end;
+    Vec3 lo, hi;
+  };
+  std::vector<Own> own;
   // With a repair (mesh_blocks' `repair`): what the blocks' repairs did, summed over them (their
   // seams kept; the triangles beyond the tolerance near a seam are left to the band's repair,
   // repair_band, and not counted here).
@@ -59,10 +67,20 @@ struct BlockMeshing {
 // an order drawn from it instead (the tests' check that the order changes nothing).
 // `repair` (optional): each block's mesh is repaired in its task (improve_mesh with its seams
 // kept, QualityOptions::keep_boundary), and its vertices' curvature measured again where the
-// repair moved them; the band around the seams is the caller's to repair (repair_band).
+// repair moved them; the band around the seams is the caller's to repair (repair_band). With
+// options.check_self_intersections, each block's mesh is checked for intersecting triangles in
+// its task too (a block whose mesh intersects itself fails as a stalled one does); the pairs
+// across blocks and around the seams are the caller's (sealed_triangles).
 // \throw CancelledError, and what the field's evaluations throw (the first block's in block order).
 BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, const Settings& settings,
                          const SeedGridStage& seeds, const QualityOptions* repair = nullptr,
                          std::uint64_t shuffle = 0);
+
+// Per triangle of `mesh` (the blocks' mesh as adopted, before the band's repair): whether it is
+// sealed, one of a block's own triangles (three of its own vertices, BlockMeshing::own) whose box
+// lies strictly inside the block's. Two sealed triangles of one block were in its own check; of
+// two blocks, their boxes are apart. So only the pairs with a triangle not sealed are left to
+// check (self_intersecting_pairs_involving).
+std::vector<char> sealed_triangles(const BlockMeshing& blocks, const Mesh& mesh);
 
 }  // namespace cdp::adaptive

@@ -166,7 +166,7 @@ std::size_t Run::repair_and_check() {
   }
   ctx.enter("checks", "checking the mesh");
   return check_mesh(mesh(), expected_components(), ctx.options.check_self_intersections, ctx.options.threads,
-                    ctx.options.cancel);
+                    ctx.options.cancel, &band.sealed);
 }
 
 void Run::attempt() {

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace cdp::adaptive {
 
@@ -32,12 +33,14 @@ std::string describe_point(const Vec3& p);
 // (unless `check_intersections` is off) no two triangles may intersect (fronts that crossed each
 // other). (A test of triangles against the vertex normals was tried and dropped: the MPU
 // models' correct meshes have triangles whose face turns more than 120 degrees from a noisy
-// vertex normal.) `threads` as AdaptiveOptions::threads.
+// vertex normal.) `threads` as AdaptiveOptions::threads. `sealed` (optional, one flag per
+// triangle): triangles known apart from one another (blocks' triangles, sealed_triangles), whose
+// pairs are not tested.
 // \return the mesh's components (== seeds).
 // \throw NoSurfaceError naming the place of the first failure.
 // \throw CancelledError when `cancel` is set during the intersection test.
 std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersections, int threads,
-                       const CancelToken& cancel);
+                       const CancelToken& cancel, const std::vector<char>* sealed = nullptr);
 
 // A neck or tunnel a front stepped over (check_necks). A NoSurfaceError that the crease-aware
 // meshing does not fall back from: the recoveries zone the neck instead (Run::zone_missed_necks).

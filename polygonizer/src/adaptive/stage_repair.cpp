@@ -125,8 +125,10 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
   QualityReport report = blocks.quality;
   QualityOptions in_band = qo;
   in_band.aim_mean_edge_ratio = 0;  // as the blocks': the whole mesh's mean decides (below)
-  QualityReport own =
-      repair_band(run.field, mesh, blocks.report.seam_vertices, blocks.mesh->mesh.positions.size(), in_band, band);
+  const std::vector<char> sealed =
+      run.options.check_self_intersections ? sealed_triangles(blocks, mesh) : std::vector<char>{};
+  QualityReport own = repair_band(run.field, mesh, blocks.report.seam_vertices, blocks.mesh->mesh.positions.size(),
+                                  in_band, band, sealed.empty() ? nullptr : &sealed);
   add_repair_counts(report, own);
   // The relaxation's search (QualityOptions::aim_mean_edge_ratio) aims at the whole mesh's mean
   // edge ratio, which neither a block nor the band knows: where it is over the aim, the whole
@@ -148,7 +150,7 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
 }
 
 QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std::size_t finished, QualityOptions qo,
-                          BandChanges& band) {
+                          BandChanges& band, const std::vector<char>* sealed) {
   const std::size_t nv = mesh.positions.size();
   // The seams and their neighbours.
   std::vector<char> near(nv, 0);
@@ -229,8 +231,10 @@ QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std
     if (!in_band[i]) {
       const auto& t = mesh.triangles[i];
       out.triangles.push_back({band.renumbered[t[0]], band.renumbered[t[1]], band.renumbered[t[2]]});
+      if (sealed) band.sealed.push_back((*sealed)[i]);
     }
   for (const auto& t : part.triangles) out.triangles.push_back({out_of(t[0]), out_of(t[1]), out_of(t[2])});
+  if (sealed) band.sealed.resize(out.triangles.size(), 0);
   std::sort(band.moved.begin(), band.moved.end());
   mesh.positions = std::move(out.positions);
   mesh.normals = std::move(out.normals);

@@ -29,6 +29,9 @@ QualityOptions repair_options(const RunContext& run, const Settings& resolved, c
 struct BandChanges {
   std::vector<int> renumbered;
   std::vector<int> moved;
+  // Per triangle after it: sealed (sealed_triangles, blocks.h) and outside the band, so that the
+  // final check tests no pair of two such (check_mesh's `sealed`). Empty: test every pair.
+  std::vector<char> sealed;
 };
 
 // Repairs `mesh` (tracked, the crease patches' components included in `creases`), where the
@@ -50,8 +53,10 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
 // vertex numbered `finished` or more (what the tracker meshed beside the blocks): cut out as one
 // open mesh, repaired with its boundary kept (QualityOptions::keep_boundary), put back with its
 // vertices in their places, those the repair added appended, those it removed dropped.
+// `sealed` (optional, one flag per triangle of `mesh`): carried over to band.sealed for the
+// triangles outside the band, 0 for the band's.
 QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std::size_t finished, QualityOptions qo,
-                          BandChanges& band);
+                          BandChanges& band, const std::vector<char>* sealed = nullptr);
 
 // The "mac" and "shape_index" vertex scalars (AdaptiveOptions::curvature_properties): the
 // tracker's own where the repair changed nothing, else measured again at every vertex (at the

@@ -50,6 +50,14 @@ bool triangles_intersect(const Mesh& mesh, int f, int g);
 // \throw LimitExceededError when the hash grid would hold 2^32 entries.
 std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs = 16,
                                                          int threads = 0, const CancelToken* cancel = nullptr);
+// self_intersecting_pairs among the pairs with at least one triangle whose flag in `involved` is
+// set (one flag per triangle): for a caller who knows the others apart (the adaptive
+// polygonizer's blocks, each checked on its own, whose triangles lie strictly inside them).
+// \throw InvalidInputError for a flag count other than the triangle count, and as
+//        self_intersecting_pairs; LimitExceededError as self_intersecting_pairs.
+std::vector<std::pair<int, int>> self_intersecting_pairs_involving(const Mesh& mesh, const std::vector<char>& involved,
+                                                                   std::size_t max_pairs = 16, int threads = 0,
+                                                                   const CancelToken* cancel = nullptr);
 // The number of such pairs (the same search).
 // \throw InvalidInputError and LimitExceededError as self_intersecting_pairs.
 std::size_t count_self_intersecting_pairs(const Mesh& mesh, int threads = 0);

@@ -5,12 +5,14 @@
 
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/mesh_topology.h>
+#include <cdp/core/triangle_intersection.h>
 #include <cdp/io/field_factory.h>
 
 #include "common/test_fields.h"
 #include "polygonizer/adaptive/stage_fixtures.h"
 #include "polygonizer/mesh_checks.h"
 #include "src/adaptive/blocks.h"
+#include "src/adaptive/stage_checks.h"
 #include "src/adaptive/stage_seed_grid.h"
 
 #include <numbers>
@@ -193,6 +195,41 @@ TEST(AdaptiveBlocks, ACallersBoundOnSearchesHoldsWithBlocksAskedFor) {
   o.max_steps = 0;
   o.max_search_visits = 1;
   EXPECT_THROW(polygonize_adaptive(*f, o), LimitExceededError);
+}
+
+// The final check tests only the pairs with a triangle that is not sealed (sealed_triangles: a
+// block's own, strictly inside its block, checked in its task): most of a block mesh is sealed,
+// and a triangle that is not (one the band's repair made) is still tested against sealed ones.
+TEST(AdaptiveBlocks, TheFinalCheckTestsEveryTriangleThatIsNotSealedAgainstAll) {
+  test_stages::Stages s(kBlockTorus, with_blocks(2));
+  const SeedGridStage seeds = sample_seed_grid_stage(*s.field, s.options, s.settings);
+  Settings settings = s.settings;
+  settings.hash_cell = seeds.hash_cell;
+  const BlockMeshing b = mesh_blocks(*s.field, s.options, settings, seeds);
+  ASSERT_TRUE(b.mesh) << b.report.fallback;
+  Mesh mesh = b.mesh->mesh;
+  std::vector<char> sealed = sealed_triangles(b, mesh);
+  std::size_t n = 0;
+  for (const char c : sealed) n += c;
+  EXPECT_GT(n, mesh.triangles.size() / 2);
+  EXPECT_LT(n, mesh.triangles.size());
+  EXPECT_NO_THROW(check_mesh(mesh, 1, true, 2, CancelToken{}, &sealed));
+  // A small triangle, not sealed, through the middle of a sealed one.
+  const auto it = std::find(sealed.begin(), sealed.end(), 1);
+  const auto& t = mesh.triangles[static_cast<std::size_t>(it - sealed.begin())];
+  const Vec3 c = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3;
+  const Vec3 n0 = (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]).normalized();
+  const Vec3 along = (mesh.positions[t[1]] - mesh.positions[t[0]]).normalized() * 1e-3;
+  const int v = static_cast<int>(mesh.positions.size());
+  for (const Vec3& p : {Vec3(c + 1e-3 * n0), Vec3(c - 1e-3 * n0 + along), Vec3(c - 1e-3 * n0 - along)}) {
+    mesh.positions.push_back(p);
+    mesh.normals.push_back(n0);
+  }
+  mesh.triangles.push_back({v, v + 1, v + 2});
+  sealed.push_back(0);
+  std::vector<char> involved(sealed.size());
+  for (std::size_t i = 0; i < sealed.size(); ++i) involved[i] = !sealed[i];
+  EXPECT_FALSE(self_intersecting_pairs_involving(mesh, involved).empty());
 }
 
 }  // namespace
