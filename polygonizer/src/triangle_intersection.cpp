@@ -861,11 +861,9 @@ void leave_out_far_from_involved(std::vector<Box>& boxes, const std::vector<char
   const Vec3 extent = all.max - all.min;
   std::array<long long, 3> dims{};
   double cells = 1;
-  for (int a = 0; a < 3; ++a) {
-    dims[a] = static_cast<long long>(extent[a] / h) + 1;
-    cells *= static_cast<double>(dims[a]);
-  }
+  for (int a = 0; a < 3; ++a) cells *= std::floor(extent[a] / h) + 1;  // in double: no overflow
   if (!(cells <= kMaxCoarseCells)) return;
+  for (int a = 0; a < 3; ++a) dims[a] = static_cast<long long>(extent[a] / h) + 1;
   const auto cell = [&](double x, int a) {
     return std::clamp(static_cast<long long>((x - all.min[a]) / h), 0LL, dims[a] - 1);
   };

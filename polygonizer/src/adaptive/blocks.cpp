@@ -731,6 +731,12 @@ void repair_block(const Field& field, const Settings& settings, QualityOptions q
         if (kept[w]) target[v] = std::min(target[v], target[w]);
       }
     }
+  // One added among added ones only (a refinement's splits of splits): the part's smallest.
+  double smallest = std::numeric_limits<double>::infinity();
+  for (std::size_t v = 0; v < n; ++v)
+    if (kept[v]) smallest = std::min(smallest, target[v]);
+  for (std::size_t v = 0; v < n; ++v)
+    if (!kept[v] && !std::isfinite(target[v])) target[v] = smallest;
   // The curvature only where the caller asked for it (a Hessian a vertex: on the bunny VIS-800
   // at factor 5, a tenth of the blocks' time).
   if (settings.curvature_properties)
@@ -942,11 +948,14 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     // alone): a pass over the triangles, where analyze_topology's edge sort was a second serial
     // pass over the mesh, as long as a sixth of the blocks' own time on two threads.
     UnionFind joined(mesh.positions.size());
+    std::vector<char> used(mesh.positions.size(), 0);
     for (const auto& t : mesh.triangles) {
       joined.unite(t[0], t[1]);
       joined.unite(t[0], t[2]);
+      for (const int v : t) used[static_cast<std::size_t>(v)] = 1;
     }
-    for (std::size_t v = 0; v < mesh.positions.size(); ++v) out.components += joined.find(static_cast<int>(v)) == static_cast<int>(v);
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+      out.components += used[v] && joined.find(static_cast<int>(v)) == static_cast<int>(v);
     out.mesh = std::move(cm);
   } catch (const CreaseLayoutError& e) {
     out.report.fallback = e.what();

@@ -60,7 +60,8 @@ struct QualityOptions {
   int threads = 0;
   CancelToken cancel;  // polled in every round and sweep (cancel.h)
   // An open mesh (a block's piece of surface, a band cut out of a mesh): the vertices on its
-  // boundary edges stay where they are and keep their index (never moved, removed or merged),
+  // boundary edges stay where they are (never moved, removed or merged; renumbered only as
+  // compact renumbers every vertex, see improve_mesh's `renumbered`),
   // and no boundary edge is flipped or split, so that the piece still fits what lies beyond it.
   bool keep_boundary = false;
   // With keep_boundary, whether over_tolerance counts the triangles beyond the tolerance that

@@ -153,12 +153,19 @@ void RepairContext::mark_boundary() {
     for (int k = 0; k < 3; ++k)
       if (across(t, x[k], x[(k + 1) % 3]) < 0) fixed_[x[k]] = fixed_[x[(k + 1) % 3]] = 1;
   }
-  // Only the boundary's own vertices are kept, so its neighbours are the same ones at the end.
-  near_fixed_ = fixed_;
-  for (std::size_t v = 0; v < fixed_.size(); ++v)
-    if (fixed_[v])
-      for (int u : vt_[v])
-        for (int w : mesh_.triangles[u]) near_fixed_[w] = 1;
+}
+
+bool RepairContext::near_boundary(const Tri& T) const {
+  // From the stars as they are now: flips change a boundary vertex's neighbours, and splits add
+  // vertices beside it, so the band the caller cuts out after the repair is these triangles.
+  for (int v : T) {
+    if (fixed(v)) return true;
+    for (int u : vt_[v])
+      if (alive_[u])
+        for (int w : mesh_.triangles[u])
+          if (fixed(w)) return true;
+  }
+  return false;
 }
 
 int RepairContext::across(int t, int a, int b) const {

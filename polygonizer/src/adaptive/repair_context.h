@@ -341,12 +341,8 @@ class RepairContext {
   // Whether v lies on the boundary (never moved, removed or merged). Vertices the splits add
   // never do.
   bool fixed(int v) const { return static_cast<std::size_t>(v) < fixed_.size() && fixed_[v]; }
-  // Whether triangle T has a corner on the boundary or next to it.
-  bool near_boundary(const Tri& T) const {
-    for (int v : T)
-      if (static_cast<std::size_t>(v) < near_fixed_.size() && near_fixed_[v]) return true;
-    return false;
-  }
+  // Whether triangle T has a corner on the boundary or next to it, now.
+  bool near_boundary(const Tri& T) const;
 
   // ---- adjacency
   // The triangle other than t on edge (a, b), or -1.
@@ -566,9 +562,8 @@ class RepairContext {
   unsigned workers_;  // threads of the parallel passes (QualityOptions::threads)
   std::vector<std::vector<int>> vt_;
   std::vector<signed char> crease_;
-  // The input's boundary vertices, and those and their neighbours (mark_boundary); empty
-  // without QualityOptions::keep_boundary.
-  std::vector<char> fixed_, near_fixed_;
+  // The input's boundary vertices (mark_boundary); empty without QualityOptions::keep_boundary.
+  std::vector<char> fixed_;
   // Each input vertex's index after compact, -1 when removed.
   std::vector<int> renumbered_;
   std::vector<char> alive_;

@@ -13,7 +13,9 @@ bool RepairContext::try_flip(int t, int k, bool for_ratio) {
   int d = -1;
   for (int w : U)
     if (w != a && w != b) d = w;
-  if (d < 0 || d == c) return false;
+  // Two boundary vertices may already share an edge beyond the piece (a neighbouring block's
+  // seam edge, a triangle outside the band) that has_edge cannot see.
+  if (d < 0 || d == c || (fixed(c) && fixed(d))) return false;
   // Each relaxation flip lowers the valences' summed squared distance from 6, or keeps it and
   // lowers the summed edge ratio (below): no flip can be undone, and the relaxation's moves
   // then have a more regular mesh to work on (an interior vertex of valence 6 can have six
