@@ -160,9 +160,10 @@ def main():
                   for r in bad]
     lines += ["", "Every run: `results/sdf_sweep/summary.csv`. To see one: `build/bin/polygonize --factor F FIELD.json "
               "-o out.ply`, with the model's `field` object written to FIELD.json."]
-    with open(os.path.join(os.path.dirname(os.path.abspath(a.out)), "sdf_sweep.md"), "w") as f:
+    report = os.path.join(os.path.dirname(os.path.abspath(a.out)), "sdf_sweep.md")
+    with open(report, "w") as f:
         f.write("\n".join(lines) + "\n")
-    print("sdf_sweep: {} runs, {} within the bounds; results/sdf_sweep.md".format(len(rows), len(rows) - len(bad)))
+    print("sdf_sweep: {} runs, {} within the bounds; {}".format(len(rows), len(rows) - len(bad), os.path.relpath(report)))
 
 
 if __name__ == "__main__":

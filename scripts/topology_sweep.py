@@ -178,9 +178,10 @@ def main():
                   for r in errors]
     work.cleanup()
     # Beside the folder, like results/sharp_features.md.
-    with open(os.path.join(os.path.dirname(os.path.abspath(a.out)), "topology_sweep.md"), "w") as f:
+    report = os.path.join(os.path.dirname(os.path.abspath(a.out)), "topology_sweep.md")
+    with open(report, "w") as f:
         f.write("\n".join(lines) + "\n")
-    print("topology_sweep: {} runs, {} wrong; results/topology_sweep.md".format(len(rows), len(wrong)))
+    print("topology_sweep: {} runs, {} wrong; {}".format(len(rows), len(wrong), os.path.relpath(report)))
 
 
 if __name__ == "__main__":
