@@ -840,13 +840,17 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return weight(x) > weight(y); });
     if (shuffle != 0) std::shuffle(order.begin(), order.end(), std::mt19937_64(shuffle));
     std::vector<BlockPart> parts(nblocks);
+    // Block blk's box: its lowest and highest corners.
+    const auto block_box = [&](std::size_t blk) {
+      const int bi = static_cast<int>(blk % n[0]), bj = static_cast<int>(blk / n[0] % n[1]),
+                bk = static_cast<int>(blk / (static_cast<std::size_t>(n[0]) * n[1]));
+      return std::pair<Vec3, Vec3>{Vec3(cuts.walls[0][bi], cuts.walls[1][bj], cuts.walls[2][bk]),
+                                   Vec3(cuts.walls[0][bi + 1], cuts.walls[1][bj + 1], cuts.walls[2][bk + 1])};
+    };
     // One block: its tracker from its cycles (every error kept in its slot by mesh_block).
     const auto mesh_one_block = [&](std::size_t blk) {
       const auto t0 = Clock::now();
-      const int bi = static_cast<int>(blk % n[0]), bj = static_cast<int>(blk / n[0] % n[1]),
-                bk = static_cast<int>(blk / (static_cast<std::size_t>(n[0]) * n[1]));
-      const Vec3 lo(cuts.walls[0][bi], cuts.walls[1][bj], cuts.walls[2][bk]);
-      const Vec3 hi(cuts.walls[0][bi + 1], cuts.walls[1][bj + 1], cuts.walls[2][bk + 1]);
+      const auto [lo, hi] = block_box(blk);
       const auto within = [lo, hi](const Vec3& x, double margin) {
         return (x.array() >= lo.array() - margin).all() && (x.array() <= hi.array() + margin).all();
       };
@@ -923,13 +927,8 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
         throw CreaseLayoutError("adaptive: a block's front had to be closed without its tests");
       const std::size_t first_own = mesh.positions.size();
       add_part(cm, part.mesh, part.ids, cycles[blk], part.target, part.mac, part.shape_index);
-      {
-        const int bi = static_cast<int>(blk % n[0]), bj = static_cast<int>(blk / n[0] % n[1]),
-                  bk = static_cast<int>(blk / (static_cast<std::size_t>(n[0]) * n[1]));
-        out.own.push_back({first_own, mesh.positions.size(),
-                           Vec3(cuts.walls[0][bi], cuts.walls[1][bj], cuts.walls[2][bk]),
-                           Vec3(cuts.walls[0][bi + 1], cuts.walls[1][bj + 1], cuts.walls[2][bk + 1])});
-      }
+      const auto [lo, hi] = block_box(blk);
+      out.own.push_back({first_own, mesh.positions.size(), lo, hi});
       cm.steps += part.steps;
       cm.splits += part.splits;
       cm.merges += part.merges;

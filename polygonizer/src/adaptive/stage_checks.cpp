@@ -155,6 +155,25 @@ int missed_bounds(const Mesh& mesh, std::size_t over_tolerance) {
   return under20 + (share_under_30 > kBoundShareUnder30) + (mean_ratio > kBoundMeanEdgeRatio) + (over_tolerance > 0);
 }
 
+std::size_t triangles_under(const Mesh& mesh, double bound) {
+  const double tan_bound = std::tan(bound);
+  std::size_t n = 0;
+  for (const auto& t : mesh.triangles) {
+    const SmallestCorner c = smallest_corner(mesh, t);
+    n += !(c.sine >= tan_bound * c.cosine);
+  }
+  return n;
+}
+
+double mean_edge_ratio(const Mesh& mesh) {
+  double sum = 0;
+  for (const auto& t : mesh.triangles) {
+    const SmallestCorner c = smallest_corner(mesh, t);
+    sum += c.shortest2 > 0 ? std::sqrt(c.longest2 / c.shortest2) : std::numeric_limits<double>::infinity();
+  }
+  return mesh.triangles.empty() ? 0 : sum / static_cast<double>(mesh.triangles.size());
+}
+
 void check_components_apart(const Field& field, const Mesh& mesh, std::size_t components) {
   if (components > 1)
     if (const auto at = uncovered_between_components(field, mesh))

@@ -67,6 +67,13 @@ void check_components_apart(const Field& field, const Mesh& mesh, std::size_t co
 // The smallest angle of the mesh's triangles, in degrees (180 for no triangle).
 double min_angle_degrees(const Mesh& mesh);
 
+// The triangles whose smallest angle is under `bound` (radians, under 60 degrees).
+std::size_t triangles_under(const Mesh& mesh, double bound);
+
+// The mean over the triangles of the longest edge over the shortest (infinite with a zero-length
+// edge), the relaxation's measure (QualityOptions::aim_mean_edge_ratio).
+double mean_edge_ratio(const Mesh& mesh);
+
 // How many of the quality bounds `mesh` misses (see kBoundMinDegrees): a smallest angle under
 // kBoundMinDegrees, more than kBoundShareUnder30 of the triangles with one under 30 degrees, a
 // mean longest/shortest edge over kBoundMeanEdgeRatio, triangles farther from the surface than

@@ -6,9 +6,6 @@
 #include <cdp/core/curvature.h>
 
 #include <algorithm>
-#include <array>
-#include <cmath>
-#include <limits>
 #include <numbers>
 #include <utility>
 #include <vector>
@@ -50,34 +47,6 @@ void check_overlap(const RunContext& run, const SeedGridStage& seeds, const Crea
     check_mesh(mesh, tracking.seeding.seeds + creases.components, run.options.check_self_intersections,
                run.options.threads, run.options.cancel);
   }
-}
-
-// The triangles whose smallest angle is under `bound` (radians, under 60 degrees): the angle at
-// the corner facing the shortest edge, compared by its tangent (no arc tangent a triangle).
-std::size_t count_under(const Mesh& mesh, double bound) {
-  const double tan_bound = std::tan(bound);
-  std::size_t n = 0;
-  for (const auto& t : mesh.triangles) {
-    std::array<double, 3> l2;
-    for (int c = 0; c < 3; ++c) l2[c] = (mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[(c + 2) % 3]]).squaredNorm();
-    const int k = static_cast<int>(std::min_element(l2.begin(), l2.end()) - l2.begin());
-    const Vec3& p = mesh.positions[t[k]];
-    const Vec3 u = mesh.positions[t[(k + 1) % 3]] - p, v = mesh.positions[t[(k + 2) % 3]] - p;
-    n += !(u.cross(v).norm() >= tan_bound * u.dot(v));
-  }
-  return n;
-}
-
-// The mean over the triangles of the longest edge over the shortest (the relaxation's measure).
-double mean_edge_ratio(const Mesh& mesh) {
-  double sum = 0;
-  for (const auto& t : mesh.triangles) {
-    std::array<double, 3> l2;
-    for (int c = 0; c < 3; ++c) l2[c] = (mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[(c + 2) % 3]]).squaredNorm();
-    const auto [lo, hi] = std::minmax_element(l2.begin(), l2.end());
-    sum += *lo > 0 ? std::sqrt(*hi / *lo) : std::numeric_limits<double>::infinity();
-  }
-  return mesh.triangles.empty() ? 0 : sum / static_cast<double>(mesh.triangles.size());
 }
 
 }  // namespace
@@ -145,7 +114,7 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
     band = {};  // every vertex measured again (add_curvature_properties)
   }
   // Afresh: the blocks' counts include triangles beside a seam that the band's repair changed.
-  report.bad_after = count_under(mesh, qo.improve_below);
+  report.bad_after = triangles_under(mesh, qo.improve_below);
   return report;
 }
 
