@@ -81,6 +81,8 @@ nlohmann::json blocks_json(const BlocksReport& b) {
           {"steps", b.steps},
           {"threads", b.threads},
           {"layout_seconds", b.layout_seconds},
+          {"task_bytes", b.task_bytes},
+          {"piece_bytes", b.piece_bytes},
           {"seconds", b.seconds},
           {"block_seconds", b.block_seconds},
           {"fallback", b.fallback},

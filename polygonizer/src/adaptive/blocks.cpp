@@ -1,5 +1,6 @@
 #include "blocks.h"
 
+#include "block_task.h"
 #include "edge_length.h"
 #include "missed_necks.h"
 #include "../parallel.h"
@@ -15,6 +16,7 @@
 #include <exception>
 #include <limits>
 #include <random>
+#include <tuple>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -99,10 +101,6 @@ constexpr double kLongestSeam = 100;
 // Fewest edges of a seam: two between corners (two seams between the same two corners bound a
 // patch of at least four vertices), three for a loop.
 constexpr std::size_t kMinOpenEdges = 2, kMinLoopEdges = 3;
-// The margin of a block's point and patch tests, as a share of the step or edge length: a point
-// on a seam lies on the block's wall to rounding, and a chord between two seam vertices of one
-// wall lies in it.
-constexpr double kOutsideBlock = 0.1;
 
 Vec3 axis_vector(int a) { return Vec3::Unit(a); }
 
@@ -677,81 +675,6 @@ std::vector<std::vector<int>> block_cycles(const std::vector<Dart>& darts) {
 }
 
 // A block's part of the mesh, as its tracker left it.
-struct BlockPart {
-  Mesh mesh;
-  std::vector<std::vector<int>> ids;  // the part's vertex ids of the cycles' vertices
-  std::vector<double> target, mac, shape_index;
-  std::size_t steps = 0, splits = 0, merges = 0, forced_closures = 0, patch_refusals = 0;
-  std::vector<CriticalStart> critical_starts;
-  QualityReport quality;
-  double seconds = 0;
-  std::exception_ptr error;  // what its tracker threw, kept for the block order to decide
-};
-
-// Repairs a block's mesh with its seams kept (quality.h), then renumbers what the part keeps per
-// vertex: the seams' ids, the targets, and with curvature properties the curvature, measured
-// again where the repair moved or added a vertex.
-void repair_block(const Field& field, const Settings& settings, QualityOptions qo, BlockPart& part) {
-  qo.keep_boundary = true;
-  qo.count_near_boundary = false;
-  qo.threads = 1;  // the blocks are the parallel part
-  // The aim is the whole mesh's mean, which no block knows: repair_mesh searches the whole mesh
-  // where that is over it.
-  qo.aim_mean_edge_ratio = 0;
-  const std::vector<Vec3> before = part.mesh.positions;
-  std::vector<int> renumbered;
-  part.quality = improve_mesh(field, part.mesh, qo, &renumbered);
-  for (auto& ids : part.ids)
-    for (int& v : ids) {
-      v = renumbered[static_cast<std::size_t>(v)];
-      if (v < 0) throw std::logic_error("adaptive: a block's repair removed a seam vertex");
-    }
-  const std::size_t n = part.mesh.positions.size();
-  std::vector<double> target(n), mac(n), shape(n);
-  std::vector<char> kept(n, 0), moved(n, 0);  // from an input vertex; and moved by the repair
-  for (std::size_t v = 0; v < renumbered.size(); ++v) {
-    if (renumbered[v] < 0) continue;
-    const auto r = static_cast<std::size_t>(renumbered[v]);
-    kept[r] = 1;
-    target[r] = part.target[v];
-    mac[r] = part.mac[v];
-    shape[r] = part.shape_index[v];
-    moved[r] = part.mesh.positions[r] != before[v];
-  }
-  // A vertex the repair added takes the smallest target of the input vertices around it (the
-  // seeding's fronts may meet it; the blocks' own are done).
-  for (std::size_t v = 0; v < n; ++v)
-    if (!kept[v]) target[v] = std::numeric_limits<double>::infinity();
-  for (const auto& t : part.mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const auto v = static_cast<std::size_t>(t[k]);
-      if (kept[v]) continue;
-      for (int j = 1; j < 3; ++j) {
-        const auto w = static_cast<std::size_t>(t[(k + j) % 3]);
-        if (kept[w]) target[v] = std::min(target[v], target[w]);
-      }
-    }
-  // One added among added ones only (a refinement's splits of splits): the part's smallest.
-  double smallest = std::numeric_limits<double>::infinity();
-  for (std::size_t v = 0; v < n; ++v)
-    if (kept[v]) smallest = std::min(smallest, target[v]);
-  for (std::size_t v = 0; v < n; ++v)
-    if (!kept[v] && !std::isfinite(target[v])) target[v] = smallest;
-  // The curvature only where the caller asked for it (a Hessian a vertex: on the bunny VIS-800
-  // at factor 5, a tenth of the blocks' time).
-  if (settings.curvature_properties)
-    for (std::size_t v = 0; v < n; ++v) {
-      if (kept[v] && !moved[v]) continue;
-      const Curvature c = curvature_at(field, part.mesh.positions[v]);
-      mac[v] = c.mac;
-      shape[v] = c.shape_index;
-    }
-  part.target = std::move(target);
-  part.mac = std::move(mac);
-  part.shape_index = std::move(shape);
-}
-
-
 }  // namespace
 
 BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, const Settings& settings,
@@ -839,7 +762,6 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     };
     std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return weight(x) > weight(y); });
     if (shuffle != 0) std::shuffle(order.begin(), order.end(), std::mt19937_64(shuffle));
-    std::vector<BlockPart> parts(nblocks);
     // Block blk's box: its lowest and highest corners.
     const auto block_box = [&](std::size_t blk) {
       const int bi = static_cast<int>(blk % n[0]), bj = static_cast<int>(blk / n[0] % n[1]),
@@ -847,60 +769,41 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       return std::pair<Vec3, Vec3>{Vec3(cuts.walls[0][bi], cuts.walls[1][bj], cuts.walls[2][bk]),
                                    Vec3(cuts.walls[0][bi + 1], cuts.walls[1][bj + 1], cuts.walls[2][bk + 1])};
     };
-    // One block: its tracker from its cycles (every error kept in its slot by mesh_block).
-    const auto mesh_one_block = [&](std::size_t blk) {
-      const auto t0 = Clock::now();
-      const auto [lo, hi] = block_box(blk);
-      const auto within = [lo, hi](const Vec3& x, double margin) {
-        return (x.array() >= lo.array() - margin).all() && (x.array() <= hi.array() + margin).all();
-      };
-      std::vector<std::vector<Tracker::Placed>> loops;
+    // Block blk's task: all its tracker needs besides the field.
+    const auto block_task = [&](std::size_t blk) {
+      BlockTask task{settings, seeds.estimated_area, {}, {}, {}, {}, options.check_self_intersections};
+      std::tie(task.lo, task.hi) = block_box(blk);
       for (const std::vector<int>& cycle : cycles[blk]) {
-        std::vector<Tracker::Placed>& loop = loops.emplace_back();
+        std::vector<Tracker::Placed>& loop = task.loops.emplace_back();
         for (const int v : cycle) loop.push_back(placed[static_cast<std::size_t>(v)]);
       }
-      BlockPart& part = parts[blk];
-      Tracker tracker(field, settings, part.mesh);
-      if (seeds.estimated_area > 0) tracker.set_estimated_area(seeds.estimated_area);
-      tracker.set_patch_test([&field, within](const Vec3& a, const Vec3& b) {
-        Vec3 m = 0.5 * (a + b);
-        for (int it = 0; it < 3; ++it) {
-          Vec3 g;
-          const double v = field.value_gradient(m, g);
-          if (!(g.squaredNorm() > 0)) return false;
-          m -= v / g.squaredNorm() * g;
-        }
-        return within(m, kOutsideBlock * (a - b).norm());
-      });
-      tracker.set_point_test([within](const Vec3& x, double step) { return within(x, kOutsideBlock * step); });
-      part.ids = tracker.mesh_from_loops(loops);
-      part.target = tracker.vertex_edge_length();
-      part.mac = tracker.vertex_mac();
-      part.shape_index = tracker.vertex_shape_index();
-      part.steps = tracker.steps();
-      part.splits = tracker.splits();
-      part.merges = tracker.merges();
-      part.forced_closures = tracker.forced_closures();
-      part.patch_refusals = tracker.patch_refusals();
-      part.critical_starts = tracker.critical_starts();
-      if (repair) repair_block(field, settings, *repair, part);
-      if (options.check_self_intersections && !self_intersecting_pairs(part.mesh, 1, 1, &options.cancel).empty())
-        throw NoSurfaceError("adaptive: a block's mesh intersects itself");
-      part.seconds = seconds_since(t0);
+      if (repair) task.repair = *repair;
+      return task;
     };
-    const auto mesh_block = [&](std::size_t blk) {
-      try {
-        mesh_one_block(blk);
-      } catch (...) {
-        parts[blk].error = std::current_exception();
+    std::vector<BlockPart> parts(nblocks);
+    if (options.block_runner) {
+      // Elsewhere (block_tasks.h): every task as bytes, the pieces back in the same order.
+      std::vector<std::string> tasks;
+      for (const std::size_t blk : order) tasks.push_back(write_task(block_task(blk)));
+      for (const std::string& t : tasks) out.report.task_bytes += t.size();
+      const std::vector<std::string> pieces = options.block_runner(tasks);
+      if (pieces.size() != order.size())
+        throw std::runtime_error("adaptive: the block runner returned " + std::to_string(pieces.size()) +
+                                 " pieces for " + std::to_string(order.size()) + " tasks");
+      for (std::size_t i = 0; i < order.size(); ++i) {
+        out.report.piece_bytes += pieces[i].size();
+        parts[order[i]] = read_part(pieces[i]);
       }
-    };
-    out.report.threads = field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
-                                                           static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
-                                      : 1;
-    detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
-      for (std::size_t i = begin; i < end; ++i) mesh_block(order[i]);
-    });
+      out.report.threads = 1;
+    } else {
+      out.report.threads =
+          field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
+                                                   static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
+                              : 1;
+      detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        for (std::size_t i = begin; i < end; ++i) parts[order[i]] = run_block(field, block_task(order[i]));
+      });
+    }
     // Every block ran, whatever the others threw: a cancellation wins, then the first failing
     // block in block order (not in time), so that the outcome is the same on any thread count.
     for (const BlockPart& part : parts)

@@ -13,6 +13,7 @@
 
 #include <cdp/core/adaptive_modes.h>
 #include <cdp/core/adaptive_report.h>
+#include <cdp/core/block_tasks.h>
 #include <cdp/core/field.h>
 #include <cdp/core/polygonize_result.h>
 #include <cdp/core/cancel.h>
@@ -75,6 +76,10 @@ struct AdaptiveOptions {
   // The mesh is the same on any number of threads; it is another mesh than the one tracking alone
   // makes. A layout or a block that fails falls back to tracking alone (stats blocks.fallback).
   bool blocks = false;
+  // With `blocks`: the blocks' trackers run elsewhere (block_tasks.h; a Dask cluster from Python,
+  // python/cdp/distributed.py) instead of on `threads` threads: the same mesh, bit for bit. Empty:
+  // on this process's threads.
+  BlockRunner block_runner;
   // Adds vertex_scalars "mac" (maximum absolute curvature) and "shape_index" to the mesh.
   bool curvature_properties = false;
   // Bounds; hitting one throws LimitExceededError. 0: derived from the box and min_edge

@@ -78,7 +78,10 @@ struct BlocksReport {
   std::array<std::vector<double>, 3> cuts;  // the cut planes' positions along each axis
   std::size_t meshed_blocks = 0, corners = 0, seams = 0, seam_vertices = 0, components = 0, steps = 0;
   double estimated_triangles = 0;  // the surface's triangles as the seed grid estimates them
-  unsigned threads = 1;  // that meshed the blocks
+  unsigned threads = 1;  // that meshed the blocks (1 with a block runner: they ran elsewhere)
+  // With AdaptiveOptions::block_runner: the bytes of the tasks handed to it and of the pieces it
+  // returned for the run whose mesh was kept (what a cluster moves).
+  std::size_t task_bytes = 0, piece_bytes = 0;
   double layout_seconds = 0, seconds = 0;
   std::vector<double> block_seconds;  // each block's tracking, in block order
   std::string fallback;
