@@ -8,7 +8,8 @@ set -euo pipefail
 pkgs=(cmake g++ make libeigen3-dev libembree-dev libtbb-dev libopenmesh-dev
       nlohmann-json3-dev libbenchmark-dev libgtest-dev python3-matplotlib
       libcli11-dev libstb-dev zlib1g-dev pybind11-dev python3-pybind11 python3-dev python3-numpy python3-pytest
-      python3-pip python3-setuptools python3-wheel python3-venv python3-skimage python3-nibabel)
+      python3-pip python3-setuptools python3-wheel python3-venv python3-skimage python3-nibabel
+      python3-distributed)
 viewer=""
 case "${1:-}" in
   --browser) pkgs+=(chromium); viewer=1 ;;

@@ -8,9 +8,57 @@ it is called with no arguments first (its box, padded), otherwise they are `cdp.
 import functools as _functools
 import typing as _typing
 import warnings as _warnings
+import os as _os
 
 from . import _cdp
-from ._cdp import *  # noqa: F401,F403  (every public name of the compiled module)
+
+# Fields that travel to other processes (a cluster's workers, cdp.distributed; pickle): every
+# field a factory of the compiled module makes keeps the call that made it, its recipe, with file
+# names made absolute, so that a worker builds the same field from its JSON description, its
+# keywords, or its Python callable and arrays (pickled). Patched in the compiled module itself, so
+# that cdp.sdf and cdp.trace, which call it, make fields that travel too.
+_FIELD_FACTORIES = ("field_from_json", "sphere", "ellipsoid", "torus", "blobs", "expression", "callable_field",
+                    "volume_field")
+
+
+def _portable(name, args, kwargs):
+    """The factory's arguments as another process (another working directory) reads them."""
+    if name != "field_from_json":
+        return args, kwargs
+    bound = dict(zip(("spec", "base_dir"), args), **kwargs)
+    spec, base_dir = bound.get("spec"), bound.get("base_dir")
+    if isinstance(spec, (str, bytes, _os.PathLike)):
+        return (_os.path.abspath(spec),), {}
+    return (spec, _os.path.abspath(base_dir if base_dir is not None else _os.getcwd())), {}
+
+
+def _keeps_recipe(name, factory):
+    @_functools.wraps(factory)
+    def wrapper(*args, **kwargs):
+        field = factory(*args, **kwargs)
+        field._cdp_recipe = (name,) + _portable(name, args, kwargs)
+        return field
+
+    return wrapper
+
+
+def _build_field(name, args, kwargs):
+    """A field from its recipe (Field.__reduce__, cdp.distributed)."""
+    return getattr(_cdp, name)(*args, **kwargs)
+
+
+def _field_reduce(field):
+    recipe = getattr(field, "_cdp_recipe", None)
+    if recipe is None:
+        raise TypeError(f"cannot pickle a cdp.Field of type {field.type!r} that no factory of cdp made")
+    return _build_field, recipe
+
+
+for _name in _FIELD_FACTORIES:
+    setattr(_cdp, _name, _keeps_recipe(_name, getattr(_cdp, _name)))
+_cdp.Field.__reduce__ = _field_reduce
+
+from ._cdp import *  # noqa: E402,F401,F403  (every public name of the compiled module)
 from ._version import __version__  # noqa: F401  (written by python/CMakeLists.txt from the project's version)
 
 __doc__ = _cdp.__doc__
@@ -60,8 +108,29 @@ def _returns_mesh(function):
     return wrapper
 
 
+def _distributes(function):
+    """polygonize(field, ..., client=None): with a dask.distributed.Client, the blocks meshed on its
+    workers (cdp.distributed), imported only then: the single-machine path needs no Dask."""
+
+    @_functools.wraps(function)
+    def wrapper(field, *args, client=None, **kwargs):
+        if client is None:
+            return function(field, *args, **kwargs)
+        from . import distributed
+        return distributed.polygonize(field, *args, client=client, **kwargs)
+
+    wrapper.__module__ = __name__
+    return wrapper
+
+
 for _name in ("polygonize", "marching_cubes", "marching_tetrahedra"):
     globals()[_name] = _returns_mesh(_accepts_models(getattr(_cdp, _name)))
+polygonize = _returns_mesh(_accepts_models(_distributes(_cdp.polygonize)))  # noqa: F811
+# Its signature line (the compiled function's, which the stubs' test reads) with `client` too.
+_first, _rest = (_cdp.polygonize.__doc__ or "\n").split("\n", 1)
+polygonize.__doc__ = _first.replace("block_runner: object = None", "block_runner: object = None, client: object = None",
+                                    1) + "\n" + _rest
+del _first, _rest
 for _name in ("curvature", "project", "trace_creases", "corner_normals", "crease_angles", "evaluate"):
     globals()[_name] = _accepts_models(getattr(_cdp, _name))
 

@@ -1,7 +1,7 @@
 # Type stubs of the package cdp (python/cdp/__init__.py): the compiled module's names (_cdp.pyi),
 # the functions that also take a model with a field() method (a cdp.sdf.SDF), and the names
 # defined in Python. tests/python/test_stubs.py checks them against the package.
-from typing import Any, Callable, Literal, NamedTuple, Protocol
+from typing import Any, Callable, Literal, NamedTuple, Protocol, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -39,6 +39,7 @@ def callable_field(f: Callable[[NDArray[np.float64]], ArrayLike], bounds: _Bound
 def polygonize(field: _FieldLike, method: Literal["adaptive", "mc", "mt"] = "adaptive", *,
                return_normals: bool = False, progress: Callable[[float], object] | None = None,
                phase: Callable[[str], object] | None = None, cancel: CancelToken | None = None,
+               block_runner: Callable[[list[bytes]], Sequence[bytes]] | None = None, client: Any = None,
                level: float = 0.0,
                factor: float | None = None, tolerance: float | None = None, chord: float | None = None,
                min_edge: float | None = None, max_edge: float | None = None,

@@ -118,7 +118,7 @@ std::string repr(const Field& f) {
 }  // namespace
 
 void bind_fields(py::module_& m) {
-  py::class_<Field, FieldPtr>(m, "Field",
+  py::class_<Field, FieldPtr>(m, "Field", py::dynamic_attr(),
                               "An implicit field F: negative inside, positive outside, zero on the surface. Made by "
                               "field_from_json, the model functions (sphere, torus, ...) or callable_field.")
       .def_property_readonly("type", &Field::type_name, "The model's type name as written in JSON.")

@@ -112,9 +112,32 @@ nlohmann::json options_json(const char* function, const py::kwargs& kwargs) {
   return j;
 }
 
+// A Python callable as the run's block runner (block_tasks.h): the tasks as a list of bytes, the
+// pieces back as a sequence of bytes. It holds the callable by pointer (the caller's reference
+// keeps it alive for the run), since the run copies its options with the GIL released.
+BlockRunner python_block_runner(py::handle runner) {
+  PyObject* callable = runner.ptr();
+  return [callable](const std::vector<std::string>& tasks) {
+    py::gil_scoped_acquire gil;
+    py::list list;
+    for (const std::string& t : tasks) list.append(py::bytes(t));
+    const py::object pieces = py::reinterpret_borrow<py::object>(callable)(list);
+    std::vector<std::string> out;
+    for (const py::handle piece : pieces) {
+      if (!py::isinstance<py::bytes>(piece))
+        throw py::type_error("block_runner must return bytes for each task, not " +
+                             py::str(py::type::of(piece).attr("__name__")).cast<std::string>());
+      out.push_back(piece.cast<std::string>());
+    }
+    return out;
+  };
+}
+
 py::tuple run(const Field& unshifted, const std::string& method, const nlohmann::json& options, py::object progress,
-              py::object phase, const std::optional<CancelToken>& cancel) {
+              py::object phase, const std::optional<CancelToken>& cancel, py::object block_runner = py::none()) {
   PolygonizeRequest request = polygonize_request(method, options);
+  if (!block_runner.is_none() && (method != "adaptive" || !request.adaptive.blocks))
+    throw InvalidInputError("polygonize: block_runner needs method \"adaptive\" with blocks=True");
   std::optional<LevelShift> shifted;
   const Field& field = request.level != 0 ? shifted.emplace(unshifted, request.level) : unshifted;
   PolygonizeResult result;
@@ -126,6 +149,7 @@ py::tuple run(const Field& unshifted, const std::string& method, const nlohmann:
       a.progress = interruptible_progress(progress);
       a.phase = interruptible_phase(phase);
       a.cancel = token;
+      if (!block_runner.is_none()) a.block_runner = python_block_runner(block_runner);
       py::gil_scoped_release release;
       result = polygonize_adaptive(field, a);
     } else {
@@ -166,7 +190,10 @@ min_edge; cdp.polygonize_options() lists them); None means the default. An optio
 does not use, or a bad value, is a ValueError; an unknown keyword a TypeError naming the nearest
 option. progress(fraction) and phase(name) are called from the run with the GIL held; Ctrl-C
 interrupts it with KeyboardInterrupt. cancel (a cdp.CancelToken): its cancel(), from another
-thread, ends the run with cdp.CancelledError.
+thread, ends the run with cdp.CancelledError. client (a dask.distributed.Client, python/cdp/distributed.py):
+the blocks are meshed as tasks on its workers, the same mesh bit for bit (method "adaptive", blocks
+on). block_runner: the hook it uses, a callable taking the blocks' tasks (a list of bytes) and
+returning cdp._run_block_task(field, task, level) of each, in order.
 
 Options:
 )";
@@ -235,10 +262,30 @@ poll. reset() makes the token usable again. Ctrl-C needs no token: it raises Key
   m.def(
       "polygonize",
       [](const Field& field, const std::string& method, py::object progress, py::object phase,
-         std::optional<CancelToken> cancel, const py::kwargs& options) {
-        return run(field, method, options_json("polygonize", options), progress, phase, cancel);
+         std::optional<CancelToken> cancel, py::object block_runner, const py::kwargs& options) {
+        return run(field, method, options_json("polygonize", options), progress, phase, cancel, block_runner);
       },
-      py::arg("field"), py::arg("method") = "adaptive", py::kw_only(), py::arg("progress") = py::none(), py::arg("phase") = py::none(), py::arg("cancel") = py::none(), doc.c_str());
+      py::arg("field"), py::arg("method") = "adaptive", py::kw_only(), py::arg("progress") = py::none(),
+      py::arg("phase") = py::none(), py::arg("cancel") = py::none(), py::arg("block_runner") = py::none(), doc.c_str());
+  // One block's task (cdp/core/block_tasks.h) on the field of the run, shifted by the run's level:
+  // what a cluster's workers run (python/cdp/distributed.py). The GIL is released while it runs.
+  m.def(
+      "_run_block_task",
+      [](const Field& field, const py::bytes& task, double level) {
+        const std::string bytes = task;
+        std::string piece;
+        {
+          py::gil_scoped_release release;
+          if (level != 0) {
+            const LevelShift shifted(field, level);
+            piece = run_block_task(shifted, bytes);
+          } else {
+            piece = run_block_task(field, bytes);
+          }
+        }
+        return py::bytes(piece);
+      },
+      py::arg("field"), py::arg("task"), py::arg("level") = 0.0);
   const auto marching = [](const char* method, const char* name) {
     return [method, name](const Field& field, py::object progress, std::optional<CancelToken> cancel,
                           const py::kwargs& options) {

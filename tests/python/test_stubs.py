@@ -24,6 +24,9 @@ NO_DEFAULT = "<required>"
 OPTION_METHODS = {"polygonize": None, "marching_cubes": "mc", "marching_tetrahedra": "mt"}
 # Keywords they still take through **options though the table has no row for them.
 DEPRECATED_KEYWORDS = {"return_normals"}
+# Keywords the package's functions take beyond the compiled ones' (cdp.polygonize's client: the
+# blocks on a Dask cluster, python/cdp/distributed.py).
+PACKAGE_KEYWORDS = {"client"}
 
 
 class Stub:
@@ -257,7 +260,7 @@ def test_package_matches_its_stub():
         if name in CDP_STUB.defs and isinstance(nodes[0], ast.FunctionDef) and nodes[0].args.args[0].arg == "field":
             def comparable(function_def):
                 return [p[:3] + (p[3] if i else None,) for i, p in enumerate(parameters(function_def))
-                        if p[0] not in DEPRECATED_KEYWORDS]
+                        if p[0] not in DEPRECATED_KEYWORDS | PACKAGE_KEYWORDS]
             ours, theirs = comparable(nodes[0]), comparable(CDP_STUB.defs[name][0])
             if ours != theirs:
                 problems.append(f"cdp.{name}: __init__.pyi and _cdp.pyi differ beyond the field's type")

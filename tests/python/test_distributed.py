@@ -1,0 +1,137 @@
+"""cdp.polygonize(field, client=...) on a real Dask cluster on this machine (LocalCluster, worker
+processes): the same mesh bit for bit as the one-process run with blocks on 1, 2 and 3 workers; a
+worker killed in the middle of a run costs only its blocks; a field a worker cannot build is one
+clear error, soon (python/cdp/distributed.py)."""
+import os
+import pathlib
+import pickle
+import shutil
+import sys
+
+import numpy as np
+import pytest
+
+import cdp
+from cdp import sdf
+
+distributed = pytest.importorskip("distributed")  # scripts/install-deps.sh installs python3-distributed
+cloudpickle = pytest.importorskip("cloudpickle")
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+TORUS = {"type": "expression", "value": "(sqrt(x^2+y^2)-1)^2 + z^2 - 0.16",
+         "bounds": [[-1.6, -1.6, -0.6], [1.6, 1.6, 0.6]]}
+# A run that waits on a cluster longer than this has hung (each run here takes about a second).
+GATHER_TIMEOUT = 120
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+                                  silence_logs=50) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def client(cluster):
+    with distributed.Client(cluster, timeout=GATHER_TIMEOUT) as c:
+        yield c
+
+
+def workers(client, cluster, n):
+    cluster.scale(n)
+    client.wait_for_workers(n, timeout=GATHER_TIMEOUT)
+    while len(client.scheduler_info()["workers"]) > n:  # scaled down: wait for the ones retiring
+        client.wait_for_workers(n, timeout=1)
+
+
+def same_mesh(a, b):
+    assert a.stats["blocks"]["used"], a.stats["blocks"]["fallback"]
+    assert b.stats["blocks"]["used"], b.stats["blocks"]["fallback"]
+    assert np.array_equal(a.vertices, b.vertices)
+    assert np.array_equal(a.faces, b.faces)
+    assert np.array_equal(a.normals, b.normals)
+
+
+def test_the_same_mesh_on_one_two_and_three_workers(client, cluster):
+    field = cdp.field_from_json(TORUS)
+    here = cdp.polygonize(field, factor=12, blocks=True)
+    assert here.stats["blocks"]["meshed_blocks"] == 9
+    for n in (1, 2, 3):
+        workers(client, cluster, n)
+        there = cdp.polygonize(field, factor=12, client=client)
+        same_mesh(here, there)
+        b = there.stats["blocks"]
+        assert 0 < b["task_bytes"] < b["piece_bytes"]
+    workers(client, cluster, 2)
+
+
+def test_models_as_users_write_them_travel(client, cluster):
+    # A smooth union of cdp.sdf (an expression), a VIS model read from its points file, and a
+    # level set of it other than zero: each the one-process mesh.
+    workers(client, cluster, 2)
+    blend = sdf.sphere(1) | sdf.sphere(0.8).translate((1.3, 0, 0)).k(0.3)
+    bunny = cdp.field_from_json(ROOT / "experiments" / "fields" / "bunny_vis800.json")
+    for field, options in ((blend, {"factor": 20}), (bunny, {"factor": 3}), (bunny, {"factor": 3, "level": 0.002})):
+        same_mesh(cdp.polygonize(field, blocks=True, **options), cdp.polygonize(field, client=client, **options))
+
+
+class _KillsItsFirstWorker:
+    """A torus as a numpy function that ends the first worker process that calls it (once, by a
+    marker file), in the middle of a block's task: the scheduler must run the lost tasks again."""
+
+    def __init__(self, marker):
+        self.marker = str(marker)
+
+    def __call__(self, p):
+        try:
+            distributed.get_worker()
+            on_worker = True
+        except ValueError:
+            on_worker = False
+        if on_worker and not os.path.exists(self.marker):
+            with open(self.marker, "w") as f:
+                f.write(str(os.getpid()))
+            os._exit(1)
+        x, y, z = p[:, 0], p[:, 1], p[:, 2]
+        return (np.sqrt(x * x + y * y) - 1) ** 2 + z * z - 0.16
+
+
+def test_a_worker_killed_in_the_middle_costs_only_its_blocks(client, cluster, tmp_path):
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])  # the class travels by value
+    workers(client, cluster, 2)
+    marker = tmp_path / "killed"
+    field = cdp.callable_field(_KillsItsFirstWorker(marker), TORUS["bounds"], trace=False)
+    here = cdp.polygonize(field, factor=6, blocks=True)
+    there = cdp.polygonize(field, factor=6, client=client)
+    assert marker.exists()  # a worker did die
+    same_mesh(here, there)
+
+
+def test_a_field_a_worker_cannot_build_is_one_clear_error(client, cluster, tmp_path):
+    workers(client, cluster, 2)
+    points = tmp_path / "bunny.ply"
+    shutil.copy(ROOT / "data" / "bunny.ply", points)
+    (tmp_path / "bunny.json").write_text('{"type": "vis", "points": "bunny.ply", "constraints": 800}')
+    field = cdp.field_from_json(tmp_path / "bunny.json")
+    points.unlink()  # the client's field is built; the workers' cannot be
+    with pytest.raises((OSError, ValueError), match="bunny.ply"):
+        cdp.polygonize(field, factor=3, client=client)
+
+
+def test_fields_pickle_as_their_recipes():
+    blend = (sdf.sphere(1) | sdf.sphere(0.8).translate((1.3, 0, 0)).k(0.3)).field()
+    g = np.linspace(-1, 1, 16)
+    ball = np.sqrt(sum(c ** 2 for c in np.meshgrid(g, g, g, indexing="ij"))) - 0.5
+    for field in (blend, cdp.torus(1, 0.4), cdp.blobs([((0, 0, 0), 1.0), ((0.5, 0, 0), 0.8)], 0.3),
+                  cdp.volume_field(ball, ((-1, -1, -1), (1, 1, 1)))):
+        back = pickle.loads(pickle.dumps(field))
+        points = np.random.default_rng(1).uniform(-1, 1, (50, 3))
+        assert np.array_equal(field.values(points), back.values(points))
+
+
+def test_what_a_cluster_cannot_do_is_said_at_once(client):
+    field = cdp.field_from_json(TORUS)
+    with pytest.raises(ValueError, match="adaptive"):
+        cdp.polygonize(field, "mc", client=client)
+    with pytest.raises(ValueError, match="blocks=False"):
+        cdp.polygonize(field, client=client, blocks=False)
