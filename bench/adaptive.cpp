@@ -7,6 +7,7 @@
 #include <cdp/baselines/marching_cubes.h>
 #include <cdp/baselines/marching_tetrahedra.h>
 #include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/block_tasks.h>
 #include <cdp/core/models/analytic.h>
 #include <cdp/core/models/expression.h>
 #include <cdp/core/mesh_topology.h>
@@ -24,6 +25,7 @@
 #include <ctime>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <string>
 #include <thread>
 
@@ -414,6 +416,97 @@ void BM_AdaptiveBlocks(benchmark::State& state) {
                               : "random_blobs_tol1e-3/adaptive/blocks");
 }
 BENCHMARK(BM_AdaptiveBlocks)->ArgName("shape")->DenseRange(0, 3)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// Issue 60's scale on paper: the blocks of a run handed to a cluster (AdaptiveOptions::block_runner,
+// python/cdp/distributed.py), projected to a run of 10^9 triangles on 64 workers from what one
+// run measures here. Each iteration meshes the torus of experiments/fields/torus.json at factor 40
+// (4 * 10^5 triangles, 128 blocks) on one thread with a runner that runs every task from its bytes
+// (run_block_task: the workers' whole work, their bytes' reading and writing included), timing
+// each, and requires the mesh of the run without a runner. Measured: the client's time outside the
+// tasks (layout, assembly, the band's repair, the seeding, the checks), the tasks' times, and the
+// bytes of tasks and pieces. Projected to kClusterTriangles on kClusterWorkers:
+//   blocks: the blocks grow to kClusterBlocks (16^3, blocks.cpp's largest layout), each the
+//     measured blocks' times cycled and scaled by the triangles per block, scheduled greedily
+//     onto the workers; largest_block: the largest of those (no run ends before it);
+//   client: the time outside the tasks per triangle times 10^9 (taken as linear: the layout grows
+//     more slowly, the assembly and checks linearly), plus kDaskTaskSeconds per task (Dask's
+//     documented scheduler overhead, about a millisecond a task);
+//   transfer: the pieces' bytes per triangle times 10^9 over kClientBytesPerSecond (every piece
+//     ends at the client);
+//   projected_seconds: client + max(blocks, transfer) (the pieces arrive while blocks run);
+//   client_mesh_gb: the assembled mesh the client holds (positions, normals, triangles) at 10^9
+//     triangles, the least memory it needs without streaming (issue 58's item 5).
+constexpr double kClusterTriangles = 1e9;
+constexpr int kClusterWorkers = 64;
+constexpr int kClusterBlocks = 16 * 16 * 16;
+constexpr double kDaskTaskSeconds = 1e-3;
+constexpr double kClientBytesPerSecond = 1.25e9;  // 10 Gb/s Ethernet
+
+void BM_BlocksClusterProjectionSlow(benchmark::State& state) {
+  static const std::unique_ptr<Field> torus = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/torus.json");
+  AdaptiveOptions o;
+  o.factor = 40;
+  o.threads = 1;
+  o.blocks = true;
+  const PolygonizeResult local = polygonize_adaptive(*torus, o);
+  std::vector<double> task_seconds;
+  o.block_runner = [&](const std::vector<std::string>& tasks) {
+    std::vector<std::string> pieces;
+    task_seconds.clear();
+    for (const std::string& t : tasks) {
+      const auto t0 = std::chrono::steady_clock::now();
+      pieces.push_back(run_block_task(*torus, t));
+      task_seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    return pieces;
+  };
+  double client = 0, in_tasks = 0, largest = 0, task_bytes = 0, piece_bytes = 0, triangles = 0, tasks = 0, mesh_bytes = 0;
+  for (auto _ : state) {
+    const PolygonizeResult r = polygonize_adaptive(*torus, o);
+    const BlocksReport& b = r.stats.adaptive->blocks;
+    if (!b.used || r.mesh.positions != local.mesh.positions || r.mesh.triangles != local.mesh.triangles) {
+      state.SkipWithError(b.used ? "the mesh of the tasks run from their bytes differs" : b.fallback.c_str());
+      return;
+    }
+    state.SetIterationTime(r.stats.seconds);
+    double sum = 0;
+    for (const double t : task_seconds) sum += t;
+    in_tasks += sum;
+    client += r.stats.seconds - sum;
+    largest += *std::max_element(task_seconds.begin(), task_seconds.end());
+    task_bytes += static_cast<double>(b.task_bytes);
+    piece_bytes += static_cast<double>(b.piece_bytes);
+    triangles = static_cast<double>(r.mesh.triangles.size());
+    tasks = static_cast<double>(task_seconds.size());
+    mesh_bytes = static_cast<double>(r.mesh.positions.size() * 2 * sizeof(Vec3) + r.mesh.triangles.size() * 3 * sizeof(int));
+  }
+  const auto n = static_cast<double>(state.iterations());
+  // The measured blocks' times (last iteration's distribution, the mean's scale), grown to
+  // kClusterBlocks blocks of kClusterTriangles / kClusterBlocks triangles each.
+  const double grow = (kClusterTriangles / kClusterBlocks) / (triangles / tasks) * (in_tasks / n) /
+                      std::accumulate(task_seconds.begin(), task_seconds.end(), 0.0) ;
+  std::vector<double> grown(kClusterBlocks);
+  for (std::size_t i = 0; i < grown.size(); ++i) grown[i] = task_seconds[i % task_seconds.size()] * grow;
+  const double blocks_seconds = greedy_makespan(grown, kClusterWorkers);
+  const double client_seconds = client / n / triangles * kClusterTriangles + kDaskTaskSeconds * kClusterBlocks;
+  const double transfer_seconds = piece_bytes / n / triangles * kClusterTriangles / kClientBytesPerSecond;
+  state.counters["triangles"] = triangles;
+  state.counters["tasks"] = tasks;
+  state.counters["client_seconds_per_triangle"] = client / n / triangles;
+  state.counters["block_seconds_per_triangle"] = in_tasks / n / triangles;
+  state.counters["largest_task_share"] = largest / in_tasks;  // of the tasks' sum
+  state.counters["task_bytes_per_triangle"] = task_bytes / n / triangles;
+  state.counters["piece_bytes_per_triangle"] = piece_bytes / n / triangles;
+  state.counters["projected_blocks_seconds"] = blocks_seconds;
+  state.counters["projected_largest_block_seconds"] = *std::max_element(grown.begin(), grown.end());
+  state.counters["projected_client_seconds"] = client_seconds;
+  state.counters["projected_transfer_seconds"] = transfer_seconds;
+  state.counters["projected_seconds"] = client_seconds + std::max(blocks_seconds, transfer_seconds);
+  state.counters["projected_one_worker_seconds"] = client_seconds + in_tasks / n / triangles * kClusterTriangles;
+  state.counters["client_mesh_gb"] = mesh_bytes / triangles * kClusterTriangles / 1e9;
+  state.SetLabel("torus_f40/adaptive/blocks_on_64_workers_at_1e9");
+}
+BENCHMARK(BM_BlocksClusterProjectionSlow)->Iterations(2)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // One SDF model at factor 3, for BM_AdaptiveSdf and BM_AdaptiveSdfCrowdSlow: each iteration
 // meshes it with its creases followed (the defaults), then ignored, then a smooth sphere (an
