@@ -251,6 +251,30 @@ def thread_speedups(run):
     return sorted(rows, key=lambda r: r["benchmark"])
 
 
+# BM_BlocksClusterProjectionSlow's projection of a run of 10^9 triangles on 64 workers (seconds),
+# and what bounds it: the client's part, the blocks' makespan, the pieces' transfer, the largest block.
+CLUSTER_PARTS = ("client", "blocks", "transfer", "largest_block")
+
+
+def cluster_projections(run):
+    """Rows {benchmark, label, seconds, one_worker, parts: {part: seconds}, bound, client_mesh_gb,
+    piece_bytes} of the benchmarks reporting projected_seconds (bench/adaptive.cpp's
+    BM_BlocksClusterProjectionSlow); bound is the part that takes longest."""
+    rows = []
+    for b in run["benchmarks"]:
+        v = None if b.get("error") else counter_median(b, "projected_seconds")
+        if v is None:
+            continue
+        parts = {p: counter_median(b, "projected_" + p + "_seconds") for p in CLUSTER_PARTS}
+        known = {p: t for p, t in parts.items() if t is not None}
+        rows.append({"benchmark": key(b), "label": b.get("label", ""), "seconds": v,
+                     "one_worker": counter_median(b, "projected_one_worker_seconds"), "parts": parts,
+                     "bound": max(known, key=known.get) if known else None,
+                     "client_mesh_gb": counter_median(b, "client_mesh_gb"),
+                     "piece_bytes": counter_median(b, "piece_bytes_per_triangle")})
+    return sorted(rows, key=lambda r: r["benchmark"])
+
+
 def sdf_model_costs(run):
     """Rows {benchmark, label, creases, sphere, triangles} of the benchmarks that mesh an SDF model
     with its creases followed and ignored and a sphere beside it (counters creases_cost_ratio and

@@ -238,6 +238,20 @@ def inrun_section(runs):
     else:
         out.append('<p class="note">Not available: no benchmark reports speedup_1_to_2 in the latest run.</p>')
 
+    # Blocks on a cluster: a run of 10^9 triangles on 64 workers projected from one measured run.
+    rows = bl.cluster_projections(latest)
+    if rows:
+        out.append("<h3>Blocks on a cluster: 10<sup>9</sup> triangles on 64 workers, projected (s)</h3>")
+        out.append('<p class="note">From one run\'s measured client time, task times and bytes (bench/README.md, '
+                   'BM_BlocksClusterProjectionSlow); the run takes the client\'s part plus the longer of the blocks\' '
+                   'makespan and the pieces\' transfer.</p>')
+        out.append(table(["Benchmark", "Label", "Projected", "One worker", "Client", "Blocks", "Transfer",
+                          "Largest block", "Bound by", "Client mesh (GB)", "Piece bytes / triangle"],
+                         [[E(r["benchmark"]), E(r["label"]), fnum(r["seconds"], "{:.4g}"), fnum(r["one_worker"], "{:.4g}")]
+                          + [fnum(r["parts"][p], "{:.4g}") for p in bl.CLUSTER_PARTS]
+                          + [E(r["bound"] or ""), fnum(r["client_mesh_gb"], "{:.3g}"), fnum(r["piece_bytes"], "{:.3g}")]
+                          for r in rows]))
+
     # SDF models: the cost of following creases against ignoring them, and against a sphere.
     rows = bl.sdf_model_costs(latest)
     out.append("<h3>SDF models: creases followed against ignored, time per triangle against a sphere</h3>")

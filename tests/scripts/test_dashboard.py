@@ -143,6 +143,24 @@ class InRunRatios(unittest.TestCase):
         self.assertIn("Speedup from one thread to two", page)
         self.assertIn("1.200", page)
 
+    def test_cluster_projection(self):
+        r = run("a" * 40, "2026-01-01T00:00:00+00:00")
+        self.assertEqual(bl.cluster_projections(r), [])
+        counters = {"projected_seconds": [2000.0] * 5, "projected_one_worker_seconds": [9800.0] * 5,
+                    "projected_client_seconds": [1880.0] * 5, "projected_blocks_seconds": [124.0] * 5,
+                    "projected_transfer_seconds": [40.0] * 5, "projected_largest_block_seconds": [3.9] * 5,
+                    "client_mesh_gb": [36.0] * 5, "piece_bytes_per_triangle": [50.0] * 5}
+        r["benchmarks"].append(bench("bench_adaptive", "BM_BlocksClusterProjectionSlow/iterations:2/manual_time",
+                                     [3000 * x for x in NOISE], label="torus_f40/adaptive/blocks_on_64_workers_at_1e9",
+                                     kind="real", counters=counters))
+        rows = bl.cluster_projections(r)
+        self.assertEqual(len(rows), 1)
+        self.assertAlmostEqual(rows[0]["seconds"], 2000.0)
+        self.assertEqual(rows[0]["bound"], "client")
+        page = make_dashboard.inrun_section([r])
+        self.assertIn("64 workers, projected", page)
+        self.assertIn("1880", page)
+
     def test_sdf_model_costs(self):
         r = run("a" * 40, "2026-01-01T00:00:00+00:00")
         self.assertEqual(bl.sdf_model_costs(r), [])
