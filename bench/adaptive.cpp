@@ -420,7 +420,7 @@ BENCHMARK(BM_AdaptiveBlocks)->ArgName("shape")->DenseRange(0, 3)->UseManualTime(
 // Issue 60's scale on paper: the blocks of a run handed to a cluster (AdaptiveOptions::block_runner,
 // python/cdp/distributed.py), projected to a run of 10^9 triangles on 64 workers from what one
 // run measures here. Each iteration meshes the torus of experiments/fields/torus.json at factor 40
-// (4 * 10^5 triangles, 128 blocks) on one thread with a runner that runs every task from its bytes
+// (4 * 10^5 triangles, 112 blocks) on one thread with a runner that runs every task from its bytes
 // (run_block_task: the workers' whole work, their bytes' reading and writing included), timing
 // each, and requires the mesh of the run without a runner. Measured: the client's time outside the
 // tasks (layout, assembly, the band's repair, the seeding, the checks), the tasks' times, and the
@@ -452,7 +452,6 @@ void BM_BlocksClusterProjectionSlow(benchmark::State& state) {
   std::vector<double> task_seconds;
   o.block_runner = [&](const std::vector<std::string>& tasks) {
     std::vector<std::string> pieces;
-    task_seconds.clear();
     for (const std::string& t : tasks) {
       const auto t0 = std::chrono::steady_clock::now();
       pieces.push_back(run_block_task(*torus, t));
@@ -462,6 +461,7 @@ void BM_BlocksClusterProjectionSlow(benchmark::State& state) {
   };
   double client = 0, in_tasks = 0, largest = 0, task_bytes = 0, piece_bytes = 0, triangles = 0, tasks = 0, mesh_bytes = 0;
   for (auto _ : state) {
+    task_seconds.clear();  // every layout's tasks (a run that meshes again lays out again)
     const PolygonizeResult r = polygonize_adaptive(*torus, o);
     const BlocksReport& b = r.stats.adaptive->blocks;
     if (!b.used || r.mesh.positions != local.mesh.positions || r.mesh.triangles != local.mesh.triangles) {
@@ -481,12 +481,13 @@ void BM_BlocksClusterProjectionSlow(benchmark::State& state) {
     mesh_bytes = static_cast<double>(r.mesh.positions.size() * 2 * sizeof(Vec3) + r.mesh.triangles.size() * 3 * sizeof(int));
   }
   const auto n = static_cast<double>(state.iterations());
-  // The measured blocks' times (last iteration's distribution, the mean's scale), grown to
-  // kClusterBlocks blocks of kClusterTriangles / kClusterBlocks triangles each.
-  const double grow = (kClusterTriangles / kClusterBlocks) / (triangles / tasks) * (in_tasks / n) /
-                      std::accumulate(task_seconds.begin(), task_seconds.end(), 0.0) ;
+  // The measured blocks' times (the last iteration's distribution) cycled to kClusterBlocks
+  // blocks, scaled so that they sum to the measured block time per triangle times
+  // kClusterTriangles.
   std::vector<double> grown(kClusterBlocks);
-  for (std::size_t i = 0; i < grown.size(); ++i) grown[i] = task_seconds[i % task_seconds.size()] * grow;
+  for (std::size_t i = 0; i < grown.size(); ++i) grown[i] = task_seconds[i % task_seconds.size()];
+  const double scale = in_tasks / n / triangles * kClusterTriangles / std::accumulate(grown.begin(), grown.end(), 0.0);
+  for (double& t : grown) t *= scale;
   const double blocks_seconds = greedy_makespan(grown, kClusterWorkers);
   const double client_seconds = client / n / triangles * kClusterTriangles + kDaskTaskSeconds * kClusterBlocks;
   const double transfer_seconds = piece_bytes / n / triangles * kClusterTriangles / kClientBytesPerSecond;

@@ -32,11 +32,33 @@ def _portable(name, args, kwargs):
     return (spec, _os.path.abspath(base_dir if base_dir is not None else _os.getcwd())), {}
 
 
+def _freeze(value, arrays):
+    """value as the factory read it, so that a caller's later changes cannot make the workers build
+    another field: dicts, lists and tuples copied; a numpy array kept (a copy could double a large
+    volume's memory) with a checksum of its bytes in `arrays`, checked when the recipe is sent."""
+    if isinstance(value, dict):
+        return {k: _freeze(v, arrays) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return type(value)(_freeze(v, arrays) for v in value)
+    if type(value).__module__ == "numpy" and hasattr(value, "tobytes"):
+        arrays.append((value, _checksum(value)))
+    return value
+
+
+def _checksum(array):
+    import zlib
+    import numpy
+    return zlib.crc32(memoryview(numpy.ascontiguousarray(array)).cast("B"))
+
+
 def _keeps_recipe(name, factory):
     @_functools.wraps(factory)
     def wrapper(*args, **kwargs):
         field = factory(*args, **kwargs)
-        field._cdp_recipe = (name,) + _portable(name, args, kwargs)
+        arrays = []
+        args, kwargs = _portable(name, args, kwargs)
+        field._cdp_recipe = (name, _freeze(args, arrays), _freeze(kwargs, arrays))
+        field._cdp_recipe_arrays = arrays
         return field
 
     return wrapper
@@ -47,11 +69,22 @@ def _build_field(name, args, kwargs):
     return getattr(_cdp, name)(*args, **kwargs)
 
 
-def _field_reduce(field):
+def _recipe(field, doing):
+    """The field's recipe for `doing` (pickling, a cluster), checked: a TypeError for a field no
+    factory made, a ValueError for one whose array was changed since."""
     recipe = getattr(field, "_cdp_recipe", None)
     if recipe is None:
-        raise TypeError(f"cannot pickle a cdp.Field of type {field.type!r} that no factory of cdp made")
-    return _build_field, recipe
+        raise TypeError(f"{doing}: the field ({field.type}) was not made by a cdp factory (field_from_json, a model "
+                        "function, expression, callable_field, volume_field, a cdp.sdf model)")
+    for array, checksum in getattr(field, "_cdp_recipe_arrays", ()):
+        if _checksum(array) != checksum:
+            raise ValueError(f"{doing}: an array the field was made from was changed since (cdp.{recipe[0]}): "
+                             "another process would build another field; make the field again")
+    return recipe
+
+
+def _field_reduce(field):
+    return _build_field, _recipe(field, "pickling a cdp.Field")
 
 
 for _name in _FIELD_FACTORIES:

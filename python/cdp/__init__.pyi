@@ -39,7 +39,7 @@ def callable_field(f: Callable[[NDArray[np.float64]], ArrayLike], bounds: _Bound
 def polygonize(field: _FieldLike, method: Literal["adaptive", "mc", "mt"] = "adaptive", *,
                return_normals: bool = False, progress: Callable[[float], object] | None = None,
                phase: Callable[[str], object] | None = None, cancel: CancelToken | None = None,
-               block_runner: Callable[[list[bytes]], Sequence[bytes]] | None = None, client: Any = None,
+               block_runner: Callable[[list[bytes], Callable[[], bool]], Sequence[bytes]] | None = None, client: Any = None,
                level: float = 0.0,
                factor: float | None = None, tolerance: float | None = None, chord: float | None = None,
                min_edge: float | None = None, max_edge: float | None = None,

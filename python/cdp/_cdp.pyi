@@ -78,7 +78,7 @@ _Arrays = tuple[NDArray[np.float64], NDArray[np.int32], NDArray[np.float64] | No
 def polygonize(field: Field, method: Literal["adaptive", "mc", "mt"] = "adaptive", *,
                progress: Callable[[float], object] | None = None, phase: Callable[[str], object] | None = None,
                cancel: CancelToken | None = None,
-               block_runner: Callable[[list[bytes]], Sequence[bytes]] | None = None,
+               block_runner: Callable[[list[bytes], Callable[[], bool]], Sequence[bytes]] | None = None,
                level: float = 0.0,
                factor: float | None = None, tolerance: float | None = None, chord: float | None = None,
                min_edge: float | None = None, max_edge: float | None = None,

@@ -17,9 +17,13 @@ this build's bytes, and are refused otherwise).
 
 Imported only when a client is given: the single-machine path needs no Dask.
 """
+import functools
+import hashlib
 import itertools
 import threading
 import uuid
+
+import distributed
 
 from . import _cdp
 
@@ -51,36 +55,56 @@ class _Recipe:
         return field
 
 
-def _mesh_block(task, recipe, level):
-    """A Dask task: one block's piece, from its task's bytes, on the field built from its recipe."""
+def _mesh_block(task, recipe, level, build):
+    """A Dask task: one block's piece, from its task's bytes, on the field built from its recipe,
+    by the same build of cdp as the client's."""
+    if _build() != build:
+        raise RuntimeError(f"cdp.polygonize(client=...): the worker's cdp ({_cdp.__file__}) is another build than the "
+                           "client's; run the same build on every worker")
     return _cdp._run_block_task(recipe.field(), task, level)
 
 
-def _recipe_of(field):
-    recipe = getattr(field, "_cdp_recipe", None)
-    if recipe is None:
-        raise TypeError(f"cdp.polygonize(client=...): the field ({field.type}) was not made by a cdp factory "
-                        "(field_from_json, a model function, expression, callable_field, volume_field, a cdp.sdf "
-                        "model), so the workers cannot build it")
-    return recipe
+@functools.lru_cache(maxsize=None)
+def _build():
+    """The compiled module's identity: a hash of its file (a task is this build's bytes)."""
+    with open(_cdp.__file__, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
 
 
-_runs = itertools.count()
+# How often a run waiting on its tasks looks whether it was cancelled (cancel, Ctrl-C), seconds.
+POLL_SECONDS = 0.2
 
 
 def block_runner(client, field, level=0.0):
     """The block runner (cdp._cdp.polygonize's block_runner) that meshes a run's blocks on `client`'s
-    workers: the field's recipe scattered to every worker once, then one task a block (largest
-    first, as the run hands them), gathered in the run's order. An error of a task (a field its
-    worker cannot build: a missing points file) is raised here as the task raised it; a worker lost
-    in the middle costs only its tasks, which the scheduler gives to another."""
-    scattered = client.scatter(_Recipe(_recipe_of(field)), broadcast=True, hash=False)
-    run = f"cdp-block-{uuid.uuid4().hex}-{next(_runs)}"
+    workers: the field's recipe scattered to every worker once, then one task a block, submitted
+    largest first with priorities in that order (Dask runs higher priorities first), gathered in
+    the run's order. An error of a task (a field its worker cannot build: a missing points file)
+    is raised here as the task raised it; a worker lost in the middle costs only its tasks, which
+    the scheduler gives to another. Cancelling the run (its token, Ctrl-C) cancels the tasks left
+    and raises cdp.CancelledError within POLL_SECONDS."""
+    from . import _recipe
 
-    def run_blocks(tasks):
-        keys = [f"{run}-{i}" for i in range(len(tasks))]
-        futures = client.map(_mesh_block, tasks, recipe=scattered, level=level, key=keys)
+    scattered = client.scatter(_Recipe(_recipe(field, "cdp.polygonize(client=...)")), broadcast=True, hash=False)
+    run = f"cdp-block-{uuid.uuid4().hex}"
+    calls = itertools.count()
+
+    def run_blocks(tasks, cancelled=lambda: False):
+        # Each call (a run that meshes again lays out again) under keys of its own.
+        prefix = f"{run}-{next(calls)}"
+        futures = [client.submit(_mesh_block, task, scattered, level, _build(), key=f"{prefix}-{i}",
+                                 priority=len(tasks) - i, pure=False)
+                   for i, task in enumerate(tasks)]
         try:
+            while True:
+                if cancelled():
+                    raise _cdp.CancelledError("adaptive: cancelled while the cluster meshed the blocks")
+                try:
+                    distributed.wait(futures, timeout=POLL_SECONDS)
+                    break
+                except (TimeoutError, distributed.TimeoutError):
+                    if any(f.status == "error" for f in futures):
+                        break  # gather raises the first task's error
             return client.gather(futures)
         finally:
             client.cancel(futures)

@@ -112,16 +112,20 @@ nlohmann::json options_json(const char* function, const py::kwargs& kwargs) {
   return j;
 }
 
-// A Python callable as the run's block runner (block_tasks.h): the tasks as a list of bytes, the
-// pieces back as a sequence of bytes. It holds the callable by pointer (the caller's reference
-// keeps it alive for the run), since the run copies its options with the GIL released.
-BlockRunner python_block_runner(py::handle runner) {
+// A Python callable as the run's block runner (block_tasks.h): called with the tasks as a list of
+// bytes and a function that says whether the run was cancelled (its token, which Ctrl-C cancels
+// while the run is on), it returns the pieces as a sequence of bytes. It holds the callable by
+// pointer (the caller's reference keeps it alive for the run), since the run copies its options
+// with the GIL released.
+BlockRunner python_block_runner(py::handle runner, const CancelToken& token) {
   PyObject* callable = runner.ptr();
-  return [callable](const std::vector<std::string>& tasks) {
+  return [callable, token](const std::vector<std::string>& tasks) {
     py::gil_scoped_acquire gil;
     py::list list;
     for (const std::string& t : tasks) list.append(py::bytes(t));
-    const py::object pieces = py::reinterpret_borrow<py::object>(callable)(list);
+    const py::cpp_function cancelled([token] { return token.cancelled(); });
+    const py::object pieces = py::reinterpret_borrow<py::object>(callable)(list, cancelled);
+    token.check("adaptive");
     std::vector<std::string> out;
     for (const py::handle piece : pieces) {
       if (!py::isinstance<py::bytes>(piece))
@@ -149,7 +153,7 @@ py::tuple run(const Field& unshifted, const std::string& method, const nlohmann:
       a.progress = interruptible_progress(progress);
       a.phase = interruptible_phase(phase);
       a.cancel = token;
-      if (!block_runner.is_none()) a.block_runner = python_block_runner(block_runner);
+      if (!block_runner.is_none()) a.block_runner = python_block_runner(block_runner, token);
       py::gil_scoped_release release;
       result = polygonize_adaptive(field, a);
     } else {
@@ -192,7 +196,8 @@ option. progress(fraction) and phase(name) are called from the run with the GIL 
 interrupts it with KeyboardInterrupt. cancel (a cdp.CancelToken): its cancel(), from another
 thread, ends the run with cdp.CancelledError. client (a dask.distributed.Client, python/cdp/distributed.py):
 the blocks are meshed as tasks on its workers, the same mesh bit for bit (method "adaptive", blocks
-on). block_runner: the hook it uses, a callable taking the blocks' tasks (a list of bytes) and
+on). block_runner: the hook it uses, a callable taking the blocks' tasks (a list of bytes) and a
+function cancelled() (true once cancel or Ctrl-C asked the run to stop: it should then raise), and
 returning cdp._run_block_task(field, task, level) of each, in order.
 
 Options:

@@ -7,6 +7,8 @@ import pathlib
 import pickle
 import shutil
 import sys
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -127,6 +129,54 @@ def test_fields_pickle_as_their_recipes():
         back = pickle.loads(pickle.dumps(field))
         points = np.random.default_rng(1).uniform(-1, 1, (50, 3))
         assert np.array_equal(field.values(points), back.values(points))
+
+
+class _SlowWhileMarked:
+    """A torus as a numpy function that sleeps on a worker while a marker file exists: tasks that
+    run until the test lets them go."""
+
+    def __init__(self, marker):
+        self.marker = str(marker)
+
+    def __call__(self, p):
+        try:
+            distributed.get_worker()
+            if os.path.exists(self.marker):
+                time.sleep(0.02)
+        except ValueError:
+            pass
+        x, y, z = p[:, 0], p[:, 1], p[:, 2]
+        return (np.sqrt(x * x + y * y) - 1) ** 2 + z * z - 0.16
+
+
+def test_cancelling_a_run_stops_its_wait_on_the_cluster(client, cluster, tmp_path):
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    workers(client, cluster, 2)
+    marker = tmp_path / "slow"
+    marker.write_text("")
+    field = cdp.callable_field(_SlowWhileMarked(marker), TORUS["bounds"], trace=False)
+    token = cdp.CancelToken()
+    timer = threading.Timer(1.0, token.cancel)
+    timer.start()
+    start = time.monotonic()
+    try:
+        with pytest.raises(cdp.CancelledError, match="while the cluster meshed"):
+            cdp.polygonize(field, factor=6, client=client, cancel=token)
+        assert time.monotonic() - start < 1.0 + 10 * cdp.distributed.POLL_SECONDS + 5
+    finally:
+        timer.cancel()
+        marker.unlink()  # the tasks already running finish at once
+
+
+def test_a_field_whose_array_changed_is_not_sent(client):
+    g = np.linspace(-1, 1, 16)
+    ball = np.sqrt(sum(c ** 2 for c in np.meshgrid(g, g, g, indexing="ij"))) - 0.5
+    field = cdp.volume_field(ball, ((-1, -1, -1), (1, 1, 1)))
+    ball[0, 0, 0] = 7.0
+    with pytest.raises(ValueError, match="changed since"):
+        cdp.polygonize(field, client=client)
+    with pytest.raises(ValueError, match="changed since"):
+        pickle.dumps(field)
 
 
 def test_what_a_cluster_cannot_do_is_said_at_once(client):

@@ -94,6 +94,7 @@ void repair_block(const Field& field, const Settings& settings, QualityOptions q
 
 BlockPart run_block(const Field& field, const BlockTask& task) {
   BlockPart part;
+  part.block = task.block;
   try {
     const auto t0 = Clock::now();
     const Vec3 lo = task.lo, hi = task.hi;
@@ -156,13 +157,47 @@ static_assert(sizeof(Tracker::Placed) == 264 && sizeof(Curvature) == 200 && size
               "a field added to Tracker::Placed or CriticalStart: write and read it in block_task.cpp");
 #endif
 
+// Bytes a Placed and a CriticalStart take when written (Reader::count's least sizes).
+constexpr std::size_t kPlacedBytes = 24 + (24 + 72 + 16 + 48 + 40) + 1 + 24 + 8;
+constexpr std::size_t kCriticalStartBytes = 24 + 24 + 8;
+constexpr TriangleCountRule kLastRule = TriangleCountRule::Hartmann;
+
+[[noreturn]] void bad_piece(const std::string& what) {
+  throw InvalidInputError("adaptive: a block piece whose " + what);
+}
+
+// A piece's numbers agree with each other: every index names one of its vertices, and every
+// per-vertex array has one entry a vertex (a piece from another build, or a runner's mix-up,
+// is refused here rather than read out of bounds).
+void check_part(const BlockPart& part) {
+  const Mesh& m = part.mesh;
+  const std::size_t n = m.positions.size();
+  if (m.normals.size() != n || part.target.size() != n || part.mac.size() != n || part.shape_index.size() != n)
+    bad_piece("per-vertex arrays do not match its vertices");
+  if (!m.corner_normals.empty() && m.corner_normals.size() != m.triangles.size())
+    bad_piece("corner normals do not match its triangles");
+  for (const auto& [name, values] : m.vertex_scalars)
+    if (values.size() != n) bad_piece("vertex scalars " + name + " do not match its vertices");
+  const auto in_range = [n](int v) { return v >= 0 && static_cast<std::size_t>(v) < n; };
+  for (const auto& t : m.triangles)
+    if (!in_range(t[0]) || !in_range(t[1]) || !in_range(t[2])) bad_piece("triangles name vertices it lacks");
+  for (const auto& ids : part.ids)
+    for (const int v : ids)
+      if (!in_range(v)) bad_piece("seam ids name vertices it lacks");
+}
+
 class Writer {
  public:
   explicit Writer(std::uint64_t tag) { num(tag); }
   template <class T>
   void num(T x) {
     static_assert(std::is_arithmetic_v<T> || std::is_enum_v<T>);
-    bytes(&x, sizeof x);
+    if constexpr (std::is_same_v<T, bool>) {
+      const std::uint8_t b = x ? 1 : 0;
+      bytes(&b, 1);
+    } else {
+      bytes(&x, sizeof x);
+    }
   }
   void vec(const Vec3& v) { bytes(v.data(), 3 * sizeof(double)); }
   void mat(const Mat3& m) { bytes(m.data(), 9 * sizeof(double)); }
@@ -216,10 +251,27 @@ class Reader {
     bytes(v.data(), v.size() * sizeof(T));
     return v;
   }
-  std::size_t count() {  // of a list read element by element: at least a byte each
+  // The length of a list read element by element, each at least `least` bytes of the input, so
+  // that a count the bytes cannot hold is refused before anything is allocated for it.
+  std::size_t count(std::size_t least) {
     const auto n = num<std::uint64_t>();
-    if (n > in_.size() - at_) truncated();
+    if (n > (in_.size() - at_) / least) truncated();
     return static_cast<std::size_t>(n);
+  }
+  // A bool as written (one byte, 0 or 1), an enum up to its last value.
+  bool flag() {
+    const auto b = num<std::uint8_t>();
+    if (b > 1) truncated();
+    return b == 1;
+  }
+  template <class E>
+  E choice(E last) {
+    using U = std::underlying_type_t<E>;
+    const auto v = num<U>();
+    bool below = false;
+    if constexpr (std::is_signed_v<U>) below = v < 0;
+    if (below || v > static_cast<U>(last)) truncated();
+    return static_cast<E>(v);
   }
   void end() const {
     if (at_ != in_.size()) truncated();
@@ -252,16 +304,16 @@ void write_settings(Writer& w, const Settings& s) {
 
 Settings read_settings(Reader& r, const CancelToken& cancel) {
   Settings s;
-  s.sizing.mode = r.num<SizingMode>(), s.sizing.factor = r.num<double>(), s.sizing.tolerance = r.num<double>();
+  s.sizing.mode = r.choice(SizingMode::Chord), s.sizing.factor = r.num<double>(), s.sizing.tolerance = r.num<double>();
   s.sizing.min_edge = r.num<double>(), s.sizing.max_edge = r.num<double>(), s.sizing.max_turn = r.num<double>();
-  s.rule = r.num<TriangleCountRule>(), s.collision_factor = r.num<double>();
+  s.rule = r.choice(kLastRule), s.collision_factor = r.num<double>();
   s.max_triangles = r.num<std::size_t>(), s.max_steps = r.num<std::size_t>();
-  s.search_visits_per_step = r.num<std::uint64_t>(), s.callers_search_bound = r.num<bool>();
-  s.curvature_properties = r.num<bool>(), s.grading = r.num<bool>(), s.side_points = r.num<bool>();
-  s.diagonal = r.num<double>(), s.rollback = r.num<bool>(), s.anticipate = r.num<bool>();
-  s.finer_zones.resize(r.count());
+  s.search_visits_per_step = r.num<std::uint64_t>(), s.callers_search_bound = r.flag();
+  s.curvature_properties = r.flag(), s.grading = r.flag(), s.side_points = r.flag();
+  s.diagonal = r.num<double>(), s.rollback = r.flag(), s.anticipate = r.flag();
+  s.finer_zones.resize(r.count(5 * sizeof(double)));
   for (FinerZone& z : s.finer_zones) z.center = r.vec(), z.radius = r.num<double>(), z.edge = r.num<double>();
-  s.look_ahead = r.num<bool>(), s.look_ahead_gradation = r.num<double>(), s.hash_cell = r.num<double>();
+  s.look_ahead = r.flag(), s.look_ahead_gradation = r.num<double>(), s.hash_cell = r.num<double>();
   s.cancel = cancel;
   return s;
 }
@@ -275,9 +327,9 @@ void write_quality_options(Writer& w, const QualityOptions& q) {
 QualityOptions read_quality_options(Reader& r, const CancelToken& cancel) {
   QualityOptions q;
   q.improve_below = r.num<double>(), q.tolerance = r.num<double>(), q.diagonal = r.num<double>();
-  q.min_edge = r.num<double>(), q.last_resort_min_edge = r.num<double>(), q.measure_near_bound = r.num<bool>();
-  q.aim_mean_edge_ratio = r.num<double>(), q.threads = r.num<int>(), q.keep_boundary = r.num<bool>();
-  q.count_near_boundary = r.num<bool>();
+  q.min_edge = r.num<double>(), q.last_resort_min_edge = r.num<double>(), q.measure_near_bound = r.flag();
+  q.aim_mean_edge_ratio = r.num<double>(), q.threads = r.num<int>(), q.keep_boundary = r.flag();
+  q.count_near_boundary = r.flag();
   q.cancel = cancel;
   return q;
 }
@@ -291,13 +343,16 @@ void quality_counts(Q& q, F&& f) {
   f(q.over_tolerance);
 }
 
-// A failure of a block's tracker that travels in its piece; kOther: any other error.
-enum class Failure : std::uint8_t { None, Layout, Stalled, Limit, NoSurface, Logic, Cancelled };
+// What a block's run threw, travelling in its piece: a tracker's failure by its kind (the run
+// falls back to tracking alone), Other for any other error (the field's: a Python function's),
+// raised by the run as a std::runtime_error with its message, in block order as its own blocks'.
+enum class Failure : std::uint8_t { None, Layout, Stalled, Limit, NoSurface, Logic, Cancelled, Other };
 
 }  // namespace
 
 std::string write_task(const BlockTask& task) {
   Writer w(kTaskTag);
+  w.num<std::uint64_t>(task.block);
   write_settings(w, task.settings);
   w.num(task.estimated_area), w.vec(task.lo), w.vec(task.hi);
   w.num<std::uint64_t>(task.loops.size());
@@ -321,24 +376,25 @@ std::string write_task(const BlockTask& task) {
 BlockTask read_task(std::string_view bytes, const CancelToken& cancel) {
   Reader r(bytes, kTaskTag, "task");
   BlockTask task;
+  task.block = r.num<std::uint64_t>();
   task.settings = read_settings(r, cancel);
   task.estimated_area = r.num<double>(), task.lo = r.vec(), task.hi = r.vec();
-  task.loops.resize(r.count());
+  task.loops.resize(r.count(sizeof(std::uint64_t)));
   for (auto& loop : task.loops) {
-    loop.resize(r.count());
+    loop.resize(r.count(kPlacedBytes));
     for (Tracker::Placed& p : loop) {
       Curvature& c = p.curvature;
       p.point = r.vec(), c.normal = r.vec(), c.C = r.mat(), c.k1 = r.num<double>(), c.k2 = r.num<double>();
       c.dir1 = r.vec(), c.dir2 = r.vec(), c.gaussian = r.num<double>(), c.mean = r.num<double>();
       c.mac = r.num<double>(), c.min_radius = r.num<double>(), c.shape_index = r.num<double>();
-      const bool critical = r.num<bool>();
+      const bool critical = r.flag();
       const Vec3 step = r.vec();
       if (critical) p.to_critical = step;
       p.seam_target = r.num<double>();
     }
   }
-  if (r.num<bool>()) task.repair = read_quality_options(r, cancel);
-  task.check_self_intersections = r.num<bool>();
+  if (r.flag()) task.repair = read_quality_options(r, cancel);
+  task.check_self_intersections = r.flag();
   r.end();
   return task;
 }
@@ -361,7 +417,12 @@ std::string write_part(const BlockPart& part) {
       failure = Failure::NoSurface, message = e.what();
     } catch (const std::logic_error& e) {
       failure = Failure::Logic, message = e.what();
-    }  // anything else (the field's) leaves here as it is
+    } catch (const std::exception& e) {
+      failure = Failure::Other, message = e.what();
+    } catch (...) {
+      failure = Failure::Other, message = "an error that is no std::exception";
+    }
+  w.num<std::uint64_t>(part.block);
   w.num(failure);
   w.array(std::vector<char>(message.begin(), message.end()));
   if (failure != Failure::None) return w.take();
@@ -390,7 +451,8 @@ std::string write_part(const BlockPart& part) {
 BlockPart read_part(std::string_view bytes) {
   Reader r(bytes, kPartTag, "piece");
   BlockPart part;
-  const auto failure = r.num<Failure>();
+  part.block = r.num<std::uint64_t>();
+  const auto failure = r.choice(Failure::Other);
   const std::vector<char> text = r.array<char>();
   const std::string message(text.begin(), text.end());
   switch (failure) {
@@ -401,7 +463,7 @@ BlockPart read_part(std::string_view bytes) {
     case Failure::NoSurface: part.error = std::make_exception_ptr(NoSurfaceError(message)); break;
     case Failure::Logic: part.error = std::make_exception_ptr(std::logic_error(message)); break;
     case Failure::Cancelled: part.error = std::make_exception_ptr(CancelledError(message)); break;
-    default: throw InvalidInputError("adaptive: a block piece cut short or from another build");
+    case Failure::Other: part.error = std::make_exception_ptr(std::runtime_error(message)); break;
   }
   if (failure != Failure::None) {
     r.end();
@@ -409,19 +471,19 @@ BlockPart read_part(std::string_view bytes) {
   }
   Mesh& m = part.mesh;
   m.positions = r.array<Vec3>(), m.normals = r.array<Vec3>(), m.triangles = r.array<std::array<int, 3>>();
-  m.corner_normals.resize(r.count());
+  m.corner_normals.resize(r.count(3 * sizeof(Vec3)));
   for (auto& corners : m.corner_normals)
     for (Vec3& n : corners) n = r.vec();
-  for (std::size_t k = r.count(); k > 0; --k) {
+  for (std::size_t k = r.count(2 * sizeof(std::uint64_t)); k > 0; --k) {
     const std::vector<char> name = r.array<char>();
     m.vertex_scalars[std::string(name.begin(), name.end())] = r.array<double>();
   }
-  part.ids.resize(r.count());
+  part.ids.resize(r.count(sizeof(std::uint64_t)));
   for (auto& ids : part.ids) ids = r.array<int>();
   part.target = r.array<double>(), part.mac = r.array<double>(), part.shape_index = r.array<double>();
   part.steps = r.num<std::size_t>(), part.splits = r.num<std::size_t>(), part.merges = r.num<std::size_t>();
   part.forced_closures = r.num<std::size_t>(), part.patch_refusals = r.num<std::size_t>();
-  part.critical_starts.resize(r.count());
+  part.critical_starts.resize(r.count(kCriticalStartBytes));
   for (CriticalStart& c : part.critical_starts) c.point = r.vec(), c.step = r.vec(), c.edge = r.num<double>();
   QualityReport& q = part.quality;
   q.repair_below_degrees = r.num<double>();
@@ -429,6 +491,7 @@ BlockPart read_part(std::string_view bytes) {
   q.over_tolerance_worst = r.num<double>(), q.over_tolerance_near = r.vec();
   part.seconds = r.num<double>();
   r.end();
+  check_part(part);
   return part;
 }
 

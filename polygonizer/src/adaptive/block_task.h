@@ -18,6 +18,7 @@
 namespace cdp::adaptive {
 
 struct BlockTask {
+  std::size_t block = 0;  // its index in block order, returned in its piece
   Settings settings;  // the run's, its cancel token left behind when sent
   double estimated_area = 0;  // the seed grid's (Tracker::set_estimated_area), 0 for none
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // the block's box
@@ -27,6 +28,7 @@ struct BlockTask {
 };
 
 struct BlockPart {
+  std::size_t block = 0;  // its task's
   Mesh mesh;
   std::vector<std::vector<int>> ids;  // the part's vertex ids of the cycles' vertices
   std::vector<double> target, mac, shape_index;
@@ -47,9 +49,10 @@ BlockTask read_task(std::string_view bytes, const CancelToken& cancel = {});
 
 // The tracker's failures (CreaseLayoutError, StalledFrontError, LimitExceededError,
 // NoSurfaceError, std::logic_error, CancelledError) travel as their kind and message and are
-// made again by read_part; \throw what any other error of the part is (the field's), when written.
+// made again by read_part; any other error (the field's) as a std::runtime_error with its message.
 std::string write_part(const BlockPart& part);
-// \throw InvalidInputError when the bytes are not a piece of this build.
+// \throw InvalidInputError when the bytes are not a piece of this build, or its numbers disagree
+// (an index past its vertices, a per-vertex array of another length).
 BlockPart read_part(std::string_view bytes);
 
 }  // namespace cdp::adaptive

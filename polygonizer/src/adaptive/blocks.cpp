@@ -771,7 +771,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     };
     // Block blk's task: all its tracker needs besides the field.
     const auto block_task = [&](std::size_t blk) {
-      BlockTask task{settings, seeds.estimated_area, {}, {}, {}, {}, options.check_self_intersections};
+      BlockTask task{blk, settings, seeds.estimated_area, {}, {}, {}, {}, options.check_self_intersections};
       std::tie(task.lo, task.hi) = block_box(blk);
       for (const std::vector<int>& cycle : cycles[blk]) {
         std::vector<Tracker::Placed>& loop = task.loops.emplace_back();
@@ -788,11 +788,23 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       for (const std::string& t : tasks) out.report.task_bytes += t.size();
       const std::vector<std::string> pieces = options.block_runner(tasks);
       if (pieces.size() != order.size())
-        throw std::runtime_error("adaptive: the block runner returned " + std::to_string(pieces.size()) +
+        throw InvalidInputError("adaptive: the block runner returned " + std::to_string(pieces.size()) +
                                  " pieces for " + std::to_string(order.size()) + " tasks");
       for (std::size_t i = 0; i < order.size(); ++i) {
         out.report.piece_bytes += pieces[i].size();
-        parts[order[i]] = read_part(pieces[i]);
+        BlockPart part = read_part(pieces[i]);
+        const std::size_t blk = order[i];
+        // The piece answers this task, and its seams are the task's (a runner that mixed them up
+        // is an error, never a mesh read out of bounds).
+        bool fits = part.block == blk;
+        if (fits && !part.error) {
+          fits = part.ids.size() == cycles[blk].size();
+          for (std::size_t c = 0; fits && c < part.ids.size(); ++c) fits = part.ids[c].size() == cycles[blk][c].size();
+        }
+        if (!fits)
+          throw InvalidInputError("adaptive: the block runner returned, for block " + std::to_string(blk) +
+                                  ", a piece of another task");
+        parts[blk] = std::move(part);
       }
       out.report.threads = 1;
     } else {

@@ -20,15 +20,18 @@ namespace cdp {
 // run_block_task(field, task) returns for each, run with the run's own field (the same model,
 // built by the same build of the library: the bytes are this build's memory layout, checked by a
 // tag). Called on the run's thread, once per layout (a run that meshes again lays out again).
-// Errors it throws end the run unchanged (a Python exception from a cluster stays one).
+// Errors it throws end the run unchanged (a Python exception from a cluster stays one); pieces
+// that do not answer their tasks (another block's, numbers that disagree) end it with
+// InvalidInputError.
 using BlockRunner = std::function<std::vector<std::string>(const std::vector<std::string>& tasks)>;
 
 // Meshes one block from its task: its tracker from its seams, its repair with the seams kept, and
-// the check for intersecting triangles, as the run does on its own threads. A tracker's failure
-// (a stalled front, a bound, a block's loops it cannot mesh) travels in the piece, for the run
-// to decide in block order as for its own blocks (a fallback to tracking alone).
+// the check for intersecting triangles, as the run does on its own threads. What the block's run
+// throws travels in the piece, for the run to decide in block order as for its own blocks: a
+// tracker's failure (a stalled front, a bound, a block's loops it cannot mesh) falls back to
+// tracking alone, any other error (the field's: a Python function's) is raised by the run as a
+// std::runtime_error with its message.
 // \throw InvalidInputError when `task` is not a block task of this build.
-// \throw what the field's evaluations throw (a Python function's error), unchanged.
 std::string run_block_task(const Field& field, std::string_view task);
 
 }  // namespace cdp
