@@ -106,7 +106,8 @@ def main():
             row.update(verdict="within" if not misses else "outside", misses="; ".join(misses),
                        triangles=stats["triangles"], seconds=round(stats["seconds"], 3),
                        min_at_creases=round(angles["min_degrees_at_creases"], 2),
-                       min_away=round(angles["min_degrees_away"], 2))
+                       min_away=round(angles["min_degrees_away"], 2),
+                       blocks=stats.get("blocks", {}).get("meshed_blocks", 0))
         for ext in (".ply", ".json"):
             if os.path.exists(base + ext):
                 os.remove(base + ext)
@@ -117,7 +118,8 @@ def main():
         rows = list(pool.map(lambda j: job(*j), jobs))
     work.cleanup()
 
-    fieldnames = ["model", "run", "verdict", "triangles", "seconds", "min_at_creases", "min_away", "misses"]
+    # blocks: the blocks the mesh was made of (0: tracked alone; with --extra "--blocks true").
+    fieldnames = ["model", "run", "verdict", "triangles", "seconds", "min_at_creases", "min_away", "blocks", "misses"]
     with open(os.path.join(a.out, "summary.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fieldnames)
         w.writeheader()
