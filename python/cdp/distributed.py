@@ -9,8 +9,9 @@ a run costs only its tasks, which Dask runs again elsewhere.
 
 The field travels as its recipe, the call of the cdp factory that made it (cdp.field_from_json and
 its JSON or file, the model functions and their keywords, cdp.expression and the cdp.sdf models,
-cdp.callable_field and its Python functions, cdp.volume_field and its array), scattered once to
-every worker and built there once per worker thread. Files a field reads (VIS and MPU points, a
+cdp.callable_field and its Python functions, cdp.volume_field and its array), sent once as a task
+whose result the workers share (made again if every worker holding it is lost) and built once per
+worker thread. Files a field reads (VIS and MPU points, a
 volume's file) are read by the workers from the same absolute path: on a cluster of several
 machines, a shared file system. The workers run the same build of cdp as the client (the tasks are
 this build's bytes, and are refused otherwise).
@@ -77,7 +78,7 @@ POLL_SECONDS = 0.2
 
 def block_runner(client, field, level=0.0):
     """The block runner (cdp._cdp.polygonize's block_runner) that meshes a run's blocks on `client`'s
-    workers: the field's recipe scattered to every worker once, then one task a block, submitted
+    workers: the field's recipe sent once (a task whose result the workers share), then one task a block, submitted
     largest first with priorities in that order (Dask runs higher priorities first), gathered in
     the run's order. An error of a task (a field its worker cannot build: a missing points file)
     is raised here as the task raised it; a worker lost in the middle costs only its tasks, which
@@ -85,14 +86,16 @@ def block_runner(client, field, level=0.0):
     and raises cdp.CancelledError within POLL_SECONDS."""
     from . import _recipe
 
-    scattered = client.scatter(_Recipe(_recipe(field, "cdp.polygonize(client=...)")), broadcast=True, hash=False)
     run = f"cdp-block-{uuid.uuid4().hex}"
+    # The recipe as a task of its own, not scattered data: data scattered to workers that all die
+    # is lost for good (the tasks that need it are cancelled), a task's result is made again.
+    recipe = client.submit(_Recipe, _recipe(field, "cdp.polygonize(client=...)"), key=f"{run}-recipe", pure=False)
     calls = itertools.count()
 
     def run_blocks(tasks, cancelled=lambda: False):
         # Each call (a run that meshes again lays out again) under keys of its own.
         prefix = f"{run}-{next(calls)}"
-        futures = [client.submit(_mesh_block, task, scattered, level, _build(), key=f"{prefix}-{i}",
+        futures = [client.submit(_mesh_block, task, recipe, level, _build(), key=f"{prefix}-{i}",
                                  priority=len(tasks) - i, pure=False)
                    for i, task in enumerate(tasks)]
         try:
