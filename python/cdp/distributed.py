@@ -32,10 +32,10 @@ __all__ = ["polygonize", "block_runner"]
 
 
 class _Recipe:
-    """A field's recipe as one scattered object (a tuple would be scattered element by element),
-    building the field once per thread of the worker that holds it: fields made from Python
-    functions are not safe to call from two threads at once, and tasks of one worker run on its
-    threads."""
+    """A field's recipe as one opaque object (Dask reads a tuple in a task's arguments as a task
+    when its first element is callable: a callable_field's recipe), building the field once per
+    thread of the worker that holds it: fields made from Python functions are not safe to call
+    from two threads at once, and tasks of one worker run on its threads."""
 
     def __init__(self, recipe):
         self.recipe = recipe
@@ -54,6 +54,11 @@ class _Recipe:
             name, args, kwargs = self.recipe
             field = self._local.field = getattr(_cdp, name)(*args, **kwargs)
         return field
+
+
+def _same(recipe):
+    """The recipe's task: its result is the recipe, held by a worker and made again if lost."""
+    return recipe
 
 
 def _mesh_block(task, recipe, level, build):
@@ -89,7 +94,8 @@ def block_runner(client, field, level=0.0):
     run = f"cdp-block-{uuid.uuid4().hex}"
     # The recipe as a task of its own, not scattered data: data scattered to workers that all die
     # is lost for good (the tasks that need it are cancelled), a task's result is made again.
-    recipe = client.submit(_Recipe, _recipe(field, "cdp.polygonize(client=...)"), key=f"{run}-recipe", pure=False)
+    recipe = client.submit(_same, _Recipe(_recipe(field, "cdp.polygonize(client=...)")), key=f"{run}-recipe",
+                           pure=False)
     calls = itertools.count()
 
     def run_blocks(tasks, cancelled=lambda: False):
