@@ -281,12 +281,8 @@ poll. reset() makes the token usable again. Ctrl-C needs no token: it raises Key
         std::string piece;
         {
           py::gil_scoped_release release;
-          if (level != 0) {
-            const LevelShift shifted(field, level);
-            piece = run_block_task(shifted, bytes);
-          } else {
-            piece = run_block_task(field, bytes);
-          }
+          std::optional<LevelShift> shifted;  // as run() shifts the run's field
+          piece = run_block_task(level != 0 ? shifted.emplace(field, level) : field, bytes);
         }
         return py::bytes(piece);
       },
