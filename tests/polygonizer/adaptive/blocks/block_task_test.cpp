@@ -8,6 +8,7 @@
 #include <cdp/core/block_tasks.h>
 #include <cdp/core/errors.h>
 
+#include "common/same_mesh.h"
 #include "common/test_fields.h"
 #include "src/adaptive/block_task.h"
 #include "src/adaptive/crease_patches.h"
@@ -28,22 +29,6 @@ AdaptiveOptions task_options(double factor = 12) {
   o.blocks = true;
   o.threads = 2;
   return o;
-}
-
-void expect_same_piece_mesh(const Mesh& a, const Mesh& b) {
-  ASSERT_EQ(a.positions.size(), b.positions.size());
-  ASSERT_EQ(a.triangles.size(), b.triangles.size());
-  for (std::size_t i = 0; i < a.positions.size(); ++i) ASSERT_EQ(a.positions[i], b.positions[i]) << "vertex " << i;
-  for (std::size_t i = 0; i < a.triangles.size(); ++i) ASSERT_EQ(a.triangles[i], b.triangles[i]) << "triangle " << i;
-  ASSERT_EQ(a.normals.size(), b.normals.size());
-  for (std::size_t i = 0; i < a.normals.size(); ++i) ASSERT_EQ(a.normals[i], b.normals[i]) << "normal " << i;
-  ASSERT_EQ(a.vertex_scalars.size(), b.vertex_scalars.size());
-  for (const auto& [name, values] : a.vertex_scalars) {
-    ASSERT_TRUE(b.vertex_scalars.count(name)) << name;
-    const std::vector<double>& other = b.vertex_scalars.at(name);
-    ASSERT_EQ(values.size(), other.size()) << name;
-    for (std::size_t i = 0; i < values.size(); ++i) ASSERT_EQ(values[i], other[i]) << name << " " << i;
-  }
 }
 
 // A runner that runs the tasks in an order drawn from `seed`, each from its bytes alone, on a
@@ -78,7 +63,7 @@ TEST(BlockTasks, BlocksRunFromTheirBytesMakeTheSameMeshAsOnTheRunsThreads) {
     EXPECT_EQ(calls, 1u);
     EXPECT_GT(b.task_bytes, 0u);
     EXPECT_GT(b.piece_bytes, b.task_bytes);  // a piece holds its block's mesh
-    expect_same_piece_mesh(here.mesh, there.mesh);
+    test::expect_same_mesh(here.mesh, there.mesh);
     EXPECT_FALSE(there.mesh.vertex_scalars.empty());
     EXPECT_EQ(here.stats.adaptive->blocks.seam_vertices, b.seam_vertices);
   }

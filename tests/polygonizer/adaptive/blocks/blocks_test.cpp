@@ -8,6 +8,7 @@
 #include <cdp/core/triangle_intersection.h>
 #include <cdp/io/field_factory.h>
 
+#include "common/same_mesh.h"
 #include "common/test_fields.h"
 #include "polygonizer/adaptive/stage_fixtures.h"
 #include "polygonizer/mesh_checks.h"
@@ -32,14 +33,6 @@ AdaptiveOptions with_blocks(int threads, double factor = 12) {
   o.blocks = true;
   o.threads = threads;
   return o;
-}
-
-void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& what) {
-  SCOPED_TRACE(what);
-  ASSERT_EQ(a.positions.size(), b.positions.size());
-  ASSERT_EQ(a.triangles.size(), b.triangles.size());
-  for (std::size_t i = 0; i < a.positions.size(); ++i) ASSERT_EQ(a.positions[i], b.positions[i]) << "vertex " << i;
-  for (std::size_t i = 0; i < a.triangles.size(); ++i) ASSERT_EQ(a.triangles[i], b.triangles[i]) << "triangle " << i;
 }
 
 TEST(AdaptiveBlocks, ATorusCutIntoBlocksMeshesSoundWithGoodTrianglesAtTheWalls) {
@@ -70,7 +63,7 @@ TEST(AdaptiveBlocks, TheMeshIsTheSameOnOneTwoThreeAndEightThreads) {
   for (const int threads : {2, 3, 8}) {
     const PolygonizeResult r = polygonize_adaptive(*f, with_blocks(threads));
     EXPECT_EQ(r.stats.adaptive->blocks.threads, static_cast<unsigned>(threads));
-    expect_same_mesh(one.mesh, r.mesh, std::to_string(threads) + " threads");
+    test::expect_same_mesh(one.mesh, r.mesh, std::to_string(threads) + " threads");
   }
 }
 
@@ -91,7 +84,7 @@ TEST(AdaptiveBlocks, TheBlocksMeshTheSameInAnyOrder) {
   for (const std::uint64_t shuffle : {1u, 2u, 3u}) {
     const BlockMeshing other = mesh_blocks(*s.field, s.options, settings, seeds, &repair, shuffle);
     ASSERT_TRUE(other.mesh) << other.report.fallback;
-    expect_same_mesh(first.mesh->mesh, other.mesh->mesh, "order " + std::to_string(shuffle));
+    test::expect_same_mesh(first.mesh->mesh, other.mesh->mesh, "order " + std::to_string(shuffle));
   }
 }
 
