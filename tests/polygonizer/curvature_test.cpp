@@ -9,6 +9,7 @@
 
 #include <random>
 
+#include "common/same_bits.h"
 #include "common/test_fields.h"
 
 namespace cdp {
@@ -117,6 +118,26 @@ TEST(Curvature, VanishingGradientIsANoSurfaceError) {
   }
   Vec3 nan_gradient(std::nan(""), 0, 0);
   EXPECT_THROW(curvature_from_derivatives(nan_gradient, Mat3::Identity()), NoSurfaceError);
+}
+
+TEST(Curvature, CurvaturesAtABatchAreThoseOfEachPointBitForBit) {
+  // More points than one batch holds (16384), so that the batches' seams are crossed too.
+  const auto f = test::tanglecube();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-2.5, 2.5);
+  std::vector<Vec3> points(20000);
+  for (Vec3& p : points) p = Vec3(u(rng), u(rng), u(rng));
+  f->reset_counts();
+  const std::vector<Curvature> batch = curvatures_at(*f, points);
+  EXPECT_EQ(f->counts().gradient_hessian, points.size());
+  ASSERT_EQ(batch.size(), points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Curvature one = curvature_at(*f, points[i]);
+    ASSERT_TRUE(test::same_bits(batch[i].k1, one.k1) && test::same_bits(batch[i].k2, one.k2) &&
+                test::same_bits(batch[i].mac, one.mac) && test::same_bits(batch[i].shape_index, one.shape_index) &&
+                test::same_bits(batch[i].normal, one.normal))
+        << "point " << i;
+  }
 }
 
 }  // namespace

@@ -78,13 +78,14 @@ void repair_block(const Field& field, const Settings& settings, QualityOptions q
     if (!kept[v] && !std::isfinite(target[v])) target[v] = smallest;
   // The curvature only where the caller asked for it (a Hessian a vertex: on the bunny VIS-800
   // at factor 5, a tenth of the blocks' time).
-  if (settings.curvature_properties)
-    for (std::size_t v = 0; v < n; ++v) {
-      if (kept[v] && !moved[v]) continue;
-      const Curvature c = curvature_at(field, part.mesh.positions[v]);
-      mac[v] = c.mac;
-      shape[v] = c.shape_index;
-    }
+  if (settings.curvature_properties) {
+    std::vector<std::size_t> which;
+    std::vector<Vec3> at;
+    for (std::size_t v = 0; v < n; ++v)
+      if (!kept[v] || moved[v]) which.push_back(v), at.push_back(part.mesh.positions[v]);
+    const std::vector<Curvature> c = curvatures_at(field, at);
+    for (std::size_t i = 0; i < which.size(); ++i) mac[which[i]] = c[i].mac, shape[which[i]] = c[i].shape_index;
+  }
   part.target = std::move(target);
   part.mac = std::move(mac);
   part.shape_index = std::move(shape);

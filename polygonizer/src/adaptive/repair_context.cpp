@@ -145,6 +145,41 @@ bool RepairContext::on_crease(int v) {
   return crease;
 }
 
+void RepairContext::probe_creases(const std::vector<int>& vs) {
+  if (smooth_) return;
+  std::vector<int> todo;
+  for (const int v : vs)
+    if (crease_[v] < 0) crease_[v] = 2, todo.push_back(v);  // 2: being probed (vs may repeat one)
+  if (todo.empty()) return;
+  std::vector<Vec3> at(todo.size()), g0(todo.size());
+  std::vector<double> values(todo.size());
+  for (std::size_t i = 0; i < todo.size(); ++i) at[i] = P(todo[i]);
+  field_.values_gradients(at.data(), values.data(), g0.data(), at.size());
+  // Those whose gradient agrees with their normal: the gradients on either side, as on_crease.
+  std::vector<std::size_t> sides;
+  std::vector<Vec3> around;
+  for (std::size_t i = 0; i < todo.size(); ++i) {
+    const int v = todo[i];
+    if (!(g0[i].squaredNorm() > 0) || !(g0[i].normalized().dot(mesh_.normals[v]) > kCreaseNormalCosine)) {
+      crease_[v] = 1;
+      continue;
+    }
+    const std::array<Vec3, 2> two = CreaseProbe(options_.diagonal).points(at[i], g0[i].normalized());
+    sides.push_back(i);
+    around.push_back(two[1]);
+    around.push_back(two[0]);
+  }
+  std::vector<Vec3> g(around.size());
+  values.resize(around.size());
+  field_.values_gradients(around.data(), values.data(), g.data(), around.size());
+  for (std::size_t k = 0; k < sides.size(); ++k) {
+    const Vec3 &g1 = g[2 * k], &g2 = g[2 * k + 1];
+    crease_[todo[sides[k]]] =
+        !(g1.squaredNorm() > 0 && g2.squaredNorm() > 0) || !(g1.normalized().dot(g2.normalized()) > kCreaseCosine);
+  }
+  for (const int v : todo) report_.crease_vertices += crease_[v] == 1;
+}
+
 void RepairContext::mark_boundary() {
   fixed_.assign(mesh_.positions.size(), 0);
   for (int t = 0; t < tri_count(); ++t) {

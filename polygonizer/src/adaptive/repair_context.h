@@ -334,6 +334,9 @@ class RepairContext {
 
   // ---- crease vertices
   bool on_crease(int v);
+  // on_crease for every vertex of `vs` not yet probed, their probes in two batched calls of the
+  // field (a Python function's calls cost more than its points): the same answers and counts.
+  void probe_creases(const std::vector<int>& vs);
 
   // ---- the boundary kept (QualityOptions::keep_boundary)
   // Marks the ends of every edge with one triangle.

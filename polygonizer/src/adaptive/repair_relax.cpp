@@ -227,8 +227,10 @@ RelaxMoves relax_targets(RepairContext& ctx, const std::vector<char>& mark, bool
   eligible.reserve(mark.size());
   for (int v = 0; v < static_cast<int>(mark.size()); ++v) {
     ctx.poll(static_cast<std::size_t>(v));
-    if (mark[v] && ctx.vt_[v].size() >= 3 && !ctx.fixed(v) && !ctx.on_crease(v)) eligible.push_back(v);
+    if (mark[v] && ctx.vt_[v].size() >= 3 && !ctx.fixed(v)) eligible.push_back(v);
   }
+  ctx.probe_creases(eligible);
+  std::erase_if(eligible, [&ctx](int v) { return ctx.on_crease(v); });
   std::vector<Vec3> target = ctx.polled_vector<Vec3>(eligible.size(), Vec3::Zero());
   std::vector<double> reach = ctx.polled_vector<double>(eligible.size(), 0);
   std::vector<char> moves = ctx.polled_vector<char>(eligible.size(), 0);

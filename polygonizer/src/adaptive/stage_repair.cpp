@@ -224,10 +224,12 @@ void add_curvature_properties(const Field& field, const Tracker& tracker, const 
         mac[static_cast<std::size_t>(band.renumbered[v])] = tmac[v];
         shape[static_cast<std::size_t>(band.renumbered[v])] = tshape[v];
       }
-    for (int v : band.moved) {
-      const Curvature c = curvature_at(field, mesh.positions[static_cast<std::size_t>(v)]);
-      mac[static_cast<std::size_t>(v)] = c.mac;
-      shape[static_cast<std::size_t>(v)] = c.shape_index;
+    std::vector<Vec3> at;
+    for (int v : band.moved) at.push_back(mesh.positions[static_cast<std::size_t>(v)]);
+    const std::vector<Curvature> c = curvatures_at(field, at);
+    for (std::size_t i = 0; i < band.moved.size(); ++i) {
+      mac[static_cast<std::size_t>(band.moved[i])] = c[i].mac;
+      shape[static_cast<std::size_t>(band.moved[i])] = c[i].shape_index;
     }
     mesh.vertex_scalars["mac"] = std::move(mac);
     mesh.vertex_scalars["shape_index"] = std::move(shape);
@@ -240,10 +242,10 @@ void add_curvature_properties(const Field& field, const Tracker& tracker, const 
   }
   // The repair moved, removed or added vertices: measure them all where they are now.
   std::vector<double> mac(mesh.positions.size()), shape(mesh.positions.size());
+  const std::vector<Curvature> c = curvatures_at(field, mesh.positions);
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-    const Curvature c = curvature_at(field, mesh.positions[v]);
-    mac[v] = c.mac;
-    shape[v] = c.shape_index;
+    mac[v] = c[v].mac;
+    shape[v] = c[v].shape_index;
   }
   mesh.vertex_scalars["mac"] = std::move(mac);
   mesh.vertex_scalars["shape_index"] = std::move(shape);

@@ -8,6 +8,8 @@
 
 #include <cdp/core/field.h>
 
+#include <vector>
+
 namespace cdp {
 
 struct Curvature {
@@ -33,5 +35,9 @@ Curvature curvature_from_derivatives(const Vec3& gradient, const Mat3& hessian);
 // curvature_from_derivatives of `field` at p: one gradient_hessian evaluation.
 // \throw NoSurfaceError as curvature_from_derivatives; what the field's evaluation throws.
 Curvature curvature_at(const Field& field, const Vec3& p);
+// curvature_at at every point, in one batched evaluation (Field::gradients_hessians): the same
+// numbers, one call of a field whose calls are costly (a Python function) instead of one a point.
+// \throw as curvature_at.
+std::vector<Curvature> curvatures_at(const Field& field, const std::vector<Vec3>& points);
 
 }  // namespace cdp

@@ -67,5 +67,31 @@ TEST(RepairRelax, SearchSweepsGoOnTowardsTheAimAndTwoThreadsMakeTheSameMesh) {
   expect_a_sphere(one.mesh);
 }
 
+TEST(RepairCreases, ProbedTogetherTheVerticesGetTheAnswersAndCountsOfOneAtATime) {
+  // A sphere capped by the plane x = 0.5: the icosphere's vertices near the cap's rim straddle
+  // the crease, the others see one smooth piece; probe_creases asks for them all in two calls.
+  const auto field = test::field_from_json(test::expression("max(sqrt(x^2+y^2+z^2)-1, x-0.5)", 1.5));
+  Mesh mesh = icosphere(4);
+  const int n = static_cast<int>(mesh.positions.size());
+  std::vector<int> all(static_cast<std::size_t>(n));
+  for (int v = 0; v < n; ++v) all[static_cast<std::size_t>(v)] = v;
+  all.push_back(3);  // a vertex asked for twice is probed once
+  Mesh copy = mesh;
+  RepairContext alone(*field, mesh, sphere_options()), together(*field, copy, sphere_options());
+  field->reset_counts();
+  std::size_t creases = 0;
+  for (int v = 0; v < n; ++v) creases += alone.on_crease(v);
+  const EvaluationCounts one_at_a_time = field->counts();
+  field->reset_counts();
+  together.probe_creases(all);
+  EXPECT_EQ(field->counts().value_gradient, one_at_a_time.value_gradient);
+  for (int v = 0; v < n; ++v) EXPECT_EQ(together.on_crease(v), alone.on_crease(v)) << "vertex " << v;
+  EXPECT_EQ(field->counts().value_gradient, one_at_a_time.value_gradient);  // cached: no more probes
+  EXPECT_GT(creases, 0u);
+  EXPECT_LT(creases, static_cast<std::size_t>(n) / 2);
+  EXPECT_EQ(together.report_.crease_vertices, creases);
+  EXPECT_EQ(alone.report_.crease_vertices, creases);
+}
+
 }  // namespace
 }  // namespace cdp::adaptive::repair
