@@ -83,6 +83,8 @@ nlohmann::json blocks_json(const BlocksReport& b) {
           {"layout_seconds", b.layout_seconds},
           {"task_bytes", b.task_bytes},
           {"piece_bytes", b.piece_bytes},
+          {"lockstep_tasks", b.lockstep_tasks},
+          {"lockstep_batches", b.lockstep_batches},
           {"seconds", b.seconds},
           {"block_seconds", b.block_seconds},
           {"fallback", b.fallback},

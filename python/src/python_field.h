@@ -35,6 +35,7 @@ class PythonField final : public Field {
   std::string type_name() const override { return "python"; }
   std::optional<double> lipschitz_bound() const override { return lipschitz_; }
   bool smooth() const override { return smooth_; }  // as its caller promised
+  bool costly_calls() const override { return true; }  // each call enters the interpreter
   // The Hessian's step: second differences of F, or first differences of the given gradient.
   std::optional<double> derivative_step() const override {
     if (has_hessian() && has_gradient()) return std::nullopt;

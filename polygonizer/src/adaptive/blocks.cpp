@@ -2,6 +2,7 @@
 
 #include "block_task.h"
 #include "edge_length.h"
+#include "lockstep.h"
 #include "missed_necks.h"
 #include "../parallel.h"
 #include "../union_find.h"
@@ -19,6 +20,7 @@
 #include <tuple>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <utility>
 
 namespace cdp::adaptive {
@@ -37,6 +39,12 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 // 40 took 1.73 s on two threads in 25 blocks against 1.05 s in 128 at 2500, one thread 2.67 s
 // against 2.00 s (one run each).
 constexpr double kTrianglesPerBlock = 2500;
+// A field whose calls cost more than their points (Field::costly_calls) is cut for
+// kLockstepTasks blocks in flight rather than for threads, since its calls per vertex divide by
+// the blocks in lockstep (lockstep.h), but into blocks of no fewer than this many triangles: a
+// seam vertex costs a traced curve's evaluations (about 20 on the torus of python/README.md),
+// and a block of 250 triangles has about 30 seam vertices.
+constexpr double kFewestTrianglesPerLockstepBlock = 250;
 // A surface estimated below this many blocks is meshed by tracking alone: a cut costs more than
 // it gains on a surface meshed in a few milliseconds.
 constexpr double kFewestBlocks = 2;
@@ -75,8 +83,8 @@ constexpr double kSeamTolerance = 1e-10;
 constexpr double kTraceShare = 0.25;
 constexpr double kTraceTurn = 0.3;
 constexpr double kShortestTraceStep = 0.1;
-// Traced points of all seams together: at most this many per estimated triangle of the mesh, and
-// at least kFewestTracePoints. A bound on the work, far above what tracing takes: a seam is
+// Traced points of the seams of one face: at most this many per estimated triangle of the mesh,
+// and at least kFewestTracePoints. A bound on the work, far above what tracing takes: a seam is
 // traced in steps of about a quarter of an edge, and a block's seams, crossing a surface of
 // about kTrianglesPerBlock triangles, hold about a hundred vertices.
 constexpr double kTracePointsPerTriangle = 2;
@@ -173,11 +181,15 @@ struct Cuts {
   int count(int a) const { return static_cast<int>(walls[a].size()) - 1; }
 };
 
-// The blocks along each axis: about kTrianglesPerBlock triangles each, shared out in proportion
-// to the box's sides. All ones where the surface is too small to cut.
+// The blocks along each axis: about kTrianglesPerBlock triangles each (fewer for a costly field),
+// shared out in proportion to the box's sides. All ones where the surface is too small to cut.
 std::array<int, 3> block_counts(const Field& field, const SeedGridStage& seeds) {
   std::array<int, 3> n{1, 1, 1};
-  const double blocks = seeds.estimated_triangles / kTrianglesPerBlock;
+  const double per_block =
+      field.costly_calls() ? std::clamp(seeds.estimated_triangles / static_cast<double>(kLockstepTasks),
+                                        kFewestTrianglesPerLockstepBlock, kTrianglesPerBlock)
+                           : kTrianglesPerBlock;
+  const double blocks = seeds.estimated_triangles / per_block;
   if (blocks < kFewestBlocks) return n;
   const Vec3 size = field.bounds().size();
   const double side = std::cbrt(size.prod() / blocks);
@@ -223,12 +235,15 @@ Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int,
   return cuts;
 }
 
-// Seam vertices: the corners first, then each face's seams' inner vertices.
+// Seam vertices: the corners first, then each face's seams' inner vertices. A face traces its
+// own from `base` (the corners' count) up, as if they came right after the corners; mesh_blocks
+// numbers them after the faces' before it.
 struct SeamVertices {
   std::vector<Vec3> points;
+  int base = 0;
   int add(const Vec3& p) {
     points.push_back(p);
-    return static_cast<int>(points.size()) - 1;
+    return base + static_cast<int>(points.size()) - 1;
   }
 };
 
@@ -255,6 +270,20 @@ std::pair<int, int> other_axes(int a) { return {a == 0 ? 1 : 0, a == 2 ? 1 : 2};
 // with a wall of the box) means the surface reaches the box there, which the layout refuses.
 Lines find_corners(const Field& field, const Cuts& cuts, double cell, SeamVertices& sv, const CancelToken& cancel) {
   Lines lines;
+  // A sign change of F between two samples of a line, in the order of the lines and the samples.
+  struct Bracket {
+    int along;
+    std::size_t line;  // in lines.roots[along]
+    Vec3 base;
+    double lo, hi;
+    bool negative_lo;  // F < 0 at lo
+    Vec3 at(double t) const {
+      Vec3 x = base;
+      x[along] = t;
+      return x;
+    }
+  };
+  std::vector<Bracket> brackets;
   const Box& box = field.bounds();
   for (int along = 0; along < 3; ++along) {
     const auto [p, q] = other_axes(along);
@@ -280,25 +309,36 @@ Lines find_corners(const Field& field, const Cuts& cuts, double cell, SeamVertic
         };
         for (int k = 0; k <= samples; ++k) points[static_cast<std::size_t>(k)] = at(box.min[along] + step * k);
         field.values(points.data(), values.data(), points.size());
-        std::vector<Corner>& out = lines.roots[along][static_cast<std::size_t>(i) * (nq + 1) + j];
         for (int k = 0; k < samples; ++k) {
-          double lo = box.min[along] + step * k, hi = lo + step;
-          double flo = values[static_cast<std::size_t>(k)], fhi = values[static_cast<std::size_t>(k) + 1];
+          const double lo = box.min[along] + step * k;
+          const double flo = values[static_cast<std::size_t>(k)], fhi = values[static_cast<std::size_t>(k) + 1];
           if (!std::isfinite(flo) || !std::isfinite(fhi))
             throw CreaseLayoutError("adaptive: the field is not finite on a block's edge near " + format_point(at(lo)));
           if ((flo < 0) == (fhi < 0)) continue;
           if (!interior_i || !interior_j)
             throw CreaseLayoutError("adaptive: the surface reaches the box's side near " + format_point(at(lo)));
-          for (int it = 0; it < kRootBisections; ++it) {
-            const double mid = 0.5 * (lo + hi);
-            const double fm = field.value(at(mid));
-            if ((fm < 0) == (flo < 0)) lo = mid, flo = fm;
-            else hi = mid, fhi = fm;
-          }
-          const double t = 0.5 * (lo + hi);
-          out.push_back({t, sv.add(at(t))});
+          brackets.push_back({along, static_cast<std::size_t>(i) * (nq + 1) + j, base, lo, lo + step, flo < 0});
         }
       }
+  }
+  // Every bracket bisected in lockstep, each round one batch of their middles: the same roots as
+  // one after another, in kRootBisections calls of a costly field (Field::costly_calls) rather
+  // than as many per corner.
+  std::vector<Vec3> mids(brackets.size());
+  std::vector<double> fm(brackets.size());
+  for (int it = 0; it < kRootBisections && !brackets.empty(); ++it) {
+    for (std::size_t r = 0; r < brackets.size(); ++r) mids[r] = brackets[r].at(0.5 * (brackets[r].lo + brackets[r].hi));
+    field.values(mids.data(), fm.data(), mids.size());
+    for (std::size_t r = 0; r < brackets.size(); ++r) {
+      Bracket& b = brackets[r];
+      const double mid = 0.5 * (b.lo + b.hi);
+      if ((fm[r] < 0) == b.negative_lo) b.lo = mid;
+      else b.hi = mid;
+    }
+  }
+  for (const Bracket& b : brackets) {
+    const double t = 0.5 * (b.lo + b.hi);
+    lines.roots[b.along][b.line].push_back({t, sv.add(b.at(t))});
   }
   return lines;
 }
@@ -391,7 +431,7 @@ struct SeamTracer {
     double travelled = 0;
     for (;;) {
       if (points_left == 0)
-        throw CreaseLayoutError("adaptive: the seams of the blocks pass " + std::to_string(points_bound) +
+        throw CreaseLayoutError("adaptive: the seams of a block's face pass " + std::to_string(points_bound) +
                                 " traced points near " + format_point(x));
       if (--points_left % 1024 == 0) cancel.check("adaptive");
       if (!t0) throw CreaseLayoutError("adaptive: a seam's tangent vanishes near " + format_point(x));
@@ -492,8 +532,10 @@ Seam resample(const SeamTracer& tracer, const Face& f, const std::vector<Vec3>& 
 
 // The seams of face f: from each corner on its sides to the corner where it leaves, then a loop
 // through each crossing of the plane's samples inside the face that no seam passes near.
+// `corners`: the corners' points (SeamVertices::points of find_corners); the seams' own vertices
+// go to `own`.
 std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const PlaneSamples& plane, const Lines& lines,
-                             SeamVertices& sv) {
+                             const std::vector<Vec3>& corners_at, SeamVertices& own) {
   std::vector<FaceCorner> corners;
   {
     // Sides d = d0, d = d1 run along b; b = b0, b = b1 along d. Lines are indexed by the wall
@@ -503,7 +545,7 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
       const int ip = p == f.a ? f.cut + 1 : wall_index, iq = q == f.a ? f.cut + 1 : wall_index;
       for (const Corner& c : lines.at(along, ip, iq))
         if (c.t > lo && c.t < hi) {
-          const Vec3& x = sv.points[static_cast<std::size_t>(c.vertex)];
+          const Vec3& x = corners_at[static_cast<std::size_t>(c.vertex)];
           corners.push_back({c.vertex, x, inward, side});
         }
     };
@@ -537,7 +579,8 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
     corners[i].used = corners[static_cast<std::size_t>(end)].used = true;
     tr.points.push_back(corners[static_cast<std::size_t>(end)].point);
     tr.targets.push_back(tracer.target(tr.points.back()));
-    seams.push_back(resample(tracer, f, tr.points, tr.targets, from.vertex, corners[static_cast<std::size_t>(end)].vertex, sv));
+    seams.push_back(
+        resample(tracer, f, tr.points, tr.targets, from.vertex, corners[static_cast<std::size_t>(end)].vertex, own));
     traced.push_back(std::move(tr.points));
   }
   // Loops: every sample edge with a sign change inside the face is crossed by the seam through
@@ -597,7 +640,7 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
           throw CreaseLayoutError("adaptive: a seam leaves its face where no corner was found near " +
                                   format_point(tr.exit) + " (the surface grazes a block's edge)");
         if (tr.points.size() < 3) throw CreaseLayoutError("adaptive: a seam loop too small to mesh near " + format_point(x));
-        seams.push_back(resample(tracer, f, tr.points, tr.targets, -1, -1, sv));
+        seams.push_back(resample(tracer, f, tr.points, tr.targets, -1, -1, own));
         tr.points.push_back(tr.points.front());  // the closing chord too, for the crossings it makes
         traced.push_back(std::move(tr.points));
       }
@@ -615,16 +658,19 @@ struct Dart {
   int from = -1, to = -1;  // corner vertices of an open seam
 };
 
+// The vertex of a seam where orient() measures its direction.
+std::size_t middle(const Seam& s) { return s.closed ? 0 : s.vertices.size() / 2; }
+
 // The two darts of a seam of face f: the first for the block below the plane, the second above.
 // With the gradient g at a vertex, the direction a x g has the side p[a] > c on its left seen
-// from outside (g x (a x g) leans along +a).
-std::array<Dart, 2> orient(const Field& field, const Face& f, const Seam& s, const SeamVertices& sv) {
+// from outside (g x (a x g) leans along +a). `g`: the gradient at the seam's middle() vertex.
+std::array<Dart, 2> orient(const Face& f, const Seam& s, const SeamVertices& sv, const Vec3& g) {
   const std::size_t n = s.vertices.size();
-  const std::size_t m = s.closed ? 0 : n / 2;
+  const std::size_t m = middle(s);
   const Vec3& x = sv.points[static_cast<std::size_t>(s.vertices[m])];
   const Vec3 dir = sv.points[static_cast<std::size_t>(s.vertices[(m + 1) % n])] -
                    sv.points[static_cast<std::size_t>(s.vertices[(m + n - 1) % n])];
-  const Vec3 t = axis_vector(f.a).cross(field.gradient(x));
+  const Vec3 t = axis_vector(f.a).cross(g);
   const double along_t = dir.dot(t);
   if (!(std::abs(along_t) > kOrientMargin * dir.norm() * t.norm()))
     throw CreaseLayoutError("adaptive: a seam's direction is unclear near " + format_point(x));
@@ -693,33 +739,65 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     out.report.corners = sv.points.size();
     const std::size_t points_bound = std::max(
         kFewestTracePoints, static_cast<std::size_t>(kTracePointsPerTriangle * seeds.estimated_triangles));
-    std::size_t points_left = points_bound;
-    const SeamTracer tracer{field,       settings.sizing, settings.grading, kSeamTolerance * settings.diagonal,
-                            points_left, points_bound,    options.cancel};
-    const auto block_index = [&](int i, int j, int k) { return static_cast<std::size_t>((k * n[1] + j) * n[0] + i); };
-    const std::size_t nblocks = static_cast<std::size_t>(n[0]) * n[1] * n[2];
-    std::vector<std::vector<Dart>> darts(nblocks);
+    std::vector<Face> faces;
     for (int a = 0; a < 3; ++a) {
       const int b = (a + 1) % 3, d = (a + 2) % 3;
       for (int cut = 0; cut + 1 < cuts.count(a); ++cut)
         for (int jd = 0; jd < cuts.count(d); ++jd)
-          for (int jb = 0; jb < cuts.count(b); ++jb) {
-            options.cancel.check("adaptive");
-            const double c = cuts.walls[a][static_cast<std::size_t>(cut) + 1];
-            const Face f{a, b, d, cut, {jb, jd}, c, cuts.walls[b][static_cast<std::size_t>(jb)],
-                         cuts.walls[b][static_cast<std::size_t>(jb) + 1], cuts.walls[d][static_cast<std::size_t>(jd)],
-                         cuts.walls[d][static_cast<std::size_t>(jd) + 1]};
-            for (const Seam& s : trace_face(tracer, f, cuts.planes[a][static_cast<std::size_t>(cut)], lines, sv)) {
-              std::array<int, 3> lo{}, hi{};
-              lo[a] = cut, hi[a] = cut + 1;
-              lo[b] = hi[b] = jb;
-              lo[d] = hi[d] = jd;
-              auto [below, above] = orient(field, f, s, sv);
-              darts[block_index(lo[0], lo[1], lo[2])].push_back(std::move(below));
-              darts[block_index(hi[0], hi[1], hi[2])].push_back(std::move(above));
-              ++out.report.seams;
-            }
-          }
+          for (int jb = 0; jb < cuts.count(b); ++jb)
+            faces.push_back({a, b, d, cut, {jb, jd}, cuts.walls[a][static_cast<std::size_t>(cut) + 1],
+                             cuts.walls[b][static_cast<std::size_t>(jb)], cuts.walls[b][static_cast<std::size_t>(jb) + 1],
+                             cuts.walls[d][static_cast<std::size_t>(jd)], cuts.walls[d][static_cast<std::size_t>(jd) + 1]});
+    }
+    // Each face's seams, from the corners alone: one after another, or in lockstep for a costly field.
+    const std::size_t ncorners = sv.points.size();
+    std::vector<std::vector<Seam>> face_seams(faces.size());
+    std::vector<SeamVertices> face_vertices(faces.size());
+    const auto trace_one = [&](const Field& on, std::size_t i) {
+      options.cancel.check("adaptive");
+      std::size_t points_left = points_bound;
+      const SeamTracer tracer{on,          settings.sizing, settings.grading, kSeamTolerance * settings.diagonal,
+                              points_left, points_bound,    options.cancel};
+      const Face& f = faces[i];
+      face_vertices[i].base = static_cast<int>(ncorners);
+      face_seams[i] = trace_face(tracer, f, cuts.planes[f.a][static_cast<std::size_t>(f.cut)], lines, sv.points,
+                                 face_vertices[i]);
+    };
+    if (field.costly_calls()) {
+      const LockstepReport lockstep =
+          run_in_lockstep(field, faces.size(), detail::worker_count(options.threads), trace_one);
+      out.report.lockstep_tasks = lockstep.carriers;
+      out.report.lockstep_batches += lockstep.batches;
+    } else
+      for (std::size_t i = 0; i < faces.size(); ++i) trace_one(field, i);
+    // Their vertices numbered in face order, and every seam's middle gradient in one batch.
+    std::vector<Vec3> middles;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      const int shift = static_cast<int>(sv.points.size() - ncorners);
+      for (Seam& s : face_seams[i])
+        for (int& v : s.vertices)
+          if (v >= static_cast<int>(ncorners)) v += shift;
+      sv.points.insert(sv.points.end(), face_vertices[i].points.begin(), face_vertices[i].points.end());
+      for (const Seam& s : face_seams[i]) middles.push_back(sv.points[static_cast<std::size_t>(s.vertices[middle(s)])]);
+    }
+    std::vector<double> middle_values(middles.size());
+    std::vector<Vec3> middle_gradients(middles.size());
+    field.values_gradients(middles.data(), middle_values.data(), middle_gradients.data(), middles.size());
+    const auto block_index = [&](int i, int j, int k) { return static_cast<std::size_t>((k * n[1] + j) * n[0] + i); };
+    const std::size_t nblocks = static_cast<std::size_t>(n[0]) * n[1] * n[2];
+    std::vector<std::vector<Dart>> darts(nblocks);
+    for (std::size_t i = 0, m = 0; i < faces.size(); ++i) {
+      const Face& f = faces[i];
+      for (const Seam& s : face_seams[i]) {
+        std::array<int, 3> lo{}, hi{};
+        lo[f.a] = f.cut, hi[f.a] = f.cut + 1;
+        lo[f.b] = hi[f.b] = f.cell[0];
+        lo[f.d] = hi[f.d] = f.cell[1];
+        auto [below, above] = orient(f, s, sv, middle_gradients[m++]);
+        darts[block_index(lo[0], lo[1], lo[2])].push_back(std::move(below));
+        darts[block_index(hi[0], hi[1], hi[2])].push_back(std::move(above));
+        ++out.report.seams;
+      }
     }
     // Every corner ends two seams of each of its four blocks' faces: one unused means a seam
     // the faces' tracing missed.
@@ -812,9 +890,20 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
           field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
                                                    static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
                               : 1;
-      detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
-        for (std::size_t i = begin; i < end; ++i) parts[order[i]] = run_block(field, block_task(order[i]));
-      });
+      if (field.costly_calls()) {
+        // The blocks' evaluations gathered, their trackers on `threads` cores between them
+        // (lockstep.h); run_block keeps its errors.
+        out.report.threads = detail::worker_count(options.threads);
+        const LockstepReport lockstep =
+            run_in_lockstep(field, order.size(), out.report.threads,
+                            [&](const Field& on, std::size_t i) { parts[order[i]] = run_block(on, block_task(order[i])); });
+        out.report.lockstep_tasks = std::max(out.report.lockstep_tasks, lockstep.carriers);
+        out.report.lockstep_batches += lockstep.batches;
+      } else {
+        detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
+          for (std::size_t i = begin; i < end; ++i) parts[order[i]] = run_block(field, block_task(order[i]));
+        });
+      }
     }
     // Every block ran, whatever the others threw: a cancellation wins, then the first failing
     // block in block order (not in time), so that the outcome is the same on any thread count.
@@ -879,6 +968,8 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     out.report.fallback = e.what();
   } catch (const std::logic_error& e) {  // a tracker's own invariant, broken by a block's loops
     out.report.fallback = std::string("adaptive: a block's tracker failed: ") + e.what();
+  } catch (const std::system_error& e) {  // lockstep's threads (a process's or a cgroup's limit)
+    out.report.fallback = std::string("adaptive: the blocks' threads could not start: ") + e.what();
   }
   out.report.seconds = seconds_since(start);
   return out;

@@ -3,16 +3,18 @@
 // surface crosses the cuts are traced once and sampled with the sizing the surface asks for
 // there (seams), and each block's piece of surface is meshed from its seams by fronts of its own,
 // as a crease patch is meshed from its creases (crease_patches.h). Blocks run on
-// AdaptiveOptions::threads threads;
-// their meshes are assembled in block order, so the mesh is the same on any number of threads
-// and in any order the blocks are run. Components that cross no cut are left to the seeding.
+// AdaptiveOptions::threads threads (a field whose calls cost more than their points: on one
+// core, in lockstep, lockstep.h); their meshes are assembled in block order, so the mesh is the
+// same on any number of threads and in any order the blocks are run. Components that cross no
+// cut are left to the seeding.
 //
 // The steps, each in one place (blocks.cpp):
 //   choose_cuts     the cut planes: near equal shares of the box, through the middle of seed-grid
 //                   cells, moved by up to kCutShift cells where the surface grazes the plane
-//   find_corners    where the surface crosses a block edge (F = 0 on a line), once per edge
+//   find_corners    where the surface crosses a block edge (F = 0 on a line), once per edge,
+//                   every edge's roots bisected together
 //   trace_face      every seam of one face of a block: from corner to corner, and loops found
-//                   from the plane's samples
+//                   from the plane's samples (the faces one after another, or in lockstep)
 //   block_cycles    each block's boundary cycles, its seams oriented with its patch on their left
 //   mesh_blocks     one tracker per block from its cycles, on all threads, then one mesh
 #pragma once

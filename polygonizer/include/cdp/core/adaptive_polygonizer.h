@@ -73,6 +73,9 @@ struct AdaptiveOptions {
   // cut into blocks of about 2500 triangles by planes that depend only on the field and the
   // options, the curves where the surface crosses them are traced once (seams), and every block
   // is meshed from its seams by fronts of its own, on `threads` threads for a thread-safe field.
+  // A field whose calls cost more than their points (Field::costly_calls: a Python function) is
+  // cut into up to 64 blocks of at least 250 triangles, meshed on one core in lockstep: one call
+  // of the field makes the evaluations of all of them (stats blocks.lockstep_batches).
   // The mesh is the same on any number of threads; it is another mesh than the one tracking alone
   // makes. A layout or a block that fails falls back to tracking alone (stats blocks.fallback).
   bool blocks = false;

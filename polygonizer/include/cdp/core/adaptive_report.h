@@ -82,6 +82,11 @@ struct BlocksReport {
   // With AdaptiveOptions::block_runner: the bytes of the tasks handed to it and of the pieces it
   // returned for the run whose mesh was kept (what a cluster moves).
   std::size_t task_bytes = 0, piece_bytes = 0;
+  // With a field whose calls cost more than their points (Field::costly_calls: a Python
+  // function): the most faces or blocks traced and meshed in lockstep, their evaluations gathered
+  // into one call of the field (polygonizer/src/adaptive/lockstep.h), and those calls; 0 otherwise.
+  std::size_t lockstep_tasks = 0;
+  std::uint64_t lockstep_batches = 0;
   double layout_seconds = 0, seconds = 0;
   std::vector<double> block_seconds;  // each block's tracking, in block order
   std::string fallback;

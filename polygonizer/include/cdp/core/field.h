@@ -314,6 +314,12 @@ class Field {
   // default, so that a model with a cache, or one calling into an interpreter (a Python
   // function, which must hold its lock), is evaluated on the caller's thread only.
   virtual bool thread_safe() const { return false; }
+  // Whether a call of the batched hooks costs far more than the arithmetic of its points: a
+  // Python function, each call a trip into the interpreter. The adaptive polygonizer's blocks
+  // then run in lockstep, the evaluations of many blocks gathered into one call
+  // (polygonizer/src/adaptive/lockstep.h). False by default.
+  // \pre true only for a model without branch points (a black box).
+  virtual bool costly_calls() const { return false; }
 
   // A bound L with |F(a) - F(b)| <= L |a - b| inside bounds(), when the model knows one.
   // Ray casting steps by |F| / L; models without a bound let the caller estimate one.

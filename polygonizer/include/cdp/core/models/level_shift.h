@@ -20,6 +20,7 @@ class LevelShift final : public Field {
 
   std::string type_name() const override { return field_.type_name(); }
   bool thread_safe() const override { return field_.thread_safe(); }
+  bool costly_calls() const override { return field_.costly_calls(); }
   bool smooth() const override { return field_.smooth(); }
   std::optional<double> derivative_step() const override { return field_.derivative_step(); }
   std::optional<double> lipschitz_bound() const override { return field_.lipschitz_bound(); }
