@@ -13,10 +13,7 @@ accuracy". Counters: triangles, smallest angle (degrees), share of triangles und
 mean and max error; for ours also the tolerance and the ratios of triangles and time to
 scikit-image's (the same repetition).
 """
-import argparse
-import json
 import os
-import re
 import sys
 import time
 
@@ -24,6 +21,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "python"))  # build/python beside build/bin
 
 import numpy as np  # noqa: E402
+
+import _gbench  # noqa: E402  (bench/_gbench.py, beside this file in build/bin)
 
 NAME = "BM_VolumeVsSkimage/torus_n48"
 TOLERANCES = (3.2e-2, 1.6e-2, 8e-3, 4e-3, 2e-3, 1e-3, 5e-4)
@@ -88,51 +87,5 @@ def one_repetition():
     return {NAME + "/skimage_marching_cubes": skimage, NAME + "/adaptive_same_error": ours}
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--benchmark_out")
-    ap.add_argument("--benchmark_out_format", default="json")
-    ap.add_argument("--benchmark_repetitions", type=int, default=1)
-    ap.add_argument("--benchmark_min_time", default="0")
-    ap.add_argument("--benchmark_filter", default=None)
-    ap.add_argument("--benchmark_report_aggregates_only", default="false")
-    a = ap.parse_args()
-    wanted = lambda name: True  # noqa: E731
-    if a.benchmark_filter:
-        negative = a.benchmark_filter.startswith("-")
-        pattern = re.compile(a.benchmark_filter[1:] if negative else a.benchmark_filter)
-        wanted = lambda name: bool(pattern.search(name)) != negative  # noqa: E731
-    names = [NAME + "/skimage_marching_cubes", NAME + "/adaptive_same_error"]
-    runs = []
-    if any(wanted(n) for n in names):
-        for repetition in range(max(1, a.benchmark_repetitions)):
-            try:
-                results = one_repetition()
-            except Exception as e:  # a missing scikit-image, a failed run: reported, not a crash
-                results = {n: {"error": f"{type(e).__name__}: {e}".splitlines()[0]} for n in names}
-            for name in names:
-                if not wanted(name):
-                    continue
-                r = results[name]
-                run = {"name": name + "/manual_time", "run_name": name + "/manual_time", "run_type": "iteration",
-                       "repetitions": a.benchmark_repetitions, "repetition_index": repetition, "threads": 1,
-                       "iterations": 1, "time_unit": "ms"}
-                if "error" in r:
-                    run.update(error_occurred=True, error_message=r["error"], real_time=0.0, cpu_time=0.0)
-                else:
-                    run.update({k: v for k, v in r.items() if k != "real_time"}, real_time=r["real_time"],
-                               cpu_time=r["real_time"])
-                runs.append(run)
-                print(f"{name}: " + ", ".join(f"{k} {v:.4g}" for k, v in r.items() if isinstance(v, float)),
-                      file=sys.stderr)
-    out = {"context": {"executable": sys.argv[0], "library_build_type": "release"}, "benchmarks": runs}
-    if a.benchmark_out:
-        with open(a.benchmark_out, "w") as f:
-            json.dump(out, f, indent=1)
-    else:
-        json.dump(out, sys.stdout, indent=1)
-    return 0
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(_gbench.main(__doc__, [NAME + "/skimage_marching_cubes", NAME + "/adaptive_same_error"], one_repetition))
