@@ -20,7 +20,6 @@
 #include <tuple>
 #include <stdexcept>
 #include <string>
-#include <system_error>
 #include <utility>
 
 namespace cdp::adaptive {
@@ -968,8 +967,6 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     out.report.fallback = e.what();
   } catch (const std::logic_error& e) {  // a tracker's own invariant, broken by a block's loops
     out.report.fallback = std::string("adaptive: a block's tracker failed: ") + e.what();
-  } catch (const std::system_error& e) {  // lockstep's threads (a process's or a cgroup's limit)
-    out.report.fallback = std::string("adaptive: the blocks' threads could not start: ") + e.what();
   }
   out.report.seconds = seconds_since(start);
   return out;

@@ -3,8 +3,8 @@
 // surface crosses the cuts are traced once and sampled with the sizing the surface asks for
 // there (seams), and each block's piece of surface is meshed from its seams by fronts of its own,
 // as a crease patch is meshed from its creases (crease_patches.h). Blocks run on
-// AdaptiveOptions::threads threads (a field whose calls cost more than their points: on one
-// core, in lockstep, lockstep.h); their meshes are assembled in block order, so the mesh is the
+// AdaptiveOptions::threads threads (a field whose calls cost more than their points: in
+// lockstep, lockstep.h); their meshes are assembled in block order, so the mesh is the
 // same on any number of threads and in any order the blocks are run. Components that cross no
 // cut are left to the seeding.
 //

@@ -1,11 +1,15 @@
 #include "lockstep.h"
 
+#include <cdp/core/errors.h>
+
 #include <algorithm>
 #include <array>
 #include <condition_variable>
 #include <deque>
 #include <exception>
 #include <mutex>
+#include <string>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -99,8 +103,8 @@ class Gather {
   }
 
   // Every pending request, by kind in carrier order: one call of the field per kind. Each request
-  // gets its own call's outcome, the field's answer or its error (which the asking task then
-  // meets, as it would alone). Then the batch's carriers line up for cores.
+  // gets its own call's outcome: the field's answer, or the error of the call that held its points
+  // with those of the other tasks (which all meet it). Then the batch's carriers line up for cores.
   void execute() {
     for (auto& rs : by_kind_) rs.clear();
     for (Request* r : pending_)
@@ -253,7 +257,11 @@ LockstepReport run_in_lockstep(const Field& field, std::size_t n, unsigned cores
     for (std::size_t c = started; c < carriers; ++c) gather.leave(c, false);
   }
   for (std::thread& t : threads) t.join();
-  if (start_error) std::rethrow_exception(start_error);
+  if (start_error) try {
+      std::rethrow_exception(start_error);
+    } catch (const std::system_error& e) {
+      throw LimitExceededError(std::string("adaptive: the threads of tasks in lockstep could not start: ") + e.what());
+    }
   for (const std::exception_ptr& e : errors)
     if (e) std::rethrow_exception(e);
   report.carriers = carriers;

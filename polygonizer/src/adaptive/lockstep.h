@@ -43,7 +43,8 @@ struct LockstepReport {
 // \pre `field` has no branch points (a black box: Field::costly_calls) and is evaluated by
 //      nothing else meanwhile.
 // \throw the exception of the lowest i whose task threw, after every carrier has ended (tasks
-//        that must all run catch their own); std::system_error where a thread cannot start.
+//        that must all run catch their own); LimitExceededError where a thread cannot start (after
+//        the carriers that did have run their tasks).
 LockstepReport run_in_lockstep(const Field& field, std::size_t n, unsigned cores,
                                const std::function<void(const Field& view, std::size_t i)>& task);
 

@@ -150,7 +150,22 @@ void RepairContext::probe_creases(const std::vector<int>& vs) {
   std::vector<int> todo;
   for (const int v : vs)
     if (crease_[v] < 0) crease_[v] = 2, todo.push_back(v);  // 2: being probed (vs may repeat one)
-  if (todo.empty()) return;
+  // In chunks, polled between them: a batch of a Python field holds 7 points a probe.
+  for (std::size_t begin = 0; begin < todo.size(); begin += kCreaseProbeBatch) {
+    const std::vector<int> chunk(todo.begin() + static_cast<std::ptrdiff_t>(begin),
+                                 todo.begin() + static_cast<std::ptrdiff_t>(std::min(todo.size(), begin + kCreaseProbeBatch)));
+    try {
+      poll();
+      probe_chunk(chunk);
+    } catch (...) {
+      for (const int v : todo)
+        if (crease_[v] == 2) crease_[v] = -1;  // not probed after all
+      throw;
+    }
+  }
+}
+
+void RepairContext::probe_chunk(const std::vector<int>& todo) {
   std::vector<Vec3> at(todo.size()), g0(todo.size());
   std::vector<double> values(todo.size());
   for (std::size_t i = 0; i < todo.size(); ++i) at[i] = P(todo[i]);

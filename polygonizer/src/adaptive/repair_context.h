@@ -337,6 +337,9 @@ class RepairContext {
   // on_crease for every vertex of `vs` not yet probed, their probes in two batched calls of the
   // field (a Python function's calls cost more than its points): the same answers and counts.
   void probe_creases(const std::vector<int>& vs);
+  // Vertices per chunk of probe_creases: its batches stay near 10 MB for a Python field.
+  static constexpr std::size_t kCreaseProbeBatch = 8192;
+  void probe_chunk(const std::vector<int>& vs);  // probe_creases' work on vertices marked 2
 
   // ---- the boundary kept (QualityOptions::keep_boundary)
   // Marks the ends of every edge with one triangle.

@@ -74,8 +74,9 @@ struct AdaptiveOptions {
   // options, the curves where the surface crosses them are traced once (seams), and every block
   // is meshed from its seams by fronts of its own, on `threads` threads for a thread-safe field.
   // A field whose calls cost more than their points (Field::costly_calls: a Python function) is
-  // cut into up to 64 blocks of at least 250 triangles, meshed on one core in lockstep: one call
-  // of the field makes the evaluations of all of them (stats blocks.lockstep_batches).
+  // cut into up to 64 blocks of at least 250 triangles, meshed in lockstep: one call of the field
+  // makes the evaluations of all of them (stats blocks.lockstep_batches), their trackers running
+  // on `threads` cores between the calls.
   // The mesh is the same on any number of threads; it is another mesh than the one tracking alone
   // makes. A layout or a block that fails falls back to tracking alone (stats blocks.fallback).
   bool blocks = false;

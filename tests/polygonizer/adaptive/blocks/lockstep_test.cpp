@@ -224,7 +224,9 @@ TEST(Lockstep, ACostlyFieldsBlocksMeshInLockstepSoundAndTheSameInAnyOrder) {
   const BlocksReport& b = r.stats.adaptive->blocks;
   ASSERT_TRUE(b.used) << b.fallback;
   EXPECT_GE(b.blocks[0] * b.blocks[1] * b.blocks[2], 32);
-  EXPECT_EQ(b.lockstep_tasks, std::min<std::size_t>(b.meshed_blocks, kLockstepTasks));
+  // The most carriers of either phase: the faces' (more than 64 here) and the blocks'.
+  EXPECT_GE(b.meshed_blocks, 32u);
+  EXPECT_EQ(b.lockstep_tasks, kLockstepTasks);
   EXPECT_GT(b.lockstep_batches, 0u);
   const MeshTopology t = analyze_topology(r.mesh);
   EXPECT_TRUE(t.watertight());
