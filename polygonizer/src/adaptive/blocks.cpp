@@ -884,25 +884,23 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
         parts[blk] = std::move(part);
       }
       out.report.threads = 1;
+    } else if (field.costly_calls()) {
+      // The blocks' evaluations gathered, their trackers on `threads` cores between them
+      // (lockstep.h); run_block keeps its errors.
+      out.report.threads = detail::worker_count(options.threads);
+      const LockstepReport lockstep =
+          run_in_lockstep(field, order.size(), out.report.threads,
+                          [&](const Field& on, std::size_t i) { parts[order[i]] = run_block(on, block_task(order[i])); });
+      out.report.lockstep_tasks = std::max(out.report.lockstep_tasks, lockstep.carriers);
+      out.report.lockstep_batches += lockstep.batches;
     } else {
       out.report.threads =
           field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
                                                    static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
                               : 1;
-      if (field.costly_calls()) {
-        // The blocks' evaluations gathered, their trackers on `threads` cores between them
-        // (lockstep.h); run_block keeps its errors.
-        out.report.threads = detail::worker_count(options.threads);
-        const LockstepReport lockstep =
-            run_in_lockstep(field, order.size(), out.report.threads,
-                            [&](const Field& on, std::size_t i) { parts[order[i]] = run_block(on, block_task(order[i])); });
-        out.report.lockstep_tasks = std::max(out.report.lockstep_tasks, lockstep.carriers);
-        out.report.lockstep_batches += lockstep.batches;
-      } else {
-        detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
-          for (std::size_t i = begin; i < end; ++i) parts[order[i]] = run_block(field, block_task(order[i]));
-        });
-      }
+      detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        for (std::size_t i = begin; i < end; ++i) parts[order[i]] = run_block(field, block_task(order[i]));
+      });
     }
     // Every block ran, whatever the others threw: a cancellation wins, then the first failing
     // block in block order (not in time), so that the outcome is the same on any thread count.
