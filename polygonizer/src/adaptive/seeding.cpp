@@ -91,11 +91,14 @@ std::optional<SurfacePoint> surface_point(const Field& field, const SignChange& 
 // one stand for this point or this box (within reach: kSheetReach times its own longest edge)?
 // Its triangles are binned by the cells their bounding boxes overlap, indexed lazily (coverage is
 // asked between components, never inside the tracker's loop), and kept by size: a hash per
-// binary order of their longest edge, each searched within the reach of its own longest. One
-// hash searched within the reach of the longest edge of the whole mesh looked through thousands
-// of small triangles for every question where a few edges of max_edge lay among edges of
-// min_edge (a raw MRI scan: 31 % of a 50 s run). The answers do not depend on the classes: a
-// triangle found in any of them, the nearest point's ties broken by triangle index.
+// binary order of their longest edge, which the questions of reach (explains,
+// nearest_within_reach) search within the reach of that class's longest edge. One hash searched
+// within the reach of the longest edge of the whole mesh looked through thousands of small
+// triangles for every question where a few edges of max_edge lay among edges of min_edge (a raw
+// MRI scan: 31 % of a 50 s run). A class whose triangles' box misses a question's box is not
+// looked up. The answers do not depend on the classes: a triangle found in any of them, the
+// nearest points' ties broken by triangle index (nearest_same_sheet's by the hash's order
+// before).
 class MeshCoverage {
  public:
   MeshCoverage(const Mesh& mesh, double cell, const CancelToken& cancel) : mesh_(mesh), h_(cell), cancel_(cancel) {}
@@ -112,6 +115,7 @@ class MeshCoverage {
       const double pad = 1e-9 * h_;
       SizeClass& c = classes_.try_emplace(longest > 0 ? std::ilogb(longest) : kNoLength, h_).first->second;
       c.longest = std::max(c.longest, longest);
+      c.lo = c.lo.array().min(lo.array() - pad), c.hi = c.hi.array().max(hi.array() + pad);
       c.cells.insert_box(static_cast<int>(indexed_), lo.array() - pad, hi.array() + pad);
     }
   }
@@ -121,6 +125,7 @@ class MeshCoverage {
     const auto& P = mesh_.positions;
     const Vec3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
     return std::any_of(classes_.begin(), classes_.end(), [&](const auto& entry) {
+      if (!entry.second.meets(lo, hi)) return false;
       return entry.second.cells.any_in(lo, hi, [&](int f) {
         const auto& t = mesh_.triangles[f];
         const Vec3 &p = P[t[0]], &q = P[t[1]], &r = P[t[2]];
@@ -145,7 +150,7 @@ class MeshCoverage {
     return std::any_of(classes_.begin(), classes_.end(), [&](const auto& entry) {
       // A triangle that explains the box lies within its longest edge minus hd of the centre.
       const double r = kSheetReach * entry.second.longest - hd;
-      if (!(r > 0)) return false;
+      if (!(r > 0) || !entry.second.meets(c.array() - r, c.array() + r)) return false;
       return entry.second.cells.any_in(c.array() - r, c.array() + r, [&](int f) {
         const auto& t = mesh_.triangles[f];
         const double reach = kSheetReach * longest_edge(t) - hd;
@@ -164,7 +169,8 @@ class MeshCoverage {
     std::optional<Vec3> best;
     double best_d = r;
     int best_f = -1;
-    for (const auto& entry : classes_)
+    for (const auto& entry : classes_) {
+      if (!entry.second.meets(x.array() - r, x.array() + r)) continue;
       entry.second.cells.any_in(x.array() - r, x.array() + r, [&](int f) {
         const auto& t = mesh_.triangles[f];
         if (!((P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).dot(normal) > 0)) return false;
@@ -173,6 +179,7 @@ class MeshCoverage {
         if (d < best_d || (d == best_d && best && f < best_f)) best_d = d, best = y, best_f = f;
         return false;
       });
+    }
     return best;
   }
 
@@ -193,6 +200,7 @@ class MeshCoverage {
     double best_d = INFINITY;
     for (const auto& entry : classes_) {
       const double r = kSheetReach * entry.second.longest;
+      if (!entry.second.meets(x.array() - r, x.array() + r)) continue;
       entry.second.cells.any_in(x.array() - r, x.array() + r, [&](int f) {
         const auto& t = mesh_.triangles[f];
         if (!((P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).dot(normal) > 0)) return false;
@@ -211,10 +219,16 @@ class MeshCoverage {
  private:
   // The class of triangles whose longest edge is 0 (none survive the tracker; kept apart all the same).
   static constexpr int kNoLength = std::numeric_limits<int>::min();
+  // A class's triangles: their hash, their longest edge and the box around their boxes as the hash
+  // holds them, padded (a question whose box misses it looks up none of its cells).
   struct SizeClass {
     explicit SizeClass(double cell) : cells(cell) {}
+    bool meets(const Vec3& qlo, const Vec3& qhi) const {
+      return (qlo.array() <= hi.array()).all() && (qhi.array() >= lo.array()).all();
+    }
     SpatialHash cells;
     double longest = 0;
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   };
 
   double longest_edge(const std::array<int, 3>& t) const {
@@ -225,7 +239,7 @@ class MeshCoverage {
   const Mesh& mesh_;
   double h_;
   std::size_t indexed_ = 0;
-  std::map<int, SizeClass> classes_;  // by std::ilogb of the longest edge: a few dozen at most
+  std::map<int, SizeClass> classes_;  // by std::ilogb of the longest edge: one per binary order between the shortest and the longest
   CancelToken cancel_;
 };
 
