@@ -165,21 +165,12 @@ class MeshCoverage {
 
   // The nearest point within r of a triangle facing the way `normal` does (ties: the first indexed).
   std::optional<Vec3> nearest_same_sheet(const Vec3& x, const Vec3& normal, double r) const {
-    const auto& P = mesh_.positions;
     std::optional<Vec3> best;
     double best_d = r;
     int best_f = -1;
-    for (const auto& entry : classes_) {
-      if (!entry.second.meets(x.array() - r, x.array() + r)) continue;
-      entry.second.cells.any_in(x.array() - r, x.array() + r, [&](int f) {
-        const auto& t = mesh_.triangles[f];
-        if (!((P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).dot(normal) > 0)) return false;
-        const Vec3 y = closest_point_on_triangle(x, P[t[0]], P[t[1]], P[t[2]]);
-        const double d = (y - x).norm();
-        if (d < best_d || (d == best_d && best && f < best_f)) best_d = d, best = y, best_f = f;
-        return false;
-      });
-    }
+    for_each_facing(x, normal, [r](const SizeClass&) { return r; }, [&](int f, const Vec3& y, double d) {
+      if (d < best_d || (d == best_d && best && f < best_f)) best_d = d, best = y, best_f = f;
+    });
     return best;
   }
 
@@ -195,24 +186,16 @@ class MeshCoverage {
     int triangle;
   };
   std::optional<Nearest> nearest_within_reach(const Vec3& x, const Vec3& normal) const {
-    const auto& P = mesh_.positions;
     std::optional<Nearest> best;
     double best_d = INFINITY;
-    for (const auto& entry : classes_) {
-      const double r = kSheetReach * entry.second.longest;
-      if (!entry.second.meets(x.array() - r, x.array() + r)) continue;
-      entry.second.cells.any_in(x.array() - r, x.array() + r, [&](int f) {
-        const auto& t = mesh_.triangles[f];
-        if (!((P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).dot(normal) > 0)) return false;
-        const Vec3 y = closest_point_on_triangle(x, P[t[0]], P[t[1]], P[t[2]]);
-        const double d = (y - x).norm();
-        if (d <= kSheetReach * longest_edge(t) && (d < best_d || (d == best_d && f < best->triangle))) {
-          best_d = d;
-          best = Nearest{y, f};
-        }
-        return false;
-      });
-    }
+    for_each_facing(
+        x, normal, [](const SizeClass& c) { return kSheetReach * c.longest; },
+        [&](int f, const Vec3& y, double d) {
+          if (d <= kSheetReach * longest_edge(mesh_.triangles[f]) && (d < best_d || (d == best_d && f < best->triangle))) {
+            best_d = d;
+            best = Nearest{y, f};
+          }
+        });
     return best;
   }
 
@@ -230,6 +213,24 @@ class MeshCoverage {
     double longest = 0;
     Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   };
+
+  // fn(f, y, d) for every triangle f facing the way `normal` does that the cells within
+  // radius(its class) of x hold (maybe more than once), y the point of f nearest to x, d their distance.
+  template <class Radius, class Fn>
+  void for_each_facing(const Vec3& x, const Vec3& normal, const Radius& radius, const Fn& fn) const {
+    const auto& P = mesh_.positions;
+    for (const auto& entry : classes_) {
+      const double r = radius(entry.second);
+      if (!entry.second.meets(x.array() - r, x.array() + r)) continue;
+      entry.second.cells.any_in(x.array() - r, x.array() + r, [&](int f) {
+        const auto& t = mesh_.triangles[f];
+        if (!((P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).dot(normal) > 0)) return false;
+        const Vec3 y = closest_point_on_triangle(x, P[t[0]], P[t[1]], P[t[2]]);
+        fn(f, y, (y - x).norm());
+        return false;
+      });
+    }
+  }
 
   double longest_edge(const std::array<int, 3>& t) const {
     const auto& P = mesh_.positions;
