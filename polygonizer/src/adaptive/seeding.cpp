@@ -12,6 +12,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <utility>
 
 namespace cdp::adaptive {
 
@@ -124,20 +125,17 @@ class MeshCoverage {
   bool crosses(const Vec3& a, const Vec3& b) const {
     const auto& P = mesh_.positions;
     const Vec3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
-    return std::any_of(classes_.begin(), classes_.end(), [&](const auto& entry) {
-      if (!entry.second.meets(lo, hi)) return false;
-      return entry.second.cells.any_in(lo, hi, [&](int f) {
-        const auto& t = mesh_.triangles[f];
-        const Vec3 &p = P[t[0]], &q = P[t[1]], &r = P[t[2]];
-        // Most triangles of the cells lie beside the segment's box (a grid edge is as long as a
-        // few triangles): corners all beyond one face of the box settle it with comparisons,
-        // exactly (the triangle's points lie between its corners).
-        for (int axis = 0; axis < 3; ++axis)
-          if ((p[axis] < lo[axis] && q[axis] < lo[axis] && r[axis] < lo[axis]) ||
-              (p[axis] > hi[axis] && q[axis] > hi[axis] && r[axis] > hi[axis]))
-            return false;
-        return segment_meets_triangle(a, b, p, q, r);
-      });
+    return any_in([&](const SizeClass&) { return BoxQuery{{lo, hi}}; }, [&](int f) {
+      const auto& t = mesh_.triangles[f];
+      const Vec3 &p = P[t[0]], &q = P[t[1]], &r = P[t[2]];
+      // Most triangles of the cells lie beside the segment's box (a grid edge is as long as a
+      // few triangles): corners all beyond one face of the box settle it with comparisons,
+      // exactly (the triangle's points lie between its corners).
+      for (int axis = 0; axis < 3; ++axis)
+        if ((p[axis] < lo[axis] && q[axis] < lo[axis] && r[axis] < lo[axis]) ||
+            (p[axis] > hi[axis] && q[axis] > hi[axis] && r[axis] > hi[axis]))
+          return false;
+      return segment_meets_triangle(a, b, p, q, r);
     });
   }
 
@@ -147,19 +145,19 @@ class MeshCoverage {
     const auto& P = mesh_.positions;
     const Vec3 c = box.center();
     const double hd = 0.5 * box.diagonal();
-    return std::any_of(classes_.begin(), classes_.end(), [&](const auto& entry) {
-      // A triangle that explains the box lies within its longest edge minus hd of the centre.
-      const double r = kSheetReach * entry.second.longest - hd;
-      if (!(r > 0) || !entry.second.meets(c.array() - r, c.array() + r)) return false;
-      return entry.second.cells.any_in(c.array() - r, c.array() + r, [&](int f) {
-        const auto& t = mesh_.triangles[f];
-        const double reach = kSheetReach * longest_edge(t) - hd;
-        if (!(reach > 0)) return false;
-        // The distance to the triangle's bounding box first: a cheap lower bound.
-        const Vec3 lo = P[t[0]].cwiseMin(P[t[1]]).cwiseMin(P[t[2]]), hi = P[t[0]].cwiseMax(P[t[1]]).cwiseMax(P[t[2]]);
-        if ((c - c.cwiseMax(lo).cwiseMin(hi)).norm() > reach) return false;
-        return (closest_point_on_triangle(c, P[t[0]], P[t[1]], P[t[2]]) - c).norm() <= reach;
-      });
+    // A triangle that explains the box lies within its longest edge minus hd of the centre.
+    const auto within_reach = [&](const SizeClass& k) {
+      const double r = kSheetReach * k.longest - hd;
+      return r > 0 ? BoxQuery{{c.array() - r, c.array() + r}} : std::nullopt;
+    };
+    return any_in(within_reach, [&](int f) {
+      const auto& t = mesh_.triangles[f];
+      const double reach = kSheetReach * longest_edge(t) - hd;
+      if (!(reach > 0)) return false;
+      // The distance to the triangle's bounding box first: a cheap lower bound.
+      const Vec3 lo = P[t[0]].cwiseMin(P[t[1]]).cwiseMin(P[t[2]]), hi = P[t[0]].cwiseMax(P[t[1]]).cwiseMax(P[t[2]]);
+      if ((c - c.cwiseMax(lo).cwiseMin(hi)).norm() > reach) return false;
+      return (closest_point_on_triangle(c, P[t[0]], P[t[1]], P[t[2]]) - c).norm() <= reach;
     });
   }
 
@@ -213,23 +211,35 @@ class MeshCoverage {
     double longest = 0;
     Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   };
+  using BoxQuery = std::optional<std::pair<Vec3, Vec3>>;  // a question's box in a class, or none
 
   // fn(f, y, d) for every triangle f facing the way `normal` does that the cells within
   // radius(its class) of x hold (maybe more than once), y the point of f nearest to x, d their distance.
   template <class Radius, class Fn>
   void for_each_facing(const Vec3& x, const Vec3& normal, const Radius& radius, const Fn& fn) const {
     const auto& P = mesh_.positions;
-    for (const auto& entry : classes_) {
-      const double r = radius(entry.second);
-      if (!entry.second.meets(x.array() - r, x.array() + r)) continue;
-      entry.second.cells.any_in(x.array() - r, x.array() + r, [&](int f) {
-        const auto& t = mesh_.triangles[f];
-        if (!((P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).dot(normal) > 0)) return false;
-        const Vec3 y = closest_point_on_triangle(x, P[t[0]], P[t[1]], P[t[2]]);
-        fn(f, y, (y - x).norm());
-        return false;
-      });
-    }
+    const auto around_x = [&](const SizeClass& k) {
+      const double r = radius(k);
+      return BoxQuery{{x.array() - r, x.array() + r}};
+    };
+    any_in(around_x, [&](int f) {
+      const auto& t = mesh_.triangles[f];
+      if (!((P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).dot(normal) > 0)) return false;
+      const Vec3 y = closest_point_on_triangle(x, P[t[0]], P[t[1]], P[t[2]]);
+      fn(f, y, (y - x).norm());
+      return false;
+    });
+  }
+
+  // Whether pred(f) holds for a triangle f that the cells of a class within the box box_of(class)
+  // hold (a class where it gives no box, or whose own box misses it, not looked up); stops at the
+  // first.
+  template <class BoxOf, class Pred>
+  bool any_in(const BoxOf& box_of, const Pred& pred) const {
+    return std::any_of(classes_.begin(), classes_.end(), [&](const auto& entry) {
+      const BoxQuery box = box_of(entry.second);
+      return box && entry.second.meets(box->first, box->second) && entry.second.cells.any_in(box->first, box->second, pred);
+    });
   }
 
   double longest_edge(const std::array<int, 3>& t) const {
