@@ -150,7 +150,16 @@ inline constexpr double kMaxTurnCosine = 0.2588;
 
 // Points in the tracker's error messages (and the crease layout's): "(x, y, z)", six decimals.
 inline std::string format_point(const Vec3& p) {
-  return "(" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " + std::to_string(p.z()) + ")";
+  // Appended in place: GCC 12 warns falsely (-Wstringop-overflow) on "literal" + std::string&&
+  // once <string> comes from the precompiled header.
+  std::string s = "(";
+  s += std::to_string(p.x());
+  s += ", ";
+  s += std::to_string(p.y());
+  s += ", ";
+  s += std::to_string(p.z());
+  s += ")";
+  return s;
 }
 
 class Tracker {
