@@ -19,3 +19,8 @@ function(cdp_add_module name)
   install(EXPORT cdp-${name}-targets NAMESPACE cdp:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/cdp)
   install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 endfunction()
+
+# The headers most of a module's files include, precompiled once per module by those whose compile
+# time is parsing (target_precompile_headers(cdp_<name> PRIVATE ${CDP_COMMON_HEADERS} ...); see
+# polygonizer/CMakeLists.txt for which modules and why).
+set(CDP_COMMON_HEADERS <algorithm> <cmath> <string> <vector> <Eigen/Dense> <cdp/core/field.h> <cdp/core/mesh.h>)
