@@ -87,8 +87,18 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
     hit = r;
     return true;
   };
-  if (near) front_hash_.any_in(*near, lo, hi, crosses);
-  else front_hash_.any_in(lo, hi, crosses);
+  // A crossing edge r-s passes within `reach` of the segment, so its start r lies within
+  // 1.25 |rs| + 0.25 |uw| of it: a cell farther than that from the segment's box, with its
+  // longest edge for |rs| (SpatialHash::widen_reach), holds none; the margin covers rounding.
+  const Vec3 seg_lo = u_point.cwiseMin(w_point), seg_hi = u_point.cwiseMax(w_point);
+  const double uw = (w_point - u_point).norm();
+  const auto far = [&](const Vec3& cell_lo, const Vec3& cell_hi, double longest_there) {
+    const Vec3 gap = (cell_lo - seg_hi).cwiseMax(seg_lo - cell_hi).cwiseMax(0.0);
+    const double bound = 1.25 * longest_there + 0.25 * uw;
+    return gap.squaredNorm() > bound * bound * (1 + 1e-9);
+  };
+  if (near) front_hash_.any_in(*near, lo, hi, far, crosses);
+  else front_hash_.any_in(lo, hi, far, crosses);
   return hit;
 }
 

@@ -56,6 +56,7 @@ class SpatialHash {
     });
     std::vector<Slot>().swap(slots_);
     std::vector<std::uint64_t>().swap(keys_);
+    std::vector<double>().swap(reach_);
     std::vector<std::unique_ptr<SpatialHash>>().swap(finer_);
     coarser_.reset();
   }
@@ -109,8 +110,22 @@ class SpatialHash {
       if (v[i] == id) {
         v[i] = v.back();
         v.pop_back();
+        if (v.empty() && u < reach_.size()) reach_[u] = 0;
         return;
       }
+  }
+
+  // Each cell's reach: at least every length widen_reach gave for a point in it since the cell
+  // was last empty (for the tracker's front hash, the front edges that start there). A search
+  // for edges near a segment passes over the cells too far for any of theirs to come near it
+  // (any_in with a `far` test), without changing which id it answers or in what order it asks:
+  // a cell passed over holds no id pred would accept. On a scan whose fronts made edges of 0.3
+  // beside a few of 5, the searches of every short edge looked through every node within the
+  // longest edge's reach. Only for a hash of points that never splits (Crowding::keep).
+  void widen_reach(const Vec3& p, double length) {
+    const auto c = static_cast<std::size_t>(cell(key(cell_of(p))));
+    if (reach_.size() < ids_.size()) reach_.resize(ids_.size(), 0);
+    reach_[c] = std::max(reach_[c], length);
   }
 
   // Stores id in every cell the box [lo, hi] overlaps (for objects with an extent: triangles).
@@ -212,13 +227,19 @@ class SpatialHash {
   // visits, from the cells g gathered when the box lies within g's (else by any_in itself).
   template <class Pred>
   bool any_in(const Gathered& g, const Vec3& lo, const Vec3& hi, Pred&& pred) const {
+    return any_in(g, lo, hi, kNeverFar, pred);
+  }
+  // The same, passing over the cells for which far(cell_lo, cell_hi, reach) holds (widen_reach).
+  template <class Far, class Pred>
+  bool any_in(const Gathered& g, const Vec3& lo, const Vec3& hi, const Far& far, Pred&& pred) const {
     const Cell a = cell_of(lo), b = cell_of(hi);
     if (a.i < g.lo[0] || a.j < g.lo[1] || a.k < g.lo[2] || b.i > g.hi[0] || b.j > g.hi[1] || b.k > g.hi[2] ||
         spanned(a, b) > static_cast<double>(ids_.size()))
-      return any_in(lo, hi, pred);
+      return any_in(lo, hi, far, pred);
     // g's cells in any_in's order; those of the smaller box keep that order among themselves.
     for (const auto& r : g.runs) {
       if (r.i < a.i || r.i > b.i || r.j < a.j || r.j > b.j || r.k < a.k || r.k > b.k) continue;
+      if (passes_over({r.i, r.j, r.k}, r.cell, far)) continue;
       const std::vector<int>& ids = ids_[static_cast<std::size_t>(r.cell)];
       if (counting_) visits_ += ids.size();
       for (int id : ids)
@@ -243,6 +264,11 @@ class SpatialHash {
   // short ones spans millions of cells, nearly all empty).
   template <class Pred>
   bool any_in(const Vec3& lo, const Vec3& hi, Pred&& pred) const {
+    return any_in(lo, hi, kNeverFar, pred);
+  }
+  // The same, passing over the cells for which far(cell_lo, cell_hi, reach) holds (widen_reach).
+  template <class Far, class Pred>
+  bool any_in(const Vec3& lo, const Vec3& hi, const Far& far, Pred&& pred) const {
     const Cell a = cell_of(lo), b = cell_of(hi);
     const auto visit = [&](int c) {
       if (crowding_ == Crowding::split && finer_[static_cast<std::size_t>(c)])
@@ -261,24 +287,47 @@ class SpatialHash {
         return ((residue - (static_cast<std::uint64_t>(from) & kAxisMask)) & kAxisMask) <=
                static_cast<std::uint64_t>(to - from);
       };
+      // A cell in the box lies at `from` plus its residue's offset from from's (where the box spans
+      // fewer cells than the key tells apart along every axis: else `far` is not asked).
+      const bool placed = b.i - a.i < static_cast<std::int64_t>(kAxisMask) &&
+                          b.j - a.j < static_cast<std::int64_t>(kAxisMask) &&
+                          b.k - a.k < static_cast<std::int64_t>(kAxisMask);
+      const auto at = [](std::uint64_t residue, std::int64_t from) {
+        return from + static_cast<std::int64_t>((residue - static_cast<std::uint64_t>(from)) & kAxisMask);
+      };
       for (std::size_t c = 0; c < keys_.size(); ++c) {
-        const std::uint64_t x = keys_[c];
-        if (meets(x & kAxisMask, a.i, b.i) && meets((x >> 21) & kAxisMask, a.j, b.j) &&
-            meets((x >> 42) & kAxisMask, a.k, b.k) && visit(static_cast<int>(c)))
-          return true;
+        const std::uint64_t x = keys_[c], xi = x & kAxisMask, xj = (x >> 21) & kAxisMask, xk = (x >> 42) & kAxisMask;
+        if (!meets(xi, a.i, b.i) || !meets(xj, a.j, b.j) || !meets(xk, a.k, b.k)) continue;
+        if (placed && passes_over({at(xi, a.i), at(xj, a.j), at(xk, a.k)}, static_cast<int>(c), far)) continue;
+        if (visit(static_cast<int>(c))) return true;
       }
     } else {
       for (std::int64_t k = a.k; k <= b.k; ++k)
         for (std::int64_t j = a.j; j <= b.j; ++j)
           for (std::int64_t i = a.i; i <= b.i; ++i) {
             const int c = find(key({i, j, k}));
-            if (c >= 0 && visit(c)) return true;
+            if (c >= 0 && !passes_over({i, j, k}, c, far) && visit(c)) return true;
           }
     }
     return coarser_ && coarser_->any_in(lo, hi, pred);
   }
 
  private:
+  // any_in's `far` when no cell is to be passed over.
+  static constexpr auto kNeverFar = [](const Vec3&, const Vec3&, double) { return false; };
+  struct Cell;
+  // Whether `far` holds for cell c at `at` and its reach. Its box is widened by a billionth of its
+  // coordinates' size: cell_of rounds p / h, so a point may lie that much outside its cell. A
+  // cell without a reach is never passed over.
+  template <class Far>
+  bool passes_over(const Cell& at, int c, const Far& far) const {
+    const auto u = static_cast<std::size_t>(c);
+    if (u >= reach_.size() || reach_[u] <= 0) return false;
+    const Vec3 lo(static_cast<double>(at.i) * h_, static_cast<double>(at.j) * h_, static_cast<double>(at.k) * h_);
+    const double slack = 1e-9 * (h_ + lo.cwiseAbs().maxCoeff());
+    return far(Vec3(lo.array() - slack), Vec3(lo.array() + (h_ + slack)), reach_[u]);
+  }
+
   SpatialHash(double cell_size, Crowding crowding, int depth)
       : h_(cell_size), inv_h_(1.0 / cell_size), crowding_(crowding), depth_(depth) {}
 
@@ -410,6 +459,7 @@ class SpatialHash {
   std::vector<Slot> slots_;
   std::vector<std::vector<int>> ids_;
   std::vector<std::uint64_t> keys_;  // of each occupied cell, as ids_
+  std::vector<double> reach_;         // of each cell, as ids_, or fewer (widen_reach)
   std::unique_ptr<SpatialHash> coarser_;  // created by the first box too wide for this level
   std::optional<CancelToken> cancel_;
 };

@@ -320,8 +320,11 @@ void Tracker::link(int a, int b) {
   fs_.link(a, b);
   if (front_edges_.size() >= drop_stale_at_) drop_stale_front_edges();
   detail::grow_apart(s_.cancel, "adaptive", 1, front_edges_);
-  front_edges_.emplace_back((mesh_.positions[fs_.nodes[a].vertex] - mesh_.positions[fs_.nodes[b].vertex]).norm(), a, b);
+  const Vec3& from = mesh_.positions[fs_.nodes[a].vertex];
+  const double length = (from - mesh_.positions[fs_.nodes[b].vertex]).norm();
+  front_edges_.emplace_back(length, a, b);
   std::push_heap(front_edges_.begin(), front_edges_.end());
+  front_hash_.widen_reach(from, length);
 }
 
 void Tracker::drop_stale_front_edges() {

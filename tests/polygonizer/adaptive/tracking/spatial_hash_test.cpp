@@ -2,6 +2,7 @@
 // that splits loses no point, finds none twice, and keeps searches local.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <random>
@@ -104,6 +105,106 @@ TEST(AdaptiveSpatialHash, GrowingPollsTheRunsCancelToken) {
   uncancelled.set_cancel(cancel);
   fill(uncancelled, 0, 1000);
   EXPECT_EQ(found(uncancelled, 1000), 1000);
+}
+
+}  // namespace
+
+namespace {
+
+// Distance from x to the segment a-b.
+double to_segment(const Vec3& x, const Vec3& a, const Vec3& b) {
+  const Vec3 d = b - a;
+  const double t = std::clamp((x - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+  return (a + t * d - x).norm();
+}
+
+// The front hash's use of widen_reach: each point has a length (its front edge's), most short,
+// a few long; a search asks for the first point, in the hash's order, within its own length of a
+// segment, in a box widened by the longest length. Passing over the cells too far for their
+// longest length must give the same first point, every time, while looking at fewer points; a
+// cell that was emptied forgets the long lengths it held.
+TEST(AdaptiveSpatialHash, PassingOverFarCellsByTheirReachKeepsEveryAnswer) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0, 4), shortish(0.01, 0.05), longish(0.5, 1.5);
+  const int n = 6000;
+  std::vector<Vec3> p;
+  std::vector<double> length;
+  SpatialHash plain(0.25), reaching(0.25);
+  for (int i = 0; i < n; ++i) {
+    p.emplace_back(unit(rng), unit(rng), 0.1 * unit(rng));  // a thick sheet, as fronts lie on a surface
+    length.push_back(i % 200 == 0 ? longish(rng) : shortish(rng));
+    plain.insert(i, p.back());
+    reaching.insert(i, p.back());
+    reaching.widen_reach(p.back(), length.back());
+  }
+  // A tenth of the points leave, the long ones among them, and come back, half of the long ones
+  // short: their cells keep the long reach unless they emptied (a bound still).
+  for (int i = 0; i < n; i += 10) {
+    plain.remove(i, p[static_cast<std::size_t>(i)]);
+    reaching.remove(i, p[static_cast<std::size_t>(i)]);
+  }
+  for (int i = 0; i < n; i += 10) {
+    if (i % 400 != 0) length[static_cast<std::size_t>(i)] = shortish(rng);
+    plain.insert(i, p[static_cast<std::size_t>(i)]);
+    reaching.insert(i, p[static_cast<std::size_t>(i)]);
+    reaching.widen_reach(p[static_cast<std::size_t>(i)], length[static_cast<std::size_t>(i)]);
+  }
+  const double longest = *std::max_element(length.begin(), length.end());
+  std::uniform_real_distribution<double> step(-0.04, 0.04);
+  int found = 0;
+  std::uint64_t plain_visits = 0, reaching_visits = 0;
+  for (int q = 0; q < 400; ++q) {
+    const Vec3 a(unit(rng), unit(rng), 0.1 * unit(rng)), b = a + Vec3(step(rng), step(rng), 0.2 * step(rng));
+    const Vec3 mid = 0.5 * (a + b);
+    const double r = 0.5 * (b - a).norm() + longest;
+    const Vec3 lo = mid.array() - r, hi = mid.array() + r;
+    const auto near = [&](int id) {
+      const auto i = static_cast<std::size_t>(id);
+      return to_segment(p[i], a, b) <= length[i];
+    };
+    const auto far = [&](const Vec3& cell_lo, const Vec3& cell_hi, double reach) {
+      const Vec3 seg_lo = a.cwiseMin(b), seg_hi = a.cwiseMax(b);
+      return (cell_lo - seg_hi).cwiseMax(seg_lo - cell_hi).cwiseMax(0.0).norm() > reach;
+    };
+    int first_plain = -1, first_reaching = -1;
+    const std::uint64_t plain_before = plain.visits(), reaching_before = reaching.visits();
+    plain.any_in(lo, hi, [&](int id) { return near(id) && (first_plain = id, true); });
+    reaching.any_in(lo, hi, far, [&](int id) { return near(id) && (first_reaching = id, true); });
+    plain_visits += plain.visits() - plain_before;
+    reaching_visits += reaching.visits() - reaching_before;
+    EXPECT_EQ(first_reaching, first_plain) << "query " << q;
+    found += first_plain >= 0;
+    // The same through a gathered box around the query's.
+    SpatialHash::Gathered g;
+    reaching.gather(lo.array() - 0.3, hi.array() + 0.3, g);
+    int first_gathered = -1;
+    reaching.any_in(g, lo, hi, far, [&](int id) { return near(id) && (first_gathered = id, true); });
+    EXPECT_EQ(first_gathered, first_plain) << "query " << q;
+  }
+  EXPECT_GT(found, 50);  // the comparison means something: many queries find a point
+  EXPECT_LT(reaching_visits, plain_visits / 2);
+
+  // Emptied cells forget: every point leaves and comes back short; a query that the long
+  // lengths once reached now looks at no cell beyond the short lengths' reach. Its box spans
+  // more cells than are occupied, so the occupied cells are the ones asked.
+  for (int i = 0; i < n; ++i) reaching.remove(i, p[static_cast<std::size_t>(i)]);
+  SpatialHash fresh(0.25);
+  for (int i = 0; i < n; ++i) {
+    reaching.insert(i, p[static_cast<std::size_t>(i)]);
+    reaching.widen_reach(p[static_cast<std::size_t>(i)], 0.02);
+    fresh.insert(i, p[static_cast<std::size_t>(i)]);
+    fresh.widen_reach(p[static_cast<std::size_t>(i)], 0.02);
+  }
+  const Vec3 a(2, 2, 0.2), b(2.02, 2, 0.2);
+  const auto never = [](int) { return false; };
+  const auto far = [&](const Vec3& cell_lo, const Vec3& cell_hi, double reach) {
+    return (cell_lo - a.cwiseMax(b)).cwiseMax(a.cwiseMin(b) - cell_hi).cwiseMax(0.0).norm() > reach;
+  };
+  const std::uint64_t before = reaching.visits(), fresh_before = fresh.visits();
+  reaching.any_in(Vec3(0.5, 0.5, -1), Vec3(3.5, 3.5, 1.5), far, never);
+  fresh.any_in(Vec3(0.5, 0.5, -1), Vec3(3.5, 3.5, 1.5), far, never);
+  EXPECT_EQ(reaching.visits() - before, fresh.visits() - fresh_before);
+  EXPECT_LT(reaching.visits() - before, 200u);
 }
 
 }  // namespace
