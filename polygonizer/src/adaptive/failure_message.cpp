@@ -84,6 +84,10 @@ std::string explain_failure(const Field& field, const AdaptiveOptions& options, 
     bend << "; the surface bends with a radius of curvature of " << tightest.first << " near "
          << describe_point(tightest.second) << ", below min_edge (" << resolved.sizing.min_edge
          << "), detail finer than the mesh's shortest edge";
+    // A scan's detail that fine is its noise, which the sampled volume interpolates as surface.
+    if (field.type_name() == "volume")
+      bend << " (in a scanned volume usually its noise: smoothing the samples before meshing, with a Gaussian of a "
+              "voxel or two as examples/mesh_volume.py does, removes it)";
     message += bend.str();
   }
   message += across_creases_advice(field, options, message);

@@ -192,7 +192,8 @@ void check_necks(const Field& field, const Mesh& mesh, std::span<const CriticalS
     msg << "adaptive: the mesh " << (m.value < 0 ? "cuts a neck of the solid" : "closes a tunnel") << " about "
         << m.width << " wide near " << describe_point(m.point) << " (F has a saddle there, F = " << m.value
         << ", and it lies " << (m.value < 0 ? "outside" : "inside") << " the mesh)"
-        << (m.width < min_edge ? ", narrower than min_edge" : "") << ": a front stepped over it";
+        << (m.width < min_edge ? ", narrower than min_edge (a min_edge under its width lets the edges follow it)" : "")
+        << ": a front stepped over it";
     throw MissedNeckError(msg.str());
   }
 }
