@@ -33,6 +33,7 @@ void add_seeding(nlohmann::json& j, const SeedingReport& s) {
   j["uncovered_crossings"] = s.uncovered;
   j["refined_cells"] = s.refined_cells;
   j["unresolved_cells"] = s.unresolved_cells;
+  j["unsearched_cells"] = s.unsearched_cells;
   j["probes"] = s.probes;
 }
 

@@ -176,6 +176,8 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
         kept = std::move(r);
         kept_from = row.kind;
       }
+    } catch (const adaptive::UnsearchedCellsError&) {
+      throw;  // the same cells would be left again (stage_tracking.h)
     } catch (const NoSurfaceError& e) {
       if (failed(row, bend, false, e)) throw;
     } catch (const LimitExceededError& e) {

@@ -187,6 +187,8 @@ void Run::attempt() {
     components = repair_and_check();
   } catch (const MissedNeckError&) {
     throw;
+  } catch (const UnsearchedCellsError&) {
+    throw;
   } catch (const NoSurfaceError& e) {
     if (!fall_back(e)) throw;
     components = repair_and_check();
@@ -293,11 +295,15 @@ PolygonizeResult Run::mesh_with_recoveries(Bend& bend) {
       attempt();
     } catch (const NoSurfaceError&) {
       if (hopeless() || needs_shorter_edges() || !recover_all(false)) throw;
+    } catch (const UnsearchedCellsError&) {
+      throw;
     } catch (const LimitExceededError&) {
       if (hopeless() || !recover_all(true)) throw;
     }
   } catch (const NoSurfaceError& e) {
     throw NoSurfaceError(why(e));
+  } catch (const UnsearchedCellsError& e) {
+    throw UnsearchedCellsError(why(e));
   } catch (const LimitExceededError& e) {
     throw LimitExceededError(why(e));
   }

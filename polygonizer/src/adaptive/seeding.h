@@ -19,7 +19,8 @@
 //     more cells empty); such a cell, unless every point of it lies within one edge of a
 //     triangle, is split into eight, down to min_edge, until a sign change is found or every
 //     part is proved empty (`refined_cells`; cells still undecided at min_edge are
-//     `unresolved_cells`, which includes the band next to the meshed surface). Without a bound
+//     `unresolved_cells`, which includes the band next to the meshed surface; the splits are
+//     bounded by the mesh already made, and the cells left past that bound are `unsearched_cells`). Without a bound
 //     (expressions, VIS, MPU) Newton's method starts from every grid node where |F| is a strict
 //     local minimum among its 26 neighbours of the same sign (a component between grid nodes
 //     pulls |F| down around it); this finds isolated small components but proves nothing.

@@ -80,6 +80,16 @@ void track_surface(const RunContext& run, const SeedGridStage& seeds, const Crea
   }
   if (mesh.triangles.empty())
     throw NoSurfaceError("adaptive: the field changes sign but no seed could be meshed (vanishing gradient)");
+  if (seeding.unsearched_cells > 0) {
+    std::ostringstream msg;
+    msg << "adaptive: the search for components that no seed-grid edge crosses stopped at its bound ("
+        << seeding.refined_cells << " cells split, two for each triangle meshed) with " << seeding.unsearched_cells
+        << " cells left that may hold surface, the first near " << describe_point(seeding.first_unsearched)
+        << ": the field's bounds on its values and slope prove little there (a noisy scan's interpolant, a "
+           "loose Lipschitz bound), and a small component may be missing; smoothing the field (a scan's samples), "
+           "or a seed grid fine enough to cross such components (seed_resolution), meshes it";
+    throw UnsearchedCellsError(msg.str());
+  }
   if (seeding.uncovered > 0)
     throw NoSurfaceError("adaptive: " + std::to_string(seeding.uncovered) +
                          " sign changes of the field are not covered by the mesh, the first near " +

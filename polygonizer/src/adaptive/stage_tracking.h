@@ -32,6 +32,13 @@ struct Tracking {
   }
 };
 
+// The small-component search (seeding.h) stopped at its budget with cells left that may hold a
+// component: the mesh may miss one, so the run ends here, without the recoveries or the runs
+// made again (each would meet the same cells, after longer).
+struct UnsearchedCellsError : LimitExceededError {
+  using LimitExceededError::LimitExceededError;
+};
+
 // Meshes the whole surface into `mesh` (emptied first): `finished` (the crease patches' or the
 // blocks' mesh, of `finished_components` components) adopted as it is, if given, then the
 // tracker from the seeds. A stalled front (StalledFrontError) is where a front that ran over
@@ -39,7 +46,8 @@ struct Tracking {
 // then meshed again from the start with the rollbacks on (`remeshed`).
 // \throw NoSurfaceError when the field has no sign change, when no seed could be meshed, when
 //        sign changes are left uncovered; the first run's StalledFrontError when the second
-//        fails; LimitExceededError for the tracker's bounds; CancelledError.
+//        fails; UnsearchedCellsError where the small-component search left cells unsplit;
+//        LimitExceededError for the tracker's bounds; CancelledError.
 void track_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseMesh* finished,
                    std::size_t finished_components, Settings& settings, Mesh& mesh, Tracking& tracking);
 
