@@ -65,6 +65,7 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
     return ab.x() * ac.y() - ab.y() * ac.x();
   };
   const auto [lo, hi] = front_edge_search_box(u_point, w_point, longest_front_edge());
+  const double uw = (w_point - u_point).norm();
   // The first front edge, in the hash's order, that passes every test. The tests are cheapest
   // first (most candidates do not cross the segment in the plane), which changes no answer:
   // they are a conjunction.
@@ -82,7 +83,7 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
     if (!same_side(N, vr) || !same_side(N, vs)) return false;
     // Only edges that pass near the segment in space count: on a thin tube or a narrow gap the
     // far side of the surface also projects across the segment in the tangent plane.
-    const double reach = 0.25 * ((w_point - u_point).norm() + (bs - ar).norm());
+    const double reach = 0.25 * (uw + (bs - ar).norm());
     if (segment_distance(u_point, w_point, ar, bs) > reach) return false;
     hit = r;
     return true;
@@ -91,7 +92,6 @@ int Tracker::crossed_front_edge(int vu, int vw, const Vec3& w_point, int frame_v
   // 1.25 |rs| + 0.25 |uw| of it: a cell farther than that from the segment's box, with its
   // longest edge for |rs| (SpatialHash::widen_reach), holds none; the margin covers rounding.
   const Vec3 seg_lo = u_point.cwiseMin(w_point), seg_hi = u_point.cwiseMax(w_point);
-  const double uw = (w_point - u_point).norm();
   const auto far = [&](const Vec3& cell_lo, const Vec3& cell_hi, double longest_there) {
     const Vec3 gap = (cell_lo - seg_hi).cwiseMax(seg_lo - cell_hi).cwiseMax(0.0);
     const double bound = 1.25 * longest_there + 0.25 * uw;

@@ -38,7 +38,7 @@ struct SeedingReport {
   std::size_t refined_cells = 0;     // cells split by the small-component search
   std::size_t unresolved_cells = 0;  // cells at min_edge that may still hold surface (thinner than min_edge)
   std::size_t unsearched_cells = 0;  // cells the search's budget left unsplit, which may hold surface (seeding.cpp)
-  Vec3 first_unsearched = Vec3::Zero();
+  Vec3 first_unsearched = Vec3::Zero();  // the centre of the first of them
   std::size_t probes = 0;            // Newton probes from local minima of |F| (fields without a bound)
   std::size_t uncovered = 0;         // sign changes not meshed after the run: 0 on success (STATS "uncovered_crossings")
   Vec3 first_uncovered = Vec3::Zero();
