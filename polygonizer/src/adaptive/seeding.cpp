@@ -47,14 +47,16 @@ constexpr int kSegmentSamples = 8;
 // Bound on the cells the small-component search splits, so that a field whose bounds are far too
 // loose cannot make the search cost far more than the meshing: kRefinedCellsPerTriangle for each
 // triangle meshed when the search begins, at least kMinRefinedCells, at most kMaxRefinedCells;
-// cells left over count as `unsearched_cells`. A cell split costs about what two triangles of
-// tracking do (about 10 us). Over the test suite and the topology sweep no run split more than
-// 8,192 cells; a sampled volume of noise (a sphere's distance on 16^3 samples plus noise of 0.03,
+// cells left over count as `unsearched_cells`. A split costs a few microseconds, a triangle of
+// tracking about 5-10. Over the test suite and the topology sweep no run split more than 8,192
+// cells; a sampled volume of noise (a sphere's distance on 16^3 samples plus noise of 0.03,
 // whose prefiltered coefficients ring: value ranges over a cell of [-0.81, 0.17] where F is
 // -0.53, a Lipschitz bound of 27) left all but 2,016 of the 32,768 grid cells to the search,
-// which split 2^20 cells in 10 s for a mesh of 23,824 triangles made in 1 s.
-constexpr std::size_t kRefinedCellsPerTriangle = 2;
-constexpr std::size_t kMinRefinedCells = 1u << 15;
+// which split 2^20 cells in 10 s for a mesh of 23,824 triangles made in 1 s. Milder noise (a
+// unit sphere's distance on 16^3 to 64^3 samples over [-2, 2]^3 plus Gaussian noise of 0.01 to
+// 0.03) needs 11,600 to 282,000 splits, 3 to 27 a triangle, and meshes in 0.1 to 1.4 s.
+constexpr std::size_t kRefinedCellsPerTriangle = 8;
+constexpr std::size_t kMinRefinedCells = 1u << 18;
 constexpr std::size_t kMaxRefinedCells = 1u << 20;
 // Steps of min_edge a surface point may be from the mesh and still belong to a meshed component.
 constexpr int kWalkSteps = 32;

@@ -83,7 +83,7 @@ void track_surface(const RunContext& run, const SeedGridStage& seeds, const Crea
   if (seeding.unsearched_cells > 0) {
     std::ostringstream msg;
     msg << "adaptive: the search for components that no seed-grid edge crosses stopped at its bound ("
-        << seeding.refined_cells << " cells split, two for each triangle meshed) with " << seeding.unsearched_cells
+        << seeding.refined_cells << " cells split, as many as its budget allows) with " << seeding.unsearched_cells
         << " cells left that may hold surface, the first near " << describe_point(seeding.first_unsearched)
         << ": the field's bounds on its values and slope prove little there (a noisy scan's interpolant, a "
            "loose Lipschitz bound), and a small component may be missing; smoothing the field (a scan's samples), "
