@@ -45,13 +45,13 @@ const PhaseReport& AdaptiveReport::phase(std::string_view name) const {
 
 namespace {
 
-using adaptive::Bend;
 
 // The runs polygonize_adaptive makes, in order. The first is the options as given; the next
 // two are made only when every run before them failed (each with its own recoveries, run.cpp),
 // the last only when a mesh misses the quality bounds. Each is made only where
 // adaptive::remeshing_allowed (Variant::Improved, no bound of the caller's on triangles, steps
-// or searches), and none after a black box's kink (adaptive::kink_in_black_box).
+// or searches), and none after a failure that no run made again mends (adaptive::RunFailure::final:
+// a black box's kink, a sampled volume's noise).
 enum class RunKind { AsGiven, LoweredMinEdge, TurnLimited, LookAhead };
 struct RunRow {
   RunKind kind;
@@ -128,11 +128,11 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   int missed = 0;
   // A run's NoSurfaceError or LimitExceededError (`limit`): whether it ends polygonize_adaptive.
   // The first run's error stands unless a run made again meshes; the lowered run's is quoted.
-  const auto failed = [&](const RunRow& row, const Bend& bend, bool limit, const std::exception& e) {
+  const auto failed = [&](const RunRow& row, const adaptive::RunFailure& failure, bool limit, const std::exception& e) {
     if (row.kind == RunKind::LoweredMinEdge) lowered_error = e.what();
     if (row.kind != RunKind::AsGiven) return false;
-    if (adaptive::kink_in_black_box(field, bend)) return true;
-    lowered = adaptive::lowered_min_edge(field, options, bend.first);
+    if (failure.final) return true;
+    lowered = adaptive::lowered_min_edge(field, options, failure.tightest.first);
     if (!lowered && !may_limit_turn) return true;
     first_error = FirstError{limit, e.what()};
     return false;
@@ -160,9 +160,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
         request.look_ahead = true;
         break;
     }
-    Bend bend = adaptive::no_bend();
+    adaptive::RunFailure failure;
     try {
-      PolygonizeResult r = adaptive::run_once(field, again, phases, request, bend);
+      PolygonizeResult r = adaptive::run_once(field, again, phases, request, failure);
       if (row.kind == RunKind::LookAhead) {
         const bool keep = missed_bounds(r) < missed;
         if (keep) {
@@ -179,9 +179,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
     } catch (const adaptive::UnsearchedCellsError&) {
       throw;  // the same cells would be left again (stage_tracking.h)
     } catch (const NoSurfaceError& e) {
-      if (failed(row, bend, false, e)) throw;
+      if (failed(row, failure, false, e)) throw;
     } catch (const LimitExceededError& e) {
-      if (failed(row, bend, true, e)) throw;
+      if (failed(row, failure, true, e)) throw;
     }
   }
   if (!kept) {

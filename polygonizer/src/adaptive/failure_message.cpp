@@ -66,6 +66,11 @@ bool kink_in_black_box(const Field& field, const Bend& tightest) {
   return step && tightest.first < *step;
 }
 
+bool noise_in_volume(const Field& field, const Settings& resolved, const Bend& tightest) {
+  const std::optional<double> spacing = field.sample_spacing();
+  return spacing && tightest.first < resolved.sizing.min_edge && tightest.first < kBelowSamples * *spacing;
+}
+
 std::string explain_failure(const Field& field, const AdaptiveOptions& options, const Settings& resolved,
                             std::string message, const Bend& tightest, const std::string& crease_fallback) {
   if (kink_in_black_box(field, tightest)) {

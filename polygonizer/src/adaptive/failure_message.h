@@ -21,6 +21,23 @@ namespace cdp::adaptive {
 // at the first failure and says so.
 bool kink_in_black_box(const Field& field, const Bend& tightest);
 
+// A sampled volume's bend this many times tighter than its sample spacing is not detail of its
+// data. (The raw brain scan of examples/mesh_volume.py, spacing 2: its first run met a bend of
+// radius 0.019 with min_edge 0.29.)
+inline constexpr double kBelowSamples = 0.1;
+
+// Whether a sampled volume (Field::sample_spacing) met the noise of its samples: a bend tighter
+// than min_edge and than kBelowSamples of the sample spacing, which its interpolant makes only
+// where the level passes near one of its saddles, and a scan's noise puts those everywhere. A
+// run whose fronts got stuck there (a LimitExceededError of the tracking) is not made again:
+// carefully, with finer turns or with min_edge lowered, it only follows the noise further (the
+// raw brain scan failed its first run after 10 s, its five recoveries after 30 s, each finding a
+// tighter bend, and a run with min_edge lowered failed after 23 s more). Its message names the
+// noise and the smoothing that removes it. A run that meshed and failed a check of its mesh is
+// made again as before (Run::mesh_with_recoveries): one stepped over a neck a hair from a
+// saddle of a smooth volume, which a run with min_edge under its width meshes at little cost.
+bool noise_in_volume(const Field& field, const Settings& resolved, const Bend& tightest);
+
 // The error message of a run that failed with `message`: the cause first where it is a black
 // box's kink, else `message` with the tightest bend where it is under min_edge, the field's
 // sharpest crease where the run meshed across creases by choice, and `crease_fallback` (why

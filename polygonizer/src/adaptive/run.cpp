@@ -46,7 +46,7 @@ constexpr std::array<double, 2> kFinerTurns{0.5, 0.25};
 
 // The recoveries, in the order they are tried after a run's first attempt fails. The first that
 // meshes ends the run; when all fail, the first attempt's error stands. None where
-// remeshing_allowed says no, nor after a black box's kink (kink_in_black_box), nor for a field
+// remeshing_allowed says no, nor after a failure none mends (RunFailure::final), nor for a field
 // whose seeding found no sign change; only the polygonizer's own errors are recovered from (an
 // exception from a callable field or a cancellation goes on unchanged). Only after a failure,
 // so that every surface that meshes at the first attempt comes out as it always has.
@@ -274,12 +274,16 @@ bool Run::recover(const Recovery& r, bool after_limit) {
   return false;
 }
 
-PolygonizeResult Run::mesh_with_recoveries(Bend& bend) {
+PolygonizeResult Run::mesh_with_recoveries(RunFailure& failure) {
   const PhaseCloser closer{ctx.phases};
   prepare();
-  const auto hopeless = [&] {
+  // `stuck`: the attempt ended on a bound of the tracking (LimitExceededError), not on a check of
+  // its mesh, which a neck stepped over fails and a run with min_edge lowered meshes at little
+  // cost (noise_in_volume).
+  const auto hopeless = [&](bool stuck) {
     tracking.note_tightest();
-    return kink_in_black_box(ctx.field, tracking.tightest);
+    return failure.final = kink_in_black_box(ctx.field, tracking.tightest) ||
+                           (stuck && noise_in_volume(ctx.field, resolved, tracking.tightest));
   };
   const auto recover_all = [&](bool after_limit) {
     return std::any_of(kRecoveries.begin(), kRecoveries.end(), [&](const Recovery& r) { return recover(r, after_limit); });
@@ -287,18 +291,18 @@ PolygonizeResult Run::mesh_with_recoveries(Bend& bend) {
   // An error of the run says what the crease-aware meshing ran into first (failure_message.h).
   const auto why = [&](const std::exception& e) {
     tracking.note_tightest();
-    bend = tracking.tightest;
+    failure.tightest = tracking.tightest;
     return explain_failure(ctx.field, ctx.options, resolved, e.what(), tracking.tightest, creases.fallback);
   };
   try {
     try {
       attempt();
     } catch (const NoSurfaceError&) {
-      if (hopeless() || needs_shorter_edges() || !recover_all(false)) throw;
+      if (hopeless(false) || needs_shorter_edges() || !recover_all(false)) throw;
     } catch (const UnsearchedCellsError&) {
       throw;
     } catch (const LimitExceededError&) {
-      if (hopeless() || !recover_all(true)) throw;
+      if (hopeless(true) || !recover_all(true)) throw;
     }
   } catch (const NoSurfaceError& e) {
     throw NoSurfaceError(why(e));
@@ -314,9 +318,9 @@ PolygonizeResult Run::mesh_with_recoveries(Bend& bend) {
 }
 
 PolygonizeResult run_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases,
-                          const RunRequest& request, Bend& bend) {
+                          const RunRequest& request, RunFailure& failure) {
   Run run(field, options, phases, request);
-  return run.mesh_with_recoveries(bend);
+  return run.mesh_with_recoveries(failure);
 }
 
 }  // namespace cdp::adaptive

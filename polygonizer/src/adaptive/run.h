@@ -24,15 +24,22 @@ struct RunRequest {
   bool lowered_min_edge_follows = false;
 };
 
+// What a failed run tells polygonize_adaptive: the tightest bend it met (kRuns' lowered min_edge
+// follows it), and whether what failed is beyond any run made again (kink_in_black_box,
+// noise_in_volume: failure_message.h).
+struct RunFailure {
+  Bend tightest = no_bend();
+  bool final = false;
+};
+
 // Meshes the surface with `options` as `request` changes them, the recoveries included.
-// `bend` receives the tightest bend the run met when it fails (kRuns' lowered min_edge
-// follows it).
+// `failure` receives what polygonize_adaptive needs to know when the run fails.
 // \return the mesh, closed, oriented, manifold, without self-intersections (unless the options
 //         turn that check off), with its stats; the phases' times go to `phases`.
 // \throw NoSurfaceError, LimitExceededError (the first attempt's error, its cause named:
 //        failure_message.h), InvalidInputError (resolve_settings), CancelledError, and what
 //        the field throws.
 PolygonizeResult run_once(const Field& field, const AdaptiveOptions& options, PhaseLedger& phases,
-                          const RunRequest& request, Bend& bend);
+                          const RunRequest& request, RunFailure& failure);
 
 }  // namespace cdp::adaptive

@@ -29,7 +29,7 @@ class Run {
   ~Run();
   Run(const Run&) = delete;
   Run& operator=(const Run&) = delete;
-  PolygonizeResult mesh_with_recoveries(Bend& bend);
+  PolygonizeResult mesh_with_recoveries(RunFailure& failure);
 
  private:
   // The stages before the first triangle: settings, seed grid, crease layout, blocks.

@@ -237,6 +237,11 @@ class Field {
   // beyond what those derivatives resolve: where a run fails on one, the adaptive polygonizer
   // reports a crease the field does not describe instead of meshing again (adaptive_polygonizer.cpp).
   virtual std::optional<double> derivative_step() const { return std::nullopt; }
+  // The spacing of the samples the model interpolates (a sampled volume's smallest), or none for
+  // a model that is not sampled. Its interpolant has no detail of its own far below that
+  // spacing: a bend much tighter is where the level passes near a saddle of it, which a scan's
+  // noise puts everywhere; the adaptive polygonizer does not mesh such a run again (failure_message.h).
+  virtual std::optional<double> sample_spacing() const { return std::nullopt; }
   // Where branch point k (numbered as in FieldPiece::branch) switches near p, to first order:
   // the signed distance to the surface where its two arguments are equal ((a - b) / |grad (a - b)|,
   // u / |grad u| for abs) and that surface's unit normal, from one evaluation with the branches

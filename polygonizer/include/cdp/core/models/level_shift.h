@@ -23,6 +23,7 @@ class LevelShift final : public Field {
   bool costly_calls() const override { return field_.costly_calls(); }
   bool smooth() const override { return field_.smooth(); }
   std::optional<double> derivative_step() const override { return field_.derivative_step(); }
+  std::optional<double> sample_spacing() const override { return field_.sample_spacing(); }
   std::optional<double> lipschitz_bound() const override { return field_.lipschitz_bound(); }
   std::optional<double> lipschitz_bound(const Box& region) const override { return field_.lipschitz_bound(region); }
   std::optional<std::pair<double, double>> value_range(const Box& region) const override;

@@ -60,6 +60,8 @@ class Volume : public Field {
   // the range of the coefficients whose support meets the region.
   std::optional<std::pair<double, double>> value_range(const Box& region) const override;
 
+  std::optional<double> sample_spacing() const override { return spacing_.minCoeff(); }
+
   const std::array<std::size_t, 3>& dims() const { return dims_; }
   const Vec3& origin() const { return origin_; }
   const Vec3& spacing() const { return spacing_; }
