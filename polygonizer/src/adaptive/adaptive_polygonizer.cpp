@@ -45,7 +45,6 @@ const PhaseReport& AdaptiveReport::phase(std::string_view name) const {
 
 namespace {
 
-
 // The runs polygonize_adaptive makes, in order. The first is the options as given; the next
 // two are made only when every run before them failed (each with its own recoveries, run.cpp),
 // the last only when a mesh misses the quality bounds. Each is made only where

@@ -292,6 +292,8 @@ PolygonizeResult Run::mesh_with_recoveries(RunFailure& failure) {
   const auto why = [&](const std::exception& e) {
     tracking.note_tightest();
     failure.tightest = tracking.tightest;
+    // A recovery may be what met the kink: no run made again after it either.
+    failure.final = failure.final || kink_in_black_box(ctx.field, tracking.tightest);
     return explain_failure(ctx.field, ctx.options, resolved, e.what(), tracking.tightest, creases.fallback);
   };
   try {
