@@ -84,6 +84,18 @@ std::string explain_failure(const Field& field, const AdaptiveOptions& options, 
          << "meshed along its creases, and exact gradient and Hessian functions resolve a smooth bend this tight. "
          << "Where the run stopped: " << message;
     message = kink.str();
+  } else if (noise_in_volume(field, resolved, tightest)) {
+    // The cause first too: lowering min_edge, the tracker's advice, only follows the noise further.
+    std::ostringstream noise;
+    noise << "adaptive: the surface bends with a radius of curvature of " << tightest.first << " near "
+          << describe_point(tightest.second) << ", under a tenth of the volume's sample spacing ("
+          << *field.sample_spacing() << ") and under min_edge (" << resolved.sizing.min_edge
+          << "): not detail of the data but the noise of its samples (the interpolant bends that tightly only "
+             "where the level passes a hair from one of its saddles), which shorter edges only follow further; "
+             "smoothing the samples before meshing, with a Gaussian of a voxel or two as examples/mesh_volume.py "
+             "does, removes it. Where the run stopped: "
+          << message;
+    message = noise.str();
   } else if (tightest.first < resolved.sizing.min_edge) {
     std::ostringstream bend;
     bend << "; the surface bends with a radius of curvature of " << tightest.first << " near "

@@ -230,6 +230,16 @@ TEST(Volume, ABendFarBelowASampleIsItsNoise) {
   const Expression sphere("sqrt(x^2+y^2+z^2)-1", {}, field.bounds());
   EXPECT_FALSE(sphere.sample_spacing().has_value());
   EXPECT_FALSE(adaptive::noise_in_volume(sphere, s, {0.5 * s.sizing.min_edge, p}));
+  // Its error names the noise first, and the smoothing that removes it, not a shorter min_edge.
+  const std::string noise =
+      adaptive::explain_failure(field, AdaptiveOptions{}, s, "STOPPED", {0.5 * s.sizing.min_edge, p}, "");
+  EXPECT_EQ(noise.find("adaptive: the surface bends"), 0u) << noise;
+  EXPECT_NE(noise.find("noise of its samples"), std::string::npos) << noise;
+  EXPECT_NE(noise.find("smoothing the samples"), std::string::npos) << noise;
+  EXPECT_NE(noise.find("Where the run stopped: STOPPED"), std::string::npos) << noise;
+  const std::string bend = adaptive::explain_failure(sphere, AdaptiveOptions{}, s, "STOPPED", {0.5 * s.sizing.min_edge, p}, "");
+  EXPECT_EQ(bend.find("STOPPED; the surface bends"), 0u) << bend;
+  EXPECT_EQ(bend.find("noise"), std::string::npos) << bend;
 }
 
 // Not every bend that tight is noise: two Gaussian blobs sampled on 24^3 points, at a level 1e-5
