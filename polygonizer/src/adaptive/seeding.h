@@ -20,10 +20,11 @@
 //     triangle, is split into eight, down to min_edge, until a sign change is found or every
 //     part is proved empty (`refined_cells`; cells still undecided at min_edge are
 //     `unresolved_cells`, which includes the band next to the meshed surface; the splits are
-//     bounded by the mesh already made, and the cells left past that bound are `unsearched_cells`). Without a bound
-//     (expressions, VIS, MPU) Newton's method starts from every grid node where |F| is a strict
-//     local minimum among its 26 neighbours of the same sign (a component between grid nodes
-//     pulls |F| down around it); this finds isolated small components but proves nothing.
+//     bounded by the mesh already made, and the cells left past that bound are
+//     `unsearched_cells`). Without a bound (expressions, VIS, MPU) Newton's method starts from
+//     every grid node where |F| is a strict local minimum among its 26 neighbours of the same
+//     sign (a component between grid nodes pulls |F| down around it); this finds isolated small
+//     components but proves nothing.
 //  3. After the run every sign change found is checked again; `uncovered` must be 0, else the
 //     polygonization fails with an error naming the place.
 #pragma once

@@ -7,8 +7,8 @@
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_topology.h>
-#include <cdp/core/models/level_shift.h>
 #include <cdp/core/models/expression.h>
+#include <cdp/core/models/level_shift.h>
 #include <cdp/core/models/volume.h>
 
 #include "src/adaptive/failure_message.h"
@@ -237,7 +237,8 @@ TEST(Volume, ABendFarBelowASampleIsItsNoise) {
   EXPECT_NE(noise.find("noise of its samples"), std::string::npos) << noise;
   EXPECT_NE(noise.find("smoothing the samples"), std::string::npos) << noise;
   EXPECT_NE(noise.find("Where the run stopped: STOPPED"), std::string::npos) << noise;
-  const std::string bend = adaptive::explain_failure(sphere, AdaptiveOptions{}, s, "STOPPED", {0.5 * s.sizing.min_edge, p}, "");
+  const std::string bend =
+      adaptive::explain_failure(sphere, AdaptiveOptions{}, s, "STOPPED", {0.5 * s.sizing.min_edge, p}, "");
   EXPECT_EQ(bend.find("STOPPED; the surface bends"), 0u) << bend;
   EXPECT_EQ(bend.find("noise"), std::string::npos) << bend;
 }

@@ -240,7 +240,8 @@ class Field {
   // The spacing of the samples the model interpolates (a sampled volume's smallest), or none for
   // a model that is not sampled. Its interpolant has no detail of its own far below that
   // spacing: a bend much tighter is where the level passes near a saddle of it, which a scan's
-  // noise puts everywhere; the adaptive polygonizer does not mesh such a run again (failure_message.h).
+  // noise puts everywhere; the adaptive polygonizer does not mesh such a run again
+  // (failure_message.h).
   virtual std::optional<double> sample_spacing() const { return std::nullopt; }
   // Where branch point k (numbered as in FieldPiece::branch) switches near p, to first order:
   // the signed distance to the surface where its two arguments are equal ((a - b) / |grad (a - b)|,
