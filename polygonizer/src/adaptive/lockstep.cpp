@@ -187,6 +187,9 @@ class LockstepView final : public Field {
   std::optional<std::pair<double, double>> value_range(const Box& region) const override {
     return field_.value_range(region);
   }
+  std::optional<std::pair<Vec3, Vec3>> gradient_range(const Box& region) const override {
+    return field_.gradient_range(region);
+  }
   std::optional<double> constraint_spacing() const override { return field_.constraint_spacing(); }
 
  protected:

@@ -21,6 +21,12 @@ void LevelShift::eval_values(const Vec3* points, double* out, std::size_t n) con
   for (std::size_t i = 0; i < n; ++i) out[i] -= level_;
 }
 
+void LevelShift::eval_values_on_lattice(const Vec3& origin, double step, int n, double* out) const {
+  field_.eval_values_on_lattice(origin, step, n, out);
+  const std::size_t count = static_cast<std::size_t>(n) * n * n;
+  for (std::size_t i = 0; i < count; ++i) out[i] -= level_;
+}
+
 void LevelShift::eval_values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const {
   field_.eval_values_gradients(points, values, gradients, n);
   for (std::size_t i = 0; i < n; ++i) values[i] -= level_;

@@ -66,26 +66,37 @@ struct AxisWeights {
   double w[3][4];
 };
 
+// Only the orders up to Order are filled in: a value alone needs neither derivative's weights.
+template <int Order>
 AxisWeights axis_weights(double u, std::size_t n, double spacing) {
   AxisWeights a;
   const double cell = std::floor(u);
   const double t = u - cell;
   const auto first = static_cast<long long>(cell) - 1;
-  for (int m = 0; m < 4; ++m) a.index[m] = mirror(first + m, n);
+  // Inside the axis (nearly always) the indices need no mirroring, and no division.
+  if (first >= 0 && first + 3 < static_cast<long long>(n))
+    for (int m = 0; m < 4; ++m) a.index[m] = static_cast<std::size_t>(first + m);
+  else
+    for (int m = 0; m < 4; ++m) a.index[m] = mirror(first + m, n);
   const double s = 1.0 - t, t2 = t * t, t3 = t2 * t;
   a.w[0][0] = s * s * s / 6.0;
   a.w[0][1] = (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0;
   a.w[0][2] = (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0;
   a.w[0][3] = t3 / 6.0;
-  const double h1 = 1.0 / spacing, h2 = h1 * h1;
-  a.w[1][0] = -0.5 * s * s * h1;
-  a.w[1][1] = (1.5 * t2 - 2.0 * t) * h1;
-  a.w[1][2] = (-1.5 * t2 + t + 0.5) * h1;
-  a.w[1][3] = 0.5 * t2 * h1;
-  a.w[2][0] = s * h2;
-  a.w[2][1] = (3.0 * t - 2.0) * h2;
-  a.w[2][2] = (1.0 - 3.0 * t) * h2;
-  a.w[2][3] = t * h2;
+  if constexpr (Order >= 1) {
+    const double h1 = 1.0 / spacing;
+    a.w[1][0] = -0.5 * s * s * h1;
+    a.w[1][1] = (1.5 * t2 - 2.0 * t) * h1;
+    a.w[1][2] = (-1.5 * t2 + t + 0.5) * h1;
+    a.w[1][3] = 0.5 * t2 * h1;
+  }
+  if constexpr (Order >= 2) {
+    const double h1 = 1.0 / spacing, h2 = h1 * h1;
+    a.w[2][0] = s * h2;
+    a.w[2][1] = (3.0 * t - 2.0) * h2;
+    a.w[2][2] = (1.0 - 3.0 * t) * h2;
+    a.w[2][3] = t * h2;
+  }
   return a;
 }
 
@@ -183,7 +194,7 @@ double Volume::evaluate(const Vec3& p, Vec3* gradient, Mat3* hessian) const {
   const Vec3 q = p.cwiseMax(origin_).cwiseMin(far_corner_);
   const Vec3 off = p - q;
   AxisWeights ax[3];
-  for (int a = 0; a < 3; ++a) ax[a] = axis_weights((q[a] - origin_[a]) / spacing_[a], dims_[a], spacing_[a]);
+  for (int a = 0; a < 3; ++a) ax[a] = axis_weights<Order>((q[a] - origin_[a]) / spacing_[a], dims_[a], spacing_[a]);
   // sum[ox][oy][oz]: the spline's derivative of those orders along x, y and z (ox + oy + oz <= Order),
   // contracted one axis at a time.
   double sum[3][3][3] = {};
@@ -270,6 +281,99 @@ std::optional<std::pair<double, double>> Volume::value_range(const Box& region) 
       }
   if (sign_ > 0) return std::make_pair(lo - level_, hi - level_ + beyond);
   return std::make_pair(level_ - hi, level_ - lo + beyond);
+}
+
+void Volume::eval_values_on_lattice(const Vec3& origin, double step, int n, double* out) const {
+  // Partial sums held for the separable contraction, in doubles: beyond this the points go one
+  // by one (a lattice over a whole large volume).
+  constexpr std::size_t kMaxPartialSums = std::size_t{1} << 22;
+  const Vec3 far = origin + step * Vec3::Constant(n - 1);
+  const std::size_t count = static_cast<std::size_t>(n);
+  if (!(origin.allFinite() && far.allFinite() && (origin.array() >= origin_.array()).all() &&
+        (far.array() <= far_corner_.array()).all())) {
+    Field::eval_values_on_lattice(origin, step, n, out);
+    return;
+  }
+  // Per axis: each lattice coordinate's four coefficient indices and weights, and the range of
+  // indices they reach.
+  std::array<std::vector<AxisWeights>, 3> ax;
+  std::array<std::size_t, 3> lo{}, span{};
+  for (int a = 0; a < 3; ++a) {
+    ax[a].resize(count);
+    std::size_t first = dims_[a], last = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const double coordinate = origin[a] + step * static_cast<double>(i);  // as Vec3 arithmetic gives it
+      ax[a][i] = axis_weights<0>((coordinate - origin_[a]) / spacing_[a], dims_[a], spacing_[a]);
+      for (std::size_t m : ax[a][i].index) first = std::min(first, m), last = std::max(last, m);
+    }
+    lo[a] = first, span[a] = last - first + 1;
+  }
+  if (span[0] * span[1] * count > kMaxPartialSums || span[0] * count * count > kMaxPartialSums) {
+    Field::eval_values_on_lattice(origin, step, n, out);
+    return;
+  }
+  // z_sum[(x * span1 + y) * n + c]: the sum along z at lattice z-coordinate c of coefficient row
+  // (x, y).
+  std::vector<double> z_sum(span[0] * span[1] * count);
+  for (std::size_t x = 0; x < span[0]; ++x)
+    for (std::size_t y = 0; y < span[1]; ++y) {
+      const double* row = &coefficients_[((lo[0] + x) * dims_[1] + lo[1] + y) * dims_[2]];
+      for (std::size_t c = 0; c < count; ++c) {
+        double z = 0;
+        for (int m = 0; m < 4; ++m) z += ax[2][c].w[0][m] * row[ax[2][c].index[m]];
+        z_sum[(x * span[1] + y) * count + c] = z;
+      }
+    }
+  // yz_sum[(x * n + b) * n + c]: then along y at lattice y-coordinate b.
+  std::vector<double> yz_sum(span[0] * count * count);
+  for (std::size_t x = 0; x < span[0]; ++x)
+    for (std::size_t b = 0; b < count; ++b)
+      for (std::size_t c = 0; c < count; ++c) {
+        double yz = 0;
+        for (int m = 0; m < 4; ++m)
+          yz += ax[1][b].w[0][m] * z_sum[(x * span[1] + ax[1][b].index[m] - lo[1]) * count + c];
+        yz_sum[(x * count + b) * count + c] = yz;
+      }
+  for (std::size_t a = 0; a < count; ++a)
+    for (std::size_t b = 0; b < count; ++b)
+      for (std::size_t c = 0; c < count; ++c) {
+        double sum = 0;
+        for (int m = 0; m < 4; ++m)
+          sum += ax[0][a].w[0][m] * yz_sum[((ax[0][a].index[m] - lo[0]) * count + b) * count + c];
+        out[(c * count + b) * count + a] = sign_ * (sum - level_);
+      }
+}
+
+std::optional<std::pair<Vec3, Vec3>> Volume::gradient_range(const Box& region) const {
+  if (!(region.min.allFinite() && region.max.allFinite())) return std::nullopt;
+  if ((region.min.array() < origin_.array()).any() || (region.max.array() > far_corner_.array()).any())
+    return std::nullopt;
+  std::array<std::size_t, 3> first{}, last{};
+  for (int a = 0; a < 3; ++a) {
+    // As in value_range: the coefficients whose support meets the region.
+    const auto lo = static_cast<long long>(std::floor((region.min[a] - origin_[a]) / spacing_[a])) - 1;
+    const auto hi = static_cast<long long>(std::floor((region.max[a] - origin_[a]) / spacing_[a])) + 2;
+    if (lo < 1 || hi + 1 >= static_cast<long long>(dims_[a])) return std::nullopt;  // mirrored there
+    first[a] = static_cast<std::size_t>(lo);
+    last[a] = static_cast<std::size_t>(hi);
+  }
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t i = first[0]; i <= last[0]; ++i)
+    for (std::size_t j = first[1]; j <= last[1]; ++j)
+      for (std::size_t k = first[2]; k <= last[2]; ++k) {
+        const double c = coefficient(i, j, k);
+        const std::array<std::size_t, 3> at{i, j, k};
+        for (int a = 0; a < 3; ++a) {
+          if (at[a] == last[a]) continue;
+          const double next =
+              a == 0 ? coefficient(i + 1, j, k) : a == 1 ? coefficient(i, j + 1, k) : coefficient(i, j, k + 1);
+          const double d = next - c;
+          lo[a] = std::min(lo[a], d / spacing_[a]);
+          hi[a] = std::max(hi[a], d / spacing_[a]);
+        }
+      }
+  if (sign_ > 0) return std::make_pair(lo, hi);
+  return std::make_pair(Vec3(-hi), Vec3(-lo));
 }
 
 }  // namespace cdp

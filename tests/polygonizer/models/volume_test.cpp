@@ -16,6 +16,7 @@
 #include <cmath>
 #include <functional>
 #include <random>
+#include <vector>
 
 namespace cdp {
 namespace {
@@ -112,6 +113,64 @@ TEST(Volume, DerivativesAreTheInterpolantsAndItsBoundsHold) {
       EXPECT_GE(v, range->first - 1e-12);
       EXPECT_LE(v, range->second + 1e-12);
     }
+  }
+}
+
+// gradient_range bounds the derivatives inside sub-boxes, checked at points inside each; near
+// the grid's faces (mirrored coefficients) and beyond the grid it gives nothing. values_on_lattice
+// gives values()'s numbers bit for bit, separably inside the grid, point by point across its box.
+TEST(Volume, GradientRangesHoldAndLatticesAreTheirPointsValues) {
+  const VolumeSamples samples = sample_cube(torus_distance, 16, 2.0);
+  VolumeSamples density = samples;  // the same surface read the other way: inside above the level
+  for (double& v : density.values) v = -v;
+  const Volume below(samples, 0.0), above(density, 0.0, VolumeInside::Above);
+  const Box box = below.bounds();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> w(0, 1);
+  int checked = 0;
+  for (const Volume* field : {&below, &above})
+    for (int trial = 0; trial < 40; ++trial) {
+      const Vec3 lo = box.min + Vec3(w(rng), w(rng), w(rng)).cwiseProduct(box.size()) * 0.8;
+      const Box region{lo, lo + box.size() * 0.2 * w(rng) + Vec3::Constant(1e-3)};
+      const auto range = field->gradient_range(region);
+      if (!range) continue;
+      ++checked;
+      for (int k = 0; k < 50; ++k) {
+        const Vec3 g = field->gradient(region.min + Vec3(w(rng), w(rng), w(rng)).cwiseProduct(region.size()));
+        EXPECT_TRUE((g.array() >= range->first.array() - 1e-12).all()) << g.transpose() << " / " << range->first;
+        EXPECT_TRUE((g.array() <= range->second.array() + 1e-12).all()) << g.transpose() << " / " << range->second;
+      }
+    }
+  EXPECT_GT(checked, 20);
+  EXPECT_FALSE(below.gradient_range(Box{box.min, box.min + Vec3::Constant(0.1)}));  // the outermost layers
+  EXPECT_FALSE(below.gradient_range(Box{box.min - Vec3::Constant(0.5), box.center()}));  // beyond the grid
+  // Near the torus's outer equator the gradient points along +x: that component's interval is
+  // positive, so the box holds no critical point.
+  const auto outer = below.gradient_range(Box{Vec3(1.35, -0.05, -0.05), Vec3(1.45, 0.05, 0.05)});
+  ASSERT_TRUE(outer);
+  EXPECT_GT(outer->first.x(), 0);
+
+  const LevelShift shifted(below, 0.25);
+  const auto same = [](const Field& field, const Vec3& origin, double step, int n) {
+    std::vector<double> lattice(static_cast<std::size_t>(n) * n * n), points(lattice.size());
+    const std::size_t before = field.counts().value;
+    field.values_on_lattice(origin, step, n, lattice.data());
+    EXPECT_EQ(field.counts().value - before, lattice.size());
+    for (int c = 0; c < n; ++c)
+      for (int b = 0; b < n; ++b)
+        for (int a = 0; a < n; ++a) {
+          const std::size_t i = (static_cast<std::size_t>(c) * n + b) * n + a;
+          points[i] = field.value(origin + step * Vec3(a, b, c));
+          if (lattice[i] != points[i]) return ::testing::AssertionFailure() << a << " " << b << " " << c;
+        }
+    return ::testing::AssertionSuccess();
+  };
+  for (const Field* field : {static_cast<const Field*>(&below), static_cast<const Field*>(&above),
+                             static_cast<const Field*>(&shifted)}) {
+    EXPECT_TRUE(same(*field, Vec3(-1.3, 0.2, -0.71), 0.0137, 11));
+    EXPECT_TRUE(same(*field, box.min, 4.0 / 7, 8));                     // the whole box, its faces included
+    EXPECT_TRUE(same(*field, Vec3(1.8, 1.7, -2.1), 0.05, 9));            // across the box: point by point
+    EXPECT_TRUE(same(*field, Vec3(0.3, 0.3, 0.3), 0.1, 1));
   }
 }
 

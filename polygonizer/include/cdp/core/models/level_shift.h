@@ -27,6 +27,9 @@ class LevelShift final : public Field {
   std::optional<double> lipschitz_bound() const override { return field_.lipschitz_bound(); }
   std::optional<double> lipschitz_bound(const Box& region) const override { return field_.lipschitz_bound(region); }
   std::optional<std::pair<double, double>> value_range(const Box& region) const override;
+  std::optional<std::pair<Vec3, Vec3>> gradient_range(const Box& region) const override {
+    return field_.gradient_range(region);
+  }
   std::optional<double> constraint_spacing() const override { return field_.constraint_spacing(); }
   double level() const { return level_; }
 
@@ -39,6 +42,7 @@ class LevelShift final : public Field {
     return field_.eval_gradient_hessian(p, gradient, hessian) - level_;
   }
   void eval_values(const Vec3* points, double* out, std::size_t n) const override;
+  void eval_values_on_lattice(const Vec3& origin, double step, int n, double* out) const override;
   void eval_values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const override;
   void eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
                                std::size_t n) const override;

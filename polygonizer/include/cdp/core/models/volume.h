@@ -59,6 +59,12 @@ class Volume : public Field {
   // The spline lies within its coefficients' range over a region (weights non-negative, sum 1):
   // the range of the coefficients whose support meets the region.
   std::optional<std::pair<double, double>> value_range(const Box& region) const override;
+  // The derivative along an axis lies within its coefficients' differences along that axis
+  // (divided by the spacing) over the coefficients whose support meets the region (the weights
+  // of a quadratic B-spline times two cubic ones: non-negative, summing to one). Nothing for a
+  // region that reaches beyond the grid's box or to its outermost two layers, where the
+  // distance term and the mirrored coefficients change the derivative.
+  std::optional<std::pair<Vec3, Vec3>> gradient_range(const Box& region) const override;
 
   std::optional<double> sample_spacing() const override { return spacing_.minCoeff(); }
 
@@ -71,6 +77,11 @@ class Volume : public Field {
   double eval_value(const Vec3& p) const override;
   double eval_value_gradient(const Vec3& p, Vec3& gradient) const override;
   double eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const override;
+  // Separably: the weights of each lattice coordinate once per axis, then the contraction along
+  // z, y and x in turn over the coefficients the lattice reaches, in evaluate's order of
+  // operations (the same values bit for bit). Point by point where the lattice reaches beyond
+  // the grid's box or its contraction would need much memory.
+  void eval_values_on_lattice(const Vec3& origin, double step, int n, double* out) const override;
 
  private:
   template <int Order>
