@@ -35,6 +35,8 @@ void add_seeding(nlohmann::json& j, const SeedingReport& s) {
   j["unresolved_cells"] = s.unresolved_cells;
   j["unsearched_cells"] = s.unsearched_cells;
   j["probes"] = s.probes;
+  j["band_cells"] = s.band_cells;
+  j["band_components"] = s.band_components;
 }
 
 void add_tracker(nlohmann::json& j, const TrackerReport& t) {

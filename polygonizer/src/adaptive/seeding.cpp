@@ -1,5 +1,6 @@
 #include "seeding.h"
 #include "spatial_hash.h"
+#include "../union_find.h"
 
 #include <cdp/core/curvature.h>
 #include <cdp/core/errors.h>
@@ -58,6 +59,10 @@ constexpr int kSegmentSamples = 8;
 constexpr std::size_t kRefinedCellsPerTriangle = 8;
 constexpr std::size_t kMinRefinedCells = 1u << 18;
 constexpr std::size_t kMaxRefinedCells = 1u << 20;
+// Lattice steps along a seed-grid cell's side in the band scan of sampled volumes (scan_band):
+// ceil(grid cell / min_edge), at most this, so that the scan costs at most 13^3 samples a cell of
+// the band (a volume's sample costs about 0.2 us).
+constexpr int kMaxBandSteps = 12;
 // Steps of min_edge a surface point may be from the mesh and still belong to a meshed component.
 constexpr int kWalkSteps = 32;
 // The checks between components poll the cancel token every so many sign changes, witnesses or
@@ -277,8 +282,10 @@ class Seeder {
 
   SeedingReport run() {
     grid_sign_changes();
-    if (field_.lipschitz_bound()) search_small_components();
+    const std::vector<char> near = near_crossed_cells();
+    if (field_.lipschitz_bound()) search_small_components(near);
     else probe_local_minima();
+    if (field_.sample_spacing()) scan_band(near);
     seed_deferred();
     recheck();
     return report_;
@@ -439,25 +446,24 @@ class Seeder {
     return {c & 1 ? box.max.x() : box.min.x(), c & 2 ? box.max.y() : box.min.y(), c & 4 ? box.max.z() : box.min.z()};
   }
 
-  void search_small_components() {
+  std::size_t cell_id(int i, int j, int k) const {
+    return (static_cast<std::size_t>(k) * grid_.n[1] + j) * grid_.n[0] + i;
+  }
+  std::array<double, 8> corners_of(int i, int j, int k) const {
+    std::array<double, 8> f;
+    for (int v = 0; v < 8; ++v) f[v] = grid_.value(i + (v & 1), j + (v >> 1 & 1), k + (v >> 2 & 1));
+    return f;
+  }
+
+  // The seed grid's cells that a grid edge shows crossed, and their neighbours (26-neighbourhood):
+  // the crossed cells dilated by one along each axis in turn, which is the same set as looking at
+  // the 26 neighbours of each cell.
+  std::vector<char> near_crossed_cells() const {
     const auto& n = grid_.n;
-    struct Candidate {
-      Box box;
-      std::array<double, 8> corners;
-    };
-    const auto cell_id = [&](int i, int j, int k) { return (static_cast<std::size_t>(k) * n[1] + j) * n[0] + i; };
-    const auto corners_of = [&](int i, int j, int k) {
-      std::array<double, 8> f;
-      for (int v = 0; v < 8; ++v) f[v] = grid_.value(i + (v & 1), j + (v >> 1 & 1), k + (v >> 2 & 1));
-      return f;
-    };
-    std::vector<char> crossed(static_cast<std::size_t>(n[0]) * n[1] * n[2]);
+    std::vector<char> near(static_cast<std::size_t>(n[0]) * n[1] * n[2]);
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
-        for (int i = 0; i < n[0]; ++i) crossed[cell_id(i, j, k)] = !one_sign(corners_of(i, j, k));
-    // Cells crossed or next to one (26-neighbourhood): the crossed cells dilated by one along
-    // each axis in turn, which is the same set as looking at the 26 neighbours of each cell.
-    std::vector<char> near = crossed;
+        for (int i = 0; i < n[0]; ++i) near[cell_id(i, j, k)] = !one_sign(corners_of(i, j, k));
     for (int axis = 0; axis < 3; ++axis) {
       const std::vector<char> from = near;
       const std::array<int, 3> d{axis == 0, axis == 1, axis == 2};
@@ -470,6 +476,15 @@ class Seeder {
             if (at + 1 < n[axis]) x |= from[cell_id(i + d[0], j + d[1], k + d[2])];
           }
     }
+    return near;
+  }
+
+  void search_small_components(const std::vector<char>& near) {
+    const auto& n = grid_.n;
+    struct Candidate {
+      Box box;
+      std::array<double, 8> corners;
+    };
     std::vector<Candidate> candidates;
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
@@ -587,6 +602,93 @@ class Seeder {
           visit({corner_point(sub, v), corner_point(sub, w), f[v], f[w]});
         }
     }
+  }
+
+  // --- sampled volumes: the band around the seeded surface, at about min_edge.
+  // Noise in the samples puts small components right beside the surface (a bubble 0.05 across,
+  // 0.05 from a noisy sphere's surface, inside a grid cell the sphere crosses) where neither the
+  // grid's edges nor the search above look. Each cell of the band (near_crossed_cells) is sampled
+  // on a lattice of step at most min_edge (kMaxBandSteps); the lattice's cells that a sign change
+  // crosses fall into components by their shared faces, and one sign change of each component is
+  // visited like a grid edge's: the component of the meshed surface is covered, a separate one is seeded. A
+  // component holding a ball of diameter sqrt(3) times the step holds a lattice node and is found.
+  // Cells the field proves free of critical points (Field::gradient_range) are skipped: on a
+  // clean scan that is nearly all of them.
+  void scan_band(const std::vector<char>& near) {
+    const auto& n = grid_.n;
+    const int m = std::clamp(static_cast<int>(std::ceil(grid_.h / min_edge_)), 1, kMaxBandSteps);
+    const int s = m + 1;
+    const double step = grid_.h / m;
+    const auto node = [s](int a, int b, int c) { return (c * s + b) * s + a; };
+    const auto sub = [m](int a, int b, int c) { return (c * m + b) * m + a; };
+    std::vector<double> values(static_cast<std::size_t>(s) * s * s);
+    std::vector<char> crossed(static_cast<std::size_t>(m) * m * m);
+    UnionFind sets(crossed.size());
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j)
+        for (int i = 0; i < n[0]; ++i) {
+          if (!near[cell_id(i, j, k)]) continue;
+          poll();
+          const Vec3 origin = grid_.point(i, j, k);
+          const Box box{origin, grid_.point(i + 1, j + 1, k + 1)};
+          if (const auto range = field_.value_range(box); range && (range->first > 0 || range->second < 0)) continue;
+          // No critical point in the cell: a component that no grid edge crosses encloses one
+          // (an extremum of F inside it), so this cell holds none of its inside, and the cell
+          // that does is scanned (or searched, outside the band).
+          if (const auto g = field_.gradient_range(box);
+              g && ((g->first.array() > 0).any() || (g->second.array() < 0).any()))
+            continue;
+          ++report_.band_cells;
+          field_.values_on_lattice(origin, step, s, values.data());
+          const auto inside = [&](int a, int b, int c) { return values[node(a, b, c)] < 0; };
+          bool any = false;
+          for (int c = 0; c < m; ++c)
+            for (int b = 0; b < m; ++b)
+              for (int a = 0; a < m; ++a) {
+                const bool first = inside(a, b, c);
+                bool mixed = false;
+                for (int v = 1; v < 8 && !mixed; ++v)
+                  mixed = inside(a + (v & 1), b + (v >> 1 & 1), c + (v >> 2 & 1)) != first;
+                crossed[sub(a, b, c)] = mixed;
+                any |= mixed;
+              }
+          if (!any) continue;
+          sets.reset(crossed.size());
+          for (int c = 0; c < m; ++c)
+            for (int b = 0; b < m; ++b)
+              for (int a = 0; a < m; ++a) {
+                if (!crossed[sub(a, b, c)]) continue;
+                if (a + 1 < m && crossed[sub(a + 1, b, c)]) sets.unite(sub(a, b, c), sub(a + 1, b, c));
+                if (b + 1 < m && crossed[sub(a, b + 1, c)]) sets.unite(sub(a, b, c), sub(a, b + 1, c));
+                if (c + 1 < m && crossed[sub(a, b, c + 1)]) sets.unite(sub(a, b, c), sub(a, b, c + 1));
+              }
+          // A component's root is its lowest lattice cell (UnionFind keeps the smaller index), so
+          // the visits follow the lattice's order.
+          for (int c = 0; c < m; ++c)
+            for (int b = 0; b < m; ++b)
+              for (int a = 0; a < m; ++a) {
+                const int id = sub(a, b, c);
+                if (!crossed[id] || sets.find(id) != id) continue;
+                ++report_.band_components;
+                visit_first_change(a, b, c, origin, step, [&](int x, int y, int z) { return values[node(x, y, z)]; });
+              }
+        }
+  }
+
+  // Visits the first edge of the lattice cell (a, b, c) whose ends differ in sign.
+  template <class Value>
+  void visit_first_change(int a, int b, int c, const Vec3& origin, double step, const Value& value) {
+    for (int v = 0; v < 8; ++v)
+      for (int axis = 0; axis < 3; ++axis) {
+        const int w = v | 1 << axis;
+        if (w == v) continue;
+        const int va = a + (v & 1), vb = b + (v >> 1 & 1), vc = c + (v >> 2 & 1);
+        const int wa = a + (w & 1), wb = b + (w >> 1 & 1), wc = c + (w >> 2 & 1);
+        const double fv = value(va, vb, vc), fw = value(wa, wb, wc);
+        if ((fv < 0) == (fw < 0) || !std::isfinite(fv) || !std::isfinite(fw)) continue;
+        visit({origin + step * Vec3(va, vb, vc), origin + step * Vec3(wa, wb, wc), fv, fw});
+        return;
+      }
   }
 
   // --- fields without a bound: Newton from the local minima of |F| on the grid.

@@ -4,6 +4,7 @@
 // the surfaces they sample, with their topology.
 #include <gtest/gtest.h>
 
+#include <cdp/baselines/marching_cubes.h>
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_topology.h>
@@ -320,6 +321,40 @@ TEST(Volume, ANeckAHairFromASaddleStillMeshesWithMinEdgeLowered) {
   EXPECT_EQ(t.components, 1u);
   EXPECT_EQ(t.genus, 0);
   EXPECT_TRUE(r.stats.adaptive->recoveries.min_edge_lowered);
+}
+
+// A small component beside the surface, inside the band of seed-grid cells the surface crosses or
+// borders, where neither a grid edge nor the small-component search looks: a sphere's distance
+// on 32^3 samples with one sample 0.27 outside it set to -0.02 (the spline interpolates, so F is
+// -0.02 there, and a bubble about 0.06 across surrounds it). Without the band scan the run meshed
+// the sphere alone, exit 0, in 6 of 8 such cases; marching cubes on a full grid of 0.02 finds two
+// components.
+TEST(Volume, ASmallComponentBesideTheSurfaceIsMeshed) {
+  VolumeSamples samples = sample_cube(sphere_distance, 32, 2.0);
+  const std::size_t node = (22 * 32 + 22) * 32 + 19;
+  const Vec3 at = samples.origin + Vec3(22, 22, 19).cwiseProduct(samples.spacing);
+  ASSERT_NEAR(samples.values[node], 0.269, 1e-3);
+  samples.values[node] = -0.02;
+  const Volume field(samples, 0.0);
+  MarchingOptions mo;
+  mo.cell_size = 0.02;
+  mo.traversal = Traversal::Grid;
+  const MeshTopology reference = analyze_topology(marching_cubes(field, mo).mesh);
+  ASSERT_EQ(reference.components, 2u);
+
+  const PolygonizeResult r = polygonize_adaptive(field, AdaptiveOptions{});
+  const MeshTopology t = analyze_topology(r.mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.components, reference.components);
+  EXPECT_EQ(t.genus, 0);
+  EXPECT_GT(r.stats.adaptive->seeding.band_components, 0u);
+  // The second component is the bubble: vertices within a sample of the node.
+  std::size_t near_node = 0;
+  for (const Vec3& v : r.mesh.positions) near_node += (v - at).norm() < 0.1;
+  EXPECT_GE(near_node, 4u);
+  // A clean sampled sphere proves every cell of its band free of critical points: nothing scanned.
+  const Volume clean(sample_cube(sphere_distance, 32, 2.0), 0.0);
+  EXPECT_EQ(polygonize_adaptive(clean, AdaptiveOptions{}).stats.adaptive->seeding.band_cells, 0u);
 }
 
 }  // namespace
