@@ -24,11 +24,15 @@
 //     `unsearched_cells`). Without a bound (expressions, VIS, MPU) Newton's method starts from
 //     every grid node where |F| is a strict local minimum among its 26 neighbours of the same
 //     sign (a component between grid nodes pulls |F| down around it); this finds isolated small
-//     components but proves nothing. Sampled volumes, whose noise puts small components right
-//     beside the surface, also scan that band (scan_band): the cells near crossed ones that the
-//     volume cannot prove free of critical points (Field::gradient_range) are sampled on a
-//     lattice of step at most min_edge (not below a twelfth of a cell), and one sign change of
-//     each connected set of crossed lattice cells is visited as a grid edge's (`band_cells`,
+//     components but proves nothing. Newton also starts from the nodes of the band next to the
+//     crossed cells where the level set through the node curls within about two cells, on the
+//     grid and by F's own derivatives (a small component beside the surface, which no grid edge
+//     crosses and leaves no strict local minimum beside the surface's sign change; any field but
+//     a sampled volume). Sampled volumes, whose noise puts small components right beside the
+//     surface, scan that band instead (scan_band): the cells near crossed ones that the volume
+//     cannot prove free of critical points (Field::gradient_range) are sampled on a lattice of
+//     step at most min_edge (not below a twelfth of a cell), and one sign change of each
+//     connected set of crossed lattice cells is visited as a grid edge's (`band_cells`,
 //     `band_components`).
 //  3. After the run every sign change found is checked again; `uncovered` must be 0, else the
 //     polygonization fails with an error naming the place.

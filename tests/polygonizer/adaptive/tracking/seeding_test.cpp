@@ -11,6 +11,9 @@
 #include <memory>
 #include <random>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "common/test_fields.h"
 #include "polygonizer/mesh_checks.h"
@@ -131,6 +134,38 @@ TEST(AdaptiveSeeding, SmallBlobWithoutABoundIsFoundByAProbe) {
   expect_components(*f, at_factor(2), 2, 0, "sphere and a small ball");
   const auto r = polygonize_adaptive(*f, at_factor(2));
   EXPECT_GT(r.stats.adaptive->seeding.probes, 0u);
+}
+
+TEST(AdaptiveSeeding, ABeadBesideTheSurfaceIsFoundByABandProbe) {
+  // Balls of radius 0.02-0.025 (2-3 min_edge) 0.02-0.03 from a sphere, under it (a void) and
+  // beside a box's face, between the nodes of a grid of cell 0.0875 in cells the big surface
+  // crosses or borders: no grid edge crosses them and no node around them is a local minimum of
+  // |F| (the big surface's sign change is next to them). The level sets curl around them, and
+  // Newton from those nodes lands on them. Without those probes each meshed one component, exit 0.
+  const auto expression_in_box = [](const std::string& value) {
+    return test::field_from_json(R"J({"type": "expression", "value": ")J" + value +
+                                 R"J(", "bounds": [[-1.4,-1.4,-1.4],[1.4,1.4,1.4]]})J");
+  };
+  const auto bead = expression_in_box("min(sqrt(x^2+y^2+z^2)-1, sqrt((x-1.04)^2+(y-0.013)^2+(z-0.007)^2)-0.02)");
+  expect_components(*bead, at_factor(1), 2, 0, "a bead by a sphere");
+  const auto void_under =
+      expression_in_box("max(sqrt(x^2+y^2+z^2)-1, 0.02-sqrt((x-0.95)^2+(y-0.013)^2+(z-0.007)^2))");
+  for (const double k : {3.0, 6.0}) expect_components(*void_under, at_factor(k), 2, 0, "a void under a sphere");
+  // The crease patches mesh the box, not a seed: one seed, the bead's.
+  const auto by_box =
+      expression_in_box("min(max(max(abs(x),abs(y)),abs(z))-0.8, sqrt((x-0.85)^2+(y-0.31)^2+(z+0.17)^2)-0.025)");
+  for (const double k : {1.0, 3.0, 6.0}) {
+    SCOPED_TRACE(k);
+    const PolygonizeResult r = polygonize_adaptive(*by_box, at_factor(k));
+    const MeshTopology t = analyze_topology(r.mesh);
+    EXPECT_TRUE(t.watertight());
+    EXPECT_EQ(t.components, 2u);
+    EXPECT_EQ(t.genus, 0);
+    EXPECT_EQ(test::count_self_intersections(r.mesh), 0u);
+    EXPECT_TRUE(r.stats.adaptive->creases.followed);
+    EXPECT_EQ(r.stats.adaptive->seeding.seeds, 1u);
+    EXPECT_GT(r.stats.adaptive->seeding.probes, 0u);
+  }
 }
 
 TEST(AdaptiveSeeding, SameMeshBitForBitWithTheSearch) {
