@@ -40,8 +40,8 @@ bool noise_in_volume(const Field& field, const Settings& resolved, const Bend& t
 
 // The error message of a run that failed with `message`: the cause first where it is a black
 // box's kink or a sampled volume's noise, else `message` with the tightest bend where it is
-// under min_edge, the field's sharpest crease where the run meshed across creases by choice, and `crease_fallback` (why
-// the crease-aware meshing failed) where it did.
+// under min_edge, the field's sharpest crease where the run meshed across creases by choice, and
+// `crease_fallback` (why the crease-aware meshing failed) where it did.
 // \throw CancelledError (naming the sharpest crease traces the creases).
 std::string explain_failure(const Field& field, const AdaptiveOptions& options, const Settings& resolved,
                             std::string message, const Bend& tightest, const std::string& crease_fallback);

@@ -603,14 +603,23 @@ class Seeder {
         if (!proved_empty_by_corners(sub, f)) search_cell(sub, f, child_centre[child]);
         continue;
       }
-      // The twelve edges of the child: from corner v along each axis where that bit is 0.
-      for (int v = 0; v < 8; ++v)
-        for (int axis = 0; axis < 3; ++axis) {
-          const int w = v | 1 << axis;
-          if (w == v || (f[v] < 0) == (f[w] < 0)) continue;
-          visit({corner_point(sub, v), corner_point(sub, w), f[v], f[w]});
-        }
+      for_each_crossed_edge(f, [&](int v, int w) {
+        visit({corner_point(sub, v), corner_point(sub, w), f[v], f[w]});
+        return true;
+      });
     }
+  }
+
+  // fn(v, w) for each of the twelve edges of a cell with corner values f (corner v to corner
+  // w = v | 1 << axis, in that order) whose ends differ in sign, until fn returns false.
+  template <class Fn>
+  static void for_each_crossed_edge(const std::array<double, 8>& f, const Fn& fn) {
+    for (int v = 0; v < 8; ++v)
+      for (int axis = 0; axis < 3; ++axis) {
+        const int w = v | 1 << axis;
+        if (w == v || (f[v] < 0) == (f[w] < 0)) continue;
+        if (!fn(v, w)) return;
+      }
   }
 
   // --- sampled volumes: the band around the seeded surface, at about min_edge.
@@ -619,8 +628,9 @@ class Seeder {
   // grid's edges nor the search above look. Each cell of the band (near_crossed_cells) is sampled
   // on a lattice of step at most min_edge (kMaxBandSteps); the lattice's cells that a sign change
   // crosses fall into components by their shared faces, and one sign change of each component is
-  // visited like a grid edge's: the component of the meshed surface is covered, a separate one is seeded. A
-  // component holding a ball of diameter sqrt(3) times the step holds a lattice node and is found.
+  // visited like a grid edge's: the component of the meshed surface is covered, a separate one is
+  // seeded. A component holding a ball of diameter sqrt(3) times the step holds a lattice node
+  // and is found.
   // Cells the field proves free of critical points (Field::gradient_range) are skipped: on a
   // clean scan that is nearly all of them.
   void scan_band(const std::vector<char>& near) {
@@ -649,15 +659,17 @@ class Seeder {
             continue;
           ++report_.band_cells;
           field_.values_on_lattice(origin, step, s, values.data());
-          const auto inside = [&](int a, int b, int c) { return values[node(a, b, c)] < 0; };
+          // The values at lattice cell (a, b, c)'s corners, numbered as corner_point's.
+          const auto corners = [&](int a, int b, int c) {
+            std::array<double, 8> f;
+            for (int v = 0; v < 8; ++v) f[v] = values[node(a + (v & 1), b + (v >> 1 & 1), c + (v >> 2 & 1))];
+            return f;
+          };
           bool any = false;
           for (int c = 0; c < m; ++c)
             for (int b = 0; b < m; ++b)
               for (int a = 0; a < m; ++a) {
-                const bool first = inside(a, b, c);
-                bool mixed = false;
-                for (int v = 1; v < 8 && !mixed; ++v)
-                  mixed = inside(a + (v & 1), b + (v >> 1 & 1), c + (v >> 2 & 1)) != first;
+                const bool mixed = !one_sign(corners(a, b, c));
                 crossed[sub(a, b, c)] = mixed;
                 any |= mixed;
               }
@@ -679,25 +691,16 @@ class Seeder {
                 const int id = sub(a, b, c);
                 if (!crossed[id] || sets.find(id) != id) continue;
                 ++report_.band_components;
-                visit_first_change(a, b, c, origin, step, [&](int x, int y, int z) { return values[node(x, y, z)]; });
+                // Its first edge whose ends differ in sign.
+                const Box cell{origin + step * Vec3(a, b, c), origin + step * Vec3(a + 1, b + 1, c + 1)};
+                const std::array<double, 8> f = corners(a, b, c);
+                for_each_crossed_edge(f, [&](int v, int w) {
+                  if (!std::isfinite(f[v]) || !std::isfinite(f[w])) return true;
+                  visit({corner_point(cell, v), corner_point(cell, w), f[v], f[w]});
+                  return false;
+                });
               }
         }
-  }
-
-  // Visits the first edge of the lattice cell (a, b, c) whose ends differ in sign.
-  template <class Value>
-  void visit_first_change(int a, int b, int c, const Vec3& origin, double step, const Value& value) {
-    for (int v = 0; v < 8; ++v)
-      for (int axis = 0; axis < 3; ++axis) {
-        const int w = v | 1 << axis;
-        if (w == v) continue;
-        const int va = a + (v & 1), vb = b + (v >> 1 & 1), vc = c + (v >> 2 & 1);
-        const int wa = a + (w & 1), wb = b + (w >> 1 & 1), wc = c + (w >> 2 & 1);
-        const double fv = value(va, vb, vc), fw = value(wa, wb, wc);
-        if ((fv < 0) == (fw < 0) || !std::isfinite(fv) || !std::isfinite(fw)) continue;
-        visit({origin + step * Vec3(va, vb, vc), origin + step * Vec3(wa, wb, wc), fv, fw});
-        return;
-      }
   }
 
   // --- Newton probes: from the local minima of |F| on the grid (fields without a bound) and from

@@ -255,6 +255,15 @@ double Volume::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessia
   return evaluate<2>(p, &gradient, &hessian);
 }
 
+std::array<std::pair<long long, long long>, 3> Volume::support_meeting(const Vec3& lo_point,
+                                                                     const Vec3& hi_point) const {
+  std::array<std::pair<long long, long long>, 3> span;
+  for (int a = 0; a < 3; ++a)
+    span[a] = {static_cast<long long>(std::floor((lo_point[a] - origin_[a]) / spacing_[a])) - 1,
+               static_cast<long long>(std::floor((hi_point[a] - origin_[a]) / spacing_[a])) + 2};
+  return span;
+}
+
 std::optional<std::pair<double, double>> Volume::value_range(const Box& region) const {
   if (!(region.min.allFinite() && region.max.allFinite())) return std::nullopt;
   // The part of the region inside the grid's box (its nearest points, where the region lies
@@ -262,14 +271,12 @@ std::optional<std::pair<double, double>> Volume::value_range(const Box& region) 
   const Vec3 lo_point = region.min.cwiseMax(origin_).cwiseMin(far_corner_);
   const Vec3 hi_point = region.max.cwiseMax(origin_).cwiseMin(far_corner_);
   const double beyond = (region.min - lo_point).cwiseAbs().cwiseMax((region.max - hi_point).cwiseAbs()).norm();
+  // The mirrored coefficients beyond the ends are layers 1 and n - 2, within the range already.
+  const auto span = support_meeting(lo_point, hi_point);
   std::array<std::size_t, 3> first{}, last{};
   for (int a = 0; a < 3; ++a) {
-    // The coefficients whose support meets [lo, hi] along this axis; the mirrored ones beyond
-    // the ends are layers 1 and n - 2, within that range already.
-    const auto lo = static_cast<long long>(std::floor((lo_point[a] - origin_[a]) / spacing_[a])) - 1;
-    const auto hi = static_cast<long long>(std::floor((hi_point[a] - origin_[a]) / spacing_[a])) + 2;
-    first[a] = static_cast<std::size_t>(std::max(0LL, lo));
-    last[a] = static_cast<std::size_t>(std::min(static_cast<long long>(dims_[a]) - 1, hi));
+    first[a] = static_cast<std::size_t>(std::max(0LL, span[a].first));
+    last[a] = static_cast<std::size_t>(std::min(static_cast<long long>(dims_[a]) - 1, span[a].second));
   }
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (std::size_t i = first[0]; i <= last[0]; ++i)
@@ -348,28 +355,25 @@ std::optional<std::pair<Vec3, Vec3>> Volume::gradient_range(const Box& region) c
   if (!(region.min.allFinite() && region.max.allFinite())) return std::nullopt;
   if ((region.min.array() < origin_.array()).any() || (region.max.array() > far_corner_.array()).any())
     return std::nullopt;
+  const auto span = support_meeting(region.min, region.max);
   std::array<std::size_t, 3> first{}, last{};
   for (int a = 0; a < 3; ++a) {
-    // As in value_range: the coefficients whose support meets the region.
-    const auto lo = static_cast<long long>(std::floor((region.min[a] - origin_[a]) / spacing_[a])) - 1;
-    const auto hi = static_cast<long long>(std::floor((region.max[a] - origin_[a]) / spacing_[a])) + 2;
-    if (lo < 1 || hi + 1 >= static_cast<long long>(dims_[a])) return std::nullopt;  // mirrored there
-    first[a] = static_cast<std::size_t>(lo);
-    last[a] = static_cast<std::size_t>(hi);
+    if (span[a].first < 1 || span[a].second + 1 >= static_cast<long long>(dims_[a])) return std::nullopt;  // mirrored
+    first[a] = static_cast<std::size_t>(span[a].first);
+    last[a] = static_cast<std::size_t>(span[a].second);
   }
+  const std::array<std::size_t, 3> stride{dims_[1] * dims_[2], dims_[2], 1};
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (std::size_t i = first[0]; i <= last[0]; ++i)
     for (std::size_t j = first[1]; j <= last[1]; ++j)
       for (std::size_t k = first[2]; k <= last[2]; ++k) {
-        const double c = coefficient(i, j, k);
         const std::array<std::size_t, 3> at{i, j, k};
+        const std::size_t f = i * stride[0] + j * stride[1] + k;
         for (int a = 0; a < 3; ++a) {
           if (at[a] == last[a]) continue;
-          const double next =
-              a == 0 ? coefficient(i + 1, j, k) : a == 1 ? coefficient(i, j + 1, k) : coefficient(i, j, k + 1);
-          const double d = next - c;
-          lo[a] = std::min(lo[a], d / spacing_[a]);
-          hi[a] = std::max(hi[a], d / spacing_[a]);
+          const double d = (coefficients_[f + stride[a]] - coefficients_[f]) / spacing_[a];
+          lo[a] = std::min(lo[a], d);
+          hi[a] = std::max(hi[a], d);
         }
       }
   if (sign_ > 0) return std::make_pair(lo, hi);

@@ -14,6 +14,7 @@
 
 #include <array>
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace cdp {
@@ -86,6 +87,9 @@ class Volume : public Field {
  private:
   template <int Order>
   double evaluate(const Vec3& p, Vec3* gradient, Mat3* hessian) const;
+  // Per axis, the first and last coefficient index whose support meets [lo_point, hi_point]
+  // (before mirroring or clamping to the grid).
+  std::array<std::pair<long long, long long>, 3> support_meeting(const Vec3& lo_point, const Vec3& hi_point) const;
   double coefficient(std::size_t i, std::size_t j, std::size_t k) const {
     return coefficients_[(i * dims_[1] + j) * dims_[2] + k];
   }
