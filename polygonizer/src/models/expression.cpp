@@ -2,6 +2,8 @@
 #include <cdp/core/errors.h>
 #include <cdp/core/models/expression.h>
 
+#include "interval.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -580,6 +582,24 @@ Expression::Expression(const std::string& formula, const std::map<std::string, d
 }
 
 Expression::~Expression() = default;
+
+std::optional<std::pair<double, double>> Expression::value_range(const Box& region) const {
+  using detail::Interval;
+  const Interval r = program_->run(Interval(region.min.x(), region.max.x()), Interval(region.min.y(), region.max.y()),
+                                   Interval(region.min.z(), region.max.z()));
+  if (!r.known()) return Interval::entire_pair();
+  return std::pair{r.lo, r.hi};
+}
+
+std::optional<std::pair<double, double>> Expression::derivative_range(const Box& region, const Vec3& direction) const {
+  using detail::Interval, detail::IntervalDual;
+  const auto axis = [&](int i) {
+    return IntervalDual(Interval(region.min[i], region.max[i]), Interval(direction[i]));
+  };
+  const Interval d = program_->run(axis(0), axis(1), axis(2)).d;
+  if (!d.known()) return Interval::entire_pair();
+  return std::pair{d.lo, d.hi};
+}
 
 double Expression::eval_value(const Vec3& p) const { return program_->run(p.x(), p.y(), p.z()); }
 

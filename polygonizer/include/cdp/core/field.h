@@ -365,6 +365,14 @@ class Field {
     return std::nullopt;
   }
 
+  // Bounds (lo, hi) on the derivative of F along the unit vector `direction` everywhere inside
+  // `region`, for models that can bound it (an expression, by interval arithmetic; by default
+  // from gradient_range); nothing otherwise. Where F is not differentiable (a crease of min or
+  // max) the bounds hold every one-sided derivative, so bounds that exclude zero prove that the
+  // region holds no critical point of F, smooth or not. Along a direction that crosses a crease,
+  // such as the mean of the faces' normals across a box's edge, they can where no axis can.
+  virtual std::optional<std::pair<double, double>> derivative_range(const Box& region, const Vec3& direction) const;
+
   // The minimum distance between two constraint points of a data-driven model; the paper's
   // Marching Tetrahedra "precision" convention scales this. Empty for models without points.
   virtual std::optional<double> constraint_spacing() const { return std::nullopt; }

@@ -42,6 +42,12 @@ class Expression : public Field {
   bool thread_safe() const override { return true; }  // evaluation reads immutable data only
   const std::string& formula() const { return formula_; }
 
+  // By interval arithmetic over the formula (src/models/interval.h): bounds that hold, loose
+  // where a variable occurs more than once; infinite where nothing bounds them (a division by
+  // an interval holding zero, the slope of a root at zero, a jump).
+  std::optional<std::pair<double, double>> value_range(const Box& region) const override;
+  std::optional<std::pair<double, double>> derivative_range(const Box& region, const Vec3& direction) const override;
+
  protected:
   double eval_value(const Vec3& p) const override;
   double eval_value_gradient(const Vec3& p, Vec3& gradient) const override;

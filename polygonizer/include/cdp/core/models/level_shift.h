@@ -30,6 +30,9 @@ class LevelShift final : public Field {
   std::optional<std::pair<Vec3, Vec3>> gradient_range(const Box& region) const override {
     return field_.gradient_range(region);
   }
+  std::optional<std::pair<double, double>> derivative_range(const Box& region, const Vec3& direction) const override {
+    return field_.derivative_range(region, direction);
+  }
   std::optional<double> constraint_spacing() const override { return field_.constraint_spacing(); }
   double level() const { return level_; }
 
