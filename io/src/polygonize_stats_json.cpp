@@ -50,6 +50,7 @@ void add_tracker(nlohmann::json& j, const TrackerReport& t) {
   j["rollbacks_failed"] = t.rollbacks_failed;
   j["crease_points"] = t.crease_points;
   j["over_mesh_rejections"] = t.over_mesh_rejections;
+  j["sheet_jumps"] = t.sheet_jumps;
   j["curvature_seconds"] = t.curvature_seconds;
   j["hessian_seconds"] = t.hessian_seconds;
   j["curvature"] = {{"min_radius", t.min_curvature_radius}};

@@ -38,7 +38,7 @@ TEST(PolygonizeStatsJson, EveryAdaptiveFieldUnderItsKey) {
                .first_uncovered = Vec3::Zero(), .non_finite_samples = 19};
   r.tracker = {.steps = 20, .search_visits = 21, .deferrals = 22, .anticipations = 23, .side_points = 24,
                .forced_closures = 25, .rollbacks = 26, .rollbacks_failed = 27, .crease_points = 28,
-               .over_mesh_rejections = 29, .curvature_seconds = 30, .hessian_seconds = 31,
+               .over_mesh_rejections = 29, .sheet_jumps = 81, .curvature_seconds = 30, .hessian_seconds = 31,
                .min_curvature_radius = 32};
   r.creases = {.handling = CreaseHandling::Follow, .followed = true, .curves = 40, .corners = 41, .vertices = 42,
                .pieces = 43, .components = 44, .steps = 45, .patch_refusals = 46, .fallback = "why",
@@ -69,7 +69,7 @@ TEST(PolygonizeStatsJson, EveryAdaptiveFieldUnderItsKey) {
       {"band_components", 80}, {"uncovered_crossings", 18}, {"non_finite_samples", 19},
       {"steps", 20}, {"search_visits", 21}, {"deferrals", 22}, {"anticipations", 23}, {"side_points", 24},
       {"forced_closures", 25}, {"rollbacks", 26}, {"rollbacks_failed", 27}, {"crease_points", 28},
-      {"over_mesh_rejections", 29}, {"curvature_seconds", 30.0}, {"hessian_seconds", 31.0},
+      {"over_mesh_rejections", 29}, {"sheet_jumps", 81}, {"curvature_seconds", 30.0}, {"hessian_seconds", 31.0},
       {"curvature.min_radius", 32.0}, {"creases.handling", "follow"}, {"creases.followed", true},
       {"creases.curves", 40}, {"creases.corners", 41}, {"creases.vertices", 42}, {"creases.pieces", 43},
       {"creases.components", 44}, {"creases.steps", 45}, {"creases.patch_refusals", 46},

@@ -92,6 +92,7 @@ void Run::write_stats() {
   tr.rollbacks_failed = t.failed_rollbacks();
   tr.crease_points = t.crease_points();
   tr.over_mesh_rejections = t.over_mesh();
+  tr.sheet_jumps = t.sheet_jumps();
   tr.curvature_seconds = t.curvature_seconds();
   tr.hessian_seconds = t.hessian_seconds();
   tracking.note_tightest();

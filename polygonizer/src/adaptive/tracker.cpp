@@ -22,6 +22,18 @@ namespace {
 // started, in up to kWalkLegs legs (a cube's crease takes three: onto the crease, off it, on).
 constexpr double kShortLanding = 0.75;
 constexpr int kWalkLegs = 4;
+// A landing curved more tightly than the step by this many radii, whose normal turned more than
+// kJumpTurnExplained times what the origin's curvature explains over the step, is suspected of a
+// jump to another sheet (see jumped). Beads of radius 0.015-0.025 a few hundredths beside a unit
+// sphere at factor 3 (steps of 0.33) landed at 13-23 radii, turned 3.6 times that; a neck between
+// two of 200 Wyvill blobs at factor 2 at 9 radii, 5.6 times, and is the same sheet.
+constexpr double kJumpRadii = 8;
+constexpr double kJumpTurnExplained = 2;
+// A suspected landing is the same sheet when two half steps end within this share of the step
+// of it, with normals within kHalvesCosine of its (a neck: the same point; a bead: the half
+// steps stay on the sheet, 0.05-0.08 and 60-70 degrees away).
+constexpr double kHalvesReach = 0.25;
+constexpr double kHalvesCosine = 0.866;
 // place_points' Newton evaluates a point with its Hessian where the point before it was within
 // this many tolerances of the surface (BatchProjector::project's hessians_below): a Newton step
 // from there nearly always converges (the error squares), and where it does, the curvature's
@@ -214,6 +226,13 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
         w.failed = true, w.walking = false;
         continue;
       }
+      // Only where Newton ran straight: a path that turned crossed a crease (see probe), where
+      // a black box's differences curve tightly on the sheet itself.
+      if (leg == 0 && !on_crease && d > s_.sizing.min_edge && !probe(w) && jumped(v, w.heading, d, *w.placed)) {
+        ++sheet_jumps_;
+        w.failed = true, w.walking = false;
+        continue;
+      }
       const double moved = (w.placed->point - w.at).norm();
       w.left -= moved;
       w.at = w.placed->point;
@@ -246,6 +265,32 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
     out.push_back(*w.placed);
   }
   return out;
+}
+
+bool Tracker::jumped(int v, const Vec3& heading, double d, const Placed& landed) const {
+  // Newton from a point of the tangent plane lands on whatever sheet lies nearest, and a small
+  // component beside the surface (a bead a step away, whose normal there can lie within the turn
+  // bound) can be nearer than the sheet the front walks on. Its landing is curved far more tightly
+  // than the step, and turned more than the origin's curvature explains; the sheet's own
+  // landings seldom are both (a neck between blobs is), so only those are checked, by walking
+  // the same way in two half steps: on the same sheet they end where the one step did.
+  const Vec3& origin = mesh_.positions[v];
+  const Vec3& normal = mesh_.normals[v];
+  const Curvature& k = landed.curvature;
+  if (!(d * k.mac > kJumpRadii)) return false;
+  const double turn = std::acos(std::clamp(normal.dot(k.normal), -1.0, 1.0));
+  if (!(turn > kJumpTurnExplained * mac_[v] * d)) return false;
+  ProjectionOptions po;
+  po.tolerance = 1e-10 * s_.diagonal;
+  po.max_step = po.max_travel = 0.5 * d;
+  const ProjectionResult half = project_to_surface(field_, origin + 0.5 * d * heading, po);
+  if (!half.ok() || !(half.gradient.squaredNorm() > 0) || !half.gradient.allFinite()) return true;
+  const Vec3 n = half.gradient.normalized();
+  Vec3 on = heading - n * n.dot(heading);
+  if (!same_side(normal, n) || !(on.squaredNorm() > 1e-12)) return true;
+  const ProjectionResult end = project_to_surface(field_, half.point + 0.5 * d * on.normalized(), po);
+  if (!end.ok() || !(end.gradient.squaredNorm() > 0) || !end.gradient.allFinite()) return true;
+  return (end.point - landed.point).norm() > kHalvesReach * d || end.gradient.normalized().dot(k.normal) < kHalvesCosine;
 }
 
 bool Tracker::over_finished_mesh(const Vec3& x, const Vec3& normal, double d) const {

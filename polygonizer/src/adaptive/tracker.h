@@ -243,6 +243,7 @@ class Tracker {
   std::size_t crease_points() const { return crease_points_; }
   // Placements refused because they landed on finished mesh.
   std::size_t over_mesh() const { return over_mesh_; }
+  std::size_t sheet_jumps() const { return sheet_jumps_; }
   // Wall-clock time spent in curvature_at (Hessian evaluation and eigen-decomposition).
   // Time in curvature: the Hessian evaluations and the eigen-decomposition together, and the
   // evaluations alone.
@@ -317,6 +318,9 @@ class Tracker {
   // implausible (another sheet, far away, finished mesh) ends the list. The directions' field
   // evaluations are batched (see place_points in tracker.cpp).
   std::vector<Placed> place_points(int v, std::span<const Vec3> dirs, double d) const;
+  // Whether a point placed from vertex v along `heading` (unit, tangent) at distance d landed on
+  // another sheet than v's (see tracker.cpp).
+  bool jumped(int v, const Vec3& heading, double d, const Placed& landed) const;
   // For each point xs[i] whose gradient is ns[i]: the mean of the normals on both sides when it
   // lies on a crease, nothing elsewhere. Two value_gradient evaluations a point, in one batch.
   void crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns, std::vector<std::optional<Vec3>>& out) const;
@@ -488,7 +492,7 @@ class Tracker {
   std::size_t side_points_ = 0;
   double area_ = 0, estimated_area_ = 0, last_progress_ = 0;
   mutable double curvature_seconds_ = 0, hessian_seconds_ = 0;
-  mutable std::size_t crease_points_ = 0, over_mesh_ = 0;
+  mutable std::size_t crease_points_ = 0, over_mesh_ = 0, sheet_jumps_ = 0;
   mutable PlacementBuffers placement_;
   mutable DerivativeBuffers derivatives_;
   mutable SpatialHash::Gathered near_front_;  // expand's checks: the front cells around the expansion

@@ -56,6 +56,8 @@ struct TrackerReport {
   std::size_t rollbacks = 0, rollbacks_failed = 0;
   std::size_t crease_points = 0;
   std::size_t over_mesh_rejections = 0;
+  // Placements refused for landing on another sheet than their origin's (Tracker::jumped).
+  std::size_t sheet_jumps = 0;
   double curvature_seconds = 0, hessian_seconds = 0;
   // The smallest radius of curvature the fronts met; negative when none was finite (STATS
   // "curvature.min_radius").
