@@ -8,20 +8,24 @@
 
 namespace cdp {
 
-// A model without branch points is one piece: the field itself, with the empty branch.
-std::optional<std::pair<double, double>> Field::derivative_range(const Box& region, const Vec3& direction) const {
-  const auto g = gradient_range(region);
-  if (!g) return std::nullopt;
+std::pair<double, double> Field::derivative_range_of(const std::pair<Vec3, Vec3>& gradients, const Vec3& direction) {
   // u . grad F over the box of gradients: each term at whichever end gives its least and most.
   double lo = 0, hi = 0;
   for (int i = 0; i < 3; ++i) {
-    const double a = direction[i] * g->first[i], b = direction[i] * g->second[i];
+    const double a = direction[i] * gradients.first[i], b = direction[i] * gradients.second[i];
     lo += std::min(a, b);
     hi += std::max(a, b);
   }
-  return std::pair{lo, hi};
+  return {lo, hi};
 }
 
+std::optional<std::pair<double, double>> Field::derivative_range(const Box& region, const Vec3& direction) const {
+  const auto g = gradient_range(region);
+  if (!g) return std::nullopt;
+  return derivative_range_of(*g, direction);
+}
+
+// A model without branch points is one piece: the field itself, with the empty branch.
 FieldPiece Field::eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
   if (!branch.empty())
     throw InvalidInputError(type_name() + ": the model has no branch points, a piece's branch must be empty");

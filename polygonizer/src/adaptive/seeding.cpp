@@ -709,9 +709,6 @@ class Seeder {
   // cell's corner values, which leans on both faces across a crease of min or max and where the
   // gradient turns within the cell, where no axis derivative need keep its sign.
   bool free_of_critical_points(const Box& box, const std::array<double, 8>& f) const {
-    const auto keeps_sign = [](const std::optional<std::pair<double, double>>& r) {
-      return r && (r->first > 0 || r->second < 0);
-    };
     const auto g = field_.gradient_range(box);
     if (g && ((g->first.array() > 0).any() || (g->second.array() < 0).any())) return true;
     // The trilinear interpolant's gradient at the centre: the mean of the four edge differences
@@ -721,15 +718,10 @@ class Seeder {
       for (int axis = 0; axis < 3; ++axis)
         if (!(v >> axis & 1)) slope[axis] += f[v | 1 << axis] - f[v];
     if (!slope.allFinite() || !(slope.squaredNorm() > 0)) return false;
+    // From the gradient's ranges where the field gave them (not asked for twice).
     const Vec3 u = slope.normalized();
-    if (!g) return keeps_sign(field_.derivative_range(box, u));
-    // From the gradient's ranges at hand (what Field::derivative_range does by default).
-    double lo = 0, hi = 0;
-    for (int i = 0; i < 3; ++i) {
-      lo += std::min(u[i] * g->first[i], u[i] * g->second[i]);
-      hi += std::max(u[i] * g->first[i], u[i] * g->second[i]);
-    }
-    return lo > 0 || hi < 0;
+    const auto r = g ? std::optional(Field::derivative_range_of(*g, u)) : field_.derivative_range(box, u);
+    return r && (r->first > 0 || r->second < 0);
   }
 
   // --- Newton probes: from the local minima of |F| on the grid (fields without a bound) and from

@@ -243,6 +243,7 @@ class Tracker {
   std::size_t crease_points() const { return crease_points_; }
   // Placements refused because they landed on finished mesh.
   std::size_t over_mesh() const { return over_mesh_; }
+  // Placements refused because Newton took them onto another sheet (jumped).
   std::size_t sheet_jumps() const { return sheet_jumps_; }
   // Wall-clock time spent in curvature_at (Hessian evaluation and eigen-decomposition).
   // Time in curvature: the Hessian evaluations and the eigen-decomposition together, and the

@@ -372,6 +372,9 @@ class Field {
   // region holds no critical point of F, smooth or not. Along a direction that crosses a crease,
   // such as the mean of the faces' normals across a box's edge, they can where no axis can.
   virtual std::optional<std::pair<double, double>> derivative_range(const Box& region, const Vec3& direction) const;
+  // The bounds on the derivative along `direction` that bounds (lo, hi) on the gradient's
+  // components give (derivative_range's default, for callers that have the gradient's at hand).
+  static std::pair<double, double> derivative_range_of(const std::pair<Vec3, Vec3>& gradients, const Vec3& direction);
 
   // The minimum distance between two constraint points of a data-driven model; the paper's
   // Marching Tetrahedra "precision" convention scales this. Empty for models without points.
