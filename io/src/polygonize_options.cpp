@@ -38,8 +38,8 @@ const std::vector<OptionSpec>& table() {
        "distance, and a second run looking ahead where a mesh misses the angle, edge-ratio or distance bounds) or "
        "paper (the algorithm as printed)"},
       {"creases", OptionKind::Choice, OptionMethods::Adaptive, "HOW", "follow", "", {"follow", "ignore"}, {}, 0, 0,
-       "follow (trace the creases of a min/max/abs field first and mesh along them) or ignore (mesh across them as "
-       "across curvature)"},
+       "follow (trace the creases of a min/max/abs field first and mesh along them; a field without branch data, a "
+       "Python function, stops at the first crease it meets) or ignore (mesh across them as across curvature)"},
       {"curvature", OptionKind::Flag, OptionMethods::Adaptive, "", "false", "", {}, {}, 0, 0,
        "mac and shape_index per vertex (vertex scalars; PLY files keep them)"},
       {"blocks", OptionKind::Boolean, OptionMethods::Adaptive, "BOOL", "false", "", {}, {}, 0, 0,

@@ -150,7 +150,7 @@ constexpr std::uint64_t kPartTag = 0x31'74'72'61'70'70'64'63;  // "cdppart1"
 // this platform, and this reminds whoever adds it to write it too (a field left out would be
 // the worker's default: another mesh than the one-process run's, silently).
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-static_assert(sizeof(Sizing) == 48 && sizeof(FinerZone) == 40 && sizeof(Settings) == 176,
+static_assert(sizeof(Sizing) == 48 && sizeof(FinerZone) == 40 && sizeof(Settings) == 184,
               "a field added to Settings: write and read it in block_task.cpp");
 static_assert(sizeof(QualityOptions) == 88, "a field added to QualityOptions: write and read it in block_task.cpp");
 static_assert(sizeof(QualityReport) == 184, "a field added to QualityReport: write and read it in block_task.cpp");
@@ -296,7 +296,7 @@ void write_settings(Writer& w, const Settings& s) {
   w.num(s.sizing.mode), w.num(s.sizing.factor), w.num(s.sizing.tolerance), w.num(s.sizing.min_edge);
   w.num(s.sizing.max_edge), w.num(s.sizing.max_turn);
   w.num(s.rule), w.num(s.collision_factor), w.num(s.max_triangles), w.num(s.max_steps);
-  w.num(s.search_visits_per_step), w.num(s.callers_search_bound), w.num(s.curvature_properties);
+  w.num(s.search_visits_per_step), w.num(s.callers_search_bound), w.num(s.stop_at_kink), w.num(s.curvature_properties);
   w.num(s.grading), w.num(s.side_points), w.num(s.diagonal), w.num(s.rollback), w.num(s.anticipate);
   w.num<std::uint64_t>(s.finer_zones.size());
   for (const FinerZone& z : s.finer_zones) w.vec(z.center), w.num(z.radius), w.num(z.edge);
@@ -309,7 +309,7 @@ Settings read_settings(Reader& r, const CancelToken& cancel) {
   s.sizing.min_edge = r.num<double>(), s.sizing.max_edge = r.num<double>(), s.sizing.max_turn = r.num<double>();
   s.rule = r.choice(kLastRule), s.collision_factor = r.num<double>();
   s.max_triangles = r.num<std::size_t>(), s.max_steps = r.num<std::size_t>();
-  s.search_visits_per_step = r.num<std::uint64_t>(), s.callers_search_bound = r.flag();
+  s.search_visits_per_step = r.num<std::uint64_t>(), s.callers_search_bound = r.flag(), s.stop_at_kink = r.flag();
   s.curvature_properties = r.flag(), s.grading = r.flag(), s.side_points = r.flag();
   s.diagonal = r.num<double>(), s.rollback = r.flag(), s.anticipate = r.flag();
   s.finer_zones.resize(r.count(5 * sizeof(double)));

@@ -81,8 +81,12 @@ std::string explain_failure(const Field& field, const AdaptiveOptions& options, 
          << *field.derivative_step() << "): a crease or corner of the function (a min, max, abs or branch in "
          << "it) that the field does not describe, which no mesh of it follows; a field that names its min, max "
          << "and abs (an expression, or from Python a cdp.sdf model or a numpy function cdp.trace can follow) is "
-         << "meshed along its creases, and exact gradient and Hessian functions resolve a smooth bend this tight. "
-         << "Where the run stopped: " << message;
+         << "meshed along its creases, and exact gradient and Hessian functions resolve a smooth bend this tight";
+    // creases: follow stops at the first kink (BlackBoxKinkError); meshing across is the caller's choice.
+    if (options.creases == CreaseHandling::Follow && options.variant == Variant::Improved)
+      kink << "; creases: ignore meshes across such creases as if they were curvature (stats "
+           << "creases.across_black_box), with edges as short as min_edge along them, and may fail or take long";
+    kink << ". Where the run stopped: " << message;
     message = kink.str();
   } else if (noise_in_volume(field, resolved, tightest)) {
     // The cause first too: lowering min_edge, the tracker's advice, only follows the noise further.

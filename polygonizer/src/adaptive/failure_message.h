@@ -15,10 +15,11 @@ namespace cdp::adaptive {
 // A run that fails having met a bend tighter than the step of a black box's central differences
 // (Field::derivative_step) met a crease or corner of the function that the field does not
 // describe: differences across it turn the normal within a step, a curvature no edge follows,
-// and no branch data say where the two faces are. Meshing it again (carefully, with finer turns,
-// with min_edge lowered) fails too, after several times as long (a gyroid clipped by a
-// ball as a Python function: the first run failed at 3 s, the last at 17 s), so the run stops
-// at the first failure and says so.
+// and no branch data say where the two faces are. With CreaseHandling::Follow the tracker stops
+// at the first vertex placed there (BlackBoxKinkError); meshing across by choice (Ignore), a run
+// that failed having met one is not made again either: carefully, with finer turns, with
+// min_edge lowered, it fails too, after several times as long (a gyroid clipped by a ball as a
+// Python function: the first run failed at 3 s, the last at 17 s).
 bool kink_in_black_box(const Field& field, const Bend& tightest);
 
 // A sampled volume's bend this many times tighter than its sample spacing is not detail of its

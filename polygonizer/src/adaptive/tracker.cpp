@@ -65,6 +65,7 @@ Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
   front_hash_.set_cancel(s_.cancel);
   vertex_hash_.set_cancel(s_.cancel);
   fs_.cancel = s_.cancel;
+  kink_radius_ = field.derivative_step().value_or(0);
 }
 
 void Tracker::release_in_background() noexcept {
@@ -119,6 +120,9 @@ int Tracker::add_vertex(const Placed& placed) {
   mesh_.normals.push_back(c.normal);
   target_.push_back(placed_target(placed));
   if (c.min_radius < tightest_.first) tightest_ = {c.min_radius, placed.point};
+  if (s_.stop_at_kink && c.min_radius < kink_radius_)
+    throw BlackBoxKinkError("adaptive: a vertex placed near " + format_point(placed.point) +
+                            " lies on a kink of a field without branch data, which creases: follow cannot follow");
   if (placed.to_critical && placed.to_critical->norm() <= kCriticalReach * target_.back())
     critical_starts_.push_back({placed.point, *placed.to_critical, target_.back()});
   mac_.push_back(c.mac);

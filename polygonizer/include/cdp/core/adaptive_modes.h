@@ -51,7 +51,10 @@ enum class CreaseHandling {
   // Trace the creases first and mesh each piece's patches from them (src/adaptive/
   // crease_patches.h): mesh edges run along the creases, and crease vertices lie on both pieces.
   // Where the creases cannot be laid out as patch boundaries, or a patch cannot be meshed, the
-  // surface is meshed as if it were smooth (stats "creases.followed" says which).
+  // surface is meshed as if it were smooth (stats "creases.followed" says which). A field
+  // without branch data whose derivatives are differences (Field::derivative_step: a Python
+  // function) has no creases to trace: the run stops at the first vertex placed on a crease or
+  // corner of it, with an error naming the place (adaptive::BlackBoxKinkError).
   Follow,
   // Mesh across creases as across curvature (the paper's method; Variant::Paper always does).
   Ignore,

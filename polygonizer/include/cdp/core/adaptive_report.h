@@ -72,7 +72,8 @@ struct CreaseReport {
   std::size_t vertices = 0, pieces = 0, components = 0, steps = 0, patch_refusals = 0;  // of the patches
   std::string fallback;   // why the creases are not followed, or empty
   int tracing_resolution = 0;  // of the last tracing; 0 when none was made
-  // A black box (no pieces) meshed across a kink that held together: cut across by chords.
+  // A black box (no pieces) meshed across a kink that held together (CreaseHandling::Ignore;
+  // Follow stops at the first kink): cut across by chords.
   bool across_black_box = false;
 };
 
