@@ -242,6 +242,26 @@ def test_creases_of_a_black_box_fail_at_once_unless_meshed_across_by_choice():
     assert np.abs(octahedron(V)).max() < 1e-6
 
 
+def capped_sphere(p):
+    return np.maximum(np.linalg.norm(p, axis=1) - 1, p[:, 2] - 0.7)
+
+
+def test_a_black_box_crease_no_vertex_lands_on_is_found_between_two():
+    """A sphere capped by a plane (faces meeting at 134 degrees) as a black box: the fronts' steps
+    cross the crease with both ends a face's, where the differences resolve the curvature, and
+    before the steps were looked at the mesh cut the crease by chords and its stats said nothing
+    (creases.across_black_box false). A step whose normal turns far more than its ends' curvature
+    explains is halved towards the turn, which stays whole across a crease."""
+    box = ((-1.25,) * 3, (1.25,) * 3)
+    field = cdp.callable_field(capped_sphere, box, trace=False)
+    with pytest.raises(cdp.LimitExceededError, match="crosses a kink"):
+        cdp.polygonize(field, factor=3)
+    assert field.python_calls < 2_000
+    V, F, _, stats = cdp.polygonize(field, factor=3, creases="ignore")
+    assert topology(V, F) == (1, 0, True)
+    assert stats["creases"]["across_black_box"]
+
+
 def test_nan_away_from_the_surface_counts_as_outside():
     """A function that is NaN in part of its box far from its surface (a mask people write)."""
     def sphere_with_a_hole_in_its_domain(p):

@@ -34,6 +34,15 @@ constexpr double kJumpTurnExplained = 2;
 // steps stay on the sheet, 0.05-0.08 and 60-70 degrees away).
 constexpr double kHalvesReach = 0.25;
 constexpr double kHalvesCosine = 0.866;
+// A black box's placement whose normal turned more than kKinkTurn, and more than
+// kKinkTurnExplained times what the curvature at its two ends explains over the step, is looked
+// at for a crease between them (kink_between): its path is halved towards the half that turns
+// more while that half turns at least kKinkConcentration of the whole (across a crease nearly
+// all of it, over smooth curvature about half), at most kKinkHalvings times.
+constexpr double kKinkTurn = 10 * std::numbers::pi / 180;
+constexpr double kKinkTurnExplained = 2;
+constexpr double kKinkConcentration = 0.6;
+constexpr int kKinkHalvings = 30;
 // place_points' Newton evaluates a point with its Hessian where the point before it was within
 // this many tolerances of the surface (BatchProjector::project's hessians_below): a Newton step
 // from there nearly always converges (the error squares), and where it does, the curvature's
@@ -225,6 +234,16 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
           continue;
         }
       }
+      // A black box's crease crossed between two points the differences resolve: the chord cuts it.
+      if (kink_radius_ > 0 && !on_crease) {
+        if (const auto kink = kink_between(w.at, w.normal, mac_[v], *w.placed)) {
+          if (kink->first < tightest_.first) tightest_ = *kink;
+          if (s_.stop_at_kink)
+            throw BlackBoxKinkError("adaptive: a step from " + format_point(w.at) + " to " +
+                                    format_point(w.placed->point) + " crosses a kink of a field without branch data near " +
+                                    format_point(kink->second) + ", which creases: follow cannot follow");
+        }
+      }
       if (leg == 0 && !on_crease && d > s_.sizing.min_edge &&
           w.normal.dot(w.placed->curvature.normal) < kMaxTurnCosine) {
         w.failed = true, w.walking = false;
@@ -269,6 +288,32 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
     out.push_back(*w.placed);
   }
   return out;
+}
+
+std::optional<std::pair<double, Vec3>> Tracker::kink_between(const Vec3& a, const Vec3& na, double mac_a, const Placed& landed) const {
+  // A crease the differences do not straddle at either end: both ends' curvature is a face's,
+  // and only the turn between them shows it. The radius it is found at is the length over which
+  // the normal turns divided by that turn, below the differences' step as for a vertex on it.
+  const auto angle = [](const Vec3& p, const Vec3& q) { return std::acos(std::clamp(p.dot(q), -1.0, 1.0)); };
+  Vec3 pa = a, qa = na, pb = landed.point, qb = landed.curvature.normal;
+  double turn = angle(qa, qb);
+  const double d = (pb - pa).norm();
+  if (!(turn > kKinkTurn) || !(turn > kKinkTurnExplained * d * std::max(mac_a, landed.curvature.mac))) return {};
+  ProjectionOptions po;
+  po.tolerance = 1e-10 * s_.diagonal;
+  for (int i = 0; i < kKinkHalvings; ++i) {
+    const double length = (pb - pa).norm();
+    if (length < kink_radius_ * turn) return std::pair(length / turn, Vec3(0.5 * (pa + pb)));
+    po.max_step = po.max_travel = length;
+    const ProjectionResult m = project_to_surface(field_, 0.5 * (pa + pb), po);
+    if (!m.ok() || !(m.gradient.squaredNorm() > 0) || !m.gradient.allFinite()) return {};
+    const Vec3 nm = m.gradient.normalized();
+    const double ta = angle(qa, nm), tb = angle(nm, qb);
+    if (!(std::max(ta, tb) >= kKinkConcentration * turn)) return {};  // the turn spreads: curvature
+    if (ta >= tb) pb = m.point, qb = nm, turn = ta;
+    else pa = m.point, qa = nm, turn = tb;
+  }
+  return {};
 }
 
 bool Tracker::jumped(int v, const Vec3& heading, double d, const Placed& landed) const {

@@ -123,8 +123,9 @@ class StalledFrontError : public LimitExceededError {
   using LimitExceededError::LimitExceededError;
 };
 
-// A vertex placed where a black box's normal turns within the step of its central differences
-// (Settings::stop_at_kink): a crease or corner of the function, which the field does not
+// A vertex placed where a black box's normal turns within the step of its central differences,
+// or a step whose normal turns so between its ends (kink_between), with Settings::stop_at_kink:
+// a crease or corner of the function, which the field does not
 // describe and so no mesh of it follows. Meshing on would not end it: the fronts that cannot
 // cross such a crease crowd along it with edges of min_edge until a bound of the searches stops
 // them (a Menger sponge as a numpy function, 486 triangles as an expression: 152,000 triangles
@@ -340,6 +341,10 @@ class Tracker {
   // Whether a point placed from vertex v along `heading` (unit, tangent) at distance d landed on
   // another sheet than v's (see tracker.cpp).
   bool jumped(int v, const Vec3& heading, double d, const Placed& landed) const;
+  // Where a step of a black box from `a` (normal `na`, curvature mac_a) to `landed` crosses a
+  // kink of it (a crease the differences resolve on both sides of), as the bend found there.
+  std::optional<std::pair<double, Vec3>> kink_between(const Vec3& a, const Vec3& na, double mac_a,
+                                                      const Placed& landed) const;
   // For each point xs[i] whose gradient is ns[i]: the mean of the normals on both sides when it
   // lies on a crease, nothing elsewhere. Two value_gradient evaluations a point, in one batch.
   void crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns, std::vector<std::optional<Vec3>>& out) const;
@@ -494,7 +499,8 @@ class Tracker {
   // Balls where edges are shorter (Settings::finer_zones, and where a rollback meshes again).
   std::vector<FinerZone> finer_zones_;
   std::vector<double> rollback_place_targets_;  // per rollback place: its first longest target
-  std::pair<double, Vec3> tightest_{std::numeric_limits<double>::infinity(), Vec3::Zero()};
+  // Mutable: place_points records the kinks its steps cross (kink_between) here too.
+  mutable std::pair<double, Vec3> tightest_{std::numeric_limits<double>::infinity(), Vec3::Zero()};
   // A placed point's target edge length: its curvature's, capped by a seam ahead and by the finer zones.
   double placed_target(const Placed& x) const {
     return zone_capped(x.point, std::min(edge_length(s_.sizing, x.curvature.min_radius), x.seam_target));
