@@ -158,7 +158,26 @@ def _distributes(function):
 
 for _name in ("polygonize", "marching_cubes", "marching_tetrahedra"):
     globals()[_name] = _returns_mesh(_accepts_models(getattr(_cdp, _name)))
-polygonize = _returns_mesh(_accepts_models(_distributes(_cdp.polygonize)))  # noqa: F811
+def _names_why_not_traced(function):
+    """polygonize(field, ...) whose error at a black box's crease also says why cdp.trace could
+    not follow the function (CallableField.trace_error, set by callable_field), so that the
+    caller knows what to write differently."""
+
+    @_functools.wraps(function)
+    def wrapper(field, *args, **kwargs):
+        try:
+            return function(field, *args, **kwargs)
+        except _cdp.LimitExceededError as e:
+            why = getattr(field, "trace_error", None)
+            if not why or "cdp.trace can follow" not in str(e):
+                raise
+            raise _cdp.LimitExceededError(f"{e}; cdp.trace could not follow this function: {why}") from None
+
+    wrapper.__module__ = __name__
+    return wrapper
+
+
+polygonize = _returns_mesh(_accepts_models(_names_why_not_traced(_distributes(_cdp.polygonize))))  # noqa: F811
 # Its signature line (the compiled function's, which the stubs' test reads) with `client` too.
 _first, _rest = (_cdp.polygonize.__doc__ or "\n").split("\n", 1)
 polygonize.__doc__ = _first.replace("block_runner: object = None", "block_runner: object = None, client: object = None",
@@ -184,8 +203,10 @@ def callable_field(f, bounds, gradient=None, hessian=None, *, trace=True, **kwar
     if trace and gradient is None and hessian is None:
         try:
             return _trace(f, bounds)
-        except TraceError:
-            pass  # a black box after all: derivatives by central differences, creases unknown
+        except TraceError as e:
+            # A black box after all: derivatives by central differences, creases unknown. Why,
+            # for polygonize's error where the mesh meets a crease (_names_why_not_traced).
+            black_box.trace_error = str(e)
     return black_box
 
 
@@ -196,5 +217,6 @@ callable_field.__doc__ = (
     "A field from a Python function of points. With trace=True (the default) and no gradient or hessian given, f "
     "is first traced (cdp.trace: called once on symbols; a function made of numpy arithmetic becomes an "
     "expression field with exact derivatives and known creases, and no Python runs while meshing); if it cannot "
-    "be (cdp.trace(f, bounds) raises TraceError saying why), or with trace=False, it is the black box below, "
+    "be (cdp.trace(f, bounds) raises TraceError saying why; the black box keeps the reason as its trace_error, "
+    "which polygonize's error at a crease of it quotes), or with trace=False, it is the black box below, "
     "called on every batch of points.\n\n" + (_cdp.callable_field.__doc__ or ""))

@@ -275,3 +275,20 @@ def test_nan_away_from_the_surface_counts_as_outside():
     assert topology(V, F) == (1, 0, True)
     assert stats["non_finite_samples"] > 0
     assert np.abs(np.linalg.norm(V, axis=1) - 1).max() < 1e-6
+
+
+def test_the_error_at_a_black_box_crease_says_why_the_function_was_not_traced():
+    """A box written with np.where decides on values, which tracing does not follow: the black
+    box's error at its first crease quotes cdp.trace's reason, the line to write differently."""
+    def box(p):
+        a = np.abs(p)
+        m = np.where(a[:, 0] > a[:, 1], a[:, 0], a[:, 1])
+        return np.where(m > a[:, 2], m, a[:, 2]) - 0.8
+
+    field = cdp.callable_field(box, ((-1.25,) * 3, (1.25,) * 3))
+    assert isinstance(field, cdp.CallableField)
+    assert "compares values" in field.trace_error
+    with pytest.raises(cdp.LimitExceededError, match="cdp.trace could not follow this function: .*compares values"):
+        cdp.polygonize(field, factor=3)
+    smooth = cdp.callable_field(torus, BOX, trace=False)
+    assert getattr(smooth, "trace_error", None) is None
