@@ -14,7 +14,9 @@ and meshes the C1 seams of rounded and smooth shapes as smooth), and calls no Py
 is made. The formula is checked against f itself, called once on 1,241 points of the box (a 9^3
 grid and 512 random points): values must agree to 1e-9 of their scale.
 
-A function that decides on values (if, while, comparisons, np.where, boolean masks), asks for
+np.where(u < v, u, v) and the like (>, <=, >=; either order of the two values; u or v a
+constant: np.where(d > 0, d, 0)) trace as the min or max they compute. Any other function that
+decides on values (if, while, other comparisons and np.where, boolean masks), asks for
 the number of points (len(p), p.shape, np.zeros(len(p))), or uses what is not listed below,
 cannot be traced: TraceError says where. `cdp.callable_field(f, bounds)` traces first and uses
 the function as a black box (called on every batch of points, derivatives by central
@@ -73,10 +75,64 @@ class _Node:
     def __pos__(self): return self
 
     def _compare(self, o):
-        raise TraceError("the function compares values of the points (<, >, ==): tracing follows arithmetic only")
+        _refuse_comparison()
 
-    __lt__ = __le__ = __gt__ = __ge__ = _compare
+    # A comparison of single values (an object array's elements): kept for np.where to read.
+    def __lt__(self, o): return _Comparison(self, o)
+    def __le__(self, o): return _Comparison(self, o)
+    def __gt__(self, o): return _Comparison(o, self)
+    def __ge__(self, o): return _Comparison(o, self)
     __hash__ = object.__hash__
+
+
+def _refuse_comparison():
+    raise TraceError("the function compares values of the points (<, >, ==) other than to take the smaller or "
+                     "larger of the two (np.where(u < v, u, v)): tracing follows arithmetic only")
+
+
+class _Comparison:
+    """lesser < greater (or <=) for one point, kept only to be read by np.where: a tie of the
+    two gives the same value on either side, so < and <= trace alike."""
+    __slots__ = ("lesser", "greater")
+
+    def __init__(self, lesser, greater):
+        self.lesser, self.greater = lesser, greater
+
+    def __bool__(self):
+        _refuse_comparison()
+
+    __float__ = __bool__
+
+
+def _same(a, b):
+    """Whether a and b compute the same value the same way: the same node, or nodes of one
+    operation on the same operands (q.max(axis=1) written twice), or equal numbers."""
+    pairs = [(a, b)]
+    while pairs:
+        u, v = pairs.pop()
+        if u is v:
+            continue
+        if _is_number(u) or _is_number(v):
+            if not (_is_number(u) and _is_number(v) and float(u) == float(v)):
+                return False
+            continue
+        if u.op != v.op or len(u.args) != len(v.args):
+            return False
+        pairs.extend(zip(u.args, v.args))
+    return True
+
+
+def _choose(c, a, b):
+    """np.where for one point: a where c holds, else b; a traced comparison only as a min or max."""
+    if isinstance(c, (bool, _np.bool_)):
+        return a if c else b
+    if not isinstance(c, _Comparison):
+        _refuse_comparison()
+    if _same(a, c.lesser) and _same(b, c.greater):
+        return _apply("min", a, b)
+    if _same(a, c.greater) and _same(b, c.lesser):
+        return _apply("max", a, b)
+    _refuse_comparison()
 
 
 X, Y, Z = _Node("x"), _Node("y"), _Node("z")
@@ -166,8 +222,11 @@ _UFUNCS = {
     _np.floor_divide: lambda a, b: _apply("floor", _apply("/", a, b)),
     _np.reciprocal: lambda a: _apply("/", 1.0, a),
 }
-_COMPARISONS = {_np.greater, _np.greater_equal, _np.less, _np.less_equal, _np.equal, _np.not_equal, _np.isnan,
-                _np.isfinite, _np.isinf, _np.logical_and, _np.logical_or, _np.logical_not, _np.sign}
+# Comparisons np.where may read: (lesser, greater) of the operands as given.
+_ORDERINGS = {_np.less: lambda u, v: (u, v), _np.less_equal: lambda u, v: (u, v),
+              _np.greater: lambda u, v: (v, u), _np.greater_equal: lambda u, v: (v, u)}
+_COMPARISONS = {_np.equal, _np.not_equal, _np.isnan, _np.isfinite, _np.isinf, _np.logical_and, _np.logical_or,
+                _np.logical_not, _np.sign}
 _REDUCE = {_np.add: "+", _np.multiply: "*", _np.maximum: "max", _np.minimum: "min", _np.fmax: "max",
            _np.fmin: "min"}
 
@@ -299,8 +358,11 @@ class _Points(_np.lib.mixins.NDArrayOperatorsMixin):
             raise TraceError(f"np.{ufunc.__name__}.{method} cannot be traced")
         if ufunc is _np.matmul:
             return _matmul(*inputs)
+        if ufunc in _ORDERINGS:
+            order = _ORDERINGS[ufunc]
+            return _Decisions(_np.frompyfunc(lambda u, v: _comparison(*order(u, v)), 2, 1)(*_operands(inputs)))
         if ufunc in _COMPARISONS:
-            _Node._compare(None, None)
+            _refuse_comparison()
         if ufunc not in _UFUNCS:
             raise TraceError(f"np.{ufunc.__name__} cannot be traced (see cdp.trace's documentation for what can)")
         arrays = _operands(inputs)
@@ -311,6 +373,50 @@ class _Points(_np.lib.mixins.NDArrayOperatorsMixin):
         if handler is None:
             raise TraceError(f"np.{function.__name__} cannot be traced (see cdp.trace's documentation for what can)")
         return handler(*args, **kwargs)
+
+
+def _comparison(lesser, greater):
+    if _is_number(lesser) and _is_number(greater):
+        return bool(lesser < greater)
+    return _Comparison(lesser, greater)
+
+
+class _Decisions:
+    """An array of comparisons of the points' values, good only as np.where's condition: anything
+    else done with it (a mask, .all(), np.logical_and, if) decides on values."""
+    __array_priority__ = 1001
+
+    def __init__(self, a):
+        self.a = a
+
+    def __bool__(self):
+        _refuse_comparison()
+
+    def __getattr__(self, name):
+        _refuse_comparison()
+
+    def __getitem__(self, key):
+        _refuse_comparison()
+
+    def __array__(self, *args, **kwargs):
+        _refuse_comparison()
+
+    def __array_ufunc__(self, *args, **kwargs):
+        _refuse_comparison()
+
+    def __array_function__(self, function, types, args, kwargs):
+        if function is not _np.where:
+            _refuse_comparison()
+        return _where(*args, **kwargs)
+
+
+def _where(condition, a=None, b=None):
+    if a is None or b is None or not isinstance(condition, _Decisions):
+        _refuse_comparison()
+    if isinstance(a, _Decisions) or isinstance(b, _Decisions):
+        _refuse_comparison()
+    values = _operands(tuple(v for v in (a, b)) + (_Points(condition.a),))
+    return _Points(_np.frompyfunc(lambda u, v, c: _choose(c, u, v), 3, 1)(*values))
 
 
 def _operand(v):
@@ -408,6 +514,7 @@ _FUNCTIONS = {
     _np.dot: lambda a, b: _matmul(a, b),
     _np.stack: _stack,
     _np.column_stack: lambda arrays: _stack(arrays, axis=1),
+    _np.where: _where,
 }
 
 

@@ -278,17 +278,17 @@ def test_nan_away_from_the_surface_counts_as_outside():
 
 
 def test_the_error_at_a_black_box_crease_says_why_the_function_was_not_traced():
-    """A box written with np.where decides on values, which tracing does not follow: the black
-    box's error at its first crease quotes cdp.trace's reason, the line to write differently."""
+    """A box whose function assigns through a boolean mask, which tracing does not follow: the
+    black box's error at its first crease quotes cdp.trace's reason, the line to write differently."""
     def box(p):
-        a = np.abs(p)
-        m = np.where(a[:, 0] > a[:, 1], a[:, 0], a[:, 1])
-        return np.where(m > a[:, 2], m, a[:, 2]) - 0.8
+        v = np.abs(p).max(axis=1) - 0.8
+        v[np.abs(p[:, 0]) > 5] = 1.0  # never in the box
+        return v
 
     field = cdp.callable_field(box, ((-1.25,) * 3, (1.25,) * 3))
     assert isinstance(field, cdp.CallableField)
-    assert "compares values" in field.trace_error
-    with pytest.raises(cdp.LimitExceededError, match="cdp.trace could not follow this function: .*compares values"):
+    assert "assigns into an array" in field.trace_error
+    with pytest.raises(cdp.LimitExceededError, match="cdp.trace could not follow this function: .*assigns into"):
         cdp.polygonize(field, factor=3)
     smooth = cdp.callable_field(torus, BOX, trace=False)
     assert getattr(smooth, "trace_error", None) is None

@@ -146,8 +146,42 @@ def test_a_long_sum_built_in_a_loop_traces():
     assert np.allclose(field.values(p), blobs(p), rtol=0, atol=1e-12)
 
 
+def test_np_where_choosing_the_smaller_or_larger_of_what_it_compares_is_a_min_or_max():
+    """np.where(u < v, u, v) is how some SDF code writes min and max (and np.where(d > 0, d, 0)
+    a rounded box's outside part): traced as the branch point it is, its creases are followed."""
+    def box(p):
+        a = np.abs(p)
+        m = np.where(a[:, 0] > a[:, 1], a[:, 0], a[:, 1])
+        return np.where(m >= a[:, 2], m, a[:, 2]) - 0.8
+
+    def rounded_box_where(p):
+        q = np.abs(p) - np.array([0.6, 0.4, 0.3])
+        return np.linalg.norm(np.where(q > 0, q, 0), axis=1) + np.where(0 < q.max(axis=1), 0, q.max(axis=1)) - 0.15
+
+    def two_balls(p):
+        a = np.linalg.norm(p - [0.3, 0, 0], axis=1) - 0.5
+        b = np.linalg.norm(p + [0.3, 0, 0], axis=1) - 0.5
+        return np.where(b <= a, b, a)
+
+    assert cdp.trace_formula(box) == ("max(abs(x), abs(y), abs(z)) - 0.8", {})
+    assert cdp.trace_formula(two_balls)[0].startswith("min(")
+    p = points()
+    for f in (box, rounded_box_where, two_balls):
+        field = cdp.trace(f, BOX)
+        assert np.allclose(field.values(p), f(p), rtol=0, atol=1e-12)
+        assert np.allclose(field.values(p), {box: lambda q: np.abs(q).max(axis=1) - 0.8,
+                                             rounded_box_where: rounded_box, two_balls: lambda q: np.minimum(
+            np.linalg.norm(q - [0.3, 0, 0], axis=1), np.linalg.norm(q + [0.3, 0, 0], axis=1)) - 0.5}[f](p),
+                           rtol=0, atol=1e-12)
+    V, F, _, stats = cdp.polygonize(cdp.trace(box, BOX), factor=2)
+    assert stats["creases"]["followed"] and stats["creases"]["curves"] == 12
+    assert topology(V, F) == (1, 0, True)
+
+
 @pytest.mark.parametrize("function, words", [
     (lambda p: np.where(p[:, 0] > 0, p[:, 0], -p[:, 0]) - 0.5, "compares values of the points"),
+    (lambda p: np.where(np.logical_and(p[:, 0] > 0, p[:, 1] > 0), p[:, 0], p[:, 1]), "compares values of the points"),
+    (lambda p: np.where(p[:, 0] > p[:, 1], p[:, 2], p[:, 1]), "compares values of the points"),
     (lambda p: np.linalg.norm(p, axis=1) - 1 if (p[:, 0] > 0).all() else p[:, 0], "compares values of the points"),
     (lambda p: p[:, 0] if p[:, 1] else p[:, 2], "decides on the points' values"),
     (lambda p: p[:, 0] + np.ones((5, 1)), "a constant of shape"),
