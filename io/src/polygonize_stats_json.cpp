@@ -35,6 +35,7 @@ void add_seeding(nlohmann::json& j, const SeedingReport& s) {
   j["unresolved_cells"] = s.unresolved_cells;
   j["unsearched_cells"] = s.unsearched_cells;
   j["probes"] = s.probes;
+  j["probes_outside"] = s.probes_outside;
   j["band_cells"] = s.band_cells;
   j["band_components"] = s.band_components;
 }

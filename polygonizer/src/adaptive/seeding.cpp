@@ -71,6 +71,9 @@ constexpr int kMaxBandSteps = 12;
 // nodes at factor 6 (a run 19 % longer) for one more bead of the forty below (Seeder::probe);
 // with 1 it passes 96, and F's own curvature there (keep_curling) none.
 constexpr double kBandCurl = 1.0;
+// A probe's landing this share of the box's diagonal beyond the box lies outside it (Newton
+// leaves points within 1e-10 of the diagonal of the surface; a face the surface touches is kept).
+constexpr double kOutsideBox = 1e-9;
 // Steps of min_edge a surface point may be from the mesh and still belong to a meshed component.
 constexpr int kWalkSteps = 32;
 // The checks between components poll the cancel token every so many sign changes, witnesses or
@@ -774,9 +777,17 @@ class Seeder {
     std::vector<double> values(landed.size());
     std::vector<Vec3> gradients(landed.size());
     field_.values_gradients(landed.data(), values.data(), gradients.data(), landed.size());
+    // A probe from a node on the box's faces may follow F out of the box to a component wholly
+    // outside it (a repetition's next ball, 0.05 beyond the face: a box of 27 balls meshed as 81).
+    // The box is the caller's: what lies beyond it is not seeded; what crosses it fails as ever.
+    const Box inside = field_.bounds().inflated(kOutsideBox * field_.bounds().diagonal());
     for (std::size_t i = 0; i < landed.size(); ++i) {
       const Vec3& g = gradients[i];
       if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
+      if (!inside.contains(landed[i])) {
+        ++report_.probes_outside;
+        continue;
+      }
       const SurfacePoint x{landed[i], g.normalized()};
       cover_.update();
       if (walks_to_mesh(x)) continue;  // its first test is meshed_at(x)

@@ -40,6 +40,7 @@ struct SeedingReport {
   std::size_t unsearched_cells = 0;  // cells the search's budget left unsplit, which may hold surface (seeding.cpp)
   Vec3 first_unsearched = Vec3::Zero();  // the centre of the first of them
   std::size_t probes = 0;            // Newton probes: local minima of |F| (no bound), the band's curls
+  std::size_t probes_outside = 0;    // of them, those that landed outside the box: not seeds (seeding.cpp)
   std::size_t band_cells = 0;        // grid cells of the band around the surface scanned at min_edge (sampled volumes)
   std::size_t band_components = 0;   // connected sets of sign changes found there, one of each visited
   std::size_t uncovered = 0;         // sign changes not meshed after the run: 0 on success (STATS "uncovered_crossings")

@@ -189,6 +189,24 @@ TEST(AdaptiveSeeding, ABeadBesideABoxFaceIsNotTakenForTheFace) {
   EXPECT_GT(r.stats.adaptive->seeding.probes, 0u);
 }
 
+TEST(AdaptiveSeeding, AComponentWhollyOutsideTheBoxIsNotSeeded) {
+  // Balls of radius 0.25 repeated every 0.75 (x - 0.75 round(x / 0.75), as numpy code repeats a
+  // shape), in a box of +-1.2: 27 balls inside, and the next ones centred at +-1.5, 0.05 beyond the
+  // faces. Probes from the local minima of F on the faces followed F out of the box onto those and
+  // seeded them: 81 components, where Marching Cubes on the same box finds 27.
+  const auto f = test::field_from_json(R"J({"type": "expression",
+      "value": "sqrt(u*u + v*v + w*w) - 0.25",
+      "define": {"u": "x - 0.75*round(x/0.75)", "v": "y - 0.75*round(y/0.75)", "w": "z - 0.75*round(z/0.75)"},
+      "bounds": [[-1.2,-1.2,-1.2],[1.2,1.2,1.2]]})J");
+  const PolygonizeResult r = polygonize_adaptive(*f, at_factor(3));
+  const MeshTopology t = analyze_topology(r.mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.components, 27u);
+  EXPECT_GT(r.stats.adaptive->seeding.probes_outside, 0u);
+  const Box box = f->bounds();
+  for (const Vec3& p : r.mesh.positions) EXPECT_TRUE(box.contains(p)) << p.transpose();
+}
+
 TEST(AdaptiveSeeding, AFrontIsNotProjectedOntoABeadBesideIt) {
   // A ball of radius 0.025 0.028 outside a unit sphere, meshed at factor 3 (edges 0.33): a new
   // point placed in the sphere's tangent plane lies nearer the bead than the sphere, and Newton
