@@ -25,7 +25,8 @@ differences) when tracing fails or gradient= or hessian= are given; trace=False 
 What traces: the arithmetic operators (+ - * / ** %, unary -, @ with constant matrices); the
 numpy functions add, subtract, multiply, divide, negative, power, square, sqrt, exp, log, sin,
 cos, tan, arctan, arctan2, hypot, abs (absolute, fabs), maximum, minimum (fmax, fmin), clip,
-floor, mod (remainder), floor_divide, reciprocal; sum, max, min (amax, amin), mean along a
+floor, round (around, rint; halves away from zero, where numpy's go to even: the check against
+the function meets any difference that makes), mod (remainder), floor_divide, reciprocal; sum, max, min (amax, amin), mean along a
 coordinate axis (axis=1 or -1 of an (N, 3) array) as functions, methods or ufunc.reduce;
 np.linalg.norm along a coordinate axis; np.dot, np.stack, np.column_stack; np.zeros_like,
 np.ones_like and np.full_like (np.full_like(x, np.inf) starting a running np.minimum); indexing that keeps
@@ -142,6 +143,7 @@ _FOLD = {
     "pow": _math.pow, "sqrt": _math.sqrt, "exp": _math.exp, "log": _math.log, "sin": _math.sin, "cos": _math.cos,
     "tan": _math.tan, "atan": _math.atan, "atan2": _math.atan2, "abs": abs, "floor": _math.floor,
     "min": min, "max": max, "mod": lambda a, b: a - b * _math.floor(a / b),
+    "round": lambda a: _math.copysign(_math.floor(abs(a) + 0.5), a),
 }
 
 
@@ -221,6 +223,10 @@ _UFUNCS = {
     _np.fmin: _scalar("min"), _np.floor: _scalar("floor"), _np.mod: _scalar("mod"),
     _np.floor_divide: lambda a, b: _apply("floor", _apply("/", a, b)),
     _np.reciprocal: lambda a: _apply("/", 1.0, a),
+    # Halves away from zero (the expression's round, std::round) where numpy's go to the even
+    # neighbour: the two differ only at exact halves, where a repetition's cells meet and the
+    # check against the function says so if the field differs there.
+    _np.rint: _scalar("round"),
 }
 # Comparisons np.where may read: (lesser, greater) of the operands as given.
 _ORDERINGS = {_np.less: lambda u, v: (u, v), _np.less_equal: lambda u, v: (u, v),
@@ -478,6 +484,12 @@ def _stack(arrays, axis=0):
     raise TraceError(f"np.stack with axis={axis} cannot be traced")
 
 
+def _round(a, decimals, kwargs):
+    if decimals != 0 or kwargs.get("out") is not None:
+        raise TraceError("np.round traces with decimals=0 and without out= only")
+    return _np.rint(a)
+
+
 def _clip_array(a, a_min=None, a_max=None, **kwargs):
     if kwargs:
         raise TraceError("np.clip with out= cannot be traced")
@@ -515,6 +527,8 @@ _FUNCTIONS = {
     _np.stack: _stack,
     _np.column_stack: lambda arrays: _stack(arrays, axis=1),
     _np.where: _where,
+    _np.round: lambda a, decimals=0, **k: _round(a, decimals, k),
+    _np.around: lambda a, decimals=0, **k: _round(a, decimals, k),
 }
 
 
@@ -525,7 +539,7 @@ _FUNCTIONS = {
 _PRECEDENCE = {"+": 1, "-": 1, "*": 2, "/": 2, "neg": 3}
 _FUNCTION_NAME = {"pow": "pow", "sqrt": "sqrt", "exp": "exp", "log": "log", "sin": "sin", "cos": "cos", "tan": "tan",
                   "atan": "atan", "atan2": "atan2", "abs": "abs", "floor": "floor", "min": "min", "max": "max",
-                  "mod": "mod"}
+                  "mod": "mod", "round": "round"}
 _MAX_DEFINITIONS = 256  # the expression model's limit (kMaxDefinitions in expression.cpp)
 
 

@@ -178,6 +178,24 @@ def test_np_where_choosing_the_smaller_or_larger_of_what_it_compares_is_a_min_or
     assert topology(V, F) == (1, 0, True)
 
 
+def test_a_repetition_with_np_round_traces():
+    """fogleman/sdf's repeat (p - spacing * np.clip(np.round(p / spacing), -count, count)): np.round
+    is the expression's round, whose halves go away from zero where numpy's go to the even
+    neighbour; the check against the function meets any difference that makes."""
+    def balls(p):
+        q = p - 0.75 * np.clip(np.round(p / 0.75), -1, 1)
+        return np.linalg.norm(q, axis=1) - 0.25
+
+    field = cdp.trace(balls, BOX)
+    assert "round(" in cdp.trace_formula(balls)[1]["_t0"] or "round(" in cdp.trace_formula(balls)[0]
+    p = points()
+    assert np.allclose(field.values(p), balls(p), rtol=0, atol=1e-12)
+    V, F, _, _ = cdp.polygonize(field, factor=2)
+    assert topology(V, F)[0] == 27
+    with pytest.raises(cdp.TraceError, match="decimals=0"):
+        cdp.trace(lambda q: np.round(q[:, 0], 2) - 0.5, BOX)
+
+
 @pytest.mark.parametrize("function, words", [
     (lambda p: np.where(p[:, 0] > 0, p[:, 0], -p[:, 0]) - 0.5, "compares values of the points"),
     (lambda p: np.where(np.logical_and(p[:, 0] > 0, p[:, 1] > 0), p[:, 0], p[:, 1]), "compares values of the points"),
