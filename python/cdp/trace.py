@@ -26,7 +26,9 @@ What traces: the arithmetic operators (+ - * / ** %, unary -, @ with constant ma
 numpy functions add, subtract, multiply, divide, negative, power, square, sqrt, exp, log, sin,
 cos, tan, arctan, arctan2, hypot, abs (absolute, fabs), maximum, minimum (fmax, fmin), clip,
 floor, round (around, rint; halves away from zero, where numpy's go to even: the check against
-the function meets any difference that makes), mod (remainder), floor_divide, reciprocal; sum, max, min (amax, amin), mean along a
+the function meets any difference that makes), mod (remainder), floor_divide, reciprocal; tanh,
+sinh, cosh, arcsin, arccos, log10, log2, exp2, expm1, log1p, deg2rad (radians), rad2deg (degrees),
+written with the functions above (expm1 and log1p lose their precision near zero); sum, max, min (amax, amin), mean along a
 coordinate axis (axis=1 or -1 of an (N, 3) array) as functions, methods or ufunc.reduce;
 np.linalg.norm along a coordinate axis; np.dot, np.stack, np.column_stack; np.zeros_like,
 np.ones_like and np.full_like (np.full_like(x, np.inf) starting a running np.minimum); indexing that keeps
@@ -207,6 +209,24 @@ def _hypot(a, b):
     return _apply("sqrt", _apply("+", _apply("*", a, a), _apply("*", b, b)))
 
 
+def _tanh(a):
+    # 1 - 2 / (e^2a + 1): exp overflows to infinity for large a, and the quotient to 0, so the
+    # value stays within [-1, 1] where sinh / cosh would divide infinities.
+    return _apply("-", 1.0, _apply("/", 2.0, _apply("+", _apply("exp", _apply("*", 2.0, a)), 1.0)))
+
+
+def _sinh_cosh(sign):
+    return lambda a: _apply("*", 0.5, _apply("+" if sign > 0 else "-", _apply("exp", a), _apply("exp", _apply("neg", a))))
+
+
+def _arcsin(a):
+    return _apply("atan2", a, _apply("sqrt", _apply("-", 1.0, _apply("*", a, a))))
+
+
+def _arccos(a):
+    return _apply("atan2", _apply("sqrt", _apply("-", 1.0, _apply("*", a, a))), a)
+
+
 def _clip(u, lo, hi):
     if lo is not None: u = _apply("max", u, lo)
     if hi is not None: u = _apply("min", u, hi)
@@ -227,6 +247,14 @@ _UFUNCS = {
     # neighbour: the two differ only at exact halves, where a repetition's cells meet and the
     # check against the function says so if the field differs there.
     _np.rint: _scalar("round"),
+    # Written with the expression's own functions (it has no hyperbolic or inverse sine).
+    _np.tanh: _tanh, _np.sinh: _sinh_cosh(-1), _np.cosh: _sinh_cosh(1), _np.arcsin: _arcsin, _np.arccos: _arccos,
+    _np.log10: lambda a: _apply("/", _apply("log", a), _math.log(10.0)),
+    _np.log2: lambda a: _apply("/", _apply("log", a), _math.log(2.0)),
+    _np.exp2: lambda a: _apply("exp", _apply("*", a, _math.log(2.0))),
+    _np.expm1: lambda a: _apply("-", _apply("exp", a), 1.0), _np.log1p: lambda a: _apply("log", _apply("+", 1.0, a)),
+    _np.deg2rad: lambda a: _apply("*", a, _math.pi / 180), _np.radians: lambda a: _apply("*", a, _math.pi / 180),
+    _np.rad2deg: lambda a: _apply("*", a, 180 / _math.pi), _np.degrees: lambda a: _apply("*", a, 180 / _math.pi),
 }
 # Comparisons np.where may read: (lesser, greater) of the operands as given.
 _ORDERINGS = {_np.less: lambda u, v: (u, v), _np.less_equal: lambda u, v: (u, v),

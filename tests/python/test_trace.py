@@ -178,6 +178,19 @@ def test_np_where_choosing_the_smaller_or_larger_of_what_it_compares_is_a_min_or
     assert topology(V, F) == (1, 0, True)
 
 
+@pytest.mark.parametrize("function", [
+    lambda p: np.tanh(3 * p[:, 0]) + np.sinh(p[:, 1]) * np.cosh(p[:, 2]),
+    lambda p: np.arcsin(0.9 * np.sin(p[:, 0])) + np.arccos(0.5 * p[:, 1]) * p[:, 2],
+    lambda p: np.log10(2 + p[:, 0]) + np.log2(2 + p[:, 1]) + np.log1p(0.5 + p[:, 2]),
+    lambda p: np.exp2(p[:, 0]) + np.expm1(p[:, 1]) + np.radians(p[:, 2]) + np.degrees(p[:, 0] * p[:, 1]) / 90,
+])
+def test_functions_written_with_the_expressions_own_trace_with_their_derivatives(function):
+    field = cdp.trace(function, BOX)
+    p = points()
+    assert np.allclose(field.values(p), function(p), rtol=0, atol=1e-12)
+    assert np.allclose(field.gradients(p), finite_gradients(function, p), rtol=0, atol=1e-6)
+
+
 def test_a_repetition_with_np_round_traces():
     """fogleman/sdf's repeat (p - spacing * np.clip(np.round(p / spacing), -count, count)): np.round
     is the expression's round, whose halves go away from zero where numpy's go to the even
