@@ -256,9 +256,9 @@ _UFUNCS = {
     _np.deg2rad: lambda a: _apply("*", a, _math.pi / 180), _np.radians: lambda a: _apply("*", a, _math.pi / 180),
     _np.rad2deg: lambda a: _apply("*", a, 180 / _math.pi), _np.degrees: lambda a: _apply("*", a, 180 / _math.pi),
 }
-# Comparisons np.where may read: (lesser, greater) of the operands as given.
-_ORDERINGS = {_np.less: lambda u, v: (u, v), _np.less_equal: lambda u, v: (u, v),
-              _np.greater: lambda u, v: (v, u), _np.greater_equal: lambda u, v: (v, u)}
+# Comparisons np.where may read: (lesser, greater, strict) of the operands as given.
+_ORDERINGS = {_np.less: lambda u, v: (u, v, True), _np.less_equal: lambda u, v: (u, v, False),
+              _np.greater: lambda u, v: (v, u, True), _np.greater_equal: lambda u, v: (v, u, False)}
 _COMPARISONS = {_np.equal, _np.not_equal, _np.isnan, _np.isfinite, _np.isinf, _np.logical_and, _np.logical_or,
                 _np.logical_not, _np.sign}
 _REDUCE = {_np.add: "+", _np.multiply: "*", _np.maximum: "max", _np.minimum: "min", _np.fmax: "max",
@@ -409,9 +409,11 @@ class _Points(_np.lib.mixins.NDArrayOperatorsMixin):
         return handler(*args, **kwargs)
 
 
-def _comparison(lesser, greater):
+def _comparison(lesser, greater, strict):
+    """One point's comparison: a bool where both sides are numbers (a constant column), else
+    kept for np.where, where a tie gives the same value on either side."""
     if _is_number(lesser) and _is_number(greater):
-        return bool(lesser < greater)
+        return bool(lesser < greater) if strict else bool(lesser <= greater)
     return _Comparison(lesser, greater)
 
 

@@ -163,6 +163,11 @@ def test_np_where_choosing_the_smaller_or_larger_of_what_it_compares_is_a_min_or
         b = np.linalg.norm(p + [0.3, 0, 0], axis=1) - 0.5
         return np.where(b <= a, b, a)
 
+    def constant_column(p):  # comparisons of numbers (zeros_like's) decide as numpy does, ties too
+        q = np.stack([p[:, 0], np.zeros_like(p[:, 0])], axis=1)
+        return np.where(q[:, 1] <= 0, np.linalg.norm(p, axis=1), p[:, 0]) - np.where(q[:, 1] < 0, 1.0, 0.5)
+
+    assert cdp.trace_formula(constant_column)[0] == "sqrt(x * x + y * y + z * z) - 0.5"
     assert cdp.trace_formula(box) == ("max(abs(x), abs(y), abs(z)) - 0.8", {})
     assert cdp.trace_formula(two_balls)[0].startswith("min(")
     p = points()

@@ -123,16 +123,16 @@ class StalledFrontError : public LimitExceededError {
   using LimitExceededError::LimitExceededError;
 };
 
-// A vertex placed where a black box's normal turns within the step of its central differences,
-// or a step whose normal turns so between its ends (kink_between), with Settings::stop_at_kink:
-// a crease or corner of the function, which the field does not
-// describe and so no mesh of it follows. Meshing on would not end it: the fronts that cannot
-// cross such a crease crowd along it with edges of min_edge until a bound of the searches stops
-// them (a Menger sponge as a numpy function, 486 triangles as an expression: 152,000 triangles
-// and 80 s, then this error), and of 17 such runs (box, hexagonal prism, capped cylinder, Menger
-// sponge, fogleman's README model and the gyroid ball, each at factors 1, 3 and 6) three meshed,
-// with up to 200 times the triangles an expression of the same function needs, in up to 16 s.
-// The run's error names the kink (explain_failure in failure_message.h) and what meshes it.
+// With Settings::stop_at_kink: a vertex placed where a black box's normal turns within the step
+// of its central differences, or a step whose normal turns so between its ends (kink_between),
+// met a crease or corner of the function, which the field does not describe and so no mesh of it
+// follows. Meshing on would not end it: the fronts that cannot cross such a crease crowd along it
+// with edges of min_edge until a bound of the searches stops them (a Menger sponge as a numpy
+// function, 486 triangles as an expression: 152,000 triangles and 80 s, then an error), and of 17
+// such runs (box, hexagonal prism, capped cylinder, Menger sponge, fogleman's README model and the
+// gyroid ball, each at factors 1, 3 and 6) three meshed, with up to 200 times the triangles an
+// expression of the same function needs, in up to 17 s. The run's error names the kink
+// (explain_failure in failure_message.h) and what meshes it.
 class BlackBoxKinkError : public LimitExceededError {
  public:
   using LimitExceededError::LimitExceededError;
