@@ -200,6 +200,7 @@ __all__ += ["TraceError", "trace", "trace_formula"]
 @_functools.wraps(_cdp.callable_field)
 def callable_field(f, bounds, gradient=None, hessian=None, *, trace=True, **kwargs):
     black_box = _cdp.callable_field(f, bounds, gradient, hessian, **kwargs)  # checks every argument
+    black_box.trace_error = None  # not traced: trace=False, or derivatives given
     if trace and gradient is None and hessian is None:
         try:
             return _trace(f, bounds)

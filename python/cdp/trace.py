@@ -26,9 +26,11 @@ What traces: the arithmetic operators (+ - * / ** %, unary -, @ with constant ma
 numpy functions add, subtract, multiply, divide, negative, power, square, sqrt, exp, log, sin,
 cos, tan, arctan, arctan2, hypot, abs (absolute, fabs), maximum, minimum (fmax, fmin), clip,
 floor, round (around, rint; halves away from zero, where numpy's go to even: the check against
-the function meets any difference that makes), mod (remainder), floor_divide, reciprocal; tanh,
-sinh, cosh, arcsin, arccos, log10, log2, exp2, expm1, log1p, deg2rad (radians), rad2deg (degrees),
-written with the functions above (expm1 and log1p lose their precision near zero); sum, max, min (amax, amin), mean along a
+the function samples 1,241 points and may miss a half the mesh meets; like floor and mod, its
+jumps are no branch point, so where a repetition's copies meet across a cell's boundary the
+crease there is not followed), mod (remainder), floor_divide, reciprocal; sinh,
+cosh, log10, log2, exp2, expm1, log1p, deg2rad (radians), rad2deg (degrees), written with the
+functions above (expm1 and log1p lose their precision near zero); sum, max, min (amax, amin), mean along a
 coordinate axis (axis=1 or -1 of an (N, 3) array) as functions, methods or ufunc.reduce;
 np.linalg.norm along a coordinate axis; np.dot, np.stack, np.column_stack; np.zeros_like,
 np.ones_like and np.full_like (np.full_like(x, np.inf) starting a running np.minimum); indexing that keeps
@@ -111,10 +113,12 @@ def _same(a, b):
     """Whether a and b compute the same value the same way: the same node, or nodes of one
     operation on the same operands (q.max(axis=1) written twice), or equal numbers."""
     pairs = [(a, b)]
+    seen = set()
     while pairs:
         u, v = pairs.pop()
-        if u is v:
+        if u is v or (id(u), id(v)) in seen:
             continue
+        seen.add((id(u), id(v)))
         if _is_number(u) or _is_number(v):
             if not (_is_number(u) and _is_number(v) and float(u) == float(v)):
                 return False
@@ -209,22 +213,8 @@ def _hypot(a, b):
     return _apply("sqrt", _apply("+", _apply("*", a, a), _apply("*", b, b)))
 
 
-def _tanh(a):
-    # 1 - 2 / (e^2a + 1): exp overflows to infinity for large a, and the quotient to 0, so the
-    # value stays within [-1, 1] where sinh / cosh would divide infinities.
-    return _apply("-", 1.0, _apply("/", 2.0, _apply("+", _apply("exp", _apply("*", 2.0, a)), 1.0)))
-
-
 def _sinh_cosh(sign):
     return lambda a: _apply("*", 0.5, _apply("+" if sign > 0 else "-", _apply("exp", a), _apply("exp", _apply("neg", a))))
-
-
-def _arcsin(a):
-    return _apply("atan2", a, _apply("sqrt", _apply("-", 1.0, _apply("*", a, a))))
-
-
-def _arccos(a):
-    return _apply("atan2", _apply("sqrt", _apply("-", 1.0, _apply("*", a, a))), a)
 
 
 def _clip(u, lo, hi):
@@ -247,8 +237,10 @@ _UFUNCS = {
     # neighbour: the two differ only at exact halves, where a repetition's cells meet and the
     # check against the function says so if the field differs there.
     _np.rint: _scalar("round"),
-    # Written with the expression's own functions (it has no hyperbolic or inverse sine).
-    _np.tanh: _tanh, _np.sinh: _sinh_cosh(-1), _np.cosh: _sinh_cosh(1), _np.arcsin: _arcsin, _np.arccos: _arccos,
+    # Written with the expression's own functions (it has no hyperbolic functions). Not tanh
+    # (exp(2a) overflows past a = 355, and its derivative with it: NaN where numpy's is 0) nor
+    # arcsin and arccos (sqrt(1 - a^2)'s derivative is NaN wherever a clip holds a at 1).
+    _np.sinh: _sinh_cosh(-1), _np.cosh: _sinh_cosh(1),
     _np.log10: lambda a: _apply("/", _apply("log", a), _math.log(10.0)),
     _np.log2: lambda a: _apply("/", _apply("log", a), _math.log(2.0)),
     _np.exp2: lambda a: _apply("exp", _apply("*", a, _math.log(2.0))),

@@ -291,4 +291,4 @@ def test_the_error_at_a_black_box_crease_says_why_the_function_was_not_traced():
     with pytest.raises(cdp.LimitExceededError, match="cdp.trace could not follow this function: .*assigns into"):
         cdp.polygonize(field, factor=3)
     smooth = cdp.callable_field(torus, BOX, trace=False)
-    assert getattr(smooth, "trace_error", None) is None
+    assert smooth.trace_error is None
