@@ -79,14 +79,11 @@ class _Node:
     def __neg__(self): return _apply("neg", self)
     def __pos__(self): return self
 
+    # Comparisons np.where may read come through _Points (_ORDERINGS); one of single values decides.
     def _compare(self, o):
         _refuse_comparison()
 
-    # A comparison of single values (an object array's elements): kept for np.where to read.
-    def __lt__(self, o): return _Comparison(self, o)
-    def __le__(self, o): return _Comparison(self, o)
-    def __gt__(self, o): return _Comparison(o, self)
-    def __ge__(self, o): return _Comparison(o, self)
+    __lt__ = __le__ = __gt__ = __ge__ = _compare
     __hash__ = object.__hash__
 
 
@@ -443,7 +440,7 @@ def _where(condition, a=None, b=None):
         _refuse_comparison()
     if isinstance(a, _Decisions) or isinstance(b, _Decisions):
         _refuse_comparison()
-    values = _operands(tuple(v for v in (a, b)) + (_Points(condition.a),))
+    values = _operands((a, b, _Points(condition.a)))
     return _Points(_np.frompyfunc(lambda u, v, c: _choose(c, u, v), 3, 1)(*values))
 
 

@@ -780,7 +780,8 @@ class Seeder {
     // A probe from a node on the box's faces may follow F out of the box to a component wholly
     // outside it (a repetition's next ball, 0.05 beyond the face: a box of 27 balls meshed as 81).
     // The box is the caller's: what lies beyond it is not seeded; what crosses it fails as ever.
-    const Box inside = field_.bounds().inflated(kOutsideBox * field_.bounds().diagonal());
+    const Box box = field_.bounds();
+    const Box inside = box.inflated(kOutsideBox * box.diagonal());
     for (std::size_t i = 0; i < landed.size(); ++i) {
       const Vec3& g = gradients[i];
       if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
