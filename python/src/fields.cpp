@@ -282,7 +282,7 @@ void bind_fields(py::module_& m) {
         "where an algorithm needs it, as evaluate's ray casting does) bounds |f(a) - f(b)| / |a - b| in the box. "
         "smooth=True (default False) promises a regular zero set (the gradient continuous and nonzero where the surface "
         "passes: no min, max, abs or branch on the coordinates there, no node): the adaptive method's repair then "
-        "skips its crease probes, three calls per vertex it touches. See python/README.md for how often the algorithms call them.");
+        "skips its crease probes, three calls per vertex it touches, and a bend tighter than the differences resolve is meshed across rather than stopping the run as a crease would. See python/README.md for how often the algorithms call them.");
 }
 
 }  // namespace cdp::python

@@ -262,6 +262,20 @@ def test_a_black_box_crease_no_vertex_lands_on_is_found_between_two():
     assert stats["creases"]["across_black_box"]
 
 
+def test_a_black_box_promised_smooth_is_meshed_across_its_tight_bends():
+    """smooth=True is the caller's word that the zero set has no crease: a bend tighter than the
+    differences resolve (here the capped sphere's rim, which the promise wrongly calls smooth) is
+    meshed across, as creases="ignore" does, instead of ending the run; the stats still say so."""
+    box = ((-1.25,) * 3, (1.25,) * 3)
+    field = cdp.callable_field(capped_sphere, box, trace=False, smooth=True)
+    V, F, _, stats = cdp.polygonize(field, factor=3)
+    assert topology(V, F) == (1, 0, True)
+    assert stats["creases"]["across_black_box"]
+    ignored = cdp.callable_field(capped_sphere, box, trace=False)
+    V2, F2, _, _ = cdp.polygonize(ignored, factor=3, creases="ignore")
+    assert len(F) == len(F2)
+
+
 def test_nan_away_from_the_surface_counts_as_outside():
     """A function that is NaN in part of its box far from its surface (a mask people write)."""
     def sphere_with_a_hole_in_its_domain(p):

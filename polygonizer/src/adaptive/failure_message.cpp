@@ -83,7 +83,7 @@ std::string explain_failure(const Field& field, const AdaptiveOptions& options, 
          << "and abs (an expression, or from Python a cdp.sdf model or a numpy function cdp.trace can follow) is "
          << "meshed along its creases, and exact gradient and Hessian functions resolve a smooth bend this tight";
     // creases: follow stops at the first kink (BlackBoxKinkError); meshing across is the caller's choice.
-    if (options.creases == CreaseHandling::Follow && options.variant == Variant::Improved)
+    if (resolved.stop_at_kink)
       kink << "; creases: ignore meshes across such creases as if they were curvature (stats "
            << "creases.across_black_box), with edges as short as min_edge along them, and may fail or take long";
     kink << ". Where the run stopped: " << message;

@@ -54,7 +54,10 @@ Settings resolve_settings(const Field& field, const AdaptiveOptions& o) {
   if (o.variant == Variant::Improved && o.sizing == SizingMode::Chord) s.sizing.max_turn = kChordMaxTurn;
   s.grading = o.variant == Variant::Improved;
   s.side_points = o.variant == Variant::Improved && !field.has_pieces();
-  s.stop_at_kink = o.variant == Variant::Improved && o.creases == CreaseHandling::Follow && field.derivative_step();
+  // A black box its caller calls smooth (Field::smooth) has bends, not creases: one tighter than
+  // the differences' step is meshed across as with creases: ignore rather than refused.
+  s.stop_at_kink = o.variant == Variant::Improved && o.creases == CreaseHandling::Follow && field.derivative_step() &&
+                   !field.smooth();
   // The default min_edge matches the default tolerance (1e-3 of the diagonal); a smaller
   // tolerance asks for edges shorter as its square root (the sagitta grows as the edge
   // squared), and Variant::Improved lowers the default with it so that the clamp does not

@@ -239,7 +239,9 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
         }
       }
       // A black box's crease crossed between two points the differences resolve: the chord cuts it.
-      if (kink_radius_ > 0 && !on_crease) {
+      // Meshing across (no stop_at_kink), one kink found is all the report says (across_black_box,
+      // and no run made again): the halvings are not paid at every crossing after it.
+      if (kink_radius_ > 0 && !on_crease && (s_.stop_at_kink || !(tightest_.first < kink_radius_))) {
         if (const auto kink = kink_between(w.at, w.normal, mac_[v], *w.placed)) {
           if (kink->first < tightest_.first) tightest_ = *kink;
           if (s_.stop_at_kink)

@@ -72,7 +72,7 @@ struct Settings {
   std::size_t max_steps = 0;
   // Whether a vertex placed on a kink of a black box (a bend tighter than Field::derivative_step)
   // ends the run at once (BlackBoxKinkError): CreaseHandling::Follow, whose promise no mesh of
-  // such a field keeps (resolve_settings).
+  // such a field keeps, unless its caller promises it smooth (resolve_settings).
   bool stop_at_kink = false;
   std::uint64_t search_visits_per_step = kSearchVisitsPerStep;  // AdaptiveOptions::max_search_visits
   bool callers_search_bound = false;  // search_visits_per_step is the caller's, not the default

@@ -129,7 +129,8 @@ TEST(BlockTasks, EverySettingAndRepairOptionTravels) {
   s.sizing = {SizingMode::Chord, 3.5, 1e-3, 0.01, 0.2, 0.7};
   s.rule = TriangleCountRule::PaperFloor;
   s.collision_factor = 1.7, s.max_triangles = 123, s.max_steps = 456, s.search_visits_per_step = 789;
-  s.callers_search_bound = true, s.curvature_properties = true, s.grading = false, s.side_points = false;
+  s.callers_search_bound = true, s.stop_at_kink = true, s.curvature_properties = true, s.grading = false;
+  s.side_points = false;
   s.diagonal = 4.25, s.rollback = true, s.anticipate = true;
   s.finer_zones = {{Vec3(1, 2, 3), 0.5, 0.01}, {Vec3(-1, 0, 2), 0.25, 0.02}};
   s.look_ahead = true, s.look_ahead_gradation = 0.3, s.hash_cell = 0.05;
@@ -163,6 +164,7 @@ TEST(BlockTasks, EverySettingAndRepairOptionTravels) {
   EXPECT_EQ(x.max_steps, s.max_steps);
   EXPECT_EQ(x.search_visits_per_step, s.search_visits_per_step);
   EXPECT_EQ(x.callers_search_bound, s.callers_search_bound);
+  EXPECT_EQ(x.stop_at_kink, s.stop_at_kink);
   EXPECT_EQ(x.curvature_properties, s.curvature_properties);
   EXPECT_EQ(x.grading, s.grading);
   EXPECT_EQ(x.side_points, s.side_points);

@@ -1,0 +1,143 @@
+// Black boxes (fields whose derivatives come from central differences, Field::derivative_step)
+// at their creases: the tracker finds a kink on a vertex or between two (Tracker::kink_between,
+// src/adaptive/tracker.h); with creases: follow the run stops there (BlackBoxKinkError), with
+// ignore, or a field its caller promises smooth, it meshes across and the stats say so. The
+// Python tests (tests/python/test_callable.py) run the same on numpy functions.
+#include <gtest/gtest.h>
+
+#include <cdp/core/adaptive_polygonizer.h>
+#include <cdp/core/errors.h>
+#include <cdp/core/mesh_topology.h>
+
+#include "src/adaptive/resolve_settings.h"
+#include "src/adaptive/tracker.h"
+
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "polygonizer/mesh_checks.h"
+
+namespace cdp {
+namespace {
+
+// A value function with derivatives as Python's callable_field makes them: central differences
+// of values, the gradient's 1e-5 and the Hessian's 1e-4 of the box's diagonal apart.
+class DifferencedField : public Field {
+ public:
+  DifferencedField(std::function<double(const Vec3&)> f, double half_side, bool smooth = false)
+      : f_(std::move(f)), smooth_(smooth) {
+    set_bounds(Box{Vec3::Constant(-half_side), Vec3::Constant(half_side)});
+    gradient_step_ = 1e-5 * bounds().diagonal();
+    hessian_step_ = 1e-4 * bounds().diagonal();
+  }
+  std::string type_name() const override { return "differenced"; }
+  bool smooth() const override { return smooth_; }
+  std::optional<double> derivative_step() const override { return hessian_step_; }
+
+ protected:
+  double eval_value(const Vec3& p) const override { return f_(p); }
+  double eval_value_gradient(const Vec3& p, Vec3& g) const override {
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e = Vec3::Unit(k) * gradient_step_;
+      g[k] = (f_(p + e) - f_(p - e)) / (2 * gradient_step_);
+    }
+    return f_(p);
+  }
+  double eval_gradient_hessian(const Vec3& p, Vec3& g, Mat3& h) const override {
+    const double v = eval_value_gradient(p, g), s = hessian_step_;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 ei = Vec3::Unit(i) * s;
+      h(i, i) = (f_(p + ei) - 2 * v + f_(p - ei)) / (s * s);
+      for (int j = 0; j < i; ++j) {
+        const Vec3 ej = Vec3::Unit(j) * s;
+        h(i, j) = h(j, i) = (f_(p + ei + ej) - f_(p + ei - ej) - f_(p - ei + ej) + f_(p - ei - ej)) / (4 * s * s);
+      }
+    }
+    return v;
+  }
+
+ private:
+  std::function<double(const Vec3&)> f_;
+  bool smooth_;
+  double gradient_step_, hessian_step_;
+};
+
+// A unit sphere capped by the plane z = 0.7: faces meeting 134 degrees apart along a circle.
+double sphere_capped_by_a_plane(const Vec3& p) { return std::max(p.norm() - 1, p.z() - 0.7); }
+
+AdaptiveOptions black_box_options(double factor, CreaseHandling creases = CreaseHandling::Follow) {
+  AdaptiveOptions o;
+  o.factor = factor;
+  o.creases = creases;
+  return o;
+}
+
+// The calls the tracker and what follows it make (the seed grid's values left out: the same
+// in every run of a field).
+std::uint64_t calls_past_the_grid(const Field& field) {
+  return field.counts().value_gradient + field.counts().gradient_hessian;
+}
+
+TEST(BlackBoxKinks, AStepAcrossACreaseStopsARunThatFollowsCreases) {
+  // No vertex lands within the differences' step of the circle (the fronts step over it with
+  // each end on a face): only the turn between a step's ends shows it. The run stops there,
+  // before a mesh is made (meshed across: 1,590 calls past the seed grid; stopped: 450), and
+  // its error names the kink.
+  const DifferencedField field(sphere_capped_by_a_plane, 1.25), across(sphere_capped_by_a_plane, 1.25);
+  polygonize_adaptive(across, black_box_options(3, CreaseHandling::Ignore));
+  try {
+    polygonize_adaptive(field, black_box_options(3));
+    FAIL() << "meshed across a crease of a black box";
+  } catch (const LimitExceededError& e) {  // BlackBoxKinkError, its message explained (failure_message.h)
+    const std::string message = e.what();
+    EXPECT_NE(message.find("crosses a kink of a field without branch data"), std::string::npos) << message;
+    EXPECT_NE(message.find("creases: ignore meshes across"), std::string::npos) << message;
+  }
+  EXPECT_LT(calls_past_the_grid(field), calls_past_the_grid(across) / 2);
+}
+
+TEST(BlackBoxKinks, IgnoreOrASmoothPromiseMeshesAcrossAndSaysSo) {
+  for (const bool smooth : {false, true}) {
+    const DifferencedField field(sphere_capped_by_a_plane, 1.25, smooth);
+    const PolygonizeResult r =
+        polygonize_adaptive(field, black_box_options(3, smooth ? CreaseHandling::Follow : CreaseHandling::Ignore));
+    const std::string what = smooth ? "smooth" : "ignore";
+    test::expect_sound(r.mesh, what);
+    const MeshTopology t = analyze_topology(r.mesh);
+    EXPECT_EQ(t.components, 1u) << what;
+    EXPECT_EQ(t.genus, 0) << what;
+    EXPECT_TRUE(r.stats.adaptive->creases.across_black_box) << what;
+  }
+}
+
+TEST(BlackBoxKinks, ASmoothBlackBoxFindsNoKink) {
+  // A torus and a sphere squashed to an ellipsoid: their curvature spreads each step's turn over
+  // its length, which kink_between tells from a crease (it halves towards the half that turns more).
+  const DifferencedField torus([](const Vec3& p) { return std::hypot(std::hypot(p.x(), p.y()) - 1, p.z()) - 0.3; }, 1.5);
+  const DifferencedField ellipsoid(
+      [](const Vec3& p) { return Vec3(p.x(), 2 * p.y(), 4 * p.z()).norm() - 1; }, 1.25);
+  for (const auto& [name, field] : {std::pair{"torus", &torus}, std::pair{"ellipsoid", &ellipsoid}}) {
+    for (const double factor : {1.0, 3.0}) {
+      const PolygonizeResult r = polygonize_adaptive(*field, black_box_options(factor));
+      EXPECT_FALSE(r.stats.adaptive->creases.across_black_box) << name << " at " << factor;
+      EXPECT_EQ(analyze_topology(r.mesh).genus, name == std::string("torus") ? 1 : 0) << name << " at " << factor;
+    }
+  }
+}
+
+TEST(BlackBoxKinks, OnlyFollowingCreasesOfABlackBoxNotPromisedSmoothStops) {
+  const DifferencedField black_box(sphere_capped_by_a_plane, 1.25), promised(sphere_capped_by_a_plane, 1.25, true);
+  EXPECT_TRUE(adaptive::resolve_settings(black_box, black_box_options(3)).stop_at_kink);
+  EXPECT_FALSE(adaptive::resolve_settings(black_box, black_box_options(3, CreaseHandling::Ignore)).stop_at_kink);
+  EXPECT_FALSE(adaptive::resolve_settings(promised, black_box_options(3)).stop_at_kink);
+  AdaptiveOptions paper = black_box_options(3);
+  paper.variant = Variant::Paper;
+  EXPECT_FALSE(adaptive::resolve_settings(black_box, paper).stop_at_kink);
+}
+
+}  // namespace
+}  // namespace cdp
