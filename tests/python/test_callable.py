@@ -250,7 +250,7 @@ def test_a_black_box_crease_no_vertex_lands_on_is_found_between_two():
     """A sphere capped by a plane (faces meeting at 134 degrees) as a black box: the fronts' steps
     cross the crease with both ends a face's, where the differences resolve the curvature, and
     before the steps were looked at the mesh cut the crease by chords and its stats said nothing
-    (creases.across_black_box false). A step whose normal turns far more than its ends' curvature
+    (creases.across_black_box false). A step whose normal turns more than its ends' curvature
     explains is halved towards the turn, which stays whole across a crease."""
     box = ((-1.25,) * 3, (1.25,) * 3)
     field = cdp.callable_field(capped_sphere, box, trace=False)
@@ -260,6 +260,25 @@ def test_a_black_box_crease_no_vertex_lands_on_is_found_between_two():
     V, F, _, stats = cdp.polygonize(field, factor=3, creases="ignore")
     assert topology(V, F) == (1, 0, True)
     assert stats["creases"]["across_black_box"]
+
+
+def two_spheres(combine, angle_degrees):
+    c = np.sin(np.radians(angle_degrees / 2))
+    return lambda p: combine(np.linalg.norm(p - [0, 0, c], axis=1) - 1, np.linalg.norm(p + [0, 0, c], axis=1) - 1)
+
+
+@pytest.mark.parametrize("combine", [np.maximum, np.minimum], ids=["lens", "union"])
+def test_a_shallow_black_box_crease_convex_or_concave_stops_the_run(combine):
+    """Two unit spheres meeting at 6 degrees, as their intersection (a convex crease) and their
+    union (a concave one, whose angle the faces' own turn hides from the raw turn of a step): the
+    turn the ends' curvature does not explain is the crease's. Before, both meshed at factors 1,
+    3 and 6 with the crease cut by chords and stats["creases"]["across_black_box"] false."""
+    box = ((-1.3,) * 3, (1.3,) * 3)
+    for factor in (1, 3, 6):
+        field = cdp.callable_field(two_spheres(combine, 6), box, trace=False)
+        with pytest.raises(cdp.LimitExceededError, match="kink"):
+            cdp.polygonize(field, factor=factor)
+        assert field.python_calls < 1_000
 
 
 def test_a_black_box_promised_smooth_is_meshed_across_its_tight_bends():

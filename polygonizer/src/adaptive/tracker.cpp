@@ -34,17 +34,13 @@ constexpr double kJumpTurnExplained = 2;
 // steps stay on the sheet, 0.05-0.08 and 60-70 degrees away).
 constexpr double kHalvesReach = 0.25;
 constexpr double kHalvesCosine = 0.866;
-// A black box's placement whose normal turned more than kKinkTurn, and more than
-// kKinkTurnExplained times what the curvature at its two ends explains over the step, is looked
-// at for a crease between them (kink_between): its path is halved towards the half that turns
-// more while that half turns at least kKinkConcentration of the whole (across a crease nearly
-// all of it, over smooth curvature about half), at most kKinkHalvings times. A sphere capped by
-// a plane (black boxes, factors 1, 3, 6): with 2 here, faces meeting 14-26 degrees from flat
-// were crossed unseen at some factors, with 1 from 14 degrees none; the 32 smooth hard-surface
-// fields make the same meshes either way, with 0.6 %, 13 % and 8 % more Python calls at factors
-// 6, 3 and 1 (the halvings that find the turn spread).
-constexpr double kKinkTurn = 10 * std::numbers::pi / 180;
-constexpr double kKinkTurnExplained = 1;
+// A black box's placement whose normal turned more than kKinkTurn beyond what the curvature at
+// its two ends explains (Tracker::unexplained_turn) is looked at for a crease between them
+// (kink_between): its path is halved towards the half whose own turn is the less explained while
+// that half keeps at least kKinkConcentration of it and more than kKinkTurn (across a crease
+// nearly all of it, its angle; curvature the ends did not predict, where it changes along the
+// step, about half, and less each halving), at most kKinkHalvings times.
+constexpr double kKinkTurn = 4 * std::numbers::pi / 180;
 constexpr double kKinkConcentration = 0.6;
 constexpr int kKinkHalvings = 30;
 // place_points' Newton evaluates a point with its Hessian where the point before it was within
@@ -242,7 +238,7 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
       // Meshing across (no stop_at_kink), one kink found is all the report says (across_black_box,
       // and no run made again): the halvings are not paid at every crossing after it.
       if (kink_radius_ > 0 && !on_crease && (s_.stop_at_kink || !(tightest_.first < kink_radius_))) {
-        if (const auto kink = kink_between(w.at, w.normal, mac_[v], *w.placed)) {
+        if (const auto kink = kink_between(w.at, w.normal, *w.placed)) {
           if (kink->first < tightest_.first) tightest_ = *kink;
           if (s_.stop_at_kink)
             throw BlackBoxKinkError("adaptive: a step from " + format_point(w.at) + " to " +
@@ -296,28 +292,75 @@ std::vector<Tracker::Placed> Tracker::place_points(int v, std::span<const Vec3> 
   return out;
 }
 
-std::optional<std::pair<double, Vec3>> Tracker::kink_between(const Vec3& a, const Vec3& na, double mac_a, const Placed& landed) const {
+namespace {
+
+double angle_between(const Vec3& p, const Vec3& q) { return std::acos(std::clamp(p.dot(q), -1.0, 1.0)); }
+
+// n turned by the rotation vector r (its axis, its angle in radians; Rodrigues).
+Vec3 rotated(const Vec3& n, const Vec3& r) {
+  const double angle = r.norm();
+  if (!(angle > 0)) return n;
+  const Vec3 k = r / angle;
+  return n * std::cos(angle) + k.cross(n) * std::sin(angle) + k * k.dot(n) * (1 - std::cos(angle));
+}
+
+// The rotation the unit normal makes along the chord `c` by the curvature C (dn = C dx) at one of
+// its ends, normal n: the chord's tangent part carried by C, as an axis times an angle.
+Vec3 rotation_along(const Vec3& n, const Mat3& C, const Vec3& c) {
+  const Vec3 t = c - n * n.dot(c);
+  const double tangent = t.norm();
+  if (!(tangent > 0)) return Vec3::Zero();
+  return n.cross(C * (t * (c.norm() / tangent)));
+}
+
+}  // namespace
+
+double Tracker::unexplained_turn(const Vec3& pa, const Curvature& ka, const Vec3& pb, const Curvature& kb) {
+  // The normal at b predicted from a's by the mean of the rotations the two ends' curvature
+  // gives along the chord (second order: a sphere at factor 1, a chord of a radian, 2 degrees
+  // off), against b's own. Across a crease the faces' curvature explains the faces' turn and
+  // leaves the crease's angle, convex or concave alike (where the raw turn, a concave crease's
+  // angle taken from the faces' turn, can be none at all).
+  const Vec3 c = pb - pa;
+  const Vec3 r = 0.5 * (rotation_along(ka.normal, ka.C, c) + rotation_along(kb.normal, kb.C, c));
+  return angle_between(rotated(ka.normal, r), kb.normal);
+}
+
+std::optional<std::pair<double, Vec3>> Tracker::kink_between(const Vec3& a, const Vec3& na, const Placed& landed) const {
   // A crease the differences do not straddle at either end: both ends' curvature is a face's,
-  // and only the turn between them shows it. The radius it is found at is the length over which
-  // the normal turns divided by that turn, below the differences' step as for a vertex on it.
-  const auto angle = [](const Vec3& p, const Vec3& q) { return std::acos(std::clamp(p.dot(q), -1.0, 1.0)); };
-  Vec3 pa = a, qa = na, pb = landed.point, qb = landed.curvature.normal;
-  double turn = angle(qa, qb);
-  const double d = (pb - pa).norm();
-  if (!(turn > kKinkTurn) || !(turn > kKinkTurnExplained * d * std::max(mac_a, landed.curvature.mac))) return {};
+  // and only the turn between them that curvature does not explain shows it.
+  const Curvature& kb = landed.curvature;
+  const Vec3& b = landed.point;
+  // First from b's curvature alone (no evaluation: a crease is rare): a's normal as b's predicts.
+  if (!(angle_between(rotated(kb.normal, rotation_along(kb.normal, kb.C, a - b)), na) > kKinkTurn)) return {};
+  const Curvature ka = curvature_at(field_, a);
+  double turn = unexplained_turn(a, ka, b, kb);
+  if (!(turn > kKinkTurn)) return {};
+  // Halved towards the crease: the midpoint's normal (from its gradient, whose differences are
+  // a tenth of the Hessian's step) as each end's face curvature carries its own normal there;
+  // the face that predicts it holds the midpoint, the crease lies in the other half. Each end
+  // keeps its face's curvature (the midpoint's own, within the Hessian's step of the crease,
+  // would be the differences' blur of it).
+  Vec3 pa = a, pb = b, qa = ka.normal, qb = kb.normal;
   ProjectionOptions po;
   po.tolerance = 1e-10 * s_.diagonal;
   for (int i = 0; i < kKinkHalvings; ++i) {
     const double length = (pb - pa).norm();
-    if (length < kink_radius_ * turn) return std::pair(length / turn, Vec3(0.5 * (pa + pb)));
+    // A turn of a crease's within the differences' step: what they cannot resolve.
+    if (length < kink_radius_) return std::pair(length, Vec3(0.5 * (pa + pb)));
     po.max_step = po.max_travel = length;
     const ProjectionResult m = project_to_surface(field_, 0.5 * (pa + pb), po);
     if (!m.ok() || !(m.gradient.squaredNorm() > 0) || !m.gradient.allFinite()) return {};
     const Vec3 nm = m.gradient.normalized();
-    const double ta = angle(qa, nm), tb = angle(nm, qb);
-    if (!(std::max(ta, tb) >= kKinkConcentration * turn)) return {};  // the turn spreads: curvature
-    if (ta >= tb) pb = m.point, qb = nm, turn = ta;
-    else pa = m.point, qa = nm, turn = tb;
+    const double from_a = angle_between(rotated(qa, rotation_along(qa, ka.C, m.point - pa)), nm);
+    const double from_b = angle_between(rotated(qb, rotation_along(qb, kb.C, m.point - pb)), nm);
+    const double left = std::max(from_a, from_b);
+    // Neither face holds the midpoint (a bend the ends' curvature did not predict, as within a
+    // fillet), or what is left fades under a crease's turn: no kink.
+    if (!(left >= kKinkConcentration * turn) || !(left > kKinkTurn)) return {};
+    if (from_a <= from_b) pa = m.point, qa = nm;
+    else pb = m.point, qb = nm;
+    turn = left;
   }
   return {};
 }

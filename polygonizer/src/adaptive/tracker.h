@@ -124,7 +124,8 @@ class StalledFrontError : public LimitExceededError {
 };
 
 // With Settings::stop_at_kink: a vertex placed where a black box's normal turns within the step
-// of its central differences, or a step whose normal turns so between its ends (kink_between),
+// of its central differences, or a step whose normal turns, beyond what its ends' curvature
+// explains, by more than a few degrees within that step (kink_between),
 // met a crease or corner of the function, which the field does not describe and so no mesh of it
 // follows. Meshing on would not end it: the fronts that cannot cross such a crease crowd along it
 // with edges of min_edge until a bound of the searches stops them (a Menger sponge as a numpy
@@ -341,10 +342,16 @@ class Tracker {
   // Whether a point placed from vertex v along `heading` (unit, tangent) at distance d landed on
   // another sheet than v's (see tracker.cpp).
   bool jumped(int v, const Vec3& heading, double d, const Placed& landed) const;
-  // Where a step of a black box from `a` (normal `na`, curvature mac_a) to `landed` crosses a
-  // kink of it (a crease the differences resolve on both sides of), as the bend found there.
-  std::optional<std::pair<double, Vec3>> kink_between(const Vec3& a, const Vec3& na, double mac_a,
-                                                      const Placed& landed) const;
+  // Where a step of a black box from `a` (normal `na`) to `landed` crosses a kink of it (a crease
+  // the differences resolve on both sides of), as the bend found there.
+  std::optional<std::pair<double, Vec3>> kink_between(const Vec3& a, const Vec3& na, const Placed& landed) const;
+
+ public:
+  // The angle between the normal at pb and the normal at pa carried along the chord by the two
+  // ends' curvature: the turn their curvature does not explain (a crease's angle across one).
+  static double unexplained_turn(const Vec3& pa, const Curvature& ka, const Vec3& pb, const Curvature& kb);
+
+ private:
   // For each point xs[i] whose gradient is ns[i]: the mean of the normals on both sides when it
   // lies on a crease, nothing elsewhere. Two value_gradient evaluations a point, in one batch.
   void crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns, std::vector<std::optional<Vec3>>& out) const;

@@ -7,7 +7,9 @@
 
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/errors.h>
+#include <cdp/core/curvature.h>
 #include <cdp/core/mesh_topology.h>
+#include <cdp/core/models/analytic.h>
 
 #include "src/adaptive/resolve_settings.h"
 #include "src/adaptive/tracker.h"
@@ -15,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <utility>
@@ -100,6 +103,68 @@ TEST(BlackBoxKinks, AStepAcrossACreaseStopsARunThatFollowsCreases) {
   EXPECT_LT(calls_past_the_grid(field), calls_past_the_grid(across) / 2);
 }
 
+constexpr double kDegree = std::numbers::pi / 180;
+
+TEST(BlackBoxKinks, TheTurnCurvatureDoesNotExplainIsACreasesAngle) {
+  // On one sphere the ends' curvature carries the normal along the chord: a radian's chord (a
+  // step at factor 1) leaves about 2 degrees, a tenth of one next to nothing.
+  const Sphere unit(Vec3::Zero(), 1);
+  for (const double arc : {1.0, 0.1}) {
+    const Vec3 a(1, 0, 0), b(std::cos(arc), std::sin(arc), 0);
+    const double left = adaptive::Tracker::unexplained_turn(a, curvature_at(unit, a), b, curvature_at(unit, b));
+    EXPECT_LT(left, arc * arc * arc * 3 * kDegree) << arc;
+  }
+  // Two unit spheres whose centres are 2 sin(6 degrees) apart meet at 12 degrees: a chord from
+  // one across their circle to the other leaves that angle, whether the crease is convex (their
+  // intersection: the raw turn is the faces' and the crease's) or concave (their union: the
+  // crease takes its angle from the faces' turn). Within 1.5 degrees at a chord of 0.6.
+  const double c = std::sin(6 * kDegree);
+  const Sphere upper(Vec3(0, 0, c), 1), lower(Vec3(0, 0, -c), 1);
+  const double r = std::sqrt(1 - c * c);
+  for (const double arc : {0.3, 0.05}) {
+    // On the lens (the intersection) the upper sphere bounds the lower half-space, and the
+    // other way round; on the union, each bounds its own side.
+    const Vec3 on_upper = Vec3(0, 0, c) + Vec3(r, 0, -c - std::sin(arc)).normalized(),
+               on_lower = Vec3(0, 0, -c) + Vec3(r, 0, c + std::sin(arc)).normalized();
+    const double lens = adaptive::Tracker::unexplained_turn(on_upper, curvature_at(upper, on_upper), on_lower,
+                                                            curvature_at(lower, on_lower));
+    EXPECT_NEAR(lens, 12 * kDegree, (0.1 + 50 * arc * arc * arc) * kDegree) << arc;
+    const Vec3 union_upper = Vec3(0, 0, c) + Vec3(r, 0, -c + std::sin(arc)).normalized(),
+               union_lower = Vec3(0, 0, -c) + Vec3(r, 0, c - std::sin(arc)).normalized();
+    const double raw = std::acos(curvature_at(upper, union_upper).normal.dot(curvature_at(lower, union_lower).normal));
+    const double valley = adaptive::Tracker::unexplained_turn(union_upper, curvature_at(upper, union_upper), union_lower,
+                                                              curvature_at(lower, union_lower));
+    EXPECT_NEAR(valley, 12 * kDegree, (0.1 + 50 * arc * arc * arc) * kDegree) << arc;
+    // The raw turn is less than the chord's curvature alone turns (a radian a unit length).
+    if (arc > 0.1) {
+      EXPECT_LT(raw, (union_upper - union_lower).norm());
+    }
+  }
+}
+
+TEST(BlackBoxKinks, ShallowCreasesConvexOrConcaveStopTheRun) {
+  // Two unit spheres meeting at 8 degrees, as their intersection (a lens: a convex crease) and
+  // their union (a concave one), at factors 1 and 3 and a tolerance; a raw turn of more than 10
+  // degrees, and more than the ends' curvature explains, missed both (the meshes cut them by
+  // chords, and said nothing) at every one of them.
+  const double c = std::sin(4 * kDegree), h = 1.25 + c;
+  const auto lens = [c](const Vec3& p) { return std::max((p - Vec3(0, 0, c)).norm(), (p + Vec3(0, 0, c)).norm()) - 1; };
+  const auto both = [c](const Vec3& p) { return std::min((p - Vec3(0, 0, c)).norm(), (p + Vec3(0, 0, c)).norm()) - 1; };
+  AdaptiveOptions tolerance;
+  tolerance.sizing = SizingMode::Tolerance;
+  tolerance.tolerance = 1e-3;
+  for (const auto& [name, f] : {std::pair<std::string, std::function<double(const Vec3&)>>{"lens", lens}, {"union", both}}) {
+    for (const AdaptiveOptions& o : {black_box_options(1), black_box_options(3), tolerance}) {
+      const DifferencedField field(f, h);
+      EXPECT_THROW(polygonize_adaptive(field, o), LimitExceededError) << name << " at factor " << o.factor;
+    }
+    const DifferencedField field(f, h);
+    const PolygonizeResult r = polygonize_adaptive(field, black_box_options(3, CreaseHandling::Ignore));
+    EXPECT_TRUE(r.stats.adaptive->creases.across_black_box) << name;
+    EXPECT_EQ(analyze_topology(r.mesh).genus, 0) << name;
+  }
+}
+
 TEST(BlackBoxKinks, IgnoreOrASmoothPromiseMeshesAcrossAndSaysSo) {
   for (const bool smooth : {false, true}) {
     const DifferencedField field(sphere_capped_by_a_plane, 1.25, smooth);
@@ -115,8 +180,9 @@ TEST(BlackBoxKinks, IgnoreOrASmoothPromiseMeshesAcrossAndSaysSo) {
 }
 
 TEST(BlackBoxKinks, ASmoothBlackBoxFindsNoKink) {
-  // A torus and a sphere squashed to an ellipsoid: their curvature spreads each step's turn over
-  // its length, which kink_between tells from a crease (it halves towards the half that turns more).
+  // A torus and a sphere squashed to an ellipsoid: the curvature at a step's two ends explains
+  // its turn, and where it changes along the step what it leaves spreads over the step's length,
+  // which kink_between tells from a crease.
   const DifferencedField torus([](const Vec3& p) { return std::hypot(std::hypot(p.x(), p.y()) - 1, p.z()) - 0.3; }, 1.5);
   const DifferencedField ellipsoid(
       [](const Vec3& p) { return Vec3(p.x(), 2 * p.y(), 4 * p.z()).norm() - 1; }, 1.25);
