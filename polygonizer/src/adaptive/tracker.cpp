@@ -39,8 +39,15 @@ constexpr double kHalvesCosine = 0.866;
 // (kink_between): its path is halved towards the half whose own turn is the less explained while
 // that half keeps at least kKinkConcentration of it and more than kKinkTurn (across a crease
 // nearly all of it, its angle; curvature the ends did not predict, where it changes along the
-// step, about half, and less each halving), at most kKinkHalvings times.
+// step, about half, and less each halving), at most kKinkHalvings times, and while each halving
+// shortens the step by kKinkShrink at least (two ends on two sheets a gap apart stay that far).
+// What counts is a turn of kKinkTurn within the differences' step h, so a fillet whose radius is
+// under about 7-14 h, where the curvature jumps from a face's to its own, is one too: a box
+// rounded by 2 and 5 h stopped, by 10 h and more meshed (h = 1e-4 of the diagonal: fillets far
+// under the default min_edge). The first test takes the far end's curvature alone, no
+// evaluation, at half the threshold (its one-sided prediction misses more).
 constexpr double kKinkTurn = 4 * std::numbers::pi / 180;
+constexpr double kKinkShrink = 0.75;
 constexpr double kKinkConcentration = 0.6;
 constexpr int kKinkHalvings = 30;
 // place_points' Newton evaluates a point with its Hessian where the point before it was within
@@ -74,7 +81,9 @@ Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
   front_hash_.set_cancel(s_.cancel);
   vertex_hash_.set_cancel(s_.cancel);
   fs_.cancel = s_.cancel;
-  kink_radius_ = field.derivative_step().value_or(0);
+  // A black box its caller promises smooth is not searched for kinks between vertices
+  // (kink_between also takes a fillet of a few differences' steps for one).
+  kink_radius_ = field.smooth() ? 0 : field.derivative_step().value_or(0);
 }
 
 void Tracker::release_in_background() noexcept {
@@ -310,7 +319,9 @@ Vec3 rotation_along(const Vec3& n, const Mat3& C, const Vec3& c) {
   const Vec3 t = c - n * n.dot(c);
   const double tangent = t.norm();
   if (!(tangent > 0)) return Vec3::Zero();
-  return n.cross(C * (t * (c.norm() / tangent)));
+  // Stretched to the chord's length (the arc the normal turns over), at most twice: a chord
+  // nearly along the normal has no tangent part worth stretching.
+  return n.cross(C * (t * std::min(2.0, c.norm() / tangent)));
 }
 
 }  // namespace
@@ -332,22 +343,31 @@ std::optional<std::pair<double, Vec3>> Tracker::kink_between(const Vec3& a, cons
   const Curvature& kb = landed.curvature;
   const Vec3& b = landed.point;
   // First from b's curvature alone (no evaluation: a crease is rare): a's normal as b's predicts.
-  if (!(angle_between(rotated(kb.normal, rotation_along(kb.normal, kb.C, a - b)), na) > kKinkTurn)) return {};
-  const Curvature ka = curvature_at(field_, a);
+  if (!(angle_between(rotated(kb.normal, rotation_along(kb.normal, kb.C, a - b)), na) > 0.5 * kKinkTurn)) return {};
+  Curvature ka;
+  try {
+    ka = curvature_at(field_, a);
+  } catch (const NoSurfaceError&) {
+    return {};  // no normal at a after all: nothing to compare
+  }
   double turn = unexplained_turn(a, ka, b, kb);
   if (!(turn > kKinkTurn)) return {};
   // Halved towards the crease: the midpoint's normal (from its gradient, whose differences are
-  // a tenth of the Hessian's step) as each end's face curvature carries its own normal there;
+  // narrower than the Hessian's by default) as each end's face curvature carries its own normal there;
   // the face that predicts it holds the midpoint, the crease lies in the other half. Each end
   // keeps its face's curvature (the midpoint's own, within the Hessian's step of the crease,
   // would be the differences' blur of it).
   Vec3 pa = a, pb = b, qa = ka.normal, qb = kb.normal;
   ProjectionOptions po;
   po.tolerance = 1e-10 * s_.diagonal;
+  double before = std::numeric_limits<double>::infinity();
   for (int i = 0; i < kKinkHalvings; ++i) {
     const double length = (pb - pa).norm();
-    // A turn of a crease's within the differences' step: what they cannot resolve.
+    // A turn of a crease's within the differences' step: what they cannot resolve. The bend
+    // reported is that length (Tracking::tightest: under the step, as a vertex's radius on a kink).
     if (length < kink_radius_) return std::pair(length, Vec3(0.5 * (pa + pb)));
+    if (!(length < kKinkShrink * before)) return {};
+    before = length;
     po.max_step = po.max_travel = length;
     const ProjectionResult m = project_to_surface(field_, 0.5 * (pa + pb), po);
     if (!m.ok() || !(m.gradient.squaredNorm() > 0) || !m.gradient.allFinite()) return {};

@@ -70,7 +70,8 @@ struct Settings {
   double collision_factor = 1.3;
   std::size_t max_triangles = 0;
   std::size_t max_steps = 0;
-  // Whether a vertex placed on a kink of a black box (a bend tighter than Field::derivative_step)
+  // Whether a vertex placed on a kink of a black box (a bend tighter than Field::derivative_step,
+  // or between two vertices a turn of a few degrees within that step: kink_between)
   // ends the run at once (BlackBoxKinkError): CreaseHandling::Follow, whose promise no mesh of
   // such a field keeps, unless its caller promises it smooth (resolve_settings).
   bool stop_at_kink = false;

@@ -61,7 +61,8 @@ struct TrackerReport {
   std::size_t sheet_jumps = 0;
   double curvature_seconds = 0, hessian_seconds = 0;
   // The smallest radius of curvature the fronts met; negative when none was finite (STATS
-  // "curvature.min_radius").
+  // "curvature.min_radius"). For a kink of a black box found between two vertices, the length
+  // within which its normal turns (under the differences' step).
   double min_curvature_radius = -1;
 };
 
