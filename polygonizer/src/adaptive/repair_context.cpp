@@ -43,7 +43,23 @@ double RepairContext::midpoint_distance(int x, int y, MidpointMemo* memo) const 
   return d;
 }
 
-double RepairContext::estimate_distance(const Tri& t, int slot, MidpointMemo* memo) const {
+void RepairContext::signed_distances(const std::vector<Vec3>& ps, std::vector<double>& out) const {
+  out.resize(ps.size());
+  std::vector<double> f;
+  std::vector<Vec3> g;
+  for (std::size_t begin = 0; begin < ps.size(); begin += kDistanceBatch) {
+    poll();
+    const std::size_t n = std::min(kDistanceBatch, ps.size() - begin);
+    f.resize(n), g.resize(n);
+    field_.values_gradients(ps.data() + begin, f.data(), g.data(), n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double l = g[i].norm();
+      out[begin + i] = l > 0 ? f[i] / l : std::numeric_limits<double>::infinity();
+    }
+  }
+}
+
+double RepairContext::estimate_distance(const Tri& t, int slot, MidpointMemo* memo, const double* centroid) const {
   if (static_cast<std::size_t>(slot) >= estimates_.size()) estimates_.resize(static_cast<std::size_t>(slot) + 1);
   EstimateEntry& e = estimates_[static_cast<std::size_t>(slot)];
   const std::array<bool, 3> kept = kept_corners(e, t);
@@ -59,12 +75,13 @@ double RepairContext::estimate_distance(const Tri& t, int slot, MidpointMemo* me
       mid[i] = midpoint_distance(t[i], t[j], memo);
     }
   }
-  e = {t, p, mid, estimate_from(p[0], p[1], p[2], mid[0], mid[1], mid[2])};
+  e = {t, p, mid,
+       centroid ? estimate_from_samples(mid[0], mid[1], mid[2], *centroid)
+                : estimate_from(p[0], p[1], p[2], mid[0], mid[1], mid[2])};
   return e.d;
 }
 
-double RepairContext::estimate_from(const Vec3& a, const Vec3& b, const Vec3& c, double mab, double mbc, double mca) const {
-  const double centroid = signed_distance((a + b + c) / 3);
+double RepairContext::estimate_from_samples(double mab, double mbc, double mca, double centroid) {
   if (!std::isfinite(mab + mbc + mca + centroid)) return std::numeric_limits<double>::infinity();
   // The quadratic through 0 at the corners and these at the midpoints, sampled on a grid of
   // step 1/12 (its maximum lies within 1% of a grid point's), from a table of the grid's

@@ -244,6 +244,12 @@ class RepairContext {
     const double l = g.norm();
     return l > 0 ? f / l : std::numeric_limits<double>::infinity();
   }
+  // signed_distance at every point of `ps`, the same numbers, in batched calls of the field of
+  // at most kDistanceBatch points (a Python function's calls cost more than its points).
+  void signed_distances(const std::vector<Vec3>& ps, std::vector<double>& out) const;
+  // Points per batch of signed_distances: with a Python field's central differences, seven points
+  // each, its arrays stay near 10 MB as probe_creases' do.
+  static constexpr std::size_t kDistanceBatch = 32768;
   // The largest distance between triangle t and the surface, estimated from the edge midpoints
   // and the centroid (see kToleranceMargin).
   // `memo` (optional) keeps the edge midpoints' distances of the triangles it has seen at the
@@ -290,13 +296,18 @@ class RepairContext {
         kept_corners(estimates_[static_cast<std::size_t>(slot)], mesh_.triangles[static_cast<std::size_t>(slot)]);
     return kept[0] && kept[1] && kept[2];
   }
-  double estimate_distance(const Tri& t, int slot, MidpointMemo* memo = nullptr) const;
+  // `centroid` (optional): signed_distance at the triangle's centroid, measured beforehand.
+  double estimate_distance(const Tri& t, int slot, MidpointMemo* memo = nullptr, const double* centroid = nullptr) const;
   double estimate_distance(const Tri& t, MidpointMemo* memo = nullptr) const {
     return estimate_from(P(t[0]), P(t[1]), P(t[2]), midpoint_distance(t[0], t[1], memo),
                          midpoint_distance(t[1], t[2], memo), midpoint_distance(t[2], t[0], memo));
   }
   // ... from the midpoints' signed distances.
-  double estimate_from(const Vec3& a, const Vec3& b, const Vec3& c, double mab, double mbc, double mca) const;
+  double estimate_from(const Vec3& a, const Vec3& b, const Vec3& c, double mab, double mbc, double mca) const {
+    return estimate_from_samples(mab, mbc, mca, signed_distance((a + b + c) / 3));
+  }
+  // ... and the centroid's.
+  static double estimate_from_samples(double mab, double mbc, double mca, double centroid);
   // The largest distance from triangle t to the surface over a barycentric grid of
   // kDenseGrid + 1 points a side (28 points: corners, 5 more on each side, 10 inside), each the
   // length of Newton's path onto the surface (at least the point's true distance); `fallback`
