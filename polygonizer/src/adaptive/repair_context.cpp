@@ -52,10 +52,7 @@ void RepairContext::signed_distances(const std::vector<Vec3>& ps, std::vector<do
     const std::size_t n = std::min(kDistanceBatch, ps.size() - begin);
     f.resize(n), g.resize(n);
     field_.values_gradients(ps.data() + begin, f.data(), g.data(), n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const double l = g[i].norm();
-      out[begin + i] = l > 0 ? f[i] / l : std::numeric_limits<double>::infinity();
-    }
+    for (std::size_t i = 0; i < n; ++i) out[begin + i] = signed_distance(f[i], g[i]);
   }
 }
 

@@ -241,6 +241,9 @@ class RepairContext {
   double signed_distance(const Vec3& p) const {
     Vec3 g;
     const double f = field_.value_gradient(p, g);
+    return signed_distance(f, g);
+  }
+  static double signed_distance(double f, const Vec3& g) {
     const double l = g.norm();
     return l > 0 ? f / l : std::numeric_limits<double>::infinity();
   }

@@ -18,6 +18,65 @@ constexpr double kDenseClearShare = 0.95;
 // every offending triangle, and 24 halvings take any edge below min_edge.
 constexpr int kRefineRounds = 24;
 
+// The estimates of a round's triangles, made before the round splits any: each edge's midpoint
+// once (two triangles share it), then each triangle into its slot (a triangle a split changes
+// before its turn is measured again there). A thread-safe field's on all cores (the same on any
+// number of threads); another's (a Python function) in batched calls, midpoints and centroids,
+// where one at a time took a call a point: a black-box tanglecube at tolerance 1e-3, 1.06
+// million calls for 96,588 triangles.
+void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
+  if (ctx.estimates_.size() < ctx.mesh_.triangles.size()) ctx.estimates_.resize(ctx.mesh_.triangles.size());
+  std::vector<int> todo;
+  RepairContext::EdgeTable table;
+  for (std::size_t w = 0; w < work.size(); ++w) {
+    ctx.poll(w);
+    const int t = work[w];
+    if (ctx.alive_[t] && !ctx.remembered(t)) {
+      todo.push_back(t);
+      const Tri& T = ctx.mesh_.triangles[t];
+      for (int i = 0; i < 3; ++i) table.keys.push_back(ctx.edge_key(T[i], T[(i + 1) % 3]));
+    }
+  }
+  ctx.poll();
+  std::sort(table.keys.begin(), table.keys.end());
+  table.keys.erase(std::unique(table.keys.begin(), table.keys.end()), table.keys.end());
+  table.d.resize(table.keys.size());
+  const auto midpoint = [&](std::size_t i) {
+    const int x = static_cast<int>(table.keys[i] >> 32), y = static_cast<int>(table.keys[i] & 0xffffffffu);
+    return Vec3(0.5 * (ctx.P(x) + ctx.P(y)));
+  };
+  if (ctx.field_.thread_safe()) {
+    detail::parallel_blocks(table.keys.size(), kRepairBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned) {
+      ctx.poll();
+      for (std::size_t i = begin; i < end; ++i) table.d[i] = ctx.signed_distance(midpoint(i));
+    });
+    detail::parallel_blocks(todo.size(), kRepairBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned) {
+      ctx.poll();
+      RepairContext::MidpointMemo memo;
+      memo.table = &table;
+      for (std::size_t i = begin; i < end; ++i) ctx.estimate_distance(ctx.mesh_.triangles[todo[i]], todo[i], &memo);
+    });
+  } else {
+    std::vector<Vec3> points(table.keys.size());
+    for (std::size_t i = 0; i < points.size(); ++i) points[i] = midpoint(i);
+    ctx.signed_distances(points, table.d);
+    points.resize(todo.size());
+    for (std::size_t i = 0; i < todo.size(); ++i) {
+      const Tri& T = ctx.mesh_.triangles[todo[i]];
+      points[i] = (ctx.P(T[0]) + ctx.P(T[1]) + ctx.P(T[2])) / 3;
+    }
+    std::vector<double> centroids;
+    ctx.signed_distances(points, centroids);
+    for (std::size_t begin = 0; begin < todo.size(); begin += kRepairBlock) {
+      ctx.poll();
+      RepairContext::MidpointMemo memo;  // as a block of the threads' (its list searched linearly)
+      memo.table = &table;
+      for (std::size_t i = begin; i < std::min(todo.size(), begin + kRepairBlock); ++i)
+        ctx.estimate_distance(ctx.mesh_.triangles[todo[i]], todo[i], &memo, &centroids[i]);
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<int> refine(RepairContext& ctx, std::vector<int> work) {
@@ -32,64 +91,7 @@ std::vector<int> refine(RepairContext& ctx, std::vector<int> work) {
   std::vector<int> left;
   for (int round = 0; round < kRefineRounds && !work.empty(); ++round) {
     ctx.touched_.clear();
-    // The estimates are made first: each edge's midpoint once (two triangles share it), then
-    // each triangle into its slot (a triangle a split changes before its turn is measured again
-    // there). A thread-safe field's on all cores (the same on any number of threads); another's
-    // (a Python function) in batched calls, midpoints and centroids, where one at a time took a
-    // call a point: a black-box tanglecube at tolerance 1e-3, 1.06 million calls for 96,588
-    // triangles.
-    {
-      if (ctx.estimates_.size() < ctx.mesh_.triangles.size()) ctx.estimates_.resize(ctx.mesh_.triangles.size());
-      std::vector<int> todo;
-      RepairContext::EdgeTable table;
-      for (std::size_t w = 0; w < work.size(); ++w) {
-        ctx.poll(w);
-        const int t = work[w];
-        if (ctx.alive_[t] && !ctx.remembered(t)) {
-          todo.push_back(t);
-          const Tri& T = ctx.mesh_.triangles[t];
-          for (int i = 0; i < 3; ++i) table.keys.push_back(ctx.edge_key(T[i], T[(i + 1) % 3]));
-        }
-      }
-      ctx.poll();
-      std::sort(table.keys.begin(), table.keys.end());
-      table.keys.erase(std::unique(table.keys.begin(), table.keys.end()), table.keys.end());
-      table.d.resize(table.keys.size());
-      const auto midpoint = [&](std::size_t i) {
-        const int x = static_cast<int>(table.keys[i] >> 32), y = static_cast<int>(table.keys[i] & 0xffffffffu);
-        return Vec3(0.5 * (ctx.P(x) + ctx.P(y)));
-      };
-      if (ctx.field_.thread_safe()) {
-        detail::parallel_blocks(table.keys.size(), kRepairBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned) {
-          ctx.poll();
-          for (std::size_t i = begin; i < end; ++i) table.d[i] = ctx.signed_distance(midpoint(i));
-        });
-        detail::parallel_blocks(todo.size(), kRepairBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned) {
-          ctx.poll();
-          RepairContext::MidpointMemo memo;
-          memo.table = &table;
-          for (std::size_t i = begin; i < end; ++i) ctx.estimate_distance(ctx.mesh_.triangles[todo[i]], todo[i], &memo);
-        });
-      } else {
-        std::vector<Vec3> points(table.keys.size());
-        for (std::size_t i = 0; i < points.size(); ++i) points[i] = midpoint(i);
-        ctx.signed_distances(points, table.d);
-        points.resize(todo.size());
-        for (std::size_t i = 0; i < todo.size(); ++i) {
-          const Tri& T = ctx.mesh_.triangles[todo[i]];
-          points[i] = (ctx.P(T[0]) + ctx.P(T[1]) + ctx.P(T[2])) / 3;
-        }
-        std::vector<double> centroids;
-        ctx.signed_distances(points, centroids);
-        for (std::size_t begin = 0; begin < todo.size(); begin += kRepairBlock) {
-          ctx.poll();
-          RepairContext::MidpointMemo memo;  // as a block of the threads' (its list searched linearly)
-          memo.table = &table;
-          for (std::size_t i = begin; i < std::min(todo.size(), begin + kRepairBlock); ++i)
-            ctx.estimate_distance(ctx.mesh_.triangles[todo[i]], todo[i], &memo, &centroids[i]);
-        }
-      }
-    }
+    estimate_ahead(ctx, work);
     for (std::size_t i = 0; i < work.size(); ++i) {
       ctx.poll(i);
       const int t = work[i];

@@ -324,6 +324,11 @@ Vec3 rotation_along(const Vec3& n, const Mat3& C, const Vec3& c) {
   return n.cross(C * (t * std::min(2.0, c.norm() / tangent)));
 }
 
+// How far the normal n at p, carried to x by the curvature C at p alone, misses nx, x's own.
+double one_sided_miss(const Vec3& p, const Vec3& n, const Mat3& C, const Vec3& x, const Vec3& nx) {
+  return angle_between(rotated(n, rotation_along(n, C, x - p)), nx);
+}
+
 }  // namespace
 
 double Tracker::unexplained_turn(const Vec3& pa, const Curvature& ka, const Vec3& pb, const Curvature& kb) {
@@ -343,7 +348,7 @@ std::optional<std::pair<double, Vec3>> Tracker::kink_between(const Vec3& a, cons
   const Curvature& kb = landed.curvature;
   const Vec3& b = landed.point;
   // First from b's curvature alone (no evaluation: a crease is rare): a's normal as b's predicts.
-  if (!(angle_between(rotated(kb.normal, rotation_along(kb.normal, kb.C, a - b)), na) > 0.5 * kKinkTurn)) return {};
+  if (!(one_sided_miss(b, kb.normal, kb.C, a, na) > 0.5 * kKinkTurn)) return {};
   Curvature ka;
   try {
     ka = curvature_at(field_, a);
@@ -372,8 +377,7 @@ std::optional<std::pair<double, Vec3>> Tracker::kink_between(const Vec3& a, cons
     const ProjectionResult m = project_to_surface(field_, 0.5 * (pa + pb), po);
     if (!m.ok() || !(m.gradient.squaredNorm() > 0) || !m.gradient.allFinite()) return {};
     const Vec3 nm = m.gradient.normalized();
-    const double from_a = angle_between(rotated(qa, rotation_along(qa, ka.C, m.point - pa)), nm);
-    const double from_b = angle_between(rotated(qb, rotation_along(qb, kb.C, m.point - pb)), nm);
+    const double from_a = one_sided_miss(pa, qa, ka.C, m.point, nm), from_b = one_sided_miss(pb, qb, kb.C, m.point, nm);
     const double left = std::max(from_a, from_b);
     // Neither face holds the midpoint (a bend the ends' curvature did not predict, as within a
     // fillet), or what is left fades under a crease's turn: no kink.
@@ -396,7 +400,7 @@ bool Tracker::jumped(int v, const Vec3& heading, double d, const Placed& landed)
   const Vec3& normal = mesh_.normals[v];
   const Curvature& k = landed.curvature;
   if (!(d * k.mac > kJumpRadii)) return false;
-  const double turn = std::acos(std::clamp(normal.dot(k.normal), -1.0, 1.0));
+  const double turn = angle_between(normal, k.normal);
   if (!(turn > kJumpTurnExplained * mac_[v] * d)) return false;
   ProjectionOptions po;
   po.tolerance = 1e-10 * s_.diagonal;
