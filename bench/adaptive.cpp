@@ -363,6 +363,7 @@ void BM_AdaptiveBlocks(benchmark::State& state) {
   const Field& field = shape == 0 ? *torus : shape == 1 ? *tangle : shape == 2 ? bunny() : *blobs;
   AdaptiveOptions serial;
   serial.threads = 1;
+  serial.blocks = false;
   if (shape == 3) serial.sizing = SizingMode::Tolerance, serial.tolerance = 1e-3;
   else serial.factor = shape == 0 ? 40 : shape == 1 ? 12 : 5;
   AdaptiveOptions blocks1 = serial;

@@ -140,7 +140,7 @@ BlockRunner python_block_runner(py::handle runner, const CancelToken& token) {
 py::tuple run(const Field& unshifted, const std::string& method, const nlohmann::json& options, py::object progress,
               py::object phase, const std::optional<CancelToken>& cancel, py::object block_runner = py::none()) {
   PolygonizeRequest request = polygonize_request(method, options);
-  if (!block_runner.is_none() && (method != "adaptive" || !request.adaptive.blocks))
+  if (!block_runner.is_none() && (method != "adaptive" || !request.adaptive.blocks.value_or(false)))
     throw InvalidInputError("polygonize: block_runner needs method \"adaptive\" with blocks=True");
   std::optional<LevelShift> shifted;
   const Field& field = request.level != 0 ? shifted.emplace(unshifted, request.level) : unshifted;

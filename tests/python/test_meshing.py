@@ -299,6 +299,14 @@ def test_blocks_give_the_same_mesh_on_one_and_two_threads():
     assert np.array_equal(one.vertices, two.vertices) and np.array_equal(one.faces, two.faces)
     summary = one.stats["summary"]
     assert summary["watertight"] and summary["genus"] == 1 and summary["components"] == 1
+    # Blocks are the default for a field whose calls are cheap: the same mesh as blocks=True.
+    default = cdp.polygonize(torus, factor=12)
+    assert default.stats["blocks"]["requested"] and default.stats["blocks"]["used"]
+    assert np.array_equal(one.vertices, default.vertices) and np.array_equal(one.faces, default.faces)
     # Without blocks the surface is tracked alone, into another mesh of the same surface.
-    alone = cdp.polygonize(torus, factor=12, threads=1)
+    alone = cdp.polygonize(torus, factor=12, threads=1, blocks=False)
     assert not alone.stats["blocks"]["used"] and not alone.stats["blocks"]["requested"]
+    # A Python function is tracked alone unless blocks=True (lockstep: fewer calls, more time).
+    field = cdp.callable_field(torus.values, torus.bounds, trace=False)
+    called = cdp.polygonize(field, factor=3)
+    assert not called.stats["blocks"]["requested"] and not called.stats["blocks"]["used"]

@@ -103,6 +103,12 @@ BlockPart run_block(const Field& field, const BlockTask& task) {
       return (x.array() >= lo.array() - margin).all() && (x.array() <= hi.array() + margin).all();
     };
     Tracker tracker(field, task.settings, part.mesh);
+    // Its counters and tightest bend, whatever it throws (a kink of a black box ends the run).
+    struct Keep {
+      const Tracker& tracker;
+      BlockPart& part;
+      ~Keep() { part.tracker = tracker.report(), part.tightest = tracker.tightest_bend(); }
+    } keep{tracker, part};
     if (task.estimated_area > 0) tracker.set_estimated_area(task.estimated_area);
     tracker.set_patch_test([&field, within](const Vec3& a, const Vec3& b) {
       Vec3 m = 0.5 * (a + b);
@@ -154,6 +160,7 @@ static_assert(sizeof(Sizing) == 48 && sizeof(FinerZone) == 40 && sizeof(Settings
               "a field added to Settings: write and read it in block_task.cpp");
 static_assert(sizeof(QualityOptions) == 88, "a field added to QualityOptions: write and read it in block_task.cpp");
 static_assert(sizeof(QualityReport) == 184, "a field added to QualityReport: write and read it in block_task.cpp");
+static_assert(sizeof(TrackerReport) == 112, "a field added to TrackerReport: write and read it in block_task.cpp");
 static_assert(sizeof(Tracker::Placed) == 264 && sizeof(Curvature) == 200 && sizeof(CriticalStart) == 56,
               "a field added to Tracker::Placed or CriticalStart: write and read it in block_task.cpp");
 #endif
@@ -344,6 +351,14 @@ void quality_counts(Q& q, F&& f) {
   f(q.over_tolerance);
 }
 
+// TrackerReport: every number in declaration order (min_curvature_radius too).
+template <class R, class F>
+void tracker_counts(R& t, F&& f) {
+  f(t.steps), f(t.search_visits), f(t.deferrals), f(t.anticipations), f(t.side_points), f(t.forced_closures);
+  f(t.rollbacks), f(t.rollbacks_failed), f(t.crease_points), f(t.over_mesh_rejections), f(t.sheet_jumps);
+  f(t.curvature_seconds), f(t.hessian_seconds), f(t.min_curvature_radius);
+}
+
 // What a block's run threw, travelling in its piece: a tracker's failure by its kind (the run
 // falls back to tracking alone), Other for any other error (the field's: a Python function's),
 // raised by the run as a std::runtime_error with its message, in block order as its own blocks'.
@@ -441,6 +456,8 @@ std::string write_part(const BlockPart& part) {
   w.num(part.steps), w.num(part.splits), w.num(part.merges), w.num(part.forced_closures), w.num(part.patch_refusals);
   w.num<std::uint64_t>(part.critical_starts.size());
   for (const CriticalStart& c : part.critical_starts) w.vec(c.point), w.vec(c.step), w.num(c.edge);
+  tracker_counts(part.tracker, [&]<class T>(const T& x) { w.num(x); });
+  w.num(part.tightest.first), w.vec(part.tightest.second);
   const QualityReport& q = part.quality;
   w.num(q.repair_below_degrees);
   quality_counts(q, [&](std::size_t x) { w.num(x); });
@@ -486,6 +503,8 @@ BlockPart read_part(std::string_view bytes) {
   part.forced_closures = r.num<std::size_t>(), part.patch_refusals = r.num<std::size_t>();
   part.critical_starts.resize(r.count(kCriticalStartBytes));
   for (CriticalStart& c : part.critical_starts) c.point = r.vec(), c.step = r.vec(), c.edge = r.num<double>();
+  tracker_counts(part.tracker, [&]<class T>(T& x) { x = r.num<T>(); });
+  part.tightest.first = r.num<double>(), part.tightest.second = r.vec();
   QualityReport& q = part.quality;
   q.repair_below_degrees = r.num<double>();
   quality_counts(q, [&](std::size_t& x) { x = r.num<std::size_t>(); });

@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <exception>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -34,6 +35,10 @@ struct BlockPart {
   std::vector<double> target, mac, shape_index;
   std::size_t steps = 0, splits = 0, merges = 0, forced_closures = 0, patch_refusals = 0;
   std::vector<CriticalStart> critical_starts;
+  // Its tracker's counters (Tracker::report) and tightest bend (Tracker::tightest_bend), for the
+  // run's report and its failure handling (a black box's kink met in a block).
+  TrackerReport tracker;
+  std::pair<double, Vec3> tightest{std::numeric_limits<double>::infinity(), Vec3::Zero()};
   QualityReport quality;
   double seconds = 0;
   std::exception_ptr error;  // what its tracker threw, kept for the block order to decide

@@ -911,6 +911,18 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
           throw;
         } catch (...) {
         }
+    // Then a black box's kink, in any block: no fallback would get past it (the run ends, its
+    // tightest bend the kink's).
+    for (const BlockPart& part : parts)
+      if (part.error) try {
+          std::rethrow_exception(part.error);
+        } catch (const BlackBoxKinkError&) {
+          for (const BlockPart& p : parts)
+            if (p.tightest.first < out.tightest.first) out.tightest = p.tightest;
+          out.kink = part.error;
+          throw;
+        } catch (...) {
+        }
     for (const BlockPart& part : parts)
       if (part.error) std::rethrow_exception(part.error);
 
@@ -935,6 +947,8 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       cm.merges += part.merges;
       cm.patch_refusals += part.patch_refusals;
       add_repair_counts(out.quality, part.quality);
+      add_tracker_counts(out.tracker, part.tracker);
+      if (part.tightest.first < out.tightest.first) out.tightest = part.tightest;
       out.critical_starts.insert(out.critical_starts.end(), part.critical_starts.begin(), part.critical_starts.end());
       part = BlockPart{};  // copied: freed as the assembly goes
     }
@@ -959,6 +973,8 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     out.mesh = std::move(cm);
   } catch (const CreaseLayoutError& e) {
     out.report.fallback = e.what();
+  } catch (const BlackBoxKinkError& e) {
+    out.report.fallback = e.what();
   } catch (const LimitExceededError& e) {  // a stalled front among them
     out.report.fallback = e.what();
   } catch (const NoSurfaceError& e) {
@@ -968,6 +984,15 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
   }
   out.report.seconds = seconds_since(start);
   return out;
+}
+
+bool worth_cutting(const Field& field, const SeedGridStage& seeds) {
+  const std::array<int, 3> n = block_counts(field, seeds);
+  return n[0] * n[1] * n[2] >= 2;
+}
+
+bool uses_blocks(const AdaptiveOptions& options, const Field& field) {
+  return options.blocks.value_or(!field.costly_calls());
 }
 
 std::vector<char> sealed_triangles(const BlockMeshing& blocks, const Mesh& mesh) {

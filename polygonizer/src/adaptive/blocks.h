@@ -27,7 +27,10 @@
 #include <cdp/core/adaptive_report.h>
 
 #include <cstdint>
+#include <exception>
+#include <limits>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace cdp::adaptive {
@@ -54,6 +57,13 @@ struct BlockMeshing {
   // seams kept; the triangles beyond the tolerance near a seam are left to the band's repair,
   // repair_band, and not counted here).
   QualityReport quality;
+  // The blocks' trackers' counters, summed (Tracker::report), and the tightest bend any of them
+  // met (the first in block order among equals): the run's report and failure handling add them.
+  TrackerReport tracker;
+  std::pair<double, Vec3> tightest{std::numeric_limits<double>::infinity(), Vec3::Zero()};
+  // A block's tracker stopped at a kink of a black box (BlackBoxKinkError, creases: follow): no
+  // mesh, and the run ends with this error (tracking alone would stop at the same kind of place).
+  std::exception_ptr kink;
   // The stage's part of the run's stats (adaptive_report.h): the blocks, cuts, seams, times
   // (block_seconds: what the projected speedups at more threads are computed from) and the
   // fallback; the run adds what it alone knows (requested, used, components, steps, wall_*).
@@ -77,6 +87,14 @@ struct BlockMeshing {
 BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, const Settings& settings,
                          const SeedGridStage& seeds, const QualityOptions* repair = nullptr,
                          std::uint64_t shuffle = 0);
+
+// Whether a run meshes by blocks: AdaptiveOptions::blocks, or where unset, whether the field's
+// calls are cheap (not Field::costly_calls).
+bool uses_blocks(const AdaptiveOptions& options, const Field& field);
+
+// Whether the seed grid's estimate of the surface is large enough to cut into blocks (else
+// mesh_blocks returns no mesh, and tracking alone meshes it).
+bool worth_cutting(const Field& field, const SeedGridStage& seeds);
 
 // Per triangle of `mesh` (the blocks' mesh as adopted, before the band's repair): whether it is
 // sealed, one of a block's own triangles (three of its own vertices, BlockMeshing::own) whose box

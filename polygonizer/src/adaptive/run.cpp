@@ -105,7 +105,7 @@ void Run::prepare() {
     creases = lay_out_creases(ctx.field, ctx.options, settings, seeds.estimated_area, &seeds.grid);
   }
   // Blocks where no crease patches were meshed: the patches' fronts run serially for now.
-  if (ctx.options.blocks && ctx.options.variant == Variant::Improved && !creases.mesh) {
+  if (uses_blocks(ctx.options, ctx.field) && ctx.options.variant == Variant::Improved && !creases.mesh) {
     // Those bounds are on one tracker's work (its steps; its searches averaged over windows of
     // Tracker's kSearchWindow steps, more than a block takes): each block's tracker would keep
     // them on its own, the whole run not.
@@ -113,9 +113,12 @@ void Run::prepare() {
       blocks.report.fallback = "the caller's max_steps or max_search_visits bound one tracker: tracked alone";
       return;
     }
-    ctx.enter("tracking", "meshing blocks");
+    // A surface too small to cut is tracked alone (mesh_blocks only reports its estimate).
+    if (worth_cutting(ctx.field, seeds)) ctx.enter("tracking", "meshing blocks");
     const QualityOptions repair = repair_options(ctx, resolved, creases);
     blocks = mesh_blocks(ctx.field, ctx.options, settings, seeds, &repair);
+    // A bend the blocks' trackers met is one the run met, kept or not (a black box's kink among them).
+    if (blocks.tightest.first < tracking.tightest.first) tracking.tightest = blocks.tightest;
   }
 }
 
@@ -175,6 +178,7 @@ void Run::attempt() {
   // patches that intersect) is not the end: the surface is meshed again as a smooth one
   // (fall_back), and the stats say why.
   try {
+    if (blocks.kink) std::rethrow_exception(blocks.kink);
     track();
     // The patches' topology before the repair works on it; intersections after (the repair
     // removes some that chords on the two faces of an acute crease make). Not the blocks': their

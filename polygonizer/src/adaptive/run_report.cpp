@@ -58,8 +58,9 @@ void Run::write_stats() {
   st.field_evaluations = ctx.field.counts() - before;
   st.triangles = result.mesh.num_triangles();
   st.vertices = result.mesh.num_vertices();
-  st.splits = tracking.tracker->splits() + (creases.mesh ? creases.mesh->splits : 0);
-  st.merges = tracking.tracker->merges() + (creases.mesh ? creases.mesh->merges : 0);
+  const CreaseMesh* adopted = finished();  // the crease patches' or the blocks' mesh
+  st.splits = tracking.tracker->splits() + (adopted ? adopted->splits : 0);
+  st.merges = tracking.tracker->merges() + (adopted ? adopted->merges : 0);
 
   AdaptiveReport& r = st.adaptive.emplace();
   AdaptiveSettingsReport& s = r.settings;
@@ -80,21 +81,16 @@ void Run::write_stats() {
   r.seeding.non_finite_samples = seeds.grid.non_finite;
   r.seed_grid_seconds = seed_grid_seconds;
 
-  const Tracker& t = *tracking.tracker;
+  // The seeding tracker's counters, and the blocks' trackers' for a mesh made of blocks (their
+  // steps apart: blocks.steps); the crease patches' forced closures.
   TrackerReport& tr = r.tracker;
-  tr.steps = t.steps();
-  tr.search_visits = t.search_visits();
-  tr.deferrals = t.deferrals();
-  tr.anticipations = t.anticipations();
-  tr.side_points = t.side_points();
-  tr.forced_closures = t.forced_closures() + (creases.mesh ? creases.mesh->forced_closures : 0);
-  tr.rollbacks = t.rollbacks();
-  tr.rollbacks_failed = t.failed_rollbacks();
-  tr.crease_points = t.crease_points();
-  tr.over_mesh_rejections = t.over_mesh();
-  tr.sheet_jumps = t.sheet_jumps();
-  tr.curvature_seconds = t.curvature_seconds();
-  tr.hessian_seconds = t.hessian_seconds();
+  tr = tracking.tracker->report();
+  if (blocks.mesh) {
+    const std::size_t steps = tr.steps;
+    add_tracker_counts(tr, blocks.tracker);
+    tr.steps = steps;
+  }
+  if (creases.mesh) tr.forced_closures += creases.mesh->forced_closures;
   tracking.note_tightest();
   tr.min_curvature_radius = std::isfinite(tracking.tightest.first) ? tracking.tightest.first : -1.0;
 
@@ -118,7 +114,7 @@ void Run::write_stats() {
 
   BlocksReport& b = r.blocks;
   b = blocks.report;
-  b.requested = ctx.options.blocks;
+  b.requested = uses_blocks(ctx.options, ctx.field);
   b.used = blocks.mesh.has_value();
   b.components = blocks.components;
   b.steps = blocks.mesh ? blocks.mesh->steps : 0;

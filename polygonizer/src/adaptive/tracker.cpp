@@ -86,6 +86,40 @@ Tracker::Tracker(const Field& field, const Settings& settings, Mesh& mesh)
   kink_radius_ = field.smooth() ? 0 : field.derivative_step().value_or(0);
 }
 
+TrackerReport Tracker::report() const {
+  TrackerReport r;
+  r.steps = steps_;
+  r.search_visits = search_visits();
+  r.deferrals = deferrals_;
+  r.anticipations = anticipations_;
+  r.side_points = side_points_;
+  r.forced_closures = forced_closures_;
+  r.rollbacks = rollbacks_;
+  r.rollbacks_failed = failed_rollbacks_;
+  r.crease_points = crease_points_;
+  r.over_mesh_rejections = over_mesh_;
+  r.sheet_jumps = sheet_jumps_;
+  r.curvature_seconds = curvature_seconds_;
+  r.hessian_seconds = hessian_seconds_;
+  return r;
+}
+
+void add_tracker_counts(TrackerReport& sum, const TrackerReport& r) {
+  sum.steps += r.steps;
+  sum.search_visits += r.search_visits;
+  sum.deferrals += r.deferrals;
+  sum.anticipations += r.anticipations;
+  sum.side_points += r.side_points;
+  sum.forced_closures += r.forced_closures;
+  sum.rollbacks += r.rollbacks;
+  sum.rollbacks_failed += r.rollbacks_failed;
+  sum.crease_points += r.crease_points;
+  sum.over_mesh_rejections += r.over_mesh_rejections;
+  sum.sheet_jumps += r.sheet_jumps;
+  sum.curvature_seconds += r.curvature_seconds;
+  sum.hessian_seconds += r.hessian_seconds;
+}
+
 void Tracker::release_in_background() noexcept {
   detail::release_in_background(front_hash_, vertex_hash_, fs_, target_, mac_, shape_index_, front_refs_, dead_,
                                 loop_vertex_, critical_starts_);

@@ -277,6 +277,9 @@ class Tracker {
   std::size_t failed_rollbacks() const { return failed_rollbacks_; }
   // Bridges refused because they would leave the patches (set_patch_test).
   std::size_t patch_refusals() const { return patch_refusals_; }
+  // The counters above as the run's report holds them (min_curvature_radius left at -1: the run
+  // reports the tightest bend of all its trackers, Tracking::tightest).
+  TrackerReport report() const;
   // Drops the vertices rollbacks left without a triangle, renumbering the rest (a no-op when
   // there was no rollback). Call once, after the last seed.
   void compact();
@@ -538,5 +541,8 @@ class Tracker {
   std::vector<char> loop_vertex_;  // vertices given by mesh_from_loops
   mutable std::size_t patch_refusals_ = 0;
 };
+
+// Adds r's counters to sum's (min_curvature_radius left alone).
+void add_tracker_counts(TrackerReport& sum, const TrackerReport& r);
 
 }  // namespace cdp::adaptive

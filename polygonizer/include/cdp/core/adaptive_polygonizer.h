@@ -20,6 +20,7 @@
 #include <cdp/core/progress.h>
 
 #include <cstddef>
+#include <optional>
 
 namespace cdp {
 
@@ -79,7 +80,10 @@ struct AdaptiveOptions {
   // on `threads` cores between the calls.
   // The mesh is the same on any number of threads; it is another mesh than the one tracking alone
   // makes. A layout or a block that fails falls back to tracking alone (stats blocks.fallback).
-  bool blocks = false;
+  // Unset (the default): blocks for a field whose calls are cheap, tracking alone for one whose
+  // calls cost more than their points (blocks in lockstep make a tenth of a Python function's
+  // calls but, for a cheap numpy function, take twice its time: the caller chooses).
+  std::optional<bool> blocks;
   // With `blocks`: the blocks' trackers run elsewhere (block_tasks.h; a Dask cluster from Python,
   // python/cdp/distributed.py) instead of on `threads` threads: the same mesh, bit for bit. Empty:
   // on this process's threads.

@@ -69,6 +69,43 @@ TEST(BlockTasks, BlocksRunFromTheirBytesMakeTheSameMeshAsOnTheRunsThreads) {
   }
 }
 
+TEST(BlockTasks, TheReportCountsTheBlocksTrackersWork) {
+  // Tanglecube at factor 5 (8 blocks) crosses every cut, so the seeding's tracker makes no step:
+  // the tracker's counters in the report are the blocks' trackers', summed from their pieces
+  // (before, the seeding tracker's alone: side points, deferrals and curvature time read 0).
+  const auto f = test::field_from_json(R"({"type": "expression", "bounds": [[-3, -3, -3], [3, 3, 3]],
+                                          "value": "x^4 - 5*x^2 + y^4 - 5*y^2 + z^4 - 5*z^2 + 11.8"})");
+  AdaptiveOptions o = task_options(5);
+  TrackerReport pieces_sum;
+  o.block_runner = [&](const std::vector<std::string>& tasks) {
+    std::vector<std::string> pieces;
+    for (const std::string& t : tasks) {
+      pieces.push_back(run_block_task(*f, t));
+      add_tracker_counts(pieces_sum, read_part(pieces.back()).tracker);
+    }
+    return pieces;
+  };
+  const PolygonizeResult r = polygonize_adaptive(*f, o);
+  ASSERT_TRUE(r.stats.adaptive->blocks.used) << r.stats.adaptive->blocks.fallback;
+  ASSERT_EQ(r.stats.adaptive->seeding.seeds, 0u);
+  const TrackerReport& tr = r.stats.adaptive->tracker;
+  EXPECT_EQ(tr.steps, 0u);  // the seeding tracker's; the blocks' are blocks.steps
+  EXPECT_EQ(r.stats.adaptive->blocks.steps, pieces_sum.steps);
+  EXPECT_GT(pieces_sum.side_points + pieces_sum.deferrals, 0u);
+  EXPECT_EQ(tr.side_points, pieces_sum.side_points);
+  EXPECT_EQ(tr.deferrals, pieces_sum.deferrals);
+  EXPECT_EQ(tr.anticipations, pieces_sum.anticipations);
+  EXPECT_EQ(tr.over_mesh_rejections, pieces_sum.over_mesh_rejections);
+  EXPECT_GT(pieces_sum.search_visits, 0u);
+  EXPECT_GE(tr.search_visits, pieces_sum.search_visits);  // and the seeding's coverage searches
+  EXPECT_GT(tr.hessian_seconds, 0.0);
+  // The same counts from the blocks run on this process's threads.
+  const PolygonizeResult here = polygonize_adaptive(*f, task_options(5));
+  EXPECT_EQ(here.stats.adaptive->tracker.side_points, tr.side_points);
+  EXPECT_EQ(here.stats.adaptive->tracker.deferrals, tr.deferrals);
+  EXPECT_EQ(here.stats.adaptive->tracker.search_visits, tr.search_visits);
+}
+
 TEST(BlockTasks, BytesThatAreNotATaskOrAPieceOfThisBuildAreRefused) {
   const auto f = test::field_from_json(kTaskTorus);
   std::string task;

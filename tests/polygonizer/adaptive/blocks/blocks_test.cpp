@@ -163,6 +163,20 @@ TEST(AdaptiveBlocks, ANeckTheBlocksFrontsSteppedOverIsFound) {
   EXPECT_EQ(t.genus, 4);
 }
 
+TEST(AdaptiveBlocks, AreTheDefaultForAFieldWhoseCallsAreCheap) {
+  const auto f = test::field_from_json(kBlockTorus);
+  AdaptiveOptions o;
+  o.factor = 12;
+  const PolygonizeResult r = polygonize_adaptive(*f, o);
+  EXPECT_TRUE(r.stats.adaptive->blocks.requested);
+  EXPECT_TRUE(r.stats.adaptive->blocks.used) << r.stats.adaptive->blocks.fallback;
+  test::expect_same_mesh(r.mesh, polygonize_adaptive(*f, with_blocks(0)).mesh);
+  o.blocks = false;
+  const PolygonizeResult alone = polygonize_adaptive(*f, o);
+  EXPECT_FALSE(alone.stats.adaptive->blocks.requested);
+  EXPECT_FALSE(alone.stats.adaptive->blocks.used);
+}
+
 TEST(AdaptiveBlocks, ASurfaceTooSmallForBlocksIsTrackedAlone) {
   const auto f = test::field_from_json(kBlockTorus);
   const PolygonizeResult r = polygonize_adaptive(*f, with_blocks(2, 2));
