@@ -343,7 +343,12 @@ BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 2)->UseManualTime
 // speedups the measured block times project at 8 and 16 threads: the one-thread run's time
 // outside its blocks taken as serial (the parallel passes' share of it counted as serial too),
 // plus the blocks scheduled greedily, longest first, onto that many threads (aim 6 and 10 on the
-// torus at 2 * 10^6 triangles and the bunny at factor 5). Shapes: 0 the torus of
+// torus at 2 * 10^6 triangles and the bunny at factor 5). projected_speedup_8_passes and _16_passes
+// take the run's data-parallel passes outside the blocks (BlocksReport::pass_seconds: the seed
+// grid, the cut planes, the final checks, ...) as Amdahl's law fitted to what they measured from
+// one thread to two in the same iteration (pass_speedup_1_to_2 = s: a share f = 2 (1 - 1/s) of
+// their time divides among the threads, the rest does not), and the rest of the time outside the
+// blocks as serial. Shapes: 0 the torus of
 // experiments/fields/torus.json at factor 40 (4 * 10^5 triangles), 1 tanglecube at factor 12,
 // 2 the bunny VIS-800 at factor 5, 3 the random blobs at tolerance 1e-3.
 double greedy_makespan(std::vector<double> times, int threads) {
@@ -370,7 +375,8 @@ void BM_AdaptiveBlocks(benchmark::State& state) {
   blocks1.blocks = true;
   AdaptiveOptions blocks2 = blocks1;
   blocks2.threads = 2;
-  double t_serial = 0, t1 = 0, t2 = 0, cpu1 = 0, cpu2 = 0, p8 = 0, p16 = 0, triangles = 0, nblocks = 0;
+  double t_serial = 0, t1 = 0, t2 = 0, cpu1 = 0, cpu2 = 0, p8 = 0, p16 = 0, q8 = 0, q16 = 0, passes1 = 0, passes2 = 0,
+         triangles = 0, nblocks = 0;
   for (auto _ : state) {
     const PolygonizeResult rs = polygonize_adaptive(field, serial);
     double c0 = cpu_seconds();
@@ -397,6 +403,16 @@ void BM_AdaptiveBlocks(benchmark::State& state) {
     const double outside = r1.stats.seconds - in_blocks;
     p8 += r1.stats.seconds / (outside + greedy_makespan(b.block_seconds, 8));
     p16 += r1.stats.seconds / (outside + greedy_makespan(b.block_seconds, 16));
+    // The passes as fitted from one thread to two, the rest outside the blocks serial.
+    const auto sum = [](const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); };
+    const double one = sum(b.pass_seconds), two = sum(r2.stats.adaptive->blocks.pass_seconds);
+    const double shared = two > 0 ? std::clamp(2 * (1 - two / one), 0.0, 1.0) : 0.0;
+    const auto in_passes = [&](double threads) { return one * ((1 - shared) + shared / threads); };
+    const double serial_outside = std::max(0.0, outside - one);
+    q8 += r1.stats.seconds / (serial_outside + in_passes(8) + greedy_makespan(b.block_seconds, 8));
+    q16 += r1.stats.seconds / (serial_outside + in_passes(16) + greedy_makespan(b.block_seconds, 16));
+    passes1 += one;
+    passes2 += two;
     triangles = static_cast<double>(r1.stats.triangles);
     nblocks = static_cast<double>(b.meshed_blocks);
   }
@@ -409,6 +425,10 @@ void BM_AdaptiveBlocks(benchmark::State& state) {
   state.counters["cpu_2_over_1"] = cpu2 / cpu1;
   state.counters["projected_speedup_8"] = p8 / n;
   state.counters["projected_speedup_16"] = p16 / n;
+  state.counters["projected_speedup_8_passes"] = q8 / n;
+  state.counters["projected_speedup_16_passes"] = q16 / n;
+  state.counters["pass_seconds_1_thread"] = passes1 / n;
+  state.counters["pass_speedup_1_to_2"] = passes2 > 0 ? passes1 / passes2 : 0.0;
   state.counters["triangles"] = triangles;
   state.counters["meshed_blocks"] = nblocks;
   state.SetLabel(shape == 0   ? "torus_f40/adaptive/blocks"

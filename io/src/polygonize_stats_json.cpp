@@ -92,6 +92,8 @@ nlohmann::json blocks_json(const BlocksReport& b) {
           {"lockstep_batches", b.lockstep_batches},
           {"seconds", b.seconds},
           {"block_seconds", b.block_seconds},
+          {"pass_seconds", b.pass_seconds},
+          {"pass_blocks", b.pass_blocks},
           {"fallback", b.fallback},
           {"wall_triangles", b.wall_triangles},
           {"wall_min_angle_degrees", b.wall_min_angle_degrees},

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <exception>
 #include <mutex>
@@ -16,6 +17,7 @@
 #include <sched.h>
 #endif
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace cdp::detail {
@@ -42,6 +44,28 @@ inline unsigned worker_count(int requested = 0) {
   return std::clamp(n, 1u, kMaxThreads);
 }
 
+// The wall time of each data-parallel pass (parallel_blocks of two blocks or more) a run makes
+// on its own thread, and its blocks: the work that more threads would share, which the projected
+// speedups of BM_AdaptiveBlocks divide among them (BlocksReport::pass_seconds). A run points
+// `pass_clock` at its own on its thread; a pass's work, and the passes it makes, count as its own.
+struct PassClock {
+  std::vector<double> seconds;
+  std::vector<std::size_t> blocks;
+};
+inline thread_local PassClock* pass_clock = nullptr;
+
+// No pass counted on this thread in its scope (the blocks' own work, timed block by block).
+class PassClockPaused {
+ public:
+  PassClockPaused() : saved_(std::exchange(pass_clock, nullptr)) {}
+  ~PassClockPaused() { pass_clock = saved_; }
+  PassClockPaused(const PassClockPaused&) = delete;
+  PassClockPaused& operator=(const PassClockPaused&) = delete;
+
+ private:
+  PassClock* saved_;
+};
+
 // Calls fn(begin, end, worker) for consecutive blocks [begin, end) of [0, n), each block once,
 // on up to `workers` threads (worker in [0, workers)). A range of at most one block runs on the
 // calling thread. The first exception thrown by fn is rethrown here once all threads are done.
@@ -50,8 +74,17 @@ void parallel_blocks(std::size_t n, std::size_t block, unsigned workers, Fn&& fn
   block = std::max<std::size_t>(block, 1);
   const std::size_t blocks = (n + block - 1) / block;
   workers = static_cast<unsigned>(std::min<std::size_t>(std::max(workers, 1u), blocks));
+  PassClock* const clock = blocks >= 2 ? pass_clock : nullptr;
+  const PassClockPaused paused;
+  const auto start = std::chrono::steady_clock::now();
+  const auto timed = [&] {
+    if (clock)
+      clock->seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()),
+          clock->blocks.push_back(blocks);
+  };
   if (workers <= 1) {
     for (std::size_t b = 0; b < blocks; ++b) fn(b * block, std::min(n, (b + 1) * block), 0u);
+    timed();
     return;
   }
   std::atomic<std::size_t> next{0};
@@ -76,6 +109,7 @@ void parallel_blocks(std::size_t n, std::size_t block, unsigned workers, Fn&& fn
   work(0);
   for (auto& t : threads) t.join();
   if (error) std::rethrow_exception(error);
+  timed();
 }
 
 }  // namespace cdp::detail

@@ -883,6 +883,8 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       return task;
     };
     std::vector<BlockPart> parts(nblocks);
+    // The blocks' time is theirs (block_seconds), not a pass of the run's (PassClock).
+    std::optional<detail::PassClockPaused> paused(std::in_place);
     if (options.block_runner) {
       // Elsewhere (block_tasks.h): every task as bytes, the pieces back in the same order.
       std::vector<std::string> tasks;
@@ -927,6 +929,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
         for (std::size_t i = begin; i < end; ++i) parts[order[i]] = run_block(field, block_task(order[i]));
       });
     }
+    paused.reset();
     // Every block ran, whatever the others threw: a cancellation wins, then the first failing
     // block in block order (not in time), so that the outcome is the same on any thread count.
     for (const BlockPart& part : parts)

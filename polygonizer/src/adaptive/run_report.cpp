@@ -119,6 +119,8 @@ void Run::write_stats() {
   b.components = blocks.components;
   b.steps = blocks.mesh ? blocks.mesh->steps : 0;
   add_wall_quality(result.mesh, b);
+  b.pass_seconds = passes.seconds;
+  b.pass_blocks = passes.blocks;
 
   r.quality = quality;
   r.quality.repair_below_degrees = kRepairBelowDegrees;

@@ -11,6 +11,7 @@
 #include "stage_repair.h"
 #include "stage_seed_grid.h"
 #include "stage_tracking.h"
+#include "../parallel.h"
 
 #include <chrono>
 #include <cstddef>
@@ -73,6 +74,7 @@ class Run {
   double seed_grid_seconds = 0;
   CreaseLayout creases;
   BlockMeshing blocks;  // AdaptiveOptions::blocks
+  detail::PassClock passes;  // the run's data-parallel passes on its thread (BlocksReport::pass_seconds)
   PolygonizeResult result;
   Tracking tracking;
   QualityReport quality;

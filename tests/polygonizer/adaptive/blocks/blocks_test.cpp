@@ -177,6 +177,26 @@ TEST(AdaptiveBlocks, AreTheDefaultForAFieldWhoseCallsAreCheap) {
   EXPECT_FALSE(alone.stats.adaptive->blocks.used);
 }
 
+TEST(AdaptiveBlocks, TheRunsPassesAreTimedApartFromTheBlocks) {
+  // What the projected speedups divide (BM_AdaptiveBlocks): the data-parallel passes the run made
+  // on its own thread, each of at least two blocks of work, and never the blocks' own time again
+  // (their trackers' checks are passes of one thread's work inside them).
+  const auto f = test::field_from_json(kBlockTorus);
+  const PolygonizeResult r = polygonize_adaptive(*f, with_blocks(1));
+  const BlocksReport& b = r.stats.adaptive->blocks;
+  ASSERT_TRUE(b.used) << b.fallback;
+  ASSERT_FALSE(b.pass_seconds.empty());
+  ASSERT_EQ(b.pass_seconds.size(), b.pass_blocks.size());
+  double passes = 0, blocks = 0;
+  for (std::size_t i = 0; i < b.pass_seconds.size(); ++i) {
+    EXPECT_GE(b.pass_blocks[i], 2u);
+    passes += b.pass_seconds[i];
+  }
+  for (const double t : b.block_seconds) blocks += t;
+  EXPECT_GT(passes, 0.0);
+  EXPECT_LE(passes + blocks, r.stats.seconds);
+}
+
 TEST(AdaptiveBlocks, ASurfaceTooSmallForBlocksIsTrackedAlone) {
   const auto f = test::field_from_json(kBlockTorus);
   const PolygonizeResult r = polygonize_adaptive(*f, with_blocks(2, 2));
