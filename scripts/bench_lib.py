@@ -237,17 +237,21 @@ def batched_vs_scalar(run):
 
 
 def thread_speedups(run):
-    """Rows {benchmark, label, speedup, one, two, p8, p16} of the benchmarks that time one run on one
-    thread and one on two (counter speedup_1_to_2; bench/adaptive.cpp's BM_AdaptiveThreads and
-    BM_AdaptiveBlocks), with the speedups the latter projects at 8 and 16 threads (None where not
-    reported)."""
+    """Rows {benchmark, label, speedup, one, two, p8, p16, q8, q16, passes} of the benchmarks that time
+    one run on one thread and one on two (counter speedup_1_to_2; bench/adaptive.cpp's
+    BM_AdaptiveThreads and BM_AdaptiveBlocks), with the speedups the latter projects at 8 and 16
+    threads, all time outside the blocks serial (p) or the run's parallel passes shared as they
+    scaled from one thread to two (q; passes: that measured speedup); None where not reported."""
     rows = []
     for b in run["benchmarks"]:
         v = None if b.get("error") else counter_median(b, "speedup_1_to_2")
         if v is not None:
             rows.append({"benchmark": key(b), "label": b.get("label", ""), "speedup": v,
                          "one": counter_median(b, "seconds_1_thread"), "two": counter_median(b, "seconds_2_threads"),
-                         "p8": counter_median(b, "projected_speedup_8"), "p16": counter_median(b, "projected_speedup_16")})
+                         "p8": counter_median(b, "projected_speedup_8"), "p16": counter_median(b, "projected_speedup_16"),
+                         "q8": counter_median(b, "projected_speedup_8_passes"),
+                         "q16": counter_median(b, "projected_speedup_16_passes"),
+                         "passes": counter_median(b, "pass_speedup_1_to_2")})
     return sorted(rows, key=lambda r: r["benchmark"])
 
 

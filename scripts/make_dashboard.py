@@ -227,10 +227,14 @@ def inrun_section(runs):
     rows = bl.thread_speedups(latest)
     out.append("<h3>Speedup from one thread to two (the same mesh on both)</h3>")
     if rows:
+        out.append('<p class="note">Projected from the measured block times (greedy, longest first): with all '
+                   'the time outside the blocks serial, and with the run\'s data-parallel passes shared as they '
+                   'scaled from one thread to two (that speedup in the last column).</p>')
         out.append(table(["Benchmark", "Label", "1 thread (s)", "2 threads (s)", "Speedup", "Projected at 8",
-                          "Projected at 16"],
+                          "Projected at 16", "At 8, passes shared", "At 16, passes shared", "Passes 1 to 2"],
                          [[E(r["benchmark"]), E(r["label"]), fnum(r["one"], "{:.4g}"), fnum(r["two"], "{:.4g}"),
-                           fnum(r["speedup"], "{:.3f}"), fnum(r["p8"], "{:.2f}"), fnum(r["p16"], "{:.2f}")]
+                           fnum(r["speedup"], "{:.3f}"), fnum(r["p8"], "{:.2f}"), fnum(r["p16"], "{:.2f}"),
+                           fnum(r["q8"], "{:.2f}"), fnum(r["q16"], "{:.2f}"), fnum(r["passes"], "{:.2f}")]
                           for r in rows]))
         series = ratio_series(runs, bl.thread_speedups, "benchmark", "speedup")
         out.append(img(ratio_plot(runs, series, "time on 1 thread / time on 2", "speedup"),

@@ -142,6 +142,22 @@ class InRunRatios(unittest.TestCase):
         page = make_dashboard.inrun_section([r])
         self.assertIn("Speedup from one thread to two", page)
         self.assertIn("1.200", page)
+        # The blocks' projections: all outside the blocks serial, and with the passes shared.
+        r["benchmarks"].append(bench("bench_adaptive", "BM_AdaptiveBlocks/shape:0/manual_time", [50 * x for x in NOISE],
+                                     label="torus_f40/adaptive/blocks", kind="real",
+                                     counters={"seconds_1_thread": [1.4] * 5, "seconds_2_threads": [0.8] * 5,
+                                               "speedup_1_to_2": [1.75] * 5, "projected_speedup_8": [3.25] * 5,
+                                               "projected_speedup_16": [3.88] * 5,
+                                               "projected_speedup_8_passes": [3.82] * 5,
+                                               "projected_speedup_16_passes": [4.76] * 5,
+                                               "pass_speedup_1_to_2": [1.48] * 5}))
+        rows = {row["label"]: row for row in bl.thread_speedups(r)}
+        self.assertAlmostEqual(rows["torus_f40/adaptive/blocks"]["q8"], 3.82)
+        self.assertAlmostEqual(rows["torus_f40/adaptive/blocks"]["passes"], 1.48)
+        self.assertIsNone(rows["bunny_vis800/adaptive/threads"]["q8"])
+        page = make_dashboard.inrun_section([r])
+        self.assertIn("4.76", page)
+        self.assertIn("passes shared", page)
 
     def test_cluster_projection(self):
         r = run("a" * 40, "2026-01-01T00:00:00+00:00")
