@@ -150,7 +150,7 @@ BlockPart run_block(const Field& field, const BlockTask& task) {
 namespace {
 
 constexpr std::uint64_t kTaskTag = 0x31'6b'73'61'74'70'64'63;  // "cdptask1"
-constexpr std::uint64_t kPartTag = 0x31'74'72'61'70'70'64'63;  // "cdppart1"
+constexpr std::uint64_t kPartTag = 0x32'74'72'61'70'70'64'63;  // "cdppart2"
 
 // Every struct written field by field below; a field added to one of them changes its size on
 // this platform, and this reminds whoever adds it to write it too (a field left out would be
@@ -360,9 +360,10 @@ void tracker_counts(R& t, F&& f) {
 }
 
 // What a block's run threw, travelling in its piece: a tracker's failure by its kind (the run
-// falls back to tracking alone), Other for any other error (the field's: a Python function's),
-// raised by the run as a std::runtime_error with its message, in block order as its own blocks'.
-enum class Failure : std::uint8_t { None, Layout, Stalled, Limit, NoSurface, Logic, Cancelled, Other };
+// falls back to tracking alone; a black box's kink ends it), Other for any other error (the
+// field's: a Python function's), raised by the run as a std::runtime_error with its message, in
+// block order as its own blocks'.
+enum class Failure : std::uint8_t { None, Layout, Stalled, Limit, NoSurface, Logic, Cancelled, Other, Kink };
 
 }  // namespace
 
@@ -427,6 +428,8 @@ std::string write_part(const BlockPart& part) {
       failure = Failure::Layout, message = e.what();
     } catch (const StalledFrontError& e) {
       failure = Failure::Stalled, message = e.what();
+    } catch (const BlackBoxKinkError& e) {
+      failure = Failure::Kink, message = e.what();
     } catch (const LimitExceededError& e) {
       failure = Failure::Limit, message = e.what();
     } catch (const NoSurfaceError& e) {
@@ -441,6 +444,7 @@ std::string write_part(const BlockPart& part) {
   w.num<std::uint64_t>(part.block);
   w.num(failure);
   w.array(std::vector<char>(message.begin(), message.end()));
+  w.num(part.tightest.first), w.vec(part.tightest.second);  // a failed block's too (a kink's place)
   if (failure != Failure::None) return w.take();
   const Mesh& m = part.mesh;
   w.array(m.positions), w.array(m.normals), w.array(m.triangles);
@@ -457,7 +461,6 @@ std::string write_part(const BlockPart& part) {
   w.num<std::uint64_t>(part.critical_starts.size());
   for (const CriticalStart& c : part.critical_starts) w.vec(c.point), w.vec(c.step), w.num(c.edge);
   tracker_counts(part.tracker, [&]<class T>(const T& x) { w.num(x); });
-  w.num(part.tightest.first), w.vec(part.tightest.second);
   const QualityReport& q = part.quality;
   w.num(q.repair_below_degrees);
   quality_counts(q, [&](std::size_t x) { w.num(x); });
@@ -470,9 +473,10 @@ BlockPart read_part(std::string_view bytes) {
   Reader r(bytes, kPartTag, "piece");
   BlockPart part;
   part.block = r.num<std::uint64_t>();
-  const auto failure = r.choice(Failure::Other);
+  const auto failure = r.choice(Failure::Kink);
   const std::vector<char> text = r.array<char>();
   const std::string message(text.begin(), text.end());
+  part.tightest.first = r.num<double>(), part.tightest.second = r.vec();
   switch (failure) {
     case Failure::None: break;
     case Failure::Layout: part.error = std::make_exception_ptr(CreaseLayoutError(message)); break;
@@ -482,6 +486,7 @@ BlockPart read_part(std::string_view bytes) {
     case Failure::Logic: part.error = std::make_exception_ptr(std::logic_error(message)); break;
     case Failure::Cancelled: part.error = std::make_exception_ptr(CancelledError(message)); break;
     case Failure::Other: part.error = std::make_exception_ptr(std::runtime_error(message)); break;
+    case Failure::Kink: part.error = std::make_exception_ptr(BlackBoxKinkError(message)); break;
   }
   if (failure != Failure::None) {
     r.end();
@@ -504,7 +509,6 @@ BlockPart read_part(std::string_view bytes) {
   part.critical_starts.resize(r.count(kCriticalStartBytes));
   for (CriticalStart& c : part.critical_starts) c.point = r.vec(), c.step = r.vec(), c.edge = r.num<double>();
   tracker_counts(part.tracker, [&]<class T>(T& x) { x = r.num<T>(); });
-  part.tightest.first = r.num<double>(), part.tightest.second = r.vec();
   QualityReport& q = part.quality;
   q.repair_below_degrees = r.num<double>();
   quality_counts(q, [&](std::size_t& x) { x = r.num<std::size_t>(); });

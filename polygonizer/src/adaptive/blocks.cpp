@@ -844,10 +844,22 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
                                                      edge_length(settings.sizing, placed[v].curvature.min_radius));
         }
       };
-      if (field.thread_safe())
-        detail::parallel_blocks(sv.points.size(), kSeamVertexSlice, detail::worker_count(options.threads), measure);
-      else
+      if (field.thread_safe()) {
+        // An error is the first slice's in slice order, as one thread would throw it.
+        std::vector<std::exception_ptr> errors((sv.points.size() + kSeamVertexSlice - 1) / kSeamVertexSlice);
+        detail::parallel_blocks(sv.points.size(), kSeamVertexSlice, detail::worker_count(options.threads),
+                                [&](std::size_t begin, std::size_t end, unsigned worker) {
+                                  try {
+                                    measure(begin, end, worker);
+                                  } catch (...) {
+                                    errors[begin / kSeamVertexSlice] = std::current_exception();
+                                  }
+                                });
+        for (const std::exception_ptr& e : errors)
+          if (e) std::rethrow_exception(e);
+      } else {
         measure(0, sv.points.size(), 0);
+      }
     }
     std::vector<std::vector<std::vector<int>>> cycles(nblocks);
     for (std::size_t blk = 0; blk < nblocks; ++blk) cycles[blk] = block_cycles(darts[blk]);
@@ -930,6 +942,9 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       });
     }
     paused.reset();
+    // Every block's tightest bend, whether its mesh is kept or not (a kink's place among them).
+    for (const BlockPart& part : parts)
+      if (part.tightest.first < out.tightest.first) out.tightest = part.tightest;
     // Every block ran, whatever the others threw: a cancellation wins, then the first failing
     // block in block order (not in time), so that the outcome is the same on any thread count.
     for (const BlockPart& part : parts)
@@ -945,8 +960,6 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       if (part.error) try {
           std::rethrow_exception(part.error);
         } catch (const BlackBoxKinkError&) {
-          for (const BlockPart& p : parts)
-            if (p.tightest.first < out.tightest.first) out.tightest = p.tightest;
           out.kink = part.error;
           throw;
         } catch (...) {
@@ -983,7 +996,6 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       cm.patch_refusals += part.patch_refusals;
       add_repair_counts(out.quality, part.quality);
       add_tracker_counts(out.tracker, part.tracker);
-      if (part.tightest.first < out.tightest.first) out.tightest = part.tightest;
       out.critical_starts.insert(out.critical_starts.end(), part.critical_starts.begin(), part.critical_starts.end());
       part = BlockPart{};  // copied: freed as the assembly goes
     }
@@ -1027,7 +1039,10 @@ bool worth_cutting(const Field& field, const SeedGridStage& seeds) {
 }
 
 bool uses_blocks(const AdaptiveOptions& options, const Field& field) {
-  return options.blocks.value_or(!field.costly_calls());
+  if (options.blocks) return *options.blocks;
+  // A caller's max_steps or max_search_visits bound one tracker's work: tracked alone, unless
+  // blocks were asked for (then the run says why it tracked alone, blocks.fallback).
+  return !field.costly_calls() && options.max_steps == 0 && options.max_search_visits == 0;
 }
 
 std::vector<char> sealed_triangles(const BlockMeshing& blocks, const Mesh& mesh) {

@@ -57,8 +57,9 @@ struct BlockMeshing {
   // seams kept; the triangles beyond the tolerance near a seam are left to the band's repair,
   // repair_band, and not counted here).
   QualityReport quality;
-  // The blocks' trackers' counters, summed (Tracker::report), and the tightest bend any of them
-  // met (the first in block order among equals): the run's report and failure handling add them.
+  // The kept blocks' trackers' counters, summed (Tracker::report), and the tightest bend any
+  // block's tracker met, kept or not (the first in block order among equals): the run's report
+  // and failure handling add them.
   TrackerReport tracker;
   std::pair<double, Vec3> tightest{std::numeric_limits<double>::infinity(), Vec3::Zero()};
   // A block's tracker stopped at a kink of a black box (BlackBoxKinkError, creases: follow): no
@@ -89,7 +90,8 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
                          std::uint64_t shuffle = 0);
 
 // Whether a run meshes by blocks: AdaptiveOptions::blocks, or where unset, whether the field's
-// calls are cheap (not Field::costly_calls).
+// calls are cheap (not Field::costly_calls) and no bound on one tracker's work is given
+// (max_steps, max_search_visits).
 bool uses_blocks(const AdaptiveOptions& options, const Field& field);
 
 // Whether the seed grid's estimate of the surface is large enough to cut into blocks (else

@@ -290,19 +290,24 @@ TEST(AdaptivePolygonizer, SameMeshOnOneThreadOrSeveral) {
   // Factor 6: about 30k triangles, so that the self-intersection check runs in parallel too
   // (from 8192 triangles), as do the seed grid of this thread-safe field and the relaxation's
   // targets and projections (blocks of 256 vertices).
+  // Tracked alone and in blocks (the default here), whose passes differ.
   const auto field = test::tanglecube();
   ASSERT_TRUE(field->thread_safe());
   AdaptiveOptions o = coarse(6);
-  o.threads = 1;
-  const auto a = polygonize_adaptive(*field, o);
-  ASSERT_GT(a.mesh.num_triangles(), 8192u);
-  ASSERT_GT(a.stats.adaptive->quality.relaxed, 4 * 256u);
-  for (int threads : {2, 3, 0}) {
-    o.threads = threads;
-    const auto b = polygonize_adaptive(*field, o);
-    ASSERT_EQ(a.mesh.triangles, b.mesh.triangles) << threads << " threads";
-    ASSERT_EQ(a.mesh.positions, b.mesh.positions) << threads << " threads";
-    EXPECT_EQ(a.stats.field_evaluations.total(), b.stats.field_evaluations.total());
+  for (const bool blocks : {false, true}) {
+    o.blocks = blocks;
+    o.threads = 1;
+    const auto a = polygonize_adaptive(*field, o);
+    ASSERT_EQ(a.stats.adaptive->blocks.used, blocks) << a.stats.adaptive->blocks.fallback;
+    ASSERT_GT(a.mesh.num_triangles(), 8192u);
+    ASSERT_GT(a.stats.adaptive->quality.relaxed, 4 * 256u);
+    for (int threads : {2, 3, 0}) {
+      o.threads = threads;
+      const auto b = polygonize_adaptive(*field, o);
+      ASSERT_EQ(a.mesh.triangles, b.mesh.triangles) << threads << " threads, blocks " << blocks;
+      ASSERT_EQ(a.mesh.positions, b.mesh.positions) << threads << " threads, blocks " << blocks;
+      EXPECT_EQ(a.stats.field_evaluations.total(), b.stats.field_evaluations.total());
+    }
   }
   o.threads = -1;
   EXPECT_THROW(polygonize_adaptive(*field, o), InvalidInputError);
@@ -343,19 +348,22 @@ TEST(AdaptivePolygonizer, ACostlyFieldsEvaluationsSplitOnTwoThreadsWithTheSameMe
 TEST(AdaptivePolygonizer, SameToleranceMeshOnOneThreadOrSeveral) {
   const Torus torus(Vec3::Zero(), 1.0, 0.35);
   ASSERT_TRUE(torus.thread_safe());
-  for (const SizingMode mode : {SizingMode::Tolerance, SizingMode::Chord}) {
-    AdaptiveOptions o;
-    o.sizing = mode;
-    o.tolerance = 1e-3;
-    o.threads = 1;
-    const auto a = polygonize_adaptive(torus, o);
-    ASSERT_GT(a.stats.adaptive->quality.relaxed, 4 * 256u) << to_string(mode);
-    o.threads = 2;
-    const auto b = polygonize_adaptive(torus, o);
-    EXPECT_EQ(a.mesh.triangles, b.mesh.triangles) << to_string(mode);
-    EXPECT_EQ(a.mesh.positions, b.mesh.positions) << to_string(mode);
-    EXPECT_EQ(a.stats.field_evaluations.total(), b.stats.field_evaluations.total()) << to_string(mode);
-  }
+  for (const SizingMode mode : {SizingMode::Tolerance, SizingMode::Chord})
+    for (const bool blocks : {false, true}) {
+      const std::string what = std::string(to_string(mode)) + (blocks ? ", blocks" : ", tracked alone");
+      AdaptiveOptions o;
+      o.sizing = mode;
+      o.tolerance = 1e-3;
+      o.blocks = blocks;
+      o.threads = 1;
+      const auto a = polygonize_adaptive(torus, o);
+      ASSERT_GT(a.stats.adaptive->quality.relaxed, blocks ? 0u : 4 * 256u) << what;
+      o.threads = 2;
+      const auto b = polygonize_adaptive(torus, o);
+      EXPECT_EQ(a.mesh.triangles, b.mesh.triangles) << what;
+      EXPECT_EQ(a.mesh.positions, b.mesh.positions) << what;
+      EXPECT_EQ(a.stats.field_evaluations.total(), b.stats.field_evaluations.total()) << what;
+    }
 }
 
 TEST(AdaptivePolygonizer, CurvaturePropertiesAreAttachedOnRequest) {
@@ -518,18 +526,20 @@ TEST(AdaptivePolygonizer, ThreadSafeAndSequentialPassesGetTheSameMesh) {
   const Torus torus(Vec3::Zero(), 1.0, 0.35);
   ASSERT_TRUE(torus.thread_safe());
   const Rewrapped unshared(torus, torus.smooth(), false);
-  for (const bool tolerance : {false, true}) {
-    AdaptiveOptions o;
-    o.factor = 4;
-    if (tolerance) o.sizing = SizingMode::Tolerance;
-    const PolygonizeResult a = polygonize_adaptive(torus, o), b = polygonize_adaptive(unshared, o);
-    ASSERT_GT(a.stats.adaptive->quality.relaxed, 2 * 256u) << tolerance;
-    EXPECT_EQ(a.mesh.positions, b.mesh.positions) << tolerance;
-    EXPECT_EQ(a.mesh.triangles, b.mesh.triangles) << tolerance;
-    if (tolerance) {
-      EXPECT_EQ(a.stats.field_evaluations.total(), b.stats.field_evaluations.total());
+  for (const bool tolerance : {false, true})
+    for (const bool blocks : {false, true}) {
+      AdaptiveOptions o;
+      o.factor = 4;
+      o.blocks = blocks;
+      if (tolerance) o.sizing = SizingMode::Tolerance;
+      const PolygonizeResult a = polygonize_adaptive(torus, o), b = polygonize_adaptive(unshared, o);
+      ASSERT_GT(a.stats.adaptive->quality.relaxed, blocks ? 0u : 2 * 256u) << tolerance;
+      EXPECT_EQ(a.mesh.positions, b.mesh.positions) << tolerance << blocks;
+      EXPECT_EQ(a.mesh.triangles, b.mesh.triangles) << tolerance << blocks;
+      if (tolerance) {
+        EXPECT_EQ(a.stats.field_evaluations.total(), b.stats.field_evaluations.total()) << blocks;
+      }
     }
-  }
 }
 
 // On a smooth field the crease probes find nothing: skipping them (Field::smooth) gives the same

@@ -79,10 +79,12 @@ struct AdaptiveOptions {
   // makes the evaluations of all of them (stats blocks.lockstep_batches), their trackers running
   // on `threads` cores between the calls.
   // The mesh is the same on any number of threads; it is another mesh than the one tracking alone
-  // makes. A layout or a block that fails falls back to tracking alone (stats blocks.fallback).
+  // makes. A layout or a block that fails falls back to tracking alone (stats blocks.fallback),
+  // except at a kink of a black box (creases: follow), which ends the run as tracking alone would.
   // Unset (the default): blocks for a field whose calls are cheap, tracking alone for one whose
   // calls cost more than their points (blocks in lockstep make a tenth of a Python function's
-  // calls but, for a cheap numpy function, take twice its time: the caller chooses).
+  // calls but, for a cheap numpy function, take twice its time: the caller chooses) and for a
+  // run given max_steps or max_search_visits (bounds on one tracker's work).
   std::optional<bool> blocks;
   // With `blocks`: the blocks' trackers run elsewhere (block_tasks.h; a Dask cluster from Python,
   // python/cdp/distributed.py) instead of on `threads` threads: the same mesh, bit for bit. Empty:

@@ -144,6 +144,14 @@ TEST(BlockTasks, ATrackersFailureTravelsInItsPieceWithItsKind) {
   } catch (const StalledFrontError& e) {
     EXPECT_STREQ(e.what(), "adaptive: stalled");
   }
+  // A black box's kink ends the run, not a fallback to tracking alone: it travels as itself, with
+  // the place and length of the kink (the run's tightest bend; stats tracker.min_curvature_radius).
+  failed.error = std::make_exception_ptr(BlackBoxKinkError("adaptive: a kink"));
+  failed.tightest = {2.5e-5, Vec3(0.25, -0.5, 1)};
+  const BlockPart kink = read_part(write_part(failed));
+  EXPECT_THROW(std::rethrow_exception(kink.error), BlackBoxKinkError);
+  EXPECT_EQ(kink.tightest.first, 2.5e-5);
+  EXPECT_EQ(kink.tightest.second, Vec3(0.25, -0.5, 1));
   // Any other error (the field's) travels as a std::runtime_error with its message, for the run
   // to raise in block order.
   failed.error = std::make_exception_ptr(std::range_error("the field's"));

@@ -175,6 +175,12 @@ TEST(AdaptiveBlocks, AreTheDefaultForAFieldWhoseCallsAreCheap) {
   const PolygonizeResult alone = polygonize_adaptive(*f, o);
   EXPECT_FALSE(alone.stats.adaptive->blocks.requested);
   EXPECT_FALSE(alone.stats.adaptive->blocks.used);
+  // A bound on one tracker's work, blocks unset: tracked alone, no fallback to explain.
+  o.blocks.reset();
+  o.max_steps = 1'000'000;
+  const PolygonizeResult bounded = polygonize_adaptive(*f, o);
+  EXPECT_FALSE(bounded.stats.adaptive->blocks.requested);
+  EXPECT_TRUE(bounded.stats.adaptive->blocks.fallback.empty()) << bounded.stats.adaptive->blocks.fallback;
 }
 
 TEST(AdaptiveBlocks, TheRunsPassesAreTimedApartFromTheBlocks) {
