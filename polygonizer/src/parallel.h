@@ -54,13 +54,14 @@ struct PassClock {
 };
 inline thread_local PassClock* pass_clock = nullptr;
 
-// No pass counted on this thread in its scope (the blocks' own work, timed block by block).
-class PassClockPaused {
+// This thread's passes counted on `clock` in its scope (a run's own), or none (nullptr: the
+// blocks' own work, timed block by block, and a pass's work); the clock before it after.
+class ScopedPassClock {
  public:
-  PassClockPaused() : saved_(std::exchange(pass_clock, nullptr)) {}
-  ~PassClockPaused() { pass_clock = saved_; }
-  PassClockPaused(const PassClockPaused&) = delete;
-  PassClockPaused& operator=(const PassClockPaused&) = delete;
+  explicit ScopedPassClock(PassClock* clock = nullptr) : saved_(std::exchange(pass_clock, clock)) {}
+  ~ScopedPassClock() { pass_clock = saved_; }
+  ScopedPassClock(const ScopedPassClock&) = delete;
+  ScopedPassClock& operator=(const ScopedPassClock&) = delete;
 
  private:
   PassClock* saved_;
@@ -68,14 +69,15 @@ class PassClockPaused {
 
 // Calls fn(begin, end, worker) for consecutive blocks [begin, end) of [0, n), each block once,
 // on up to `workers` threads (worker in [0, workers)). A range of at most one block runs on the
-// calling thread. The first exception thrown by fn is rethrown here once all threads are done.
+// calling thread. The exception of the lowest block that threw is rethrown here once all threads
+// are done: the one a single thread would throw.
 template <class Fn>
 void parallel_blocks(std::size_t n, std::size_t block, unsigned workers, Fn&& fn) {
   block = std::max<std::size_t>(block, 1);
   const std::size_t blocks = (n + block - 1) / block;
   workers = static_cast<unsigned>(std::min<std::size_t>(std::max(workers, 1u), blocks));
   PassClock* const clock = blocks >= 2 ? pass_clock : nullptr;
-  const PassClockPaused paused;
+  const ScopedPassClock paused;
   const auto start = std::chrono::steady_clock::now();
   const auto timed = [&] {
     if (clock)
@@ -87,18 +89,21 @@ void parallel_blocks(std::size_t n, std::size_t block, unsigned workers, Fn&& fn
     timed();
     return;
   }
+  // Blocks are taken in increasing order, so every block below one that threw was taken before
+  // it and runs to its end: the lowest block that threw is the one a single thread would have
+  // stopped at, and its error is the one rethrown, whatever the threads' timing.
   std::atomic<std::size_t> next{0};
   std::exception_ptr error;
+  std::size_t error_block = blocks;
   std::mutex error_mutex;
   const auto work = [&](unsigned worker) {
-    try {
-      for (std::size_t b; (b = next.fetch_add(1, std::memory_order_relaxed)) < blocks;)
+    for (std::size_t b; (b = next.fetch_add(1, std::memory_order_relaxed)) < blocks;) try {
         fn(b * block, std::min(n, (b + 1) * block), worker);
-    } catch (...) {
-      const std::lock_guard<std::mutex> lock(error_mutex);
-      if (!error) error = std::current_exception();
-      next.store(blocks, std::memory_order_relaxed);  // the others stop at their next block
-    }
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(error_mutex);
+        if (b < error_block) error_block = b, error = std::current_exception();
+        next.store(blocks, std::memory_order_relaxed);  // no block after it is started
+      }
   };
   // A helper lent to this thread for its serial evaluations (helper_thread.h) must not spin
   // beside the workers: none is lent to them, and this thread is one of them.

@@ -13,11 +13,11 @@
 #include <cdp/core/errors.h>
 
 #include <algorithm>
+#include <atomic>
 #include <climits>
 #include <cmath>
 #include <cstdint>
 #include <functional>
-#include <numeric>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -808,20 +808,22 @@ std::vector<Box> boxes_for_intersection(const Mesh& mesh, std::size_t* degenerat
   std::vector<Box> boxes = detail::polled_vector<Box>(n, [&] {
     if (cancel) cancel->check(what);
   });
-  std::vector<std::size_t> skipped((n + kPollEvery - 1) / kPollEvery, 0);
+  std::atomic<std::size_t> skipped{0};
   detail::parallel_blocks(n, kPollEvery, detail::worker_count(threads), [&](std::size_t begin, std::size_t end, unsigned) {
     poll(begin);
+    std::size_t here = 0;
     for (std::size_t f = begin; f < end; ++f) {
       const Tri t = corners(mesh, static_cast<int>(f));
       if (triangle_is_degenerate(t[0], t[1], t[2])) {
         boxes[f] = {Vec3::Ones(), Vec3::Zero()};
-        ++skipped[begin / kPollEvery];
+        ++here;
         continue;
       }
       boxes[f] = {t[0].cwiseMin(t[1]).cwiseMin(t[2]), t[0].cwiseMax(t[1]).cwiseMax(t[2])};
     }
+    skipped.fetch_add(here, std::memory_order_relaxed);
   });
-  if (degenerate) *degenerate = std::accumulate(skipped.begin(), skipped.end(), std::size_t{0});
+  if (degenerate) *degenerate = skipped.load();
   return boxes;
 }
 

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -85,6 +86,29 @@ TEST(LendHelper, LendsOnlyWithASecondThreadAndOnlyToItsThread) {
     EXPECT_EQ(lent_helper(), helper);
   }
   EXPECT_EQ(lent_helper(), nullptr);
+}
+
+TEST(ParallelBlocks, RethrowsTheLowestBlocksErrorAsOneThreadWould) {
+  // Block 50 throws at once, block 10 after a while: one thread stops at block 10, and so must
+  // four, whatever their timing (the first error in time was rethrown before), every block below
+  // it having run.
+  for (int repeat = 0; repeat < 5; ++repeat) {
+    std::vector<char> ran(64, 0);
+    try {
+      parallel_blocks(ran.size(), 1, 4, [&](std::size_t begin, std::size_t, unsigned) {
+        ran[begin] = 1;
+        if (begin == 10) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(20));
+          throw std::runtime_error("block 10");
+        }
+        if (begin == 50) throw std::runtime_error("block 50");
+      });
+      ADD_FAILURE() << "no error";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "block 10");
+    }
+    for (std::size_t b = 0; b <= 10; ++b) EXPECT_TRUE(ran[b]) << b;
+  }
 }
 
 }  // namespace

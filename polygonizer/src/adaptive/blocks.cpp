@@ -770,19 +770,11 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       out.report.lockstep_tasks = lockstep.carriers;
       out.report.lockstep_batches += lockstep.batches;
     } else if (field.thread_safe()) {
-      // On all cores, each face into its own slot; an error is the first face's in face order,
-      // as one after another would throw it.
-      std::vector<std::exception_ptr> errors(faces.size());
+      // On all cores, each face into its own slot (an error is the first face's in face order).
       detail::parallel_blocks(faces.size(), 1, detail::worker_count(options.threads),
                               [&](std::size_t begin, std::size_t end, unsigned) {
-                                for (std::size_t i = begin; i < end; ++i) try {
-                                    trace_one(field, i);
-                                  } catch (...) {
-                                    errors[i] = std::current_exception();
-                                  }
+                                for (std::size_t i = begin; i < end; ++i) trace_one(field, i);
                               });
-      for (const std::exception_ptr& e : errors)
-        if (e) std::rethrow_exception(e);
     } else {
       for (std::size_t i = 0; i < faces.size(); ++i) trace_one(field, i);
     }
@@ -844,22 +836,10 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
                                                      edge_length(settings.sizing, placed[v].curvature.min_radius));
         }
       };
-      if (field.thread_safe()) {
-        // An error is the first slice's in slice order, as one thread would throw it.
-        std::vector<std::exception_ptr> errors((sv.points.size() + kSeamVertexSlice - 1) / kSeamVertexSlice);
-        detail::parallel_blocks(sv.points.size(), kSeamVertexSlice, detail::worker_count(options.threads),
-                                [&](std::size_t begin, std::size_t end, unsigned worker) {
-                                  try {
-                                    measure(begin, end, worker);
-                                  } catch (...) {
-                                    errors[begin / kSeamVertexSlice] = std::current_exception();
-                                  }
-                                });
-        for (const std::exception_ptr& e : errors)
-          if (e) std::rethrow_exception(e);
-      } else {
+      if (field.thread_safe())
+        detail::parallel_blocks(sv.points.size(), kSeamVertexSlice, detail::worker_count(options.threads), measure);
+      else
         measure(0, sv.points.size(), 0);
-      }
     }
     std::vector<std::vector<std::vector<int>>> cycles(nblocks);
     for (std::size_t blk = 0; blk < nblocks; ++blk) cycles[blk] = block_cycles(darts[blk]);
@@ -895,53 +875,54 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       return task;
     };
     std::vector<BlockPart> parts(nblocks);
-    // The blocks' time is theirs (block_seconds), not a pass of the run's (PassClock).
-    std::optional<detail::PassClockPaused> paused(std::in_place);
-    if (options.block_runner) {
-      // Elsewhere (block_tasks.h): every task as bytes, the pieces back in the same order.
-      std::vector<std::string> tasks;
-      for (const std::size_t blk : order) tasks.push_back(write_task(block_task(blk)));
-      for (const std::string& t : tasks) out.report.task_bytes += t.size();
-      const std::vector<std::string> pieces = options.block_runner(tasks);
-      if (pieces.size() != order.size())
-        throw InvalidInputError("adaptive: the block runner returned " + std::to_string(pieces.size()) +
-                                 " pieces for " + std::to_string(order.size()) + " tasks");
-      for (std::size_t i = 0; i < order.size(); ++i) {
-        out.report.piece_bytes += pieces[i].size();
-        BlockPart part = read_part(pieces[i]);
-        const std::size_t blk = order[i];
-        // The piece answers this task, and its seams are the task's (a runner that mixed them up
-        // is an error, never a mesh read out of bounds).
-        bool fits = part.block == blk;
-        if (fits && !part.error) {
-          fits = part.ids.size() == cycles[blk].size();
-          for (std::size_t c = 0; fits && c < part.ids.size(); ++c) fits = part.ids[c].size() == cycles[blk][c].size();
+    {
+      // The blocks' time is theirs (block_seconds), not a pass of the run's (PassClock).
+      const detail::ScopedPassClock paused;
+      if (options.block_runner) {
+        // Elsewhere (block_tasks.h): every task as bytes, the pieces back in the same order.
+        std::vector<std::string> tasks;
+        for (const std::size_t blk : order) tasks.push_back(write_task(block_task(blk)));
+        for (const std::string& t : tasks) out.report.task_bytes += t.size();
+        const std::vector<std::string> pieces = options.block_runner(tasks);
+        if (pieces.size() != order.size())
+          throw InvalidInputError("adaptive: the block runner returned " + std::to_string(pieces.size()) +
+                                   " pieces for " + std::to_string(order.size()) + " tasks");
+        for (std::size_t i = 0; i < order.size(); ++i) {
+          out.report.piece_bytes += pieces[i].size();
+          BlockPart part = read_part(pieces[i]);
+          const std::size_t blk = order[i];
+          // The piece answers this task, and its seams are the task's (a runner that mixed them up
+          // is an error, never a mesh read out of bounds).
+          bool fits = part.block == blk;
+          if (fits && !part.error) {
+            fits = part.ids.size() == cycles[blk].size();
+            for (std::size_t c = 0; fits && c < part.ids.size(); ++c) fits = part.ids[c].size() == cycles[blk][c].size();
+          }
+          if (!fits)
+            throw InvalidInputError("adaptive: the block runner returned, for block " + std::to_string(blk) +
+                                    ", a piece of another task");
+          parts[blk] = std::move(part);
         }
-        if (!fits)
-          throw InvalidInputError("adaptive: the block runner returned, for block " + std::to_string(blk) +
-                                  ", a piece of another task");
-        parts[blk] = std::move(part);
+        out.report.threads = 1;
+      } else if (field.costly_calls()) {
+        // The blocks' evaluations gathered, their trackers on `threads` cores between them
+        // (lockstep.h); run_block keeps its errors.
+        out.report.threads = detail::worker_count(options.threads);
+        const LockstepReport lockstep =
+            run_in_lockstep(field, order.size(), out.report.threads,
+                            [&](const Field& on, std::size_t i) { parts[order[i]] = run_block(on, block_task(order[i])); });
+        out.report.lockstep_tasks = std::max(out.report.lockstep_tasks, lockstep.carriers);
+        out.report.lockstep_batches += lockstep.batches;
+      } else {
+        out.report.threads =
+            field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
+                                                     static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
+                                : 1;
+        detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
+          for (std::size_t i = begin; i < end; ++i) parts[order[i]] = run_block(field, block_task(order[i]));
+        });
       }
-      out.report.threads = 1;
-    } else if (field.costly_calls()) {
-      // The blocks' evaluations gathered, their trackers on `threads` cores between them
-      // (lockstep.h); run_block keeps its errors.
-      out.report.threads = detail::worker_count(options.threads);
-      const LockstepReport lockstep =
-          run_in_lockstep(field, order.size(), out.report.threads,
-                          [&](const Field& on, std::size_t i) { parts[order[i]] = run_block(on, block_task(order[i])); });
-      out.report.lockstep_tasks = std::max(out.report.lockstep_tasks, lockstep.carriers);
-      out.report.lockstep_batches += lockstep.batches;
-    } else {
-      out.report.threads =
-          field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
-                                                   static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
-                              : 1;
-      detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
-        for (std::size_t i = begin; i < end; ++i) parts[order[i]] = run_block(field, block_task(order[i]));
-      });
     }
-    paused.reset();
     // Every block's tightest bend, whether its mesh is kept or not (a kink's place among them).
     for (const BlockPart& part : parts)
       if (part.tightest.first < out.tightest.first) out.tightest = part.tightest;

@@ -280,11 +280,7 @@ bool Run::recover(const Recovery& r, bool after_limit) {
 
 PolygonizeResult Run::mesh_with_recoveries(RunFailure& failure) {
   const PhaseCloser closer{ctx.phases};
-  struct TimePasses {  // this run's passes on this thread, whatever it throws
-    detail::PassClock* saved;
-    explicit TimePasses(detail::PassClock& own) : saved(std::exchange(detail::pass_clock, &own)) {}
-    ~TimePasses() { detail::pass_clock = saved; }
-  } time_passes{passes};
+  const detail::ScopedPassClock time_passes(&passes);  // this run's passes on this thread
   prepare();
   // `stuck`: the attempt ended on a bound of the tracking (LimitExceededError), not on a check of
   // its mesh, which a neck stepped over fails and a run with min_edge lowered meshes at little
