@@ -26,17 +26,17 @@ constexpr int kSpinsPerClockRead = 64;
 // is a microsecond or a few; one still running after this has lost its processor.
 constexpr int kBusySpins = 20000;
 
-thread_local LendHelper* t_lender = nullptr;
-
-}  // namespace
-
-void spin_pause() noexcept {
+void pause() noexcept {
 #if defined(__x86_64__) || defined(__i386__)
   _mm_pause();
 #else
   std::this_thread::yield();
 #endif
 }
+
+thread_local LendHelper* t_lender = nullptr;
+
+}  // namespace
 
 HelperThread::HelperThread() : thread_([this] { loop(); }) {}
 
@@ -59,7 +59,7 @@ void HelperThread::post(void (*run)(const unsigned char*, unsigned char*)) noexc
 void HelperThread::wait() noexcept {
   const std::uint64_t target = posted_.load(std::memory_order_relaxed);
   for (int spins = 0; done_.load(std::memory_order_acquire) != target; ++spins) {
-    if (spins < kBusySpins) spin_pause();
+    if (spins < kBusySpins) pause();
     else std::this_thread::yield();
   }
 }
@@ -72,7 +72,7 @@ void HelperThread::loop() noexcept {
     Clock::time_point idle_since = Clock::now();
     for (int spins = 0; (now = posted_.load(std::memory_order_acquire)) == seen; ++spins) {
       if (spins % kSpinsPerClockRead != kSpinsPerClockRead - 1 || Clock::now() - idle_since < kIdleSpin) {
-        spin_pause();
+        pause();
         continue;
       }
       sleeping_.store(true, std::memory_order_seq_cst);

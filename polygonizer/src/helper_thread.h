@@ -32,9 +32,6 @@
 
 namespace cdp::detail {
 
-// One turn of a spin-wait: the processor's pause hint (x86), else a yield.
-void spin_pause() noexcept;
-
 class LendHelper;
 
 class HelperThread {

@@ -766,7 +766,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     };
     if (field.costly_calls()) {
       const LockstepReport lockstep =
-          run_in_lockstep(field, faces.size(), detail::worker_count(options.threads), trace_one);
+          run_in_lockstep(field, faces.size(), trace_one);
       out.report.lockstep_tasks = lockstep.carriers;
       out.report.lockstep_batches += lockstep.batches;
     } else if (field.thread_safe()) {
@@ -905,12 +905,11 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
         }
         out.report.threads = 1;
       } else if (field.costly_calls()) {
-        // The blocks' evaluations gathered, their trackers on `threads` cores between them
+        // The blocks' evaluations gathered, their trackers on this thread between them
         // (lockstep.h); run_block keeps its errors.
-        out.report.threads = detail::worker_count(options.threads);
-        const LockstepReport lockstep =
-            run_in_lockstep(field, order.size(), out.report.threads,
-                            [&](const Field& on, std::size_t i) { parts[order[i]] = run_block(on, block_task(order[i])); });
+        out.report.threads = 1;
+        const LockstepReport lockstep = run_in_lockstep(
+            field, order.size(), [&](const Field& on, std::size_t i) { parts[order[i]] = run_block(on, block_task(order[i])); });
         out.report.lockstep_tasks = std::max(out.report.lockstep_tasks, lockstep.carriers);
         out.report.lockstep_batches += lockstep.batches;
       } else {

@@ -8,25 +8,14 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
-#include <chrono>
-#include <condition_variable>
 #include <exception>
 #include <memory>
-#include <mutex>
 #include <string>
-#include <system_error>
-#include <thread>
 #include <utility>
 #include <vector>
 
 namespace cdp::adaptive {
 namespace {
-
-// How long a worker waiting for a round spins before it sleeps (see Gather::spin_until_round_after),
-// reading the clock every kSpinsPerClockRead pauses.
-constexpr std::chrono::microseconds kRoundSpin{200};
-constexpr int kSpinsPerClockRead = 64;
 
 enum class Kind : std::uint8_t { Values, ValuesGradients, GradientsHessians };
 constexpr std::size_t kKinds = 3;
@@ -42,31 +31,23 @@ struct Request {
   std::exception_ptr error;
 };
 
-// The carriers' meeting point. Each carrier is a fiber (fiber.h), and `workers` threads run them,
-// carrier c on worker c % workers: a worker resumes each of its carriers in turn until it asks
-// for an evaluation or ends, then waits for the round, the others' carriers asking too; the last
-// worker to arrive makes the batch of every carrier's request and starts the next round. Between
-// their evaluations carriers compute on at most `workers` cores at once, and a round costs a
-// worker two fiber switches a carrier and one wait, where a thread a carrier cost every carrier
-// two thread switches (the torus of python/README.md at factor 8, 64 carriers: 90,000 context
-// switches and 0.8 s of system time in a 1.4 s run). Which worker runs a carrier changes no number.
+// The carriers' meeting point. Each carrier is a fiber (fiber.h), all of them on the calling
+// thread: a round resumes each carrier in turn until it asks for an evaluation or ends, then makes
+// the batch of every carrier's request. A round costs two fiber switches a carrier, where a thread
+// a carrier cost every carrier two thread switches (the torus of python/README.md at factor 8, 64
+// carriers: 90,000 context switches and 0.8 s of system time in a 1.4 s run; 0.25 s now). One
+// thread, not one per core: with the carriers shared by two threads meeting once a round, the
+// same runs took 1.1-1.7 times as long on this 2-core machine (a Python function's calls then
+// come from two threads, and each round waits for the slower one).
 class Gather {
  public:
-  Gather(const Field& field, std::size_t carriers)
-      : field_(field), pending_(carriers, nullptr), fibers_(carriers) {
+  Gather(const Field& field, std::size_t carriers) : field_(field), pending_(carriers, nullptr), fibers_(carriers) {
     for (auto& rs : by_kind_) rs.reserve(carriers);
   }
 
   const Field& field() const { return field_; }
   std::uint64_t batches() const { return batches_; }
   std::vector<std::unique_ptr<detail::Fiber>>& fibers() { return fibers_; }
-
-  // The workers' count, once their threads are known to run: workers wait for it.
-  void open(std::size_t workers) {
-    std::lock_guard lock(mutex_);
-    workers_ = live_workers_ = workers;
-    round_changed_.notify_all();
-  }
 
   // Called by carrier c, inside its fiber: the request waits for its round's batch.
   void ask(std::size_t c, Request& r) {
@@ -75,60 +56,23 @@ class Gather {
     if (r.error) std::rethrow_exception(r.error);
   }
 
-  // Worker w's loop, to the end of its carriers.
-  void work(std::size_t w) {
-    {
-      std::unique_lock lock(mutex_);
-      round_changed_.wait(lock, [&] { return workers_ > 0; });
-      if (w >= workers_) return;  // its thread started, a later one did not: not a worker
-    }
+  // The rounds, to the end of every carrier: each round advances every carrier left by one
+  // evaluation (a carrier suspends only to ask), so the rounds are as many as the most
+  // evaluations one carrier's tasks make.
+  void run() {
     for (;;) {
-      bool done = true;
-      for (std::size_t c = w; c < fibers_.size(); c += workers_) {
-        detail::Fiber& f = *fibers_[c];
-        if (!f.finished()) f.resume();
-        done = done && f.finished();
-      }
-      std::unique_lock lock(mutex_);
-      if (done) {
-        --live_workers_;
-        if (live_workers_ > 0 && arrived_ == live_workers_) next_round();
-        return;
-      }
-      if (++arrived_ == live_workers_) {
-        next_round();
-      } else {
-        const std::uint64_t round = round_.load(std::memory_order_relaxed);
-        lock.unlock();
-        if (spin_until_round_after(round)) continue;
-        lock.lock();
-        round_changed_.wait(lock, [&] { return round_.load(std::memory_order_relaxed) != round; });
-      }
+      bool any = false;
+      for (const auto& f : fibers_)
+        if (!f->finished()) {
+          f->resume();
+          any = any || !f->finished();
+        }
+      if (!any) return;
+      execute();
     }
   }
 
  private:
-  // Holding the lock, every other live worker waiting.
-  void next_round() {
-    execute();
-    arrived_ = 0;
-    round_.fetch_add(1, std::memory_order_release);  // the answers before it (see spin_until_round_after)
-    round_changed_.notify_all();
-  }
-
-  // Whether the round after `round` began within kRoundSpin. A round is a batch's call and the
-  // carriers' steps between two evaluations, about a tenth of a millisecond; a worker put to sleep
-  // takes tens of microseconds to wake (on two workers, sleeping at once made the torus of
-  // python/README.md at factor 8 a third slower than one worker).
-  bool spin_until_round_after(std::uint64_t round) const {
-    const auto until = std::chrono::steady_clock::now() + kRoundSpin;
-    for (int spins = 1;; ++spins) {
-      if (round_.load(std::memory_order_acquire) != round) return true;
-      if (spins % kSpinsPerClockRead == 0 && std::chrono::steady_clock::now() > until) return false;
-      detail::spin_pause();
-    }
-  }
-
   // Every pending request, by kind in carrier order: one call of the field per kind. Each request
   // gets its own call's outcome: the field's answer, or the error of the call that held its points
   // with those of the other tasks (which all meet it).
@@ -179,12 +123,8 @@ class Gather {
   }
 
   const Field& field_;
-  std::mutex mutex_;
-  std::condition_variable round_changed_;
-  std::vector<Request*> pending_;  // per carrier, written by its fiber, read by the round's last worker
+  std::vector<Request*> pending_;  // per carrier
   std::vector<std::unique_ptr<detail::Fiber>> fibers_;  // per carrier
-  std::size_t workers_ = 0, live_workers_ = 0, arrived_ = 0;
-  std::atomic<std::uint64_t> round_{0};  // written holding mutex_, read by spinning workers without it
   std::uint64_t batches_ = 0;
   std::array<std::vector<Request*>, kKinds> by_kind_;
   std::vector<Vec3> points_;  // the batch's, reused
@@ -255,7 +195,7 @@ class LockstepView final : public Field {
 
 }  // namespace
 
-LockstepReport run_in_lockstep(const Field& field, std::size_t n, unsigned cores,
+LockstepReport run_in_lockstep(const Field& field, std::size_t n,
                                const std::function<void(const Field& view, std::size_t i)>& task) {
   LockstepReport report;
   if (n == 0) return report;
@@ -276,24 +216,13 @@ LockstepReport run_in_lockstep(const Field& field, std::size_t n, unsigned cores
     throw LimitExceededError("adaptive: the stacks of " + std::to_string(carriers) +
                              " tasks in lockstep could not be mapped");
   }
-  // This thread is the first worker, with the thread-local state a fresh thread has (the run's
-  // pass clock and lent helper are not the tasks'); the others are threads of their own, as many
-  // as start (fewer workers change no number).
-  const std::size_t wanted = std::clamp<std::size_t>(cores, 1, carriers);
-  std::vector<std::thread> helpers;
-  helpers.reserve(wanted - 1);
-  for (std::size_t w = 1; w < wanted; ++w) try {
-      helpers.emplace_back([&gather, w] { gather.work(w); });
-    } catch (const std::system_error&) {
-      break;
-    }
-  gather.open(helpers.size() + 1);
   {
+    // The tasks have none of this thread's thread-local state (the run's pass clock, a lent
+    // helper), as on threads of their own.
     const detail::ScopedPassClock no_clock;
     const detail::NoHelperHere no_helper;
-    gather.work(0);
+    gather.run();
   }
-  for (std::thread& t : helpers) t.join();
   for (const std::exception_ptr& e : errors)
     if (e) std::rethrow_exception(e);
   report.carriers = carriers;

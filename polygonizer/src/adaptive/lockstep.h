@@ -10,8 +10,8 @@
 // The k-th batch holds the k-th evaluation of every task that makes one, in carrier order,
 // whatever the threads' timing: the same batches on every run and on any machine (a numpy
 // function gets the same arrays), and each task the same numbers as it would get alone, so the
-// same mesh as the tasks run one after another. Between evaluations the carriers compute on at
-// most `cores` threads, and the field is called by one at a time, so it need not be thread-safe.
+// same mesh as the tasks run one after another. All of it runs on the calling thread, so the field
+// need not be thread-safe.
 #pragma once
 
 #include <cdp/core/field.h>
@@ -35,18 +35,17 @@ struct LockstepReport {
 };
 
 // Runs task(view, i) for every i in [0, n): task i on carrier i % carriers (carriers =
-// min(n, kLockstepTasks)), each carrier's tasks in increasing i, on the calling thread and up to
-// `cores` - 1 more (as many as start), so at most `cores` (at least one) computing at once.
-// `view` stands for `field` with every evaluation gathered with the other carriers' (above); it
-// has no branch points and is not thread-safe, so a task evaluates it on its own carrier only.
-// A task runs on a fiber's stack of Fiber::kDefaultStackBytes, on one thread throughout, with
-// none of the calling thread's thread-local state (the run's pass clock, a lent helper).
+// min(n, kLockstepTasks)), each carrier's tasks in increasing i, on the calling thread. `view`
+// stands for `field` with every evaluation gathered with the other carriers' (above); it has no
+// branch points and is not thread-safe, so a task evaluates it on its own carrier only. A task
+// runs on a fiber's stack of Fiber::kDefaultStackBytes, with none of the calling thread's
+// thread-local state (the run's pass clock, a lent helper).
 // \pre `field` has no branch points (a black box: Field::costly_calls) and is evaluated by
 //      nothing else meanwhile.
 // \throw the exception of the lowest i whose task threw, after every carrier has ended (tasks
 //        that must all run catch their own); LimitExceededError where the carriers' stacks cannot
 //        be mapped (before any task runs).
-LockstepReport run_in_lockstep(const Field& field, std::size_t n, unsigned cores,
+LockstepReport run_in_lockstep(const Field& field, std::size_t n,
                                const std::function<void(const Field& view, std::size_t i)>& task);
 
 }  // namespace cdp::adaptive
