@@ -46,7 +46,8 @@ const std::vector<OptionSpec>& table() {
        "cut the box into blocks of about 2500 triangles, trace the seams where the surface crosses the cuts, and "
        "mesh the blocks from them on all threads (a surface without followed creases; the same mesh on any number "
        "of threads; stats blocks); default: true, except for a Python function (whose calls blocks would gather "
-       "in lockstep: a tenth of the calls, and for a cheap numpy function twice the time)"},
+       "in lockstep: a tenth of the calls and less time on smooth functions, but far more time on a function with "
+       "rounded (C1) edges)"},
       {"check_self_intersections", OptionKind::Boolean, OptionMethods::Adaptive, "BOOL", "true", "", {}, {}, 0, 0,
        "refuse a mesh whose triangles intersect (the last of the final checks; false skips it, for speed on a "
        "surface known to mesh)"},

@@ -309,7 +309,7 @@ def test_blocks_give_the_same_mesh_on_one_and_two_threads():
     # Without blocks the surface is tracked alone, into another mesh of the same surface.
     alone = cdp.polygonize(torus, factor=12, threads=1, blocks=False)
     assert not alone.stats["blocks"]["used"] and not alone.stats["blocks"]["requested"]
-    # A Python function is tracked alone unless blocks=True (lockstep: fewer calls, more time).
+    # A Python function is tracked alone unless blocks=True (python/README.md says why).
     field = cdp.callable_field(torus.values, torus.bounds, trace=False)
     called = cdp.polygonize(field, factor=3)
     assert not called.stats["blocks"]["requested"] and not called.stats["blocks"]["used"]

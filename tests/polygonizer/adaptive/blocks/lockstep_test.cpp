@@ -215,8 +215,8 @@ TEST(Lockstep, TheSeamsAndBlocksOfALockstepRunAreThoseMadeOneAfterAnother) {
 }
 
 TEST(Lockstep, ACostlyFieldIsTrackedAloneUnlessBlocksAreAskedFor) {
-  // Lockstep makes a tenth of the calls but, for a cheap numpy function, twice the time: the
-  // caller chooses (AdaptiveOptions::blocks unset).
+  // Lockstep makes a tenth of the calls, but a black box with C1 seams (a rounded box) takes
+  // far longer in blocks: the caller chooses (AdaptiveOptions::blocks unset).
   const auto torus = test::field_from_json(kReadmeTorus);
   const RecordingCostlyField costly(*torus);
   AdaptiveOptions o;
