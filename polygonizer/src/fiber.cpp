@@ -1,5 +1,9 @@
+// glibc's fortified longjmp (_FORTIFY_SOURCE, a default of some distributions' compilers) refuses
+// a jump to another stack, which is what a switch is.
+#undef _FORTIFY_SOURCE
 #include "fiber.h"
 
+#include <csetjmp>
 #include <cstdint>
 #include <new>
 #include <utility>
@@ -76,7 +80,15 @@ void Fiber::entry(unsigned hi, unsigned lo) {
 
 void Fiber::resume() {
   start_switch(&caller_fake_, context_.uc_stack.ss_sp, context_.uc_stack.ss_size);
-  swapcontext(&caller_, &context_);
+  // The first time through setcontext, which enters the body on its stack; after that, where
+  // the body last suspended. Either way the fiber comes back by a jump to caller_.
+  if (_setjmp(caller_) == 0) {
+    if (!started_) {
+      started_ = true;
+      setcontext(&context_);
+    }
+    _longjmp(fiber_, 1);
+  }
   finish_switch(caller_fake_, nullptr, nullptr);
   if (finished_ && error_) std::rethrow_exception(std::exchange(error_, nullptr));
 }
@@ -86,7 +98,7 @@ void Fiber::suspend() { switch_out(false); }
 void Fiber::switch_out(bool last) {
   // The fiber's fake stack is let go when it leaves for good (a null save).
   start_switch(last ? nullptr : &fiber_fake_, caller_bottom_, caller_size_);
-  swapcontext(&context_, &caller_);
+  if (last || _setjmp(fiber_) == 0) _longjmp(caller_, 1);
   finish_switch(fiber_fake_, &caller_bottom_, &caller_size_);
 }
 

@@ -1,10 +1,11 @@
 // A function run on a stack of its own (a fiber), on the thread that resumes it, until it
-// suspends itself or returns: a switch costs about 0.3 us (glibc's swapcontext, whose one system
-// call saves the signal mask), where handing a core from one thread to another costs a futex
+// suspends itself or returns: a switch is a _setjmp and a _longjmp (the registers the ABI keeps
+// across a call, a few nanoseconds; swapcontext also saves and restores the signal mask, a system
+// call each way, about 0.3 us), where handing a core from one thread to another costs a futex
 // wake and two context switches, several microseconds each on this machine. Tasks in lockstep
 // (adaptive/lockstep.h) run as fibers: their trackers switch at every evaluation.
 //
-// POSIX ucontext rather than a library's (Boost.Context needs its compiled part, which every user
+// POSIX makecontext (a stack of its own to start on) and setjmp rather than a library's (Boost.Context needs its compiled part, which every user
 // of the static cdp::core would then link; cdp::core needs Eigen only). Under AddressSanitizer
 // the switches are announced to it (its fiber interface), so that it knows which stack is live.
 #pragma once
@@ -12,6 +13,8 @@
 #include <cstddef>
 #include <exception>
 #include <functional>
+
+#include <csetjmp>
 
 #include <ucontext.h>
 
@@ -45,8 +48,9 @@ class Fiber {
   std::function<void()> body_;
   void* map_ = nullptr;  // the stack's mapping, guard page included
   std::size_t map_bytes_ = 0;
-  ucontext_t context_{}, caller_{};
-  bool finished_ = false;
+  ucontext_t context_{};  // where the body starts (makecontext)
+  std::jmp_buf caller_{}, fiber_{};  // where resume and the body stopped (_setjmp)
+  bool started_ = false, finished_ = false;
   std::exception_ptr error_;
   // AddressSanitizer's: the caller's stack, and each side's fake stack across a switch.
   const void* caller_bottom_ = nullptr;
