@@ -174,6 +174,36 @@ double mean_edge_ratio(const Mesh& mesh) {
   return mesh.triangles.empty() ? 0 : sum / static_cast<double>(mesh.triangles.size());
 }
 
+void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing) {
+  std::vector<Vec3> middles;
+  middles.reserve(mesh.triangles.size());
+  for (const auto& t : mesh.triangles)
+    middles.push_back((mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3);
+  std::vector<double> values(middles.size());
+  std::vector<Vec3> gradients(middles.size());
+  field.values_gradients(middles.data(), values.data(), gradients.data(), middles.size());
+  double worst = kBendChordRatio;
+  std::size_t at = middles.size();
+  double worst_off = 0, worst_edge = 0, worst_asked = 0;
+  for (std::size_t i = 0; i < middles.size(); ++i) {
+    const double g = gradients[i].norm();
+    if (!(g > 0) || !std::isfinite(values[i])) continue;
+    const double off = std::abs(values[i]) / g;
+    if (!(off > 0)) continue;
+    const auto& t = mesh.triangles[i];
+    double edge = 0;
+    for (int k = 0; k < 3; ++k) edge = std::max(edge, (mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]).norm());
+    const double asked = edge_length(sizing, edge * edge / (6 * off));
+    if (edge > worst * asked) worst = edge / asked, at = i, worst_off = off, worst_edge = edge, worst_asked = asked;
+  }
+  if (at == middles.size()) return;
+  std::ostringstream os;
+  os << "adaptive: a triangle at " << describe_point(middles[at]) << " cuts across a bend finer than its edges (its middle "
+     << worst_off << " off the surface, its longest edge " << worst_edge << " where the bend asks for " << worst_asked
+     << ")";
+  throw NoSurfaceError(os.str());
+}
+
 void check_components_apart(const Field& field, const Mesh& mesh, std::size_t components) {
   if (components > 1)
     if (const auto at = uncovered_between_components(field, mesh))

@@ -2,6 +2,7 @@
 // error, and the quality bounds polygonize_adaptive holds a smooth surface's mesh to.
 #pragma once
 
+#include "edge_length.h"
 #include "missed_necks.h"
 
 #include <cdp/core/cancel.h>
@@ -63,6 +64,22 @@ void check_necks(const Field& field, const Mesh& mesh, std::span<const CriticalS
 // side of it, which check_mesh passes.
 // \throw NoSurfaceError naming the place.
 void check_components_apart(const Field& field, const Mesh& mesh, std::size_t components);
+
+// A triangle whose middle lies s off the surface with its longest edge L stands on a bend of
+// radius about L^2 / (6 s) (the middle of an equilateral triangle inscribed in a sphere of radius
+// r lies L^2 / (6 r) inside it). Where L is more than this many times the edge the sizing asks
+// for at that radius, the triangle cuts across a bend finer than its corners saw. On the numpy
+// functions of python/README.md (a torus, a twisted ellipsoid, blobs, a rounded box) at factors
+// 3 and 8, tracked alone and in blocks, the largest ratio was 1.64 wherever the mesh followed the
+// surface; blocks in lockstep cut a rounded box's fillets at factor 8 at ratios up to 7.5.
+inline constexpr double kBendChordRatio = 3;
+
+// The mesh's triangles against the bends under them (kBendChordRatio), their middles' distances
+// measured in one batched call of the field. Run after blocks meshed in lockstep (a function
+// whose calls cost more than their points), where the repair of the band around their seams cut
+// a rounded box's fillets with nothing else to say so: the run then tracks the surface alone.
+// \throw NoSurfaceError naming the worst triangle's place.
+void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing);
 
 // The smallest angle of the mesh's triangles, in degrees (180 for no triangle).
 double min_angle_degrees(const Mesh& mesh);

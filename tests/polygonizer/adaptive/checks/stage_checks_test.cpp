@@ -5,12 +5,15 @@
 
 #include <cdp/core/cancel.h>
 #include <cdp/core/errors.h>
+#include <cdp/core/models/analytic.h>
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 
 namespace cdp::adaptive {
 namespace {
@@ -39,6 +42,50 @@ TEST(AdaptiveStages, TheChecksRefuseAnOpenMeshAndCountTheQualityBoundsMissed) {
   sliver.positions[3] = {0.5, 0.5, 0.01};  // the faces at vertex 3 nearly flat: angles near 0
   EXPECT_EQ(missed_bounds(sliver, 0), 3);
   EXPECT_NEAR(min_angle_degrees(tetra), 45, 1e-9);
+}
+
+// The octahedron with its vertices on the unit sphere, each triangle split in four `levels` times
+// with the new vertices pushed out onto the sphere.
+Mesh sphere_octahedron(int levels) {
+  Mesh m;
+  m.positions = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  for (int level = 0; level < levels; ++level) {
+    std::map<std::pair<int, int>, int> middle;
+    const auto at = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      if (const auto it = middle.find(key); it != middle.end()) return it->second;
+      m.positions.push_back((m.positions[static_cast<std::size_t>(a)] + m.positions[static_cast<std::size_t>(b)]).normalized());
+      return middle[key] = static_cast<int>(m.positions.size()) - 1;
+    };
+    std::vector<std::array<int, 3>> finer;
+    for (const auto& t : m.triangles) {
+      const int ab = at(t[0], t[1]), bc = at(t[1], t[2]), ca = at(t[2], t[0]);
+      finer.insert(finer.end(), {{t[0], ab, ca}, {ab, t[1], bc}, {ca, bc, t[2]}, {ab, bc, ca}});
+    }
+    m.triangles = std::move(finer);
+  }
+  return m;
+}
+
+TEST(AdaptiveStages, TheBendCheckRefusesTrianglesCuttingAcrossABendFinerThanTheirEdges) {
+  // A unit sphere at factor 8 asks for edges of about 1/8: the octahedron's faces (edges 1.41,
+  // middles 0.42 inside) cut across it, the octahedron split three times (edges about 0.18)
+  // follows it; at factor 1 (edges of about 1) the octahedron is what the sizing asks for.
+  const Sphere sphere(Vec3::Zero(), 1);
+  Sizing sizing;
+  sizing.factor = 8;
+  sizing.min_edge = 1e-3;
+  sizing.max_edge = 2;
+  try {
+    check_bends_kept(sphere, sphere_octahedron(0), sizing);
+    ADD_FAILURE() << "no error";
+  } catch (const NoSurfaceError& e) {
+    EXPECT_NE(std::string(e.what()).find("cuts across a bend"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(check_bends_kept(sphere, sphere_octahedron(3), sizing));
+  sizing.factor = 1;
+  EXPECT_NO_THROW(check_bends_kept(sphere, sphere_octahedron(0), sizing));
 }
 
 TEST(AdaptiveStages, TheSmallestAngleIsThatOfEveryCornerMeasured) {
