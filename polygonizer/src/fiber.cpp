@@ -3,7 +3,6 @@
 #undef _FORTIFY_SOURCE
 #include "fiber.h"
 
-#include <csetjmp>
 #include <cstdint>
 #include <new>
 #include <utility>

@@ -5,9 +5,10 @@
 // wake and two context switches, several microseconds each on this machine. Tasks in lockstep
 // (adaptive/lockstep.h) run as fibers: their trackers switch at every evaluation.
 //
-// POSIX makecontext (a stack of its own to start on) and setjmp rather than a library's (Boost.Context needs its compiled part, which every user
-// of the static cdp::core would then link; cdp::core needs Eigen only). Under AddressSanitizer
-// the switches are announced to it (its fiber interface), so that it knows which stack is live.
+// POSIX makecontext (a stack of its own to start on) and setjmp rather than a library's
+// (Boost.Context needs its compiled part, which every user of the static cdp::core would then
+// link; cdp::core needs Eigen only). Under AddressSanitizer the switches are announced to it (its
+// fiber interface), so that it knows which stack is live.
 #pragma once
 
 #include <cstddef>

@@ -182,9 +182,12 @@ void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing
   std::vector<double> values(middles.size());
   std::vector<Vec3> gradients(middles.size());
   field.values_gradients(middles.data(), values.data(), gradients.data(), middles.size());
-  double worst = kBendChordRatio;
-  std::size_t at = middles.size();
-  double worst_off = 0, worst_edge = 0, worst_asked = 0;
+  // The triangle whose longest edge most exceeds what its bend asks for, beyond kBendChordRatio.
+  struct Worst {
+    double ratio = kBendChordRatio;
+    std::size_t at = 0;
+    double off = 0, edge = 0, asked = 0;
+  } worst;
   for (std::size_t i = 0; i < middles.size(); ++i) {
     const double g = gradients[i].norm();
     if (!(g > 0) || !std::isfinite(values[i])) continue;
@@ -194,13 +197,13 @@ void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing
     double edge = 0;
     for (int k = 0; k < 3; ++k) edge = std::max(edge, (mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]).norm());
     const double asked = edge_length(sizing, edge * edge / (6 * off));
-    if (edge > worst * asked) worst = edge / asked, at = i, worst_off = off, worst_edge = edge, worst_asked = asked;
+    if (edge > worst.ratio * asked) worst = {edge / asked, i, off, edge, asked};
   }
-  if (at == middles.size()) return;
+  if (!(worst.edge > 0)) return;
   std::ostringstream os;
-  os << "adaptive: a triangle at " << describe_point(middles[at]) << " cuts across a bend finer than its edges (its middle "
-     << worst_off << " off the surface, its longest edge " << worst_edge << " where the bend asks for " << worst_asked
-     << ")";
+  os << "adaptive: a triangle at " << describe_point(middles[worst.at])
+     << " cuts across a bend finer than its edges (its middle " << worst.off << " off the surface, its longest edge "
+     << worst.edge << " where the bend asks for " << worst.asked << ")";
   throw NoSurfaceError(os.str());
 }
 
