@@ -781,9 +781,9 @@ bool triangles_intersect(const Mesh& mesh, int f, int g) {
 
 namespace {
 
-// triangle_boxes_for_intersection, polling `cancel` (when given) every kPollEvery triangles.
-std::vector<Box> boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate, const char* what,
-                                        const CancelToken* cancel, int threads = 1) {
+// The checks of triangle_boxes_for_intersection before any box: every index in range, every
+// position a triangle uses finite; `cancel` (when given) polled every kPollEvery triangles.
+void validate_for_intersection(const Mesh& mesh, const char* what, const CancelToken* cancel) {
   if (mesh.triangles.size() > static_cast<std::size_t>(INT_MAX))
     throw InvalidInputError(std::string(what) + ": too many triangles");
   const auto nv = static_cast<long long>(mesh.positions.size());
@@ -802,6 +802,16 @@ std::vector<Box> boxes_for_intersection(const Mesh& mesh, std::size_t* degenerat
       if (!mesh.positions[static_cast<std::size_t>(i)].allFinite())
         throw InvalidInputError(std::string(what) + ": a vertex position is not finite");
   }
+}
+
+// triangle_boxes_for_intersection, polling `cancel` (when given) every kPollEvery triangles.
+std::vector<Box> boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate, const char* what,
+                                        const CancelToken* cancel, int threads = 1) {
+  validate_for_intersection(mesh, what, cancel);
+  const std::size_t n = mesh.triangles.size();
+  const auto poll = [&](std::size_t f) {
+    if (cancel && f % kPollEvery == 0) cancel->check(what);
+  };
   // The boxes made room for in polled blocks (a hundred megabytes of fresh pages at 2*10^6
   // triangles), then each slice of triangles on a thread into its own slots: the degeneracy test
   // was a fifth of the blocks' final check on the torus at factor 40, all of it serial.
@@ -843,33 +853,44 @@ std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::
 
 namespace {
 
-// Empties the box of every triangle not involved whose box touches no cell of a coarse grid that
-// an involved triangle's box touches: it overlaps no involved box, so it is in no pair to test,
-// and the hash grid (whose cost is most of all triangles' entries) leaves it out. Cells of
-// kCoarseCellEdges median involved box sides; with more than kMaxCoarseCells cells, nothing is
-// left out.
-void leave_out_far_from_involved(std::vector<Box>& boxes, const std::vector<char>& involved, const CancelToken* cancel) {
+// What a check of the pairs with an involved triangle needs of the mesh, one mark per triangle:
+// kNearInvolved for every triangle whose box touches a cell of a coarse grid that an involved
+// triangle's box touches (any other overlaps no involved box, so is in no pair to test), and
+// kInStar for the others around their vertices (flat_stars certifies a vertex from its whole
+// star). Cells of kCoarseCellEdges median involved box sides. Empty (everything is needed) with
+// more than kMaxCoarseCells cells. The boxes are made on the way, never held: held for every
+// triangle they were the largest part of a run's peak memory (89 of 444 MB at 1.9 * 10^6
+// triangles, the blocks' torus at tolerance 1e-5), where most triangles are in no pair to test.
+constexpr unsigned char kFarFromInvolved = 0, kNearInvolved = 1, kInStar = 2;
+std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<char>& involved, const CancelToken* cancel) {
   constexpr double kCoarseCellEdges = 2;
   constexpr double kMaxCoarseCells = 1 << 27;  // a bit each: 16 MB
-  const auto live = [&](std::size_t f) { return (boxes[f].min.array() <= boxes[f].max.array()).all(); };
+  const std::size_t n = mesh.triangles.size();
+  const auto poll = [&](std::size_t f) {
+    if (cancel && f % kPollEvery == 0) cancel->check("self-intersections");
+  };
+  const auto box_of = [&](std::size_t f) {
+    const Tri t = corners(mesh, static_cast<int>(f));
+    return Box{t[0].cwiseMin(t[1]).cwiseMin(t[2]), t[0].cwiseMax(t[1]).cwiseMax(t[2])};
+  };
   std::vector<double> sides;
   Box all{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
-  for (std::size_t f = 0; f < boxes.size(); ++f) {
-    if (cancel && f % kPollEvery == 0) cancel->check("self-intersections");
-    if (!live(f)) continue;
-    all.min = all.min.cwiseMin(boxes[f].min);
-    all.max = all.max.cwiseMax(boxes[f].max);
-    if (involved[f]) sides.push_back((boxes[f].max - boxes[f].min).maxCoeff());
+  for (std::size_t f = 0; f < n; ++f) {
+    poll(f);
+    const Box b = box_of(f);
+    all.min = all.min.cwiseMin(b.min);
+    all.max = all.max.cwiseMax(b.max);
+    if (involved[f]) sides.push_back(b.size().maxCoeff());
   }
-  if (sides.empty() || !(all.min.array() <= all.max.array()).all()) return;
+  if (sides.empty()) return std::vector<unsigned char>(n, kFarFromInvolved);  // no pair to test
   std::nth_element(sides.begin(), sides.begin() + static_cast<std::ptrdiff_t>(sides.size() / 2), sides.end());
   const double h = kCoarseCellEdges * sides[sides.size() / 2];
-  if (!(h > 0)) return;
+  if (!(h > 0)) return {};
   const Vec3 extent = all.max - all.min;
   std::array<long long, 3> dims{};
   double cells = 1;
   for (int a = 0; a < 3; ++a) cells *= std::floor(extent[a] / h) + 1;  // in double: no overflow
-  if (!(cells <= kMaxCoarseCells)) return;
+  if (!(cells <= kMaxCoarseCells)) return {};
   for (int a = 0; a < 3; ++a) dims[a] = static_cast<long long>(extent[a] / h) + 1;
   const auto cell = [&](double x, int a) {
     return std::clamp(static_cast<long long>((x - all.min[a]) / h), 0LL, dims[a] - 1);
@@ -877,22 +898,34 @@ void leave_out_far_from_involved(std::vector<Box>& boxes, const std::vector<char
   std::vector<bool> marked(static_cast<std::size_t>(cells), false);
   // Calls fn(index) for every coarse cell box f touches, until fn returns true.
   const auto any_cell = [&](std::size_t f, const auto& fn) {
-    const Box& b = boxes[f];
+    const Box b = box_of(f);
     for (long long z = cell(b.min.z(), 2); z <= cell(b.max.z(), 2); ++z)
       for (long long y = cell(b.min.y(), 1); y <= cell(b.max.y(), 1); ++y)
         for (long long x = cell(b.min.x(), 0); x <= cell(b.max.x(), 0); ++x)
           if (fn(static_cast<std::size_t>((z * dims[1] + y) * dims[0] + x))) return true;
     return false;
   };
-  for (std::size_t f = 0; f < boxes.size(); ++f) {
-    if (cancel && f % kPollEvery == 0) cancel->check("self-intersections");
-    if (involved[f] && live(f)) any_cell(f, [&](std::size_t c) { return marked[c] = true, false; });
+  for (std::size_t f = 0; f < n; ++f) {
+    poll(f);
+    if (involved[f]) any_cell(f, [&](std::size_t c) { return marked[c] = true, false; });
   }
-  for (std::size_t f = 0; f < boxes.size(); ++f) {
-    if (cancel && f % kPollEvery == 0) cancel->check("self-intersections");
-    if (!involved[f] && live(f) && !any_cell(f, [&](std::size_t c) { return bool(marked[c]); }))
-      boxes[f] = {Vec3::Ones(), Vec3::Zero()};
+  std::vector<unsigned char> near(n, kFarFromInvolved);
+  std::vector<bool> at_vertex(mesh.positions.size(), false);
+  for (std::size_t f = 0; f < n; ++f) {
+    poll(f);
+    if (!involved[f] && !any_cell(f, [&](std::size_t c) { return bool(marked[c]); })) continue;
+    near[f] = kNearInvolved;
+    for (const int v : mesh.triangles[f]) at_vertex[static_cast<std::size_t>(v)] = true;
   }
+  for (std::size_t f = 0; f < n; ++f) {
+    poll(f);
+    if (near[f] != kFarFromInvolved) continue;
+    const auto& t = mesh.triangles[f];
+    if (at_vertex[static_cast<std::size_t>(t[0])] || at_vertex[static_cast<std::size_t>(t[1])] ||
+        at_vertex[static_cast<std::size_t>(t[2])])
+      near[f] = kInStar;
+  }
+  return near;
 }
 
 }  // namespace
@@ -902,11 +935,49 @@ std::vector<std::pair<int, int>> self_intersecting_pairs_involving(const Mesh& m
                                                                    const CancelToken* cancel) {
   if (involved.size() != mesh.triangles.size())
     throw InvalidInputError("self_intersecting_pairs_involving: expects one flag per triangle");
-  std::vector<Box> boxes = boxes_for_intersection(mesh, nullptr, "self_intersecting_pairs", cancel, threads);
-  leave_out_far_from_involved(boxes, involved, cancel);
+  const char* what = "self_intersecting_pairs";
+  validate_for_intersection(mesh, what, cancel);
+  const std::vector<unsigned char> near = near_involved(mesh, involved, cancel);
   PairCollector out(max_pairs);
-  hash_grid_pairs(mesh, boxes, out, threads, cancel, &involved);
-  return out.sorted_pairs();
+  if (near.empty()) {
+    const std::vector<Box> boxes = boxes_for_intersection(mesh, nullptr, what, cancel, threads);
+    hash_grid_pairs(mesh, boxes, out, threads, cancel, &involved);
+    return out.sorted_pairs();
+  }
+  // The triangles needed, as a mesh of their own, in their order (so a pair's order and the
+  // smallest max_pairs pairs are the same in either numbering), their vertices renumbered.
+  Mesh part;
+  std::vector<int> ids;  // part's triangle -> mesh's
+  ids.reserve(static_cast<std::size_t>(std::count_if(near.begin(), near.end(), [](unsigned char m) { return m != kFarFromInvolved; })));
+  part.triangles.reserve(ids.capacity());
+  std::vector<int> vertex(mesh.positions.size(), -1);
+  for (std::size_t f = 0; f < near.size(); ++f) {
+    if (cancel && f % kPollEvery == 0) cancel->check(what);
+    if (near[f] == kFarFromInvolved) continue;
+    std::array<int, 3> t{};
+    for (int c = 0; c < 3; ++c) {
+      int& v = vertex[static_cast<std::size_t>(mesh.triangles[f][c])];
+      if (v < 0) {
+        v = static_cast<int>(part.positions.size());
+        part.positions.push_back(mesh.positions[static_cast<std::size_t>(mesh.triangles[f][c])]);
+      }
+      t[c] = v;
+    }
+    part.triangles.push_back(t);
+    ids.push_back(static_cast<int>(f));
+  }
+  vertex = {};
+  std::vector<Box> boxes = boxes_for_intersection(part, nullptr, what, cancel, threads);
+  std::vector<char> part_involved(ids.size(), 0);
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    const auto f = static_cast<std::size_t>(ids[k]);
+    part_involved[k] = involved[f];
+    if (near[f] == kInStar) boxes[k] = {Vec3::Ones(), Vec3::Zero()};  // in a star only: in no pair
+  }
+  hash_grid_pairs(part, boxes, out, threads, cancel, &part_involved);
+  std::vector<std::pair<int, int>> pairs = out.sorted_pairs();
+  for (auto& [f, g] : pairs) f = ids[static_cast<std::size_t>(f)], g = ids[static_cast<std::size_t>(g)];
+  return pairs;
 }
 
 std::size_t count_self_intersecting_pairs(const Mesh& mesh, int threads) {
