@@ -997,6 +997,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     }
     for (std::size_t v = 0; v < mesh.positions.size(); ++v)
       out.components += used[v] && joined.find(static_cast<int>(v)) == static_cast<int>(v);
+    out.vertices = cm.mesh.positions.size();
     out.mesh = std::move(cm);
   } catch (const CreaseLayoutError& e) {
     out.report.fallback = e.what();

@@ -42,6 +42,10 @@ struct BlockMeshing {
   // (`report.fallback`).
   std::optional<CreaseMesh> mesh;
   std::size_t components = 0;  // of `mesh`
+  // Of `mesh`, kept when the run, once its tracker has adopted the mesh, frees its arrays
+  // (`adopted`: a copy of the whole mesh no stage after the tracking reads).
+  std::size_t vertices = 0;
+  bool adopted = false;
   // The blocks' trackers' vertices near critical points of F (Tracker::critical_starts), in
   // block order: where the neck search (check_necks) looks for necks their fronts stepped over.
   std::vector<CriticalStart> critical_starts;

@@ -40,7 +40,8 @@ class Run {
   // Drops a crease layout whose meshing failed with `e` and meshes the surface as smooth;
   // false where there was none.
   bool fall_back(const std::exception& e);
-  // The mesh adopted as finished before the tracker seeds: the crease patches' or the blocks'.
+  // The mesh adopted as finished before the tracker seeds: the crease patches' or the blocks'
+  // (whose arrays track frees once adopted; their counters stay).
   const CreaseMesh* finished() const;
   // track_surface after it.
   void track();

@@ -96,7 +96,7 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
   in_band.aim_mean_edge_ratio = 0;  // as the blocks': the whole mesh's mean decides (below)
   const std::vector<char> sealed =
       run.options.check_self_intersections ? sealed_triangles(blocks, mesh) : std::vector<char>{};
-  QualityReport own = repair_band(run.field, mesh, blocks.report.seam_vertices, blocks.mesh->mesh.positions.size(),
+  QualityReport own = repair_band(run.field, mesh, blocks.report.seam_vertices, blocks.vertices,
                                   in_band, band, sealed.empty() ? nullptr : &sealed);
   add_repair_counts(report, own);
   // The relaxation's search (QualityOptions::aim_mean_edge_ratio) aims at the whole mesh's mean
