@@ -22,12 +22,20 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <ctime>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <thread>
+
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace {
 
@@ -529,6 +537,96 @@ void BM_BlocksClusterProjectionSlow(benchmark::State& state) {
   state.SetLabel("torus_f40/adaptive/blocks_on_64_workers_at_1e9");
 }
 BENCHMARK(BM_BlocksClusterProjectionSlow)->Iterations(2)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// Issue 58's item 5, measured as users meet it: the peak resident memory of the `polygonize`
+// program (a process of its own, spawned and waited for, its getrusage maximum) meshing the torus
+// of experiments/fields/torus.json with the defaults at tolerance 1e-5 (about 1.9 * 10^6
+// triangles) and 1e-6 (about 1.8 * 10^7), each written to a PLY file. `peak_ratio` is the large
+// run's peak over the small one's: with streaming, at most 1.3; holding the mesh until it is
+// written, about the ratio of the triangles (`triangle_ratio`). One iteration, one repetition:
+// the large run takes about a minute and 4 GB.
+struct ProgramRun {
+  double peak_bytes = 0, triangles = 0, seconds = 0;
+};
+
+std::string program_path(const std::string& name) {
+  std::vector<char> self(4096);
+  const ssize_t n = readlink("/proc/self/exe", self.data(), self.size() - 1);
+  if (n <= 0) return name;
+  const std::string path(self.data(), static_cast<std::size_t>(n));
+  return path.substr(0, path.rfind('/') + 1) + name;
+}
+
+// Runs `polygonize FIELD -o DIR/mesh.ply --quiet ARGS`; the mesh's triangles from the PLY header.
+std::optional<ProgramRun> run_polygonize(const std::string& field, const std::vector<std::string>& args,
+                                         const std::string& dir, std::string& error) {
+  const std::string program = program_path("polygonize"), out = dir + "/mesh.ply";
+  std::vector<std::string> words{program, field, "-o", out, "--quiet"};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  const auto t0 = std::chrono::steady_clock::now();
+  pid_t pid = 0;
+  if (posix_spawn(&pid, program.c_str(), nullptr, nullptr, argv.data(), environ) != 0) {
+    error = "cannot start " + program;
+    return std::nullopt;
+  }
+  int status = 0;
+  struct rusage usage {};
+  if (wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    error = program + " failed";
+    return std::nullopt;
+  }
+  ProgramRun r;
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.peak_bytes = static_cast<double>(usage.ru_maxrss) * 1024.0;  // kilobytes on Linux
+  std::ifstream ply(out, std::ios::binary);
+  std::string line;
+  while (std::getline(ply, line) && line != "end_header")
+    if (line.rfind("element face ", 0) == 0) r.triangles = std::stod(line.substr(13));
+  std::remove(out.c_str());
+  if (!(r.triangles > 0)) {
+    error = "no face count in " + out;
+    return std::nullopt;
+  }
+  return r;
+}
+
+void BM_PeakMemorySlow(benchmark::State& state) {
+  const std::string field = std::string(CDP_SOURCE_DIR) + "/experiments/fields/torus.json";
+  char dir_template[] = "/tmp/cdp_bench_memory_XXXXXX";
+  const char* dir = mkdtemp(dir_template);
+  if (!dir) {
+    state.SkipWithError("cannot make a temporary directory");
+    return;
+  }
+  ProgramRun small, large;
+  for (auto _ : state) {
+    std::string error;
+    const auto a = run_polygonize(field, {"--tolerance", "1e-5"}, dir, error);
+    const auto b = a ? run_polygonize(field, {"--tolerance", "1e-6"}, dir, error) : std::nullopt;
+    if (!b) {
+      rmdir(dir);
+      state.SkipWithError(error.c_str());
+      return;
+    }
+    small = *a, large = *b;
+    state.SetIterationTime(large.seconds);
+  }
+  rmdir(dir);
+  state.counters["triangles_small"] = small.triangles;
+  state.counters["triangles_large"] = large.triangles;
+  state.counters["peak_mb_small"] = small.peak_bytes / 1e6;
+  state.counters["peak_mb_large"] = large.peak_bytes / 1e6;
+  state.counters["bytes_per_triangle_small"] = small.peak_bytes / small.triangles;
+  state.counters["bytes_per_triangle_large"] = large.peak_bytes / large.triangles;
+  state.counters["peak_ratio"] = large.peak_bytes / small.peak_bytes;
+  state.counters["triangle_ratio"] = large.triangles / small.triangles;
+  state.counters["seconds_small"] = small.seconds;
+  state.SetLabel("torus/adaptive/polygonize_1e-5_and_1e-6");
+}
+BENCHMARK(BM_PeakMemorySlow)->Iterations(1)->Repetitions(1)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // One SDF model at factor 3, for BM_AdaptiveSdf and BM_AdaptiveSdfCrowdSlow: each iteration
 // meshes it with its creases followed (the defaults), then ignored, then a smooth sphere (an

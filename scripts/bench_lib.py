@@ -279,6 +279,27 @@ def cluster_projections(run):
     return sorted(rows, key=lambda r: r["benchmark"])
 
 
+def peak_memory(run):
+    """Rows {benchmark, label, small, large, mb_small, mb_large, bytes_small, bytes_large, ratio,
+    triangle_ratio} of the benchmarks reporting peak_ratio (bench/adaptive.cpp's BM_PeakMemorySlow:
+    the polygonize program's peak resident memory at two sizes of the same surface; issue 58's
+    aim: a ratio of at most 1.3 where the triangles grow tenfold)."""
+    rows = []
+    for b in run["benchmarks"]:
+        v = None if b.get("error") else counter_median(b, "peak_ratio")
+        if v is None:
+            continue
+        c = {k: counter_median(b, k) for k in ("triangles_small", "triangles_large", "peak_mb_small", "peak_mb_large",
+                                               "bytes_per_triangle_small", "bytes_per_triangle_large",
+                                               "triangle_ratio")}
+        rows.append({"benchmark": key(b), "label": b.get("label", ""), "ratio": v,
+                     "small": c["triangles_small"], "large": c["triangles_large"],
+                     "mb_small": c["peak_mb_small"], "mb_large": c["peak_mb_large"],
+                     "bytes_small": c["bytes_per_triangle_small"], "bytes_large": c["bytes_per_triangle_large"],
+                     "triangle_ratio": c["triangle_ratio"]})
+    return sorted(rows, key=lambda r: r["benchmark"])
+
+
 def sdf_model_costs(run):
     """Rows {benchmark, label, creases, sphere, triangles} of the benchmarks that mesh an SDF model
     with its creases followed and ignored and a sphere beside it (counters creases_cost_ratio and

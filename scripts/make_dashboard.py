@@ -256,6 +256,20 @@ def inrun_section(runs):
                           + [E(r["bound"] or ""), fnum(r["client_mesh_gb"], "{:.3g}"), fnum(r["piece_bytes"], "{:.3g}")]
                           for r in rows]))
 
+    # Peak memory at two sizes of one surface (issue 58's streaming aim: at most 1.3 times).
+    rows = bl.peak_memory(latest)
+    if rows:
+        out.append("<h3>Peak memory of the polygonize program at two sizes of the torus</h3>")
+        out.append('<p class="note">Peak resident memory of the whole program, writing its PLY file '
+                   '(bench/README.md, BM_PeakMemorySlow). Streaming finished blocks would keep the ratio under '
+                   '1.3; a run that holds the mesh until it writes grows with the triangles.</p>')
+        out.append(table(["Benchmark", "Label", "Triangles", "Peak (MB)", "Bytes / triangle", "Triangles, large",
+                          "Peak, large (MB)", "Bytes / triangle, large", "Peak ratio", "Triangle ratio"],
+                         [[E(r["benchmark"]), E(r["label"]), fnum(r["small"], "{:.4g}"), fnum(r["mb_small"], "{:.4g}"),
+                           fnum(r["bytes_small"], "{:.0f}"), fnum(r["large"], "{:.4g}"), fnum(r["mb_large"], "{:.4g}"),
+                           fnum(r["bytes_large"], "{:.0f}"), fnum(r["ratio"], "{:.2f}"),
+                           fnum(r["triangle_ratio"], "{:.2f}")] for r in rows]))
+
     # SDF models: the cost of following creases against ignoring them, and against a sphere.
     rows = bl.sdf_model_costs(latest)
     out.append("<h3>SDF models: creases followed against ignored, time per triangle against a sphere</h3>")

@@ -177,6 +177,24 @@ class InRunRatios(unittest.TestCase):
         self.assertIn("64 workers, projected", page)
         self.assertIn("1880", page)
 
+    def test_peak_memory(self):
+        r = run("a" * 40, "2026-01-01T00:00:00+00:00")
+        self.assertEqual(bl.peak_memory(r), [])
+        counters = {"peak_ratio": [13.5], "triangle_ratio": [9.8], "triangles_small": [1.85e6],
+                    "triangles_large": [1.815e7], "peak_mb_small": [334.6], "peak_mb_large": [4510.5],
+                    "bytes_per_triangle_small": [180.6], "bytes_per_triangle_large": [248.5]}
+        r["benchmarks"].append(bench("bench_adaptive", "BM_PeakMemorySlow/iterations:1/repeats:1/manual_time",
+                                     [51795], label="torus/adaptive/polygonize_1e-5_and_1e-6", kind="real",
+                                     counters=counters))
+        rows = bl.peak_memory(r)
+        self.assertEqual(len(rows), 1)
+        self.assertAlmostEqual(rows[0]["ratio"], 13.5)
+        self.assertAlmostEqual(rows[0]["bytes_large"], 248.5)
+        page = make_dashboard.inrun_section([r])
+        self.assertIn("Peak memory of the polygonize program", page)
+        self.assertIn("<td>4510</td>", page)
+        self.assertIn("<td>13.50</td>", page)
+
     def test_sdf_model_costs(self):
         r = run("a" * 40, "2026-01-01T00:00:00+00:00")
         self.assertEqual(bl.sdf_model_costs(r), [])
