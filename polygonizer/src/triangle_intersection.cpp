@@ -857,14 +857,16 @@ namespace {
 // kNearInvolved for every triangle whose box touches a cell of a coarse grid that an involved
 // triangle's box touches (any other overlaps no involved box, so is in no pair to test), and
 // kInStar for the others around their vertices (flat_stars certifies a vertex from its whole
-// star). Cells of kCoarseCellEdges median involved box sides. Empty (everything is needed) with
-// more than kMaxCoarseCells cells. The boxes are made on the way, never held: held for every
-// triangle they were the largest part of a run's peak memory (89 of 444 MB at 1.9 * 10^6
-// triangles, the blocks' torus at tolerance 1e-5), where most triangles are in no pair to test.
+// star). Cells of kCoarseCellEdges median involved box sides, or larger, up to kMaxCoarseCells
+// cells; empty (everything is needed) where no such grid is found. The boxes are made on the
+// way, never held: held for every triangle they were the largest part of a run's peak memory (89
+// of 444 MB at 1.9 * 10^6 triangles, the blocks' torus at tolerance 1e-5), where most triangles
+// are in no pair to test.
 constexpr unsigned char kFarFromInvolved = 0, kNearInvolved = 1, kInStar = 2;
 std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<char>& involved, const CancelToken* cancel) {
   constexpr double kCoarseCellEdges = 2;
   constexpr double kMaxCoarseCells = 1 << 27;  // a bit each: 16 MB
+  constexpr double kCoarseCellGrowth = 1.25;
   const std::size_t n = mesh.triangles.size();
   const auto poll = [&](std::size_t f) {
     if (cancel && f % kPollEvery == 0) cancel->check("self-intersections");
@@ -884,12 +886,25 @@ std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<cha
   }
   if (sides.empty()) return std::vector<unsigned char>(n, kFarFromInvolved);  // no pair to test
   std::nth_element(sides.begin(), sides.begin() + static_cast<std::ptrdiff_t>(sides.size() / 2), sides.end());
-  const double h = kCoarseCellEdges * sides[sides.size() / 2];
+  double h = kCoarseCellEdges * sides[sides.size() / 2];
   if (!(h > 0)) return {};
   const Vec3 extent = all.max - all.min;
+  if (!extent.allFinite()) return {};
   std::array<long long, 3> dims{};
-  double cells = 1;
-  for (int a = 0; a < 3; ++a) cells *= std::floor(extent[a] / h) + 1;  // in double: no overflow
+  const auto count_cells = [&] {
+    double cells = 1;
+    for (int a = 0; a < 3; ++a) cells *= std::floor(extent[a] / h) + 1;  // in double: no overflow
+    return cells;
+  };
+  // Larger cells where there would be too many: they keep more triangles, never fewer than needed
+  // (at 1.8 * 10^7 triangles of the torus the cells of two median edges were 1.5 * 10^8, and the
+  // check took every triangle: 2 GB and 10 s of the run's 55). Each step grows the cells by a
+  // quarter: 4096 steps reach any grid from the smallest positive h.
+  double cells = count_cells();
+  for (int step = 0; step < 4096 && !(cells <= kMaxCoarseCells); ++step) {
+    h *= kCoarseCellGrowth;
+    cells = count_cells();
+  }
   if (!(cells <= kMaxCoarseCells)) return {};
   for (int a = 0; a < 3; ++a) dims[a] = static_cast<long long>(extent[a] / h) + 1;
   const auto cell = [&](double x, int a) {

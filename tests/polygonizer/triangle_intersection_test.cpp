@@ -404,8 +404,12 @@ TEST(TriangleIntersection, InvalidMeshesThrow) {
 // triangles' loop) and on overlapping spheres (their flat stars certified in the part checked),
 // with a share of the triangles involved from none to all, all of them or the smallest three.
 TEST(TriangleIntersection, PairsInvolvingFlaggedTrianglesAreTheFullChecksWithOne) {
+  // The last: two small overlapping spheres and a third far away, a grid of cells of two of their
+  // edges too large to make (the cells grown until it is not).
   std::vector<Mesh> meshes{varied_soup(21, 3000, false), varied_soup(22, 3000, true),
-                           merged(icosphere(3), icosphere(3, Vec3(0.31, 0.7, -0.2), 0.8)), huge_over_small(450)};
+                           merged(icosphere(3), icosphere(3, Vec3(0.31, 0.7, -0.2), 0.8)), huge_over_small(450),
+                           merged(merged(icosphere(3, Vec3::Zero(), 1e-3), icosphere(3, Vec3(0.31, 0.7, -0.2) * 1e-3, 0.8e-3)),
+                                  icosphere(1, Vec3(3, -2, 1), 1e-3))};
   std::mt19937_64 rng(5);
   for (std::size_t i = 0; i < meshes.size(); ++i) {
     const Mesh& m = meshes[i];
