@@ -131,10 +131,12 @@ const CreaseMesh* Run::finished() const {
 
 void Run::track() {
   if (blocks.mesh && blocks.adopted) throw std::logic_error("adaptive: the blocks' mesh adopted twice");
-  track_surface(ctx, seeds, finished(), creases.components + blocks.components, settings, mesh(), tracking);
-  // The tracker holds the blocks' mesh now, and a run made again tracks alone (drop_blocks): their
-  // copy was a fifth of the peak memory (94 of 444 MB, the torus at tolerance 1e-5). The crease
-  // patches' mesh stays: a recovery adopts it again.
+  // The blocks' mesh moves into the tracker's, as a run made again tracks alone (drop_blocks):
+  // their copy was a fifth of the peak memory (94 of 444 MB, the torus at tolerance 1e-5). The
+  // crease patches' mesh is copied: a recovery adopts it again.
+  CreaseMesh* adopt = creases.mesh ? &*creases.mesh : blocks.mesh ? &*blocks.mesh : nullptr;
+  track_surface(ctx, seeds, adopt, !creases.mesh && blocks.mesh, creases.components + blocks.components, settings,
+                mesh(), tracking);
   if (blocks.mesh) {
     blocks.adopted = true;
     CreaseMesh& m = *blocks.mesh;

@@ -12,15 +12,20 @@ namespace {
 
 // One meshing: the crease patches' or blocks' mesh adopted as finished surface, then every component the
 // seeding finds uncovered.
-void mesh_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseMesh* finished, Settings& settings,
-                  bool rollback, Mesh& mesh, Tracking& tracking) {
+void mesh_surface(const RunContext& run, const SeedGridStage& seeds, CreaseMesh* finished, bool consume,
+                  Settings& settings, bool rollback, Mesh& mesh, Tracking& tracking) {
   mesh = Mesh{};
   settings.rollback = rollback;
   tracking.note_tightest();  // of the meshing this one replaces
   Tracker& tracker = tracking.tracker.emplace(run.field, settings, mesh);
   if (seeds.estimated_area > 0) tracker.set_estimated_area(seeds.estimated_area);
   if (run.options.progress) tracker.set_progress(run.options.progress);
-  if (finished) {
+  if (finished && consume) {
+    mesh.positions = std::move(finished->mesh.positions);
+    mesh.normals = std::move(finished->mesh.normals);
+    mesh.triangles = std::move(finished->mesh.triangles);
+    tracker.adopt_finished(std::move(finished->target), std::move(finished->mac), std::move(finished->shape_index));
+  } else if (finished) {
     mesh.positions = finished->mesh.positions;
     mesh.normals = finished->mesh.normals;
     mesh.triangles = finished->mesh.triangles;
@@ -44,21 +49,21 @@ void mesh_surface(const RunContext& run, const SeedGridStage& seeds, const Creas
 
 }  // namespace
 
-void track_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseMesh* finished,
+void track_surface(const RunContext& run, const SeedGridStage& seeds, CreaseMesh* finished, bool consume,
                    std::size_t finished_components, Settings& settings, Mesh& mesh, Tracking& tracking) {
   run.enter("tracking", "meshing");
   tracking.remeshed = false;
   try {
-    mesh_surface(run, seeds, finished, settings, settings.anticipate, mesh, tracking);  // careful runs roll back from the start
+    mesh_surface(run, seeds, finished, consume, settings, settings.anticipate, mesh, tracking);  // careful runs roll back from the start
   } catch (const StalledFrontError& stalled) {
-    if (settings.anticipate) throw;
+    if (settings.anticipate || consume) throw;  // consumed: nothing left to adopt again
     // The rollbacks undo such places where they begin. Surfaces that mesh without them are
     // never meshed with them, so they come out exactly as before. When the second run fails
     // too, or its mesh fails the checks (a rollback has been seen to leave a non-manifold edge:
     // the printed triangle count on the bunny VIS-800 at factor 1), the first run's error stands.
     try {
       tracking.remeshed = true;
-      mesh_surface(run, seeds, finished, settings, true, mesh, tracking);
+      mesh_surface(run, seeds, finished, false, settings, true, mesh, tracking);
       if (tracking.seeding.uncovered > 0) throw NoSurfaceError("uncovered sign changes");
       run.enter("checks");
       check_mesh(mesh, tracking.seeding.seeds + finished_components, run.options.check_self_intersections,

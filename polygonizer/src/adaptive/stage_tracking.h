@@ -43,12 +43,15 @@ struct UnsearchedCellsError : LimitExceededError {
 // blocks' mesh, of `finished_components` components) adopted as it is, if given, then the
 // tracker from the seeds. A stalled front (StalledFrontError) is where a front that ran over
 // finished mesh ends, thousands of steps later (the MPU models at some factors): the surface is
-// then meshed again from the start with the rollbacks on (`remeshed`).
+// then meshed again from the start with the rollbacks on (`remeshed`). With `consume`, the
+// finished mesh's arrays are moved into `mesh` and the tracker rather than copied (the blocks'
+// mesh, adopted once: a copy of the whole mesh was a fifth of a run's peak memory), and a
+// stalled front is not meshed again here (the caller tracks alone).
 // \throw NoSurfaceError when the field has no sign change, when no seed could be meshed, when
 //        sign changes are left uncovered; the first run's StalledFrontError when the second
-//        fails; UnsearchedCellsError where the small-component search left cells unsplit;
-//        LimitExceededError for the tracker's bounds; CancelledError.
-void track_surface(const RunContext& run, const SeedGridStage& seeds, const CreaseMesh* finished,
+//        fails (or with `consume`); UnsearchedCellsError where the small-component search left
+//        cells unsplit; LimitExceededError for the tracker's bounds; CancelledError.
+void track_surface(const RunContext& run, const SeedGridStage& seeds, CreaseMesh* finished, bool consume,
                    std::size_t finished_components, Settings& settings, Mesh& mesh, Tracking& tracking);
 
 }  // namespace cdp::adaptive

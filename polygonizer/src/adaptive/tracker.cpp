@@ -691,12 +691,18 @@ std::vector<std::vector<int>> Tracker::mesh_from_loops(std::span<const std::vect
 
 void Tracker::adopt_finished(std::span<const double> target, std::span<const double> mac,
                              std::span<const double> shape_index) {
+  adopt_finished(std::vector<double>(target.begin(), target.end()), std::vector<double>(mac.begin(), mac.end()),
+                 std::vector<double>(shape_index.begin(), shape_index.end()));
+}
+
+void Tracker::adopt_finished(std::vector<double>&& target, std::vector<double>&& mac,
+                             std::vector<double>&& shape_index) {
   const std::size_t n = mesh_.positions.size();
   if (target.size() != n || mac.size() != n || shape_index.size() != n || !target_.empty())
     throw std::logic_error("adaptive: adopt_finished needs one value per vertex, before any vertex of its own");
-  target_.assign(target.begin(), target.end());
-  mac_.assign(mac.begin(), mac.end());
-  shape_index_.assign(shape_index.begin(), shape_index.end());
+  target_ = std::move(target);
+  mac_ = std::move(mac);
+  shape_index_ = std::move(shape_index);
   front_refs_.assign(n, 0);
   for (std::size_t v = 0; v < n; ++v) vertex_hash_.insert(static_cast<int>(v), mesh_.positions[v], vertex_position());
   for (const auto& t : mesh_.triangles) {

@@ -218,6 +218,8 @@ class Tracker {
   // per-vertex targets and curvature properties) as finished surface: the fronts treat them as
   // they treat their own finished mesh, and the area bound counts them.
   void adopt_finished(std::span<const double> target, std::span<const double> mac, std::span<const double> shape_index);
+  // The same, taking the arrays rather than copying them.
+  void adopt_finished(std::vector<double>&& target, std::vector<double>&& mac, std::vector<double>&& shape_index);
   // For a tracker meshing one piece's patches (crease_patches.h): whether a straight edge between
   // two points of the loops runs inside the patches rather than across a region the piece does
   // not cover (two loops of the piece pass close by each other there). Bridges between two loop

@@ -39,7 +39,7 @@ struct Stages {
 inline void track(Stages& s, const SeedGridStage& seeds, Mesh& mesh, Tracking& tracking) {
   Settings settings = s.settings;
   settings.hash_cell = seeds.hash_cell;
-  track_surface(s.run, seeds, nullptr, 0, settings, mesh, tracking);
+  track_surface(s.run, seeds, nullptr, false, 0, settings, mesh, tracking);
 }
 
 }  // namespace cdp::adaptive::test_stages

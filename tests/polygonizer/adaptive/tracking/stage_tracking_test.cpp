@@ -32,7 +32,7 @@ TEST(AdaptiveStages, TrackingMeshesEveryComponentOrNamesWhyNot) {
   Tracking nothing;
   Settings st = outside.settings;
   try {
-    track_surface(outside.run, none, nullptr, 0, st, empty, nothing);
+    track_surface(outside.run, none, nullptr, false, 0, st, empty, nothing);
     ADD_FAILURE() << "no error";
   } catch (const NoSurfaceError& e) {
     EXPECT_EQ(std::string(e.what()).rfind("adaptive: no zero crossing of the field in its box", 0), 0u) << e.what();
