@@ -42,8 +42,8 @@ struct BlockMeshing {
   // (`report.fallback`).
   std::optional<CreaseMesh> mesh;
   std::size_t components = 0;  // of `mesh`
-  // Of `mesh`, kept when the run, once its tracker has adopted the mesh, frees its arrays
-  // (`adopted`: a copy of the whole mesh no stage after the tracking reads).
+  // Of `mesh`, kept when the run moves its arrays into the tracker's mesh (`adopted`: from then
+  // on `mesh` holds its counters only).
   std::size_t vertices = 0;
   bool adopted = false;
   // The blocks' trackers' vertices near critical points of F (Tracker::critical_starts), in

@@ -135,10 +135,12 @@ void Run::track() {
   // their copy was a fifth of the peak memory (94 of 444 MB, the torus at tolerance 1e-5). The
   // crease patches' mesh is copied: a recovery adopts it again.
   CreaseMesh* adopt = creases.mesh ? &*creases.mesh : blocks.mesh ? &*blocks.mesh : nullptr;
-  track_surface(ctx, seeds, adopt, !creases.mesh && blocks.mesh, creases.components + blocks.components, settings,
-                mesh(), tracking);
-  if (blocks.mesh) {
-    blocks.adopted = true;
+  const bool consume = !creases.mesh && blocks.mesh;
+  // Whatever track_surface throws, the arrays may be gone from here on: adopting them again
+  // would adopt nothing.
+  if (consume) blocks.adopted = true;
+  track_surface(ctx, seeds, adopt, consume, creases.components + blocks.components, settings, mesh(), tracking);
+  if (consume) {
     CreaseMesh& m = *blocks.mesh;
     m.mesh = Mesh{};
     for (std::vector<double>* v : {&m.target, &m.mac, &m.shape_index}) std::vector<double>().swap(*v);

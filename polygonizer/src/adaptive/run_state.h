@@ -41,7 +41,7 @@ class Run {
   // false where there was none.
   bool fall_back(const std::exception& e);
   // The mesh adopted as finished before the tracker seeds: the crease patches' or the blocks'
-  // (whose arrays track frees once adopted; their counters stay).
+  // (whose arrays track moves into the tracker's; their counters stay).
   const CreaseMesh* finished() const;
   // track_surface after it.
   void track();
