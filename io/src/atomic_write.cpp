@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 
 #include <fcntl.h>
@@ -40,6 +41,11 @@ void remove_pending_temporary_file() noexcept {
 }
 
 void write_file_atomically(const std::filesystem::path& path, std::string_view contents, std::string_view what) {
+  write_file_atomically(path, [&](const ByteSink& append) { append(contents); }, what);
+}
+
+void write_file_atomically(const std::filesystem::path& path, const std::function<void(const ByteSink& append)>& produce,
+                           std::string_view what) {
   const std::string failure = path.string() + ": cannot write" + (what.empty() ? "" : " " + std::string(what));
   std::filesystem::path tmp = path;
   // Hidden and per process, so that concurrent writers of one target never share a temporary.
@@ -54,22 +60,36 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
     const int err = errno;
     throw FileError(failure + ": " + errno_text(err), err);
   }
+  bool open_yet = true;  // false once fail has closed and removed the temporary
   const auto fail = [&](int err) {
+    open_yet = false;
     close(fd);
     unlink(tmp_name.c_str());
     throw FileError(failure + ": " + errno_text(err), err);
   };
-  const char* data = contents.data();
-  std::size_t left = contents.size();
-  while (left > 0) {  // bounded: every pass writes at least one byte or fails
-    const ssize_t n = write(fd, data, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail(errno);
+  const ByteSink append = [&](std::string_view contents) {
+    if (!open_yet) throw std::logic_error("write_file_atomically: a piece appended after a failure");
+    const char* data = contents.data();
+    std::size_t left = contents.size();
+    while (left > 0) {  // bounded: every pass writes at least one byte or fails
+      const ssize_t n = write(fd, data, left);
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        fail(errno);
+      }
+      if (n == 0) fail(EIO);
+      data += n;
+      left -= static_cast<std::size_t>(n);
     }
-    if (n == 0) fail(EIO);
-    data += n;
-    left -= static_cast<std::size_t>(n);
+  };
+  try {
+    produce(append);
+  } catch (...) {
+    if (open_yet) {
+      close(fd);
+      unlink(tmp_name.c_str());
+    }
+    throw;
   }
   if (fsync(fd) != 0) fail(errno);
   if (close(fd) != 0) {

@@ -96,14 +96,20 @@ std::string extension_of(const std::filesystem::path& path) {
 
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, bool binary) {
   const std::string ext = extension_of(path);
+  // PLY, OBJ and OFF go to the file in pieces (never the whole file in memory beside the mesh).
+  if (ext == ".ply" || ext == ".obj" || ext == ".off") {
+    write_file_atomically(
+        path,
+        [&](const ByteSink& append) {
+          if (ext == ".ply") formats::write_ply(mesh, binary, append);
+          else if (ext == ".obj") formats::write_obj(mesh, append);
+          else formats::write_off(mesh, append);
+        },
+        "mesh");
+    return;
+  }
   std::string bytes;
-  if (ext == ".ply") {
-    bytes = formats::write_ply(mesh, binary);
-  } else if (ext == ".obj") {
-    bytes = formats::write_obj(mesh);
-  } else if (ext == ".off") {
-    bytes = formats::write_off(mesh);
-  } else if (ext == ".stl") {
+  if (ext == ".stl") {
     // STL is float32 by definition; OpenMesh writes it.
     silence_openmesh();
     TriMesh om = to_openmesh(mesh);

@@ -6,7 +6,9 @@
 #pragma once
 
 #include <cdp/core/mesh.h>
+#include <cdp/io/atomic_write.h>
 
+#include <cstddef>
 #include <string>
 #include <string_view>
 
@@ -20,12 +22,34 @@ Mesh read_ply(std::string_view data, const std::string& name);
 Mesh read_obj(std::string_view data, const std::string& name);
 Mesh read_off(std::string_view data, const std::string& name);
 
-// Writers return the file's bytes. Coordinates, normals and vertex scalars are written so that
-// reading them back gives the same doubles bit for bit (binary float64 in PLY; the shortest
-// round-trip decimal in OBJ, OFF and ASCII PLY).
-std::string write_ply(const Mesh& mesh, bool binary);
-std::string write_obj(const Mesh& mesh);
-std::string write_off(const Mesh& mesh);
+// Writers hand the file's bytes to `sink` in pieces of about kWritePiece bytes, in order, so that
+// a large mesh's file is never held whole (write_file_atomically's ByteSink). Coordinates,
+// normals and vertex scalars are written so that reading them back gives the same doubles bit
+// for bit (binary float64 in PLY; the shortest round-trip decimal in OBJ, OFF and ASCII PLY).
+void write_ply(const Mesh& mesh, bool binary, const ByteSink& sink);
+void write_obj(const Mesh& mesh, const ByteSink& sink);
+void write_off(const Mesh& mesh, const ByteSink& sink);
+
+// A megabyte: a few hundred system calls for a mesh of 10^7 triangles.
+inline constexpr std::size_t kWritePiece = std::size_t{1} << 20;
+
+// The writers' buffer: `out` grows by a record at a time and goes to the sink whenever it holds
+// kWritePiece bytes (`record_done`), the rest at `finish`.
+class PieceWriter {
+ public:
+  explicit PieceWriter(const ByteSink& sink) : sink_(sink) { out.reserve(kWritePiece + 4096); }
+  void record_done() {
+    if (out.size() >= kWritePiece) finish();
+  }
+  void finish() {
+    if (!out.empty()) sink_(out);
+    out.clear();
+  }
+  std::string out;
+
+ private:
+  const ByteSink& sink_;
+};
 
 // The shortest decimal text that reads back as the same double.
 std::string shortest_decimal(double v);

@@ -286,12 +286,14 @@ Mesh read_ply(std::string_view data, const std::string& name) {
   return mesh;
 }
 
-std::string write_ply(const Mesh& mesh, bool binary) {
+void write_ply(const Mesh& mesh, bool binary, const ByteSink& sink) {
   const bool normals = mesh.normals.size() == mesh.positions.size();
   std::vector<std::pair<const std::string*, const std::vector<double>*>> scalars;
   for (const auto& [n, values] : mesh.vertex_scalars)
     if (values.size() == mesh.positions.size()) scalars.push_back({&n, &values});
-  std::string out = "ply\nformat ";
+  PieceWriter w(sink);
+  std::string& out = w.out;
+  out += "ply\nformat ";
   out += binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
   out += "element vertex " + std::to_string(mesh.positions.size()) + "\n";
   for (const char* p : {"x", "y", "z"}) out += std::string("property double ") + p + "\n";
@@ -300,7 +302,6 @@ std::string write_ply(const Mesh& mesh, bool binary) {
   for (const auto& s : scalars) out += "property double " + *s.first + "\n";
   out += "element face " + std::to_string(mesh.triangles.size()) + "\n";
   out += "property list uchar int vertex_indices\nend_header\n";
-  const std::size_t per_vertex = 3 + (normals ? 3 : 0) + scalars.size();
   if (binary) {
     static_assert(sizeof(double) == 8 && sizeof(int) == 4, "PLY double and int are 8 and 4 bytes");
     const bool little_host = [] { const std::uint16_t x = 1; unsigned char c; std::memcpy(&c, &x, 1); return c == 1; }();
@@ -309,16 +310,17 @@ std::string write_ply(const Mesh& mesh, bool binary) {
       out.append(static_cast<const char*>(p), n);
       if (!little_host) std::reverse(out.begin() + static_cast<std::ptrdiff_t>(at), out.end());
     };
-    out.reserve(out.size() + mesh.positions.size() * per_vertex * 8 + mesh.triangles.size() * 13);
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
       for (int a = 0; a < 3; ++a) put(&mesh.positions[i][a], 8);
       if (normals)
         for (int a = 0; a < 3; ++a) put(&mesh.normals[i][a], 8);
       for (const auto& s : scalars) put(&(*s.second)[i], 8);
+      w.record_done();
     }
     for (const auto& t : mesh.triangles) {
       out.push_back(3);
       for (int k = 0; k < 3; ++k) put(&t[k], 4);
+      w.record_done();
     }
   } else {
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
@@ -332,11 +334,14 @@ std::string write_ply(const Mesh& mesh, bool binary) {
         for (int a = 0; a < 3; ++a) add(mesh.normals[i][a]);
       for (const auto& s : scalars) add((*s.second)[i]);
       out += line + "\n";
+      w.record_done();
     }
-    for (const auto& t : mesh.triangles)
+    for (const auto& t : mesh.triangles) {
       out += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + "\n";
+      w.record_done();
+    }
   }
-  return out;
+  w.finish();
 }
 
 }  // namespace cdp::formats

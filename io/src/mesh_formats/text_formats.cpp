@@ -202,9 +202,10 @@ Mesh read_off(std::string_view data, const std::string& name) {
   return mesh;
 }
 
-std::string write_obj(const Mesh& mesh) {
+void write_obj(const Mesh& mesh, const ByteSink& sink) {
   const bool normals = mesh.normals.size() == mesh.positions.size();
-  std::string out;
+  PieceWriter w(sink);
+  std::string& out = w.out;
   for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
     const Vec3& p = mesh.positions[i];
     out += "v " + shortest_decimal(p.x()) + " " + shortest_decimal(p.y()) + " " + shortest_decimal(p.z()) + "\n";
@@ -212,6 +213,7 @@ std::string write_obj(const Mesh& mesh) {
       const Vec3& n = mesh.normals[i];
       out += "vn " + shortest_decimal(n.x()) + " " + shortest_decimal(n.y()) + " " + shortest_decimal(n.z()) + "\n";
     }
+    w.record_done();
   }
   for (const auto& t : mesh.triangles) {
     out += "f";
@@ -220,13 +222,16 @@ std::string write_obj(const Mesh& mesh) {
       out += " " + i + (normals ? "//" + i : "");
     }
     out += "\n";
+    w.record_done();
   }
-  return out;
+  w.finish();
 }
 
-std::string write_off(const Mesh& mesh) {
+void write_off(const Mesh& mesh, const ByteSink& sink) {
   const bool normals = mesh.normals.size() == mesh.positions.size();
-  std::string out = normals ? "NOFF\n" : "OFF\n";
+  PieceWriter w(sink);
+  std::string& out = w.out;
+  out += normals ? "NOFF\n" : "OFF\n";
   out += std::to_string(mesh.positions.size()) + " " + std::to_string(mesh.triangles.size()) + " 0\n";
   for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
     const Vec3& p = mesh.positions[i];
@@ -236,10 +241,13 @@ std::string write_off(const Mesh& mesh) {
       out += " " + shortest_decimal(n.x()) + " " + shortest_decimal(n.y()) + " " + shortest_decimal(n.z());
     }
     out += "\n";
+    w.record_done();
   }
-  for (const auto& t : mesh.triangles)
+  for (const auto& t : mesh.triangles) {
     out += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + "\n";
-  return out;
+    w.record_done();
+  }
+  w.finish();
 }
 
 }  // namespace cdp::formats

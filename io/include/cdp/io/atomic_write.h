@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string_view>
 
 namespace cdp {
@@ -15,6 +16,15 @@ namespace cdp {
 // \throw FileError (an InvalidInputError, errno in error_number()) when the temporary file cannot be
 //        created, written, flushed or closed, or cannot be renamed over the target.
 void write_file_atomically(const std::filesystem::path& path, std::string_view contents, std::string_view what = {});
+
+// The same with the contents made in pieces, so that a large file (a mesh of 10^7 triangles is
+// hundreds of megabytes) is never held whole: `produce` is called once with `append`, which
+// writes each piece it is given to the temporary file, in order. An exception from `produce`
+// removes the temporary and goes on unchanged.
+// \throw FileError as above; what `produce` throws.
+using ByteSink = std::function<void(std::string_view)>;
+void write_file_atomically(const std::filesystem::path& path, const std::function<void(const ByteSink& append)>& produce,
+                           std::string_view what = {});
 
 // For a signal handler: removes the temporary file a write in progress has open, if any. Only
 // async-signal-safe calls (unlink), so that an interrupted program leaves nothing hidden behind.
