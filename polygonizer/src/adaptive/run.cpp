@@ -182,6 +182,8 @@ std::size_t Run::repair_and_check() {
     if (ctx.options.variant != Variant::Improved) ctx.phases.enter("quality");
     add_curvature_properties(ctx.field, *tracking.tracker, quality, band, mesh());
   }
+  // Nothing but the tracker's counters is asked for from here on; the checks are the run's peak.
+  tracking.tracker->release_bulk();
   ctx.enter("checks", "checking the mesh");
   // After blocks in lockstep, the band's repair can cut a black box's rounded edges
   // (check_bends_kept): the run then tracks the surface alone (attempt's fall_back).

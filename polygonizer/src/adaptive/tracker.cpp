@@ -120,6 +120,13 @@ void add_tracker_counts(TrackerReport& sum, const TrackerReport& r) {
   sum.hessian_seconds += r.hessian_seconds;
 }
 
+void Tracker::release_bulk() {
+  released_visits_ = search_visits();
+  const auto drop = [](auto& x) { std::decay_t<decltype(x)>(std::move(x)); };
+  drop(front_hash_), drop(vertex_hash_), drop(fs_), drop(front_edges_);
+  drop(target_), drop(mac_), drop(shape_index_), drop(front_refs_), drop(dead_), drop(loop_vertex_);
+}
+
 void Tracker::release_in_background() noexcept {
   detail::release_in_background(front_hash_, vertex_hash_, fs_, target_, mac_, shape_index_, front_refs_, dead_,
                                 loop_vertex_, critical_starts_);
