@@ -20,6 +20,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <numeric>
 #include <optional>
@@ -51,6 +53,22 @@ cdp::PolygonizeResult name_field(const std::string& path, F&& run) {
   } catch (const cdp::InvalidInputError& e) {
     throw cdp::InvalidInputError(path + ": " + e.what());
   }
+}
+
+// VmHWM of /proc/self/status in bytes; none where it cannot be read (not Linux).
+std::optional<double> peak_resident_bytes() {
+  std::FILE* f = std::fopen("/proc/self/status", "r");
+  if (!f) return std::nullopt;
+  char line[256];
+  std::optional<double> kb;
+  while (std::fgets(line, sizeof line, f))
+    if (std::strncmp(line, "VmHWM:", 6) == 0) {
+      kb = std::strtod(line + 6, nullptr);
+      break;
+    }
+  std::fclose(f);
+  if (!kb || !(*kb > 0)) return std::nullopt;
+  return *kb * 1024;
 }
 
 }  // namespace
@@ -154,11 +172,15 @@ int main(int argc, char** argv) {
 
     reporter.phase("writing " + out_path);
     cdp::write_mesh(result.mesh, out_path);
+    // The program's own high-water mark, the mesh's writing included (a parent's wait4 can report
+    // the parent's: Linux carries a vfork parent's peak into its child's exec).
+    const std::optional<double> peak = peak_resident_bytes();
     if (!stats_path.empty()) {
       // Every method's triangles by their smallest angle and the mesh's topology: the summary.
       cdp::add_mesh_summary(result.mesh, result.stats);
       nlohmann::json j = cdp::to_json(result.stats);
       j["field"] = field_path;
+      if (peak) j["peak_resident_bytes"] = *peak;
       if (repeat > 1) {
         j["repeat_seconds"] = nlohmann::json::array();
         for (const auto& r : runs) j["repeat_seconds"].push_back(r.seconds);

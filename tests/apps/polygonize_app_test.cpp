@@ -46,6 +46,12 @@ TEST_P(PolygonizeApp, WritesAClosedTorusAndItsStats) {
   EXPECT_EQ(stats["triangles"].get<std::size_t>(), mesh.num_triangles());
   EXPECT_EQ(stats["components"].get<int>(), 1);
   EXPECT_GT(stats["field_evaluations"]["total"].get<double>(), 0);
+  // The program's own peak resident memory (Linux's VmHWM): at least its mesh's bytes, and far
+  // below a gigabyte for this torus.
+  ASSERT_TRUE(stats.contains("peak_resident_bytes"));
+  const double peak = stats["peak_resident_bytes"].get<double>();
+  EXPECT_GT(peak, static_cast<double>(mesh.num_vertices() * 48 + mesh.num_triangles() * 12));
+  EXPECT_LT(peak, 1e9);
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryMethod, PolygonizeApp, ::testing::Values("adaptive", "mc", "mt"),
