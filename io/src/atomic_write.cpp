@@ -52,15 +52,10 @@ void write_file_atomically(const std::filesystem::path& path, const std::functio
   tmp.replace_filename("." + path.filename().string() + ".tmp" + std::to_string(getpid()));
   const std::string tmp_name = tmp.string();
   PendingTemporary pending(tmp_name);
-  // POSIX calls rather than a stream, so that the reason of a failure (a full disk, a file size
-  // limit) reaches the message, and so that fsync can make the contents durable before the
-  // rename makes them visible.
-  const int fd = open(tmp_name.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    const int err = errno;
-    throw FileError(failure + ": " + errno_text(err), err);
-  }
-  bool open_yet = true;  // false once fail has closed and removed the temporary
+  // Everything that may allocate is made before the file is opened: from the open to the end,
+  // only fail and the producer throw, and both leave no temporary behind.
+  int fd = -1;
+  bool open_yet = false;  // true from the open until fail or the producer's error closes it
   const auto fail = [&](int err) {
     open_yet = false;
     close(fd);
@@ -82,6 +77,15 @@ void write_file_atomically(const std::filesystem::path& path, const std::functio
       left -= static_cast<std::size_t>(n);
     }
   };
+  // POSIX calls rather than a stream, so that the reason of a failure (a full disk, a file size
+  // limit) reaches the message, and so that fsync can make the contents durable before the
+  // rename makes them visible.
+  fd = open(tmp_name.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    const int err = errno;
+    throw FileError(failure + ": " + errno_text(err), err);
+  }
+  open_yet = true;
   try {
     produce(append);
   } catch (...) {
@@ -91,6 +95,8 @@ void write_file_atomically(const std::filesystem::path& path, const std::functio
     }
     throw;
   }
+  // A producer that caught a failed write's FileError and went on: the temporary is gone.
+  if (!open_yet) throw std::logic_error("write_file_atomically: the producer went on after a failed write");
   if (fsync(fd) != 0) fail(errno);
   if (close(fd) != 0) {
     const int err = errno;
