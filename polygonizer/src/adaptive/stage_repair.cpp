@@ -179,6 +179,9 @@ QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std
   }
   mesh.positions.resize(kept);
   mesh.normals.resize(kept);
+  // Room for what the part adds made once (a doubling would hold the old array beside the new).
+  mesh.positions.reserve(kept + part.positions.size());
+  mesh.normals.reserve(kept + part.positions.size());
   for (std::size_t p = 0; p < part.positions.size(); ++p) {
     int at;
     if (part_to_mesh[p] >= 0) {
@@ -207,6 +210,7 @@ QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std
       if (sealed) band.sealed.push_back((*sealed)[i]);
     }
   mesh.triangles.resize(outside);
+  mesh.triangles.reserve(outside + part.triangles.size());
   for (const auto& t : part.triangles) mesh.triangles.push_back({out_of(t[0]), out_of(t[1]), out_of(t[2])});
   if (sealed) band.sealed.resize(mesh.triangles.size(), 0);
   std::sort(band.moved.begin(), band.moved.end());
