@@ -140,6 +140,8 @@ void Run::track() {
   // would adopt nothing.
   if (consume) blocks.adopted = true;
   track_surface(ctx, seeds, adopt, consume, creases.components + blocks.components, settings, mesh(), tracking);
+  // Moved-from vectors are left in an unspecified state: emptied here, so that only the
+  // counters are certain to remain (and nothing the tracker did not take is held).
   if (consume) {
     CreaseMesh& m = *blocks.mesh;
     m.mesh = Mesh{};
