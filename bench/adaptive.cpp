@@ -190,6 +190,36 @@ const Field& torus_or_bunny(int shape, std::unique_ptr<Field>& holder) {
   return *holder;
 }
 
+// Tolerance mode's field evaluations a vertex, by kind (issue 57: at most one Hessian and 2.5
+// values and gradients a vertex in tracking, repair and checks together), and its time a
+// triangle: the torus at 1e-4 (a cheap field: its estimates are measured) and the bunny VIS-800 at
+// 3e-4 (a costly one: its estimates are predicted from the vertices' Hessians, repair_context.h).
+void BM_ToleranceEvaluations(benchmark::State& state) {
+  const int shape = static_cast<int>(state.range(0));  // 0 torus, 1 bunny VIS-800
+  std::unique_ptr<Field> torus;
+  const Field& field = torus_or_bunny(shape, torus);
+  AdaptiveOptions o;
+  o.sizing = SizingMode::Tolerance;
+  o.tolerance = shape == 0 ? 1e-4 : 3e-4;
+  o.threads = 1;
+  double vertices = 0, value_gradient = 0, gradient_hessian = 0, triangles = 0, seconds = 0;
+  for (auto _ : state) {
+    const PolygonizeResult r = polygonize_adaptive(field, o);
+    vertices += static_cast<double>(r.stats.vertices);
+    value_gradient += static_cast<double>(r.stats.field_evaluations.value_gradient);
+    gradient_hessian += static_cast<double>(r.stats.field_evaluations.gradient_hessian);
+    triangles += static_cast<double>(r.stats.triangles);
+    seconds += r.stats.seconds;
+    state.SetIterationTime(r.stats.seconds);
+  }
+  state.counters["triangles"] = triangles / static_cast<double>(state.iterations());
+  state.counters["ns_per_triangle"] = 1e9 * seconds / triangles;
+  state.counters["value_gradient_per_vertex"] = value_gradient / vertices;
+  state.counters["gradient_hessian_per_vertex"] = gradient_hessian / vertices;
+  state.SetLabel(std::string(shape == 0 ? "torus" : "bunny_vis800") + "/adaptive_tolerance");
+}
+BENCHMARK(BM_ToleranceEvaluations)->ArgName("shape")->DenseRange(0, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
+
 // The paper's algorithm as printed (Variant::Paper: no grading, repair, relaxation or tolerance
 // refinement), with the robustness of the tracker and the seeding and the final
 // self-intersection check: the torus at the factors of BM_Adaptive and the bunny VIS-800 at

@@ -329,7 +329,7 @@ Settings read_settings(Reader& r, const CancelToken& cancel) {
 void write_quality_options(Writer& w, const QualityOptions& q) {
   w.num(q.improve_below), w.num(q.tolerance), w.num(q.diagonal), w.num(q.min_edge), w.num(q.last_resort_min_edge);
   w.num(q.measure_near_bound), w.num(q.aim_mean_edge_ratio), w.num(q.threads), w.num(q.keep_boundary);
-  w.num(q.count_near_boundary);
+  w.num(q.count_near_boundary), w.num(q.predict_estimates);
 }
 
 QualityOptions read_quality_options(Reader& r, const CancelToken& cancel) {
@@ -337,7 +337,7 @@ QualityOptions read_quality_options(Reader& r, const CancelToken& cancel) {
   q.improve_below = r.num<double>(), q.tolerance = r.num<double>(), q.diagonal = r.num<double>();
   q.min_edge = r.num<double>(), q.last_resort_min_edge = r.num<double>(), q.measure_near_bound = r.flag();
   q.aim_mean_edge_ratio = r.num<double>(), q.threads = r.num<int>(), q.keep_boundary = r.flag();
-  q.count_near_boundary = r.flag();
+  q.count_near_boundary = r.flag(), q.predict_estimates = r.choice(QualityOptions::Predict::Always);
   q.cancel = cancel;
   return q;
 }

@@ -46,6 +46,13 @@ struct QualityOptions {
   // there the splits near a crease were what kept its angles (the two spheres at 2e-3: 19.8 ->
   // 10.9 degrees without them), and the tolerance does not hold across a crease either way.
   bool measure_near_bound = true;
+  // With a tolerance, on a smooth field with exact derivatives (Field::smooth, not
+  // Field::derivative_step), the distance estimates may predict edge midpoints and centroids from
+  // the corners' derivatives where two predictions agree (repair_context.h, kPredictShare), and
+  // measure them elsewhere: never, on a field whose points or calls are costly
+  // (Field::costly_points, Field::costly_calls), or on any such field (for tests and measurements).
+  enum class Predict { Never, CostlyFields, Always };
+  Predict predict_estimates = Predict::CostlyFields;
   // Positive: when the relaxation's sweeps leave the mesh's mean longest/shortest edge ratio
   // over this, it sweeps again with each move searched in the tangent plane (see relax), until
   // the mean is at or under it or a bounded number of sweeps has run. 0: no search. Not for a

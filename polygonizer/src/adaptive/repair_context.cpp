@@ -27,7 +27,7 @@ bool RepairContext::tri_below(const Tri& t, double limit) const {
   return tri_min_angle(t) < limit;
 }
 
-double RepairContext::midpoint_distance(int x, int y, MidpointMemo* memo) const {
+RepairContext::Mid RepairContext::midpoint_distance(int x, int y, MidpointMemo* memo) const {
   const std::pair<int, int> key = std::minmax(x, y);
   if (memo && memo->table) {
     const auto& keys = memo->table->keys;
@@ -38,9 +38,15 @@ double RepairContext::midpoint_distance(int x, int y, MidpointMemo* memo) const 
   if (memo)
     for (const auto& [k, d] : memo->known)
       if (k == key) return d;
-  const double d = signed_distance(0.5 * (P(x) + P(y)));
+  const Mid d = midpoint_sample(x, y);
   if (memo) memo->known.push_back({key, d});
   return d;
+}
+
+RepairContext::Mid RepairContext::midpoint_sample(int x, int y) const {
+  if (predict_)
+    if (const std::optional<Mid> m = predicted_midpoint(x, y)) return *m;
+  return {signed_distance(0.5 * (P(x) + P(y))), -1};
 }
 
 void RepairContext::signed_distances(const std::vector<Vec3>& ps, std::vector<double>& out) const {
@@ -62,7 +68,7 @@ double RepairContext::estimate_distance(const Tri& t, int slot, MidpointMemo* me
   const std::array<bool, 3> kept = kept_corners(e, t);
   if (kept[0] && kept[1] && kept[2]) return e.d;
   const std::array<Vec3, 3> p{P(t[0]), P(t[1]), P(t[2])};
-  std::array<double, 3> mid;
+  std::array<Mid, 3> mid;
   for (int i = 0; i < 3; ++i) {
     const int j = (i + 1) % 3;
     if (kept[i] && kept[j]) {
@@ -72,10 +78,115 @@ double RepairContext::estimate_distance(const Tri& t, int slot, MidpointMemo* me
       mid[i] = midpoint_distance(t[i], t[j], memo);
     }
   }
-  e = {t, p, mid,
-       centroid ? estimate_from_samples(mid[0], mid[1], mid[2], *centroid)
-                : estimate_from(p[0], p[1], p[2], mid[0], mid[1], mid[2])};
+  e = {t, p, mid, estimate_from(t, mid, centroid)};
   return e.d;
+}
+
+double RepairContext::estimate_from(const Tri& t, const std::array<Mid, 3>& mid, const double* centroid) const {
+  double margin = 0;
+  bool predicted = true;
+  for (const Mid& m : mid) {
+    if (m.u >= 0) margin = std::max(margin, m.u);
+    else predicted = false;
+  }
+  double c = 0;
+  if (centroid) {
+    c = *centroid;
+  } else {
+    const std::optional<double> guess = predicted ? predicted_centroid(t) : std::nullopt;
+    c = guess ? *guess : signed_distance((P(t[0]) + P(t[1]) + P(t[2])) / 3);
+  }
+  return estimate_from_samples(mid[0].d, mid[1].d, mid[2].d, c) + margin;
+}
+
+const RepairContext::Jet& RepairContext::jet(int v) const {
+  Jet& j = jets_[static_cast<std::size_t>(v)];
+  const Vec3& p = P(v);
+  if (j.p == p) return j;
+  if (spare_v_ == v && spare_.p == p) {
+    std::swap(j, spare_);
+    return j;
+  }
+  spare_ = j, spare_v_ = v;
+  j.p = p;
+  j.f = field_.gradient_hessian(p, j.g, j.h);
+  return j;
+}
+
+void RepairContext::fill_jets(const std::vector<int>& corners) const {
+  reserve_jets();
+  // Each vertex not kept once, in the order met, claimed by its position (no sort: this ran once
+  // a refinement round over three corners a triangle).
+  std::vector<int> vs;
+  for (const int v : corners) {
+    Jet& j = jets_[static_cast<std::size_t>(v)];
+    if (j.p == P(v)) continue;
+    j.p = P(v);
+    vs.push_back(v);
+  }
+  try {
+    const bool shared = field_.thread_safe();
+    detail::parallel_blocks(vs.size(), shared ? kRepairBlock : kDistanceBatch, shared ? workers_ : 1u,
+                            [&](std::size_t begin, std::size_t end, unsigned) {
+                              poll();
+                              const std::size_t n = end - begin;
+                              std::vector<Vec3> points(n), gradients(n);
+                              std::vector<double> values(n);
+                              std::vector<Mat3> hessians(n);
+                              for (std::size_t i = 0; i < n; ++i) points[i] = P(vs[begin + i]);
+                              field_.gradients_hessians(points.data(), values.data(), gradients.data(),
+                                                        hessians.data(), n);
+                              for (std::size_t i = 0; i < n; ++i)
+                                jets_[static_cast<std::size_t>(vs[begin + i])] = {points[i], values[i], gradients[i],
+                                                                                   hessians[i]};
+                            });
+  } catch (...) {
+    for (const int v : vs) jets_[static_cast<std::size_t>(v)] = Jet{};  // claimed, not evaluated
+    throw;
+  }
+}
+
+std::optional<RepairContext::Mid> RepairContext::predicted_midpoint(int x, int y) const {
+  reserve_jets();
+  const Jet& a = jet(x);
+  const Jet& b = jet(y);
+  const Vec3 e = b.p - a.p, h = 0.5 * e;
+  // A: the mean of the two ends' Taylor expansions; H: the Hermite cubic of the ends' values and
+  // slopes along the edge. Both are exact for cubics; (A + 3H) / 4 for quartics (kPredictShare).
+  const double from_a = a.f + a.g.dot(h) + 0.5 * h.dot(a.h * h);
+  const double from_b = b.f - b.g.dot(h) + 0.5 * h.dot(b.h * h);
+  const double A = 0.5 * (from_a + from_b);
+  const double H = 0.5 * (a.f + b.f) + (a.g - b.g).dot(e) / 8;
+  const Vec3 g = 0.5 * (a.g + a.h * h + b.g - b.h * h);
+  const double l = g.norm();
+  if (!(l > 0)) return std::nullopt;
+  const Mid m{0.25 * (A + 3 * H) / l, std::abs(A - H) / l};
+  if (!std::isfinite(m.d) || !(m.u <= kPredictShare * options_.tolerance)) return std::nullopt;
+  return m;
+}
+
+std::optional<double> RepairContext::predicted_centroid(const Tri& t) const {
+  reserve_jets();
+  const std::array<const Jet*, 3> j{&jet(t[0]), &jet(t[1]), &jet(t[2])};
+  const Vec3 c = (j[0]->p + j[1]->p + j[2]->p) / 3;
+  // Each corner's Taylor expansion with its third-order term estimated from the Hessians'
+  // differences (the third derivative along c - a_i is about mean(H) - H_i): the mean is then
+  // exact for cubics, where the plain mean of the expansions is not. Its term in mean(H),
+  // sum_i h_i' mean(H) h_i / 6, is mean(H) : sum_i h_i h_i' / 6.
+  double f = 0;
+  Vec3 g = Vec3::Zero();
+  Mat3 mean_h = Mat3::Zero(), spread = Mat3::Zero();
+  for (const Jet* k : j) {
+    const Vec3 h = c - k->p, hh = k->h * h;
+    f += k->f + k->g.dot(h) + h.dot(hh) / 3;
+    g += k->g + hh;
+    mean_h += k->h;
+    spread += h * h.transpose();
+  }
+  f += (mean_h.cwiseProduct(spread)).sum() / 18;  // mean(H) = sum / 3, and / 6
+  const double d = signed_distance(f / 3, g / 3);
+  if (!std::isfinite(d)) return std::nullopt;
+  return d;
 }
 
 double RepairContext::estimate_from_samples(double mab, double mbc, double mca, double centroid) {
@@ -392,6 +503,7 @@ void RepairContext::compact() {
     const Tri& x = mesh_.triangles[t];
     out.triangles.push_back({remap[x[0]], remap[x[1]], remap[x[2]]});
   }
+  jets_.clear(), spare_v_ = -1;  // by the old numbers
   mesh_.positions = std::move(out.positions);
   mesh_.normals = std::move(out.normals);
   mesh_.triangles = std::move(out.triangles);

@@ -70,6 +70,17 @@ inline constexpr double kMoveShares[] = {1.0, 0.5, 0.25};
 // captures the sagitta of a curved patch to second order; the 10% margin covers the
 // third-order remainder (measured under 4% on the torus and tanglecube at eps = 1e-2).
 inline constexpr double kToleranceMargin = 0.9;
+// Predicted estimates (RepairContext::predict_): an edge's midpoint is predicted from its ends'
+// values, gradients and Hessians (no evaluation at the midpoint) where two predictions exact for
+// cubics, the mean of the ends' second-order Taylor expansions (A) and the Hermite cubic through
+// the ends' values and slopes (H), agree to within this share of the tolerance. (A + 3H) / 4 is
+// exact for quartics, and |A - H| bounds its error on every case tried: 0.7 of it where the second
+// derivative jumps between the ends (a C1 seam: max(x, 0)^2), 0.05 for x^8, 0.6 for a sine
+// sampled at two points a radian apart (scripts run at the time; the repair tests measure it
+// against the field). That bound is added to the triangle's estimate, so a share of 0.1 costs a
+// triangle near the bound at most a tenth of the tolerance; the torus at 1e-4 shows about 1e-3
+// of it. A seam, a crease or a feature between the ends disagrees far more, and is measured.
+inline constexpr double kPredictShare = 0.1;
 // A flip of the relaxation that brings the valences nearer 6 may raise the two triangles'
 // summed edge ratio by up to this share, which the moves that follow more than make up for.
 // The same three cases and random blobs at tolerance 1e-3: 1.246 / 1.255 / 1.263 / 1.203; with
@@ -141,6 +152,10 @@ class RepairContext {
     // Nothing reads its visits, and intersecting_turn queries it on several threads at once.
     hash_.set_counting(false);
     hash_.set_cancel(options_.cancel);
+    using Predict = QualityOptions::Predict;
+    predict_ = o.tolerance > 0 && field.smooth() && !field.derivative_step() &&
+               (o.predict_estimates == Predict::Always ||
+                (o.predict_estimates == Predict::CostlyFields && (field.costly_points() || field.costly_calls())));
     try {
       // Room for every triangle's box at once (no page is touched before its box is stored):
       // grown a triangle at a time, the two arrays doubled together, 0.1-0.2 s in one call at
@@ -259,19 +274,27 @@ class RepairContext {
   // current positions: the triangles of a star share their edges to the centre.
   // `table` (optional, read only): edges measured beforehand at the current positions, by
   // edge_key, sorted.
+  // A midpoint's signed distance d, and u: where predicted (kPredictShare), the bound of its
+  // error; -1 where measured.
+  struct Mid {
+    double d = 0;
+    double u = -1;
+  };
   struct EdgeTable {
     std::vector<std::uint64_t> keys;
-    std::vector<double> d;
+    std::vector<Mid> d;
   };
   struct MidpointMemo {
-    std::vector<std::pair<std::pair<int, int>, double>> known;
+    std::vector<std::pair<std::pair<int, int>, Mid>> known;
     const EdgeTable* table = nullptr;
   };
   static std::uint64_t edge_key(int x, int y) {
     const auto [lo, hi] = std::minmax(x, y);
     return static_cast<std::uint64_t>(static_cast<std::uint32_t>(lo)) << 32 | static_cast<std::uint32_t>(hi);
   }
-  double midpoint_distance(int x, int y, MidpointMemo* memo) const;
+  Mid midpoint_distance(int x, int y, MidpointMemo* memo) const;
+  // The midpoint of edge x y, predicted where the prediction is trusted, else measured.
+  Mid midpoint_sample(int x, int y) const;
   // The estimate of the triangle in slot `slot` (its corners `t`, which an operation may be
   // trying at new positions), remembered with the corners, their positions and the edges'
   // midpoint distances, and reused only where those compare equal (the estimate is a function
@@ -283,7 +306,7 @@ class RepairContext {
   struct EstimateEntry {
     Tri t{-1, -1, -1};
     std::array<Vec3, 3> p;
-    std::array<double, 3> mid;  // edges t[0] t[1], t[1] t[2], t[2] t[0]
+    std::array<Mid, 3> mid;  // edges t[0] t[1], t[1] t[2], t[2] t[0]
     double d = 0;
   };
   // Which corners of `t`, at the current positions, entry e was made with (none when e is of
@@ -302,15 +325,39 @@ class RepairContext {
   // `centroid` (optional): signed_distance at the triangle's centroid, measured beforehand.
   double estimate_distance(const Tri& t, int slot, MidpointMemo* memo = nullptr, const double* centroid = nullptr) const;
   double estimate_distance(const Tri& t, MidpointMemo* memo = nullptr) const {
-    return estimate_from(P(t[0]), P(t[1]), P(t[2]), midpoint_distance(t[0], t[1], memo),
-                         midpoint_distance(t[1], t[2], memo), midpoint_distance(t[2], t[0], memo));
+    return estimate_from(t, {midpoint_distance(t[0], t[1], memo), midpoint_distance(t[1], t[2], memo),
+                             midpoint_distance(t[2], t[0], memo)});
   }
-  // ... from the midpoints' signed distances.
-  double estimate_from(const Vec3& a, const Vec3& b, const Vec3& c, double mab, double mbc, double mca) const {
-    return estimate_from_samples(mab, mbc, mca, signed_distance((a + b + c) / 3));
-  }
-  // ... and the centroid's.
+  // ... from the midpoints (edges t[0] t[1], t[1] t[2], t[2] t[0]) and the centroid: `centroid`
+  // where given, predicted where all three midpoints were, else measured. The largest error
+  // bound of a predicted midpoint is added.
+  double estimate_from(const Tri& t, const std::array<Mid, 3>& mid, const double* centroid = nullptr) const;
+  // ... from the midpoints' and the centroid's signed distances.
   static double estimate_from_samples(double mab, double mbc, double mca, double centroid);
+
+  // Predicted estimates (QualityOptions::predict_estimates): with a tolerance and a smooth field
+  // (Field::smooth) whose derivatives are exact (not differences of values), the midpoints and centroids come from the corners' value, gradient and
+  // Hessian (one evaluation a vertex, kept while it stays put) instead of an evaluation each; see
+  // kPredictShare. On the torus at 1e-4 the estimates took 8.3 of 12.3 evaluations a vertex.
+  struct Jet {
+    Vec3 p = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // where: never equal before set
+    double f = 0;
+    Vec3 g = Vec3::Zero();
+    Mat3 h = Mat3::Zero();
+  };
+  // Vertex v's jet at its current position, evaluated where not kept. The jet it displaces is
+  // kept aside once, so that a move tried and taken back evaluates once, not twice.
+  // One thread only, but for jets fill_jets made.
+  const Jet& jet(int v) const;
+  // Evaluates the jets of `corners` not kept: a thread-safe field's on all cores, another's in
+  // batches.
+  void fill_jets(const std::vector<int>& corners) const;
+  // Makes room for every vertex's jet (jet does not grow the array: its references stay).
+  void reserve_jets() const {
+    if (jets_.size() < mesh_.positions.size()) jets_.resize(mesh_.positions.size() + mesh_.positions.size() / 8);
+  }
+  std::optional<Mid> predicted_midpoint(int x, int y) const;
+  std::optional<double> predicted_centroid(const Tri& t) const;
   // The largest distance from triangle t to the surface over a barycentric grid of
   // kDenseGrid + 1 points a side (28 points: corners, 5 more on each side, 10 inside), each the
   // length of Newton's path onto the surface (at least the point's true distance); `fallback`
@@ -596,6 +643,11 @@ class RepairContext {
   std::vector<StarTriangle> star_buffer_;
   // estimate_distance's memo, by triangle slot (see there).
   mutable std::vector<EstimateEntry> estimates_;
+  // Predicted estimates (see Jet): whether, the vertices' jets, and the one jet set aside.
+  bool predict_ = false;
+  mutable std::vector<Jet> jets_;
+  mutable Jet spare_;
+  mutable int spare_v_ = -1;
   // The box each triangle is stored in the hash with (hash_box).
   std::vector<Vec3> hashed_lo_, hashed_hi_;
   // Triangles changed in the current round, and since the last tolerance check.

@@ -41,14 +41,27 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
   std::sort(table.keys.begin(), table.keys.end());
   table.keys.erase(std::unique(table.keys.begin(), table.keys.end()), table.keys.end());
   table.d.resize(table.keys.size());
+  const auto ends = [&](std::size_t i) {
+    return std::pair{static_cast<int>(table.keys[i] >> 32), static_cast<int>(table.keys[i] & 0xffffffffu)};
+  };
   const auto midpoint = [&](std::size_t i) {
-    const int x = static_cast<int>(table.keys[i] >> 32), y = static_cast<int>(table.keys[i] & 0xffffffffu);
+    const auto [x, y] = ends(i);
     return Vec3(0.5 * (ctx.P(x) + ctx.P(y)));
   };
+  if (ctx.predict_) {
+    // Every corner's jet first, so that the passes below only read them.
+    std::vector<int> corners;
+    corners.reserve(3 * todo.size());
+    for (const int t : todo) corners.insert(corners.end(), ctx.mesh_.triangles[t].begin(), ctx.mesh_.triangles[t].end());
+    ctx.fill_jets(corners);
+  }
   if (ctx.field_.thread_safe()) {
     detail::parallel_blocks(table.keys.size(), kRepairBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned) {
       ctx.poll();
-      for (std::size_t i = begin; i < end; ++i) table.d[i] = ctx.signed_distance(midpoint(i));
+      for (std::size_t i = begin; i < end; ++i) {
+        const auto [x, y] = ends(i);
+        table.d[i] = ctx.midpoint_sample(x, y);
+      }
     });
     detail::parallel_blocks(todo.size(), kRepairBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned) {
       ctx.poll();
@@ -57,16 +70,44 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
       for (std::size_t i = begin; i < end; ++i) ctx.estimate_distance(ctx.mesh_.triangles[todo[i]], todo[i], &memo);
     });
   } else {
-    std::vector<Vec3> points(table.keys.size());
-    for (std::size_t i = 0; i < points.size(); ++i) points[i] = midpoint(i);
-    ctx.signed_distances(points, table.d);
-    points.resize(todo.size());
+    // The same samples as above: the predicted ones, then the rest measured in one batch.
+    std::vector<Vec3> points;
+    std::vector<std::size_t> which;
+    for (std::size_t i = 0; i < table.keys.size(); ++i) {
+      const auto [x, y] = ends(i);
+      const std::optional<RepairContext::Mid> m = ctx.predict_ ? ctx.predicted_midpoint(x, y) : std::nullopt;
+      if (m) {
+        table.d[i] = *m;
+      } else {
+        which.push_back(i);
+        points.push_back(midpoint(i));
+      }
+    }
+    std::vector<double> measured;
+    ctx.signed_distances(points, measured);
+    for (std::size_t k = 0; k < which.size(); ++k) table.d[which[k]] = {measured[k], -1};
+    // A centroid is predicted where all three midpoints were (as estimate_from decides).
+    RepairContext::MidpointMemo lookup;
+    lookup.table = &table;
+    const auto predicted = [&](const Tri& T) {
+      for (int k = 0; k < 3; ++k)
+        if (ctx.midpoint_distance(T[k], T[(k + 1) % 3], &lookup).u < 0) return false;
+      return true;
+    };
+    std::vector<double> centroids(todo.size());
+    points.clear(), which.clear();
     for (std::size_t i = 0; i < todo.size(); ++i) {
       const Tri& T = ctx.mesh_.triangles[todo[i]];
-      points[i] = (ctx.P(T[0]) + ctx.P(T[1]) + ctx.P(T[2])) / 3;
+      const std::optional<double> c = ctx.predict_ && predicted(T) ? ctx.predicted_centroid(T) : std::nullopt;
+      if (c) {
+        centroids[i] = *c;
+      } else {
+        which.push_back(i);
+        points.push_back((ctx.P(T[0]) + ctx.P(T[1]) + ctx.P(T[2])) / 3);
+      }
     }
-    std::vector<double> centroids;
-    ctx.signed_distances(points, centroids);
+    ctx.signed_distances(points, measured);
+    for (std::size_t k = 0; k < which.size(); ++k) centroids[which[k]] = measured[k];
     for (std::size_t begin = 0; begin < todo.size(); begin += kRepairBlock) {
       ctx.poll();
       RepairContext::MidpointMemo memo;  // as a block of the threads' (its list searched linearly)

@@ -1,0 +1,170 @@
+// RepairContext's distance estimates (src/adaptive/repair_context.h): the midpoints and centroids
+// predicted from the corners' derivatives against the field's own values there, on the unit
+// sphere and across a C1 seam, and the tolerance's refinement with and without them against the
+// sphere's distance in closed form.
+#include "src/adaptive/repair_refine.h"
+
+#include "polygonizer/adaptive/repair/repair_fixtures.h"
+
+#include <cdp/core/triangle_geometry.h>
+
+#include <numeric>
+
+namespace cdp::adaptive::repair {
+namespace {
+
+using namespace test_repair;
+
+// z = k max(x, 0)^2 / 2: a plane that bends into a parabola along x = 0, where the second
+// derivative jumps (C1, as a rounded box's face meets its fillet). Declared smooth, as a
+// compiled model's author may, so that the predictions are asked.
+class SeamField final : public Field {
+ public:
+  explicit SeamField(double k) : k_(k) { set_bounds(Box{Vec3::Constant(-2), Vec3::Constant(2)}); }
+  std::string type_name() const override { return "seam"; }
+  bool smooth() const override { return true; }
+  bool thread_safe() const override { return true; }
+  // The surface point above (x, y).
+  Vec3 on_surface(double x, double y) const { return {x, y, 0.5 * k_ * std::pow(std::max(x, 0.0), 2)}; }
+
+ protected:
+  double eval_value(const Vec3& p) const override { return p.z() - 0.5 * k_ * std::pow(std::max(p.x(), 0.0), 2); }
+  double eval_value_gradient(const Vec3& p, Vec3& g) const override {
+    g = {-k_ * std::max(p.x(), 0.0), 0, 1};
+    return eval_value(p);
+  }
+  double eval_gradient_hessian(const Vec3& p, Vec3& g, Mat3& h) const override {
+    h = Mat3::Zero();
+    h(0, 0) = p.x() > 0 ? -k_ : 0;
+    return eval_value_gradient(p, g);
+  }
+
+ private:
+  double k_;
+};
+
+// Every edge's predicted midpoint on the sphere is within its own error bound of the field's
+// signed distance there, and the bound is far under the tolerance (so the estimates spend no
+// evaluation at the midpoints); the centroids are within the bound of their edges.
+TEST(RepairContext, PredictedMidpointsAndCentroidsMatchTheFieldOnTheSphere) {
+  const auto field = unit_sphere();
+  Mesh mesh = icosphere(3);
+  QualityOptions o = sphere_options();
+  o.tolerance = 1e-2;
+  o.predict_estimates = QualityOptions::Predict::Always;  // the sphere is cheap: not by default
+  RepairContext ctx(*field, mesh, o);
+  ASSERT_TRUE(ctx.predict_);
+  int predicted = 0;
+  for (const Tri& t : mesh.triangles) {
+    double bound = 0;
+    for (int i = 0; i < 3; ++i) {
+      const int x = t[i], y = t[(i + 1) % 3];
+      const std::optional<RepairContext::Mid> m = ctx.predicted_midpoint(x, y);
+      ASSERT_TRUE(m);
+      const double measured = ctx.signed_distance(0.5 * (mesh.positions[x] + mesh.positions[y]));
+      EXPECT_LE(std::abs(m->d - measured), m->u + 1e-15);
+      EXPECT_LT(m->u, 1e-2 * o.tolerance);
+      EXPECT_LT(m->d, -0.1 * o.tolerance);  // a chord's midpoint lies inside, well measurable
+      bound = std::max(bound, m->u);
+      ++predicted;
+    }
+    const std::optional<double> c = ctx.predicted_centroid(t);
+    ASSERT_TRUE(c);
+    const double measured = ctx.signed_distance((mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3);
+    EXPECT_LE(std::abs(*c - measured), std::max(bound, 1e-3 * std::abs(measured)));
+  }
+  EXPECT_EQ(predicted, 3 * static_cast<int>(mesh.triangles.size()));
+  // And so the triangles' estimates, against a context that measures.
+  QualityOptions measuring = o;
+  measuring.predict_estimates = QualityOptions::Predict::Never;
+  Mesh copy = mesh;
+  const RepairContext measured(*field, copy, measuring);
+  double worst = 0;
+  for (const Tri& t : mesh.triangles) {
+    const double p = ctx.estimate_distance(t), m = measured.estimate_distance(t);
+    worst = std::max(worst, std::abs(p - m) / m);
+  }
+  EXPECT_LT(worst, 1e-2);
+}
+
+// Across the seam the two predictions disagree: wherever the ends straddle it with a sagitta
+// near the tolerance the midpoint is measured, and wherever it is predicted it is within its
+// bound of the field's value.
+TEST(RepairContext, APredictionAcrossAC1SeamIsMeasuredOrWithinItsBound) {
+  const SeamField field(4.0);
+  Mesh mesh;
+  const double length = 0.1;  // sagitta on the parabola k L^2 / 8 = 5e-3
+  int refused = 0, kept = 0;
+  for (int i = 0; i <= 40; ++i) {
+    const double x0 = -length + i * (2 * length / 40);
+    mesh.positions.push_back(field.on_surface(x0, 0));
+    mesh.positions.push_back(field.on_surface(x0 + length, 0.01));
+  }
+  mesh.normals.assign(mesh.positions.size(), Vec3::UnitZ());
+  for (int i = 0; i + 2 < static_cast<int>(mesh.positions.size()); i += 2) mesh.triangles.push_back({i, i + 1, i + 2});
+  QualityOptions o = sphere_options();
+  o.tolerance = 5e-3;
+  o.predict_estimates = QualityOptions::Predict::Always;
+  RepairContext ctx(field, mesh, o);
+  ASSERT_TRUE(ctx.predict_);
+  for (int i = 0; i + 1 < static_cast<int>(mesh.positions.size()); i += 2) {
+    const Vec3 a = mesh.positions[i], b = mesh.positions[i + 1];
+    const double measured = ctx.signed_distance(0.5 * (a + b));
+    const std::optional<RepairContext::Mid> m = ctx.predicted_midpoint(i, i + 1);
+    if (!m) {
+      // Only an edge across the seam or ending on it: on either side the field is a quadratic,
+      // exactly predicted.
+      EXPECT_TRUE(a.x() < 1e-12 && b.x() > 0) << "edge from x = " << a.x();
+      ++refused;
+      continue;
+    }
+    ++kept;
+    EXPECT_LE(std::abs(m->d - measured), m->u + 1e-15) << "edge from x = " << a.x();
+  }
+  EXPECT_GT(refused, 10);
+  EXPECT_GT(kept, 10);  // both sides' own edges: a plane, a parabola
+  // The sample the estimate falls back to is the field's own.
+  const RepairContext::Mid across = ctx.midpoint_sample(10, 11);
+  EXPECT_EQ(across.u, -1);
+}
+
+// The refinement with predicted estimates keeps the tolerance (closed form) as the measured one
+// does, with a fraction of the value-and-gradient evaluations: one Hessian a vertex instead.
+TEST(RepairContext, TheRefinementKeepsTheToleranceWithPredictedEstimates) {
+  const auto field = unit_sphere();
+  EvaluationCounts spent[2];
+  std::size_t triangles[2];
+  for (const bool predict : {false, true}) {
+    SCOPED_TRACE(predict ? "predicted" : "measured");
+    Mesh mesh = icosphere(2);
+    QualityOptions o = sphere_options();
+    o.tolerance = 1e-3;
+    o.predict_estimates = predict ? QualityOptions::Predict::Always : QualityOptions::Predict::CostlyFields;
+    o.measure_near_bound = false;  // its dense samples are projections either way
+    field->reset_counts();
+    RepairContext ctx(*field, mesh, o);
+    EXPECT_EQ(ctx.predict_, predict);  // the sphere's points are cheap
+    std::vector<int> all(mesh.triangles.size());
+    std::iota(all.begin(), all.end(), 0);
+    EXPECT_TRUE(refine(ctx, all).empty());
+    ctx.compact();
+    spent[predict] = field->counts();
+    triangles[predict] = mesh.triangles.size();
+    double worst = 0;
+    for (const auto& t : mesh.triangles)
+      worst = std::max(worst, 1 - closest_point_on_triangle(Vec3::Zero(), mesh.positions[t[0]], mesh.positions[t[1]],
+                                                              mesh.positions[t[2]]).norm());
+    EXPECT_LE(worst, o.tolerance);
+    EXPECT_GT(worst, 0.5 * o.tolerance);  // refined to the tolerance, not far past it
+    expect_a_sphere(mesh);
+  }
+  // The same refinement up to the triangles at the bound that either estimate may split (the
+  // icosphere's are nearly all alike): 11,300 and 11,740 triangles when written.
+  EXPECT_NEAR(double(triangles[true]) / double(triangles[false]), 1.0, 0.06);
+  EXPECT_EQ(spent[false].gradient_hessian, 0u);
+  EXPECT_LT(3 * spent[true].value_gradient, spent[false].value_gradient);
+  EXPECT_LE(spent[true].gradient_hessian, triangles[true]);  // a vertex's jet once: V = T / 2 + 2
+}
+
+}  // namespace
+}  // namespace cdp::adaptive::repair
