@@ -142,7 +142,7 @@ class LockstepView final : public Field {
 
   std::string type_name() const override { return field_.type_name(); }
   bool smooth() const override { return field_.smooth(); }
-  bool costly_points() const override { return field_.costly_points(); }
+  bool predicts_from_hessians() const override { return field_.predicts_from_hessians(); }
   std::optional<double> derivative_step() const override { return field_.derivative_step(); }
   std::optional<double> sample_spacing() const override { return field_.sample_spacing(); }
   std::optional<double> lipschitz_bound() const override { return field_.lipschitz_bound(); }

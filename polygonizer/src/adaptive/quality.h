@@ -47,10 +47,11 @@ struct QualityOptions {
   // 10.9 degrees without them), and the tolerance does not hold across a crease either way.
   bool measure_near_bound = true;
   // With a tolerance, on a smooth field with exact derivatives (Field::smooth, not
-  // Field::derivative_step), the distance estimates may predict edge midpoints and centroids from
-  // the corners' derivatives where two predictions agree (repair_context.h, kPredictShare), and
-  // measure them elsewhere: never, on a field whose points or calls are costly
-  // (Field::costly_points, Field::costly_calls), or on any such field (for tests and measurements).
+  // Field::derivative_step), the distance estimates may predict edge midpoints from their ends'
+  // derivatives where two predictions agree (repair_context.h, kPredictShare), and measure them
+  // elsewhere: never, on a field that asks for it or whose calls are costly
+  // (Field::predicts_from_hessians, Field::costly_calls), or on any such field (for tests and
+  // measurements). The run decides it once for all its repairs (stage_repair.cpp).
   enum class Predict { Never, CostlyFields, Always };
   Predict predict_estimates = Predict::CostlyFields;
   // Positive: when the relaxation's sweeps leave the mesh's mean longest/shortest edge ratio

@@ -74,13 +74,19 @@ inline constexpr double kToleranceMargin = 0.9;
 // values, gradients and Hessians (no evaluation at the midpoint) where two predictions exact for
 // cubics, the mean of the ends' second-order Taylor expansions (A) and the Hermite cubic through
 // the ends' values and slopes (H), agree to within this share of the tolerance. (A + 3H) / 4 is
-// exact for quartics, and |A - H| bounds its error on every case tried: 0.7 of it where the second
-// derivative jumps between the ends (a C1 seam: max(x, 0)^2), 0.05 for x^8, 0.6 for a sine
-// sampled at two points a radian apart (scripts run at the time; the repair tests measure it
-// against the field). That bound is added to the triangle's estimate, so a share of 0.1 costs a
-// triangle near the bound at most a tenth of the tolerance; the torus at 1e-4 shows about 1e-3
-// of it. A seam, a crease or a feature between the ends disagrees far more, and is measured.
-inline constexpr double kPredictShare = 0.1;
+// exact for quartics, and |A - H| bounded its error on every one-dimensional case tried: 0.7 of
+// it where the second derivative jumps between the ends (a C1 seam, max(x, 0)^2), 0.05 for x^8,
+// 0.6 for a sine whose ends are 8 radians apart (the repair tests check it against the field on
+// the sphere and across a seam). A triangle's centroid is predicted from its corners where its
+// three midpoints were (predicted_centroid), under the same share. 4/3 of the midpoints' largest
+// bound (the most a midpoint moves the quadratic through them) and the centroid's are added to
+// the triangle's estimate: at most about 0.1 of the tolerance with this share, 0.01 on the unit
+// sphere's 1,280 triangles at 1e-2. A seam, a crease or a feature between the corners disagrees
+// far more, and is measured. A share of 0.1 saved a fifth more evaluations in the same time
+// (bunny VIS-800 at 3e-4: 43k against 52k values and gradients), but its bounds, raising the
+// estimates near the bound, changed what the repair could do on the Igea VIS-4004 at 3e-3
+// (smallest angle 27.4 degrees, 30.1 measured or with this share).
+inline constexpr double kPredictShare = 0.03;
 // A flip of the relaxation that brings the valences nearer 6 may raise the two triangles'
 // summed edge ratio by up to this share, which the moves that follow more than make up for.
 // The same three cases and random blobs at tolerance 1e-3: 1.246 / 1.255 / 1.263 / 1.203; with
@@ -155,7 +161,7 @@ class RepairContext {
     using Predict = QualityOptions::Predict;
     predict_ = o.tolerance > 0 && field.smooth() && !field.derivative_step() &&
                (o.predict_estimates == Predict::Always ||
-                (o.predict_estimates == Predict::CostlyFields && (field.costly_points() || field.costly_calls())));
+                (o.predict_estimates == Predict::CostlyFields && (field.predicts_from_hessians() || field.costly_calls())));
     try {
       // Room for every triangle's box at once (no page is touched before its box is stored):
       // grown a triangle at a time, the two arrays doubled together, 0.1-0.2 s in one call at
@@ -322,23 +328,25 @@ class RepairContext {
         kept_corners(estimates_[static_cast<std::size_t>(slot)], mesh_.triangles[static_cast<std::size_t>(slot)]);
     return kept[0] && kept[1] && kept[2];
   }
-  // `centroid` (optional): signed_distance at the triangle's centroid, measured beforehand.
-  double estimate_distance(const Tri& t, int slot, MidpointMemo* memo = nullptr, const double* centroid = nullptr) const;
+  // `centroid` (optional): the centroid's sample, made beforehand as estimate_from would.
+  double estimate_distance(const Tri& t, int slot, MidpointMemo* memo = nullptr, const Mid* centroid = nullptr) const;
   double estimate_distance(const Tri& t, MidpointMemo* memo = nullptr) const {
     return estimate_from(t, {midpoint_distance(t[0], t[1], memo), midpoint_distance(t[1], t[2], memo),
                              midpoint_distance(t[2], t[0], memo)});
   }
   // ... from the midpoints (edges t[0] t[1], t[1] t[2], t[2] t[0]) and the centroid: `centroid`
-  // where given, predicted where all three midpoints were, else measured. The largest error
-  // bound of a predicted midpoint is added.
-  double estimate_from(const Tri& t, const std::array<Mid, 3>& mid, const double* centroid = nullptr) const;
+  // where given, else predicted where all three midpoints were and the prediction is trusted,
+  // else measured. The predictions' error bounds are added: 4/3 of the midpoints' largest (the
+  // most a midpoint moves the quadratic through them) and the centroid's.
+  double estimate_from(const Tri& t, const std::array<Mid, 3>& mid, const Mid* centroid = nullptr) const;
   // ... from the midpoints' and the centroid's signed distances.
   static double estimate_from_samples(double mab, double mbc, double mca, double centroid);
 
   // Predicted estimates (QualityOptions::predict_estimates): with a tolerance and a smooth field
-  // (Field::smooth) whose derivatives are exact (not differences of values), the midpoints and centroids come from the corners' value, gradient and
-  // Hessian (one evaluation a vertex, kept while it stays put) instead of an evaluation each; see
-  // kPredictShare. On the torus at 1e-4 the estimates took 8.3 of 12.3 evaluations a vertex.
+  // (Field::smooth) whose derivatives are exact (not differences of values), the edge midpoints
+  // come from their ends' value, gradient and Hessian (one evaluation a vertex, kept while it
+  // stays put) instead of an evaluation each; see kPredictShare. (The torus at 1e-4, measuring:
+  // 8.3 of its 12.3 evaluations a vertex were the estimates', 3.9 of them midpoints.)
   struct Jet {
     Vec3 p = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // where: never equal before set
     double f = 0;
@@ -357,7 +365,8 @@ class RepairContext {
     if (jets_.size() < mesh_.positions.size()) jets_.resize(mesh_.positions.size() + mesh_.positions.size() / 8);
   }
   std::optional<Mid> predicted_midpoint(int x, int y) const;
-  std::optional<double> predicted_centroid(const Tri& t) const;
+  // The centroid of t predicted from its corners; `edges`: the largest bound of its edges'.
+  std::optional<Mid> predicted_centroid(const Tri& t, double edges) const;
   // The largest distance from triangle t to the surface over a barycentric grid of
   // kDenseGrid + 1 points a side (28 points: corners, 5 more on each side, 10 inside), each the
   // length of Newton's path onto the surface (at least the point's true distance); `fallback`

@@ -86,19 +86,21 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
     std::vector<double> measured;
     ctx.signed_distances(points, measured);
     for (std::size_t k = 0; k < which.size(); ++k) table.d[which[k]] = {measured[k], -1};
-    // A centroid is predicted where all three midpoints were (as estimate_from decides).
+    // A centroid predicted where all three midpoints were, as estimate_from decides.
     RepairContext::MidpointMemo lookup;
     lookup.table = &table;
-    const auto predicted = [&](const Tri& T) {
-      for (int k = 0; k < 3; ++k)
-        if (ctx.midpoint_distance(T[k], T[(k + 1) % 3], &lookup).u < 0) return false;
-      return true;
-    };
-    std::vector<double> centroids(todo.size());
+    std::vector<RepairContext::Mid> centroids(todo.size());
     points.clear(), which.clear();
     for (std::size_t i = 0; i < todo.size(); ++i) {
       const Tri& T = ctx.mesh_.triangles[todo[i]];
-      const std::optional<double> c = ctx.predict_ && predicted(T) ? ctx.predicted_centroid(T) : std::nullopt;
+      double edges = 0;
+      bool predicted = ctx.predict_;
+      for (int k = 0; k < 3 && predicted; ++k) {
+        const RepairContext::Mid m = ctx.midpoint_distance(T[k], T[(k + 1) % 3], &lookup);
+        predicted = m.u >= 0;
+        edges = std::max(edges, m.u);
+      }
+      const std::optional<RepairContext::Mid> c = predicted ? ctx.predicted_centroid(T, edges) : std::nullopt;
       if (c) {
         centroids[i] = *c;
       } else {
@@ -107,7 +109,7 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
       }
     }
     ctx.signed_distances(points, measured);
-    for (std::size_t k = 0; k < which.size(); ++k) centroids[which[k]] = measured[k];
+    for (std::size_t k = 0; k < which.size(); ++k) centroids[which[k]] = {measured[k], -1};
     for (std::size_t begin = 0; begin < todo.size(); begin += kRepairBlock) {
       ctx.poll();
       RepairContext::MidpointMemo memo;  // as a block of the threads' (its list searched linearly)

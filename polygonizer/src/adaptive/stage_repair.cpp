@@ -79,6 +79,10 @@ QualityOptions repair_options(const RunContext& run, const Settings& resolved, c
   const bool across_creases = run.field.has_pieces() && !creases.mesh && !no_crease;
   qo.aim_mean_edge_ratio = across_creases ? 0 : kBoundMeanEdgeRatio;
   qo.measure_near_bound = !across_creases;
+  // Decided here, on the run's own field, for every repair of the run alike: a block's repair in
+  // lockstep sees a view of it whose calls are not costly (lockstep.h).
+  qo.predict_estimates = run.field.predicts_from_hessians() || run.field.costly_calls() ? QualityOptions::Predict::Always
+                                                                               : QualityOptions::Predict::Never;
   return qo;
 }
 

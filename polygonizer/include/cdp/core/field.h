@@ -335,13 +335,17 @@ class Field {
   // (polygonizer/src/adaptive/lockstep.h). False by default.
   // \pre true only for a model without branch points (a black box).
   virtual bool costly_calls() const { return false; }
-  // Whether each point costs far more than the method's own arithmetic around it (a microsecond
-  // against a tenth of one: a VIS model of hundreds of centres, an MPU model's octree of fits).
-  // The adaptive method's repair then predicts its tolerance estimates from the vertices' Hessians
-  // instead of evaluating the field at every edge midpoint and centroid (repair_context.h; a smooth
-  // model with exact derivatives only). False by default: on a cheap field (the torus: 9 ns a value
-  // and gradient, 89 ns a Hessian) the predictions cost more time than the evaluations they save.
-  virtual bool costly_points() const { return false; }
+  // Whether the adaptive method's repair should predict its tolerance estimates' edge midpoints
+  // from the vertices' values, gradients and Hessians instead of evaluating the field there
+  // (repair_context.h, kPredictShare): a model that is C2 or smoother, so that the predictions
+  // hold between vertices, and whose points cost far more than the arithmetic around them (a
+  // microsecond against a tenth of one: a VIS model of hundreds of centres). A Python function
+  // given with its derivatives and called smooth is predicted too (its calls are costly). False by
+  // default: on a cheap field the predictions cost more time than the evaluations they save (the
+  // torus: 9 ns a value and gradient, 89 ns a Hessian), and an MPU model, costly too, is C1
+  // wherever its kernels end (the predictions refused or their bounds raising the estimates: the
+  // Igea MPU at 3e-4 came out with a 2-degree triangle).
+  virtual bool predicts_from_hessians() const { return false; }
 
   // A bound L with |F(a) - F(b)| <= L |a - b| inside bounds(), when the model knows one.
   // Ray casting steps by |F| / L; models without a bound let the caller estimate one.

@@ -192,7 +192,7 @@ TEST(BlockTasks, EverySettingAndRepairOptionTravels) {
   QualityOptions& r = t.repair.emplace();
   r.improve_below = 0.5, r.tolerance = 1e-3, r.diagonal = 4.25, r.min_edge = 0.002, r.last_resort_min_edge = 0.001;
   r.measure_near_bound = false, r.aim_mean_edge_ratio = 1.2, r.threads = 3, r.keep_boundary = true;
-  r.count_near_boundary = false;
+  r.count_near_boundary = false, r.predict_estimates = QualityOptions::Predict::Always;
   t.check_self_intersections = true;
   const BlockTask b = read_task(write_task(t));
   EXPECT_EQ(b.block, 17u);
@@ -255,6 +255,7 @@ TEST(BlockTasks, EverySettingAndRepairOptionTravels) {
   EXPECT_EQ(b.repair->threads, r.threads);
   EXPECT_EQ(b.repair->keep_boundary, r.keep_boundary);
   EXPECT_EQ(b.repair->count_near_boundary, r.count_near_boundary);
+  EXPECT_EQ(b.repair->predict_estimates, r.predict_estimates);
   EXPECT_EQ(b.check_self_intersections, t.check_self_intersections);
 }
 

@@ -21,7 +21,7 @@ class LevelShift final : public Field {
   std::string type_name() const override { return field_.type_name(); }
   bool thread_safe() const override { return field_.thread_safe(); }
   bool costly_calls() const override { return field_.costly_calls(); }
-  bool costly_points() const override { return field_.costly_points(); }
+  bool predicts_from_hessians() const override { return field_.predicts_from_hessians(); }
   bool smooth() const override { return field_.smooth(); }
   std::optional<double> derivative_step() const override { return field_.derivative_step(); }
   std::optional<double> sample_spacing() const override { return field_.sample_spacing(); }

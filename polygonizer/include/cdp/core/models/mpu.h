@@ -75,7 +75,6 @@ class Mpu : public Field {
   std::string type_name() const override { return "mpu"; }
   bool thread_safe() const override { return true; }  // evaluation reads immutable data only
   bool smooth() const override { return true; }
-  bool costly_points() const override { return true; }  // about a microsecond a point (the octree's fits)
   const MpuStats& stats() const { return stats_; }
   // sum_i w_i(p): positive wherever F is the blend (everywhere in the octree's root cube).
   double weight_sum(const Vec3& p) const;

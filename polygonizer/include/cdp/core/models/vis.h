@@ -67,8 +67,9 @@ class Vis : public Field {
   std::string type_name() const override { return "vis"; }
   bool thread_safe() const override { return true; }  // evaluation reads immutable data only
   bool smooth() const override { return true; }
-  // From kCostlyPointCentres centres a value and gradient costs over 70 ns (1.2 ns a centre).
-  bool costly_points() const override { return n_ >= kCostlyPointCentres; }
+  // C2 (its kernel r^3), and from kCostlyPointCentres centres a value and gradient costs over 70 ns
+  // (1.2 ns a centre).
+  bool predicts_from_hessians() const override { return n_ >= kCostlyPointCentres; }
   static constexpr std::size_t kCostlyPointCentres = 64;
   // Minimum distance between two on-surface constraint points (the data points; the offset
   // points are at distance d from their own by construction, so they would only restate d).
