@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -50,5 +51,32 @@ inline double first_order_distance(const Field& f, const Vec3& p) {
 inline std::unique_ptr<Field> field_from_json(const std::string& text) {
   return make_field(nlohmann::json::parse(text), "<test>");
 }
+
+// The same field, claiming what it is told, for tests of what the claims change: not smooth (as
+// a callable's), the repair probes every vertex it touches for a crease; not thread-safe (as a
+// Python function), the relaxation projects in one batch and the refinement measures in batches;
+// asking for predicted estimates (Field::predicts_from_hessians, as a VIS model does), the
+// repair predicts its estimates' midpoints and centroids from the vertices' Hessians.
+class Rewrapped : public Field {
+ public:
+  Rewrapped(const Field& f, bool smooth, bool thread_safe, bool predicts_from_hessians = false)
+      : f_(f), smooth_(smooth), thread_safe_(thread_safe), predicts_(predicts_from_hessians) {
+    set_bounds(f.bounds());
+  }
+  std::string type_name() const override { return "rewrapped"; }
+  bool smooth() const override { return smooth_; }
+  bool thread_safe() const override { return thread_safe_; }
+  bool predicts_from_hessians() const override { return predicts_; }
+  std::optional<double> lipschitz_bound() const override { return f_.lipschitz_bound(); }
+
+ protected:
+  double eval_value(const Vec3& p) const override { return f_.value(p); }
+  double eval_value_gradient(const Vec3& p, Vec3& g) const override { return f_.value_gradient(p, g); }
+  double eval_gradient_hessian(const Vec3& p, Vec3& g, Mat3& h) const override { return f_.gradient_hessian(p, g, h); }
+
+ private:
+  const Field& f_;
+  bool smooth_, thread_safe_, predicts_;
+};
 
 }  // namespace cdp::test

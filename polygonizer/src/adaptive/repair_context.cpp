@@ -84,16 +84,8 @@ double RepairContext::estimate_distance(const Tri& t, int slot, MidpointMemo* me
 
 double RepairContext::estimate_from(const Tri& t, const std::array<Mid, 3>& mid, const Mid* centroid) const {
   double margin = 0;
-  bool predicted = true;
-  for (const Mid& m : mid) {
-    if (m.u >= 0) margin = std::max(margin, m.u);
-    else predicted = false;
-  }
-  // The centroid is predicted only where its three midpoints were: an edge across a seam or a
-  // crease is not, and a seam that enters a triangle crosses two of its edges.
-  std::optional<Mid> c;
-  if (centroid) c = *centroid;
-  else if (predicted) c = predicted_centroid(t, margin);
+  for (const Mid& m : mid) margin = std::max(margin, m.u);
+  std::optional<Mid> c = centroid ? std::optional<Mid>(*centroid) : predicted_centroid(t, mid);
   if (!c) c = Mid{signed_distance((P(t[0]) + P(t[1]) + P(t[2])) / 3), -1};
   // A midpoint off by u moves the quadratic through them by up to 4/3 u (at the centroid).
   return estimate_from_samples(mid[0].d, mid[1].d, mid[2].d, c->d) + 4.0 / 3.0 * margin + std::max(c->u, 0.0);
@@ -171,7 +163,14 @@ std::optional<RepairContext::Mid> RepairContext::predicted_midpoint(int x, int y
   return m;
 }
 
-std::optional<RepairContext::Mid> RepairContext::predicted_centroid(const Tri& t, double edges) const {
+std::optional<RepairContext::Mid> RepairContext::predicted_centroid(const Tri& t, const std::array<Mid, 3>& mid) const {
+  // Only where the three midpoints were predicted: an edge across a seam or a crease is not, and
+  // a seam that enters a triangle crosses two of its edges.
+  double edges = 0;
+  for (const Mid& m : mid) {
+    if (!(m.u >= 0)) return std::nullopt;
+    edges = std::max(edges, m.u);
+  }
   reserve_jets();
   const std::array<const Jet*, 3> j{&jet(t[0]), &jet(t[1]), &jet(t[2])};
   const Vec3 c = (j[0]->p + j[1]->p + j[2]->p) / 3;

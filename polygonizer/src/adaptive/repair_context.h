@@ -344,8 +344,8 @@ class RepairContext {
 
   // Predicted estimates (QualityOptions::predict_estimates): with a tolerance and a smooth field
   // (Field::smooth) whose derivatives are exact (not differences of values), the edge midpoints
-  // come from their ends' value, gradient and Hessian (one evaluation a vertex, kept while it
-  // stays put) instead of an evaluation each; see kPredictShare. (The torus at 1e-4, measuring:
+  // and centroids come from their corners' value, gradient and Hessian (one evaluation a vertex,
+  // kept while it stays put) instead of an evaluation each; see kPredictShare. (The torus at 1e-4, measuring:
   // 8.3 of its 12.3 evaluations a vertex were the estimates', 3.9 of them midpoints.)
   struct Jet {
     Vec3 p = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  // where: never equal before set
@@ -365,8 +365,9 @@ class RepairContext {
     if (jets_.size() < mesh_.positions.size()) jets_.resize(mesh_.positions.size() + mesh_.positions.size() / 8);
   }
   std::optional<Mid> predicted_midpoint(int x, int y) const;
-  // The centroid of t predicted from its corners; `edges`: the largest bound of its edges'.
-  std::optional<Mid> predicted_centroid(const Tri& t, double edges) const;
+  // The centroid of t predicted from its corners, where its midpoints `mid` (edges t[0] t[1],
+  // t[1] t[2], t[2] t[0]) all were predicted and the prediction is trusted; else none.
+  std::optional<Mid> predicted_centroid(const Tri& t, const std::array<Mid, 3>& mid) const;
   // The largest distance from triangle t to the surface over a barycentric grid of
   // kDenseGrid + 1 points a side (28 points: corners, 5 more on each side, 10 inside), each the
   // length of Newton's path onto the surface (at least the point's true distance); `fallback`

@@ -86,21 +86,16 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
     std::vector<double> measured;
     ctx.signed_distances(points, measured);
     for (std::size_t k = 0; k < which.size(); ++k) table.d[which[k]] = {measured[k], -1};
-    // A centroid predicted where all three midpoints were, as estimate_from decides.
+    // The centroids predicted where estimate_from would predict them.
     RepairContext::MidpointMemo lookup;
     lookup.table = &table;
     std::vector<RepairContext::Mid> centroids(todo.size());
     points.clear(), which.clear();
     for (std::size_t i = 0; i < todo.size(); ++i) {
       const Tri& T = ctx.mesh_.triangles[todo[i]];
-      double edges = 0;
-      bool predicted = ctx.predict_;
-      for (int k = 0; k < 3 && predicted; ++k) {
-        const RepairContext::Mid m = ctx.midpoint_distance(T[k], T[(k + 1) % 3], &lookup);
-        predicted = m.u >= 0;
-        edges = std::max(edges, m.u);
-      }
-      const std::optional<RepairContext::Mid> c = predicted ? ctx.predicted_centroid(T, edges) : std::nullopt;
+      const auto mid = [&](int k) { return ctx.midpoint_distance(T[k], T[(k + 1) % 3], &lookup); };
+      const std::optional<RepairContext::Mid> c =
+          ctx.predict_ ? ctx.predicted_centroid(T, {mid(0), mid(1), mid(2)}) : std::nullopt;
       if (c) {
         centroids[i] = *c;
       } else {

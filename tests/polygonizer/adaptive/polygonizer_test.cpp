@@ -443,29 +443,7 @@ TEST(AdaptivePolygonizer, InvalidOptionsAndEmptyFieldsAreErrors) {
 namespace cdp {
 namespace {
 
-// The same field, claiming smoothness and thread safety as told: not smooth (as a callable's),
-// the repair probes every vertex it touches for a crease; not thread-safe (as a Python
-// function), the relaxation projects in one batch and the refinement measures each triangle in
-// its turn.
-class Rewrapped : public Field {
- public:
-  Rewrapped(const Field& f, bool smooth, bool thread_safe) : f_(f), smooth_(smooth), thread_safe_(thread_safe) {
-    set_bounds(f.bounds());
-  }
-  std::string type_name() const override { return "rewrapped"; }
-  bool smooth() const override { return smooth_; }
-  bool thread_safe() const override { return thread_safe_; }
-  std::optional<double> lipschitz_bound() const override { return f_.lipschitz_bound(); }
-
- protected:
-  double eval_value(const Vec3& p) const override { return f_.value(p); }
-  double eval_value_gradient(const Vec3& p, Vec3& g) const override { return f_.value_gradient(p, g); }
-  double eval_gradient_hessian(const Vec3& p, Vec3& g, Mat3& h) const override { return f_.gradient_hessian(p, g, h); }
-
- private:
-  const Field& f_;
-  bool smooth_, thread_safe_;
-};
+using test::Rewrapped;
 
 // stats "phases.*": each phase's time and field evaluations, summed over every run a
 // polygonization makes, add up to the run's (test::expect_phases_add_up; the hard-surface suite

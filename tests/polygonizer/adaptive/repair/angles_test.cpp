@@ -369,30 +369,15 @@ struct ToleranceCase {
   bool predicted = false;
 };
 
-// The same field, asking for predicted estimates, and claiming smoothness: the four surfaces are (the tanglecube
-// and Chmutov's quartic are polynomials, whose expressions do not say so).
-class AskingForPredictions final : public Field {
- public:
-  explicit AskingForPredictions(std::unique_ptr<Field> f) : f_(std::move(f)) { set_bounds(f_->bounds()); }
-  std::string type_name() const override { return f_->type_name(); }
-  bool smooth() const override { return true; }
-  bool thread_safe() const override { return f_->thread_safe(); }
-  bool predicts_from_hessians() const override { return true; }
-
- protected:
-  double eval_value(const Vec3& p) const override { return f_->value(p); }
-  double eval_value_gradient(const Vec3& p, Vec3& g) const override { return f_->value_gradient(p, g); }
-  double eval_gradient_hessian(const Vec3& p, Vec3& g, Mat3& h) const override { return f_->gradient_hessian(p, g, h); }
-
- private:
-  std::unique_ptr<Field> f_;
-};
-
 class ToleranceBound : public testing::TestWithParam<ToleranceCase> {};
 
 TEST_P(ToleranceBound, LargestDistanceAtMostEps) {
-  std::unique_ptr<Field> field = test::field_from_json(GetParam().json);
-  if (GetParam().predicted) field = std::make_unique<AskingForPredictions>(std::move(field));
+  const std::unique_ptr<Field> plain = test::field_from_json(GetParam().json);
+  // Asking for predictions, and claiming smoothness: the four surfaces are (the tanglecube and
+  // Chmutov's quartic are polynomials, whose expressions do not say so).
+  std::optional<test::Rewrapped> asking;
+  if (GetParam().predicted) asking.emplace(*plain, true, plain->thread_safe(), true);
+  const Field* field = asking ? &*asking : plain.get();
   AdaptiveOptions o;
   o.sizing = SizingMode::Tolerance;
   o.tolerance = GetParam().eps;

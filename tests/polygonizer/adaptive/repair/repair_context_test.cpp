@@ -56,7 +56,7 @@ TEST(RepairContext, PredictedMidpointsAndCentroidsMatchTheFieldOnTheSphere) {
   RepairContext ctx(*field, mesh, o);
   ASSERT_TRUE(ctx.predict_);
   for (const Tri& t : mesh.triangles) {
-    double edges = 0;
+    std::array<RepairContext::Mid, 3> mids;
     for (int i = 0; i < 3; ++i) {
       const int x = t[i], y = t[(i + 1) % 3];
       const std::optional<RepairContext::Mid> m = ctx.predicted_midpoint(x, y);
@@ -65,9 +65,9 @@ TEST(RepairContext, PredictedMidpointsAndCentroidsMatchTheFieldOnTheSphere) {
       EXPECT_LE(std::abs(m->d - measured), m->u + 1e-15);
       EXPECT_LT(m->u, 1e-2 * o.tolerance);
       EXPECT_LT(m->d, -0.1 * o.tolerance);  // a chord's midpoint lies inside, well measurable
-      edges = std::max(edges, m->u);
+      mids[i] = *m;
     }
-    const std::optional<RepairContext::Mid> c = ctx.predicted_centroid(t, edges);
+    const std::optional<RepairContext::Mid> c = ctx.predicted_centroid(t, mids);
     ASSERT_TRUE(c);
     const double measured = ctx.signed_distance((mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3);
     EXPECT_LE(std::abs(c->d - measured), c->u + 1e-15);
@@ -167,29 +167,13 @@ TEST(RepairContext, TheRefinementKeepsTheToleranceWithPredictedEstimates) {
   EXPECT_LE(spent[true].gradient_hessian, triangles[true]);  // a vertex's jet once: V = T / 2 + 2
 }
 
-// The unit sphere, not thread-safe (as a Python function given with its derivatives): the
-// refinement's estimates then go in batched calls instead of on the threads.
-class UnsharedSphere final : public Field {
- public:
-  explicit UnsharedSphere(const Field& f) : f_(f) { set_bounds(f.bounds()); }
-  std::string type_name() const override { return "unshared sphere"; }
-  bool smooth() const override { return true; }
-
- protected:
-  double eval_value(const Vec3& p) const override { return f_.value(p); }
-  double eval_value_gradient(const Vec3& p, Vec3& g) const override { return f_.value_gradient(p, g); }
-  double eval_gradient_hessian(const Vec3& p, Vec3& g, Mat3& h) const override { return f_.gradient_hessian(p, g, h); }
-
- private:
-  const Field& f_;
-};
-
 // With predicted estimates the refinement is the same, mesh and evaluation counts, on one thread
 // and on three, and for a field that is not thread-safe (the predictions and measurements decided
 // alike in both branches of its estimates).
 TEST(RepairContext, PredictedEstimatesAreTheSameOnAnyThreadsAndInBatches) {
   const auto shared = unit_sphere();
-  const UnsharedSphere unshared(*shared);
+  // Not thread-safe, as a Python function given with its derivatives: the estimates in batches.
+  const test::Rewrapped unshared(*shared, true, false);
   ASSERT_TRUE(shared->thread_safe());
   ASSERT_FALSE(unshared.thread_safe());
   struct Outcome {
