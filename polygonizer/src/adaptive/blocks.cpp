@@ -15,7 +15,9 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <functional>
 #include <limits>
+#include <queue>
 #include <random>
 #include <tuple>
 #include <stdexcept>
@@ -490,6 +492,25 @@ struct SeamTracer {
   }
 };
 
+// Targets h along a polyline (a loop when `closed`) graded so that none exceeds another's plus
+// kSeamGradation times the length between them along it: a sweep each way (twice round a loop).
+// A black box's C1 seam (a rounded box's flat face meeting its rounded edge) tells no sizing where
+// it is (Field::smooth_sides), so the targets jump there from the flat side's to the rounded
+// edge's; vertices spaced by them left a few long seam edges beside short ones, and the blocks'
+// fronts started from them with slivers.
+void grade_along(const std::vector<Vec3>& points, bool closed, std::vector<double>& h) {
+  const std::size_t n = points.size();
+  if (n < 2) return;
+  const std::size_t steps = closed ? 2 * n : n - 1;
+  const auto relax = [&](std::size_t from, std::size_t to) {
+    h[to] = std::min(h[to], h[from] + kSeamGradation * (points[to] - points[from]).norm());
+  };
+  for (std::size_t k = 0; k < steps; ++k) relax(k % n, (k + 1) % n);
+  // Back the other way: from n - 1 (from 0, then n - 1, round a loop).
+  const std::size_t top = closed ? n : n - 1;
+  for (std::size_t k = 0; k < steps; ++k) relax((top + n - k % n) % n, (top + n - 1 - k % n) % n);
+}
+
 // The polyline's vertices about one target apart (equal steps of the integral of ds / target,
 // the target also bounded by the seam's own turning), moved onto the seam. `first` and `last`
 // are the corners' vertices of an open seam (ends of `points`), -1 for a loop.
@@ -508,6 +529,7 @@ Seam resample(const SeamTracer& tracer, const Face& f, const std::vector<Vec3>& 
     if (turn > 0) h[i] = std::min(h[i], edge_length(tracer.sizing, 0.5 * (u.norm() + w.norm()) / turn));
     h[i] = std::max(h[i], tracer.sizing.min_edge);
   }
+  if (tracer.grading) grade_along(points, out.closed, h);
   std::vector<double> cumulative(segments + 1, 0.0);
   for (std::size_t j = 0; j < segments; ++j)
     cumulative[j + 1] = cumulative[j] + (at(j + 1) - at(j)).norm() * 0.5 * (1 / h[j] + 1 / h[(j + 1) % n]);
@@ -529,6 +551,48 @@ Seam resample(const SeamTracer& tracer, const Face& f, const std::vector<Vec3>& 
   }
   if (!out.closed) out.vertices.push_back(last);
   return out;
+}
+
+// The seam vertices' targets graded along the seams as grade_along grades the traced points'
+// (none over another's plus kSeamGradation times the seam's length between them), through the
+// corners from one face's seams to the next: shortest paths from every vertex at once. The
+// blocks' trackers take the seam vertices' targets as their fronts' (Tracker::Placed::seam_target),
+// which must agree with the seams' spacing.
+void grade_seam_targets(const std::vector<std::vector<Seam>>& face_seams, const std::vector<Vec3>& points,
+                        const Sizing& sizing, std::vector<Tracker::Placed>& placed) {
+  const std::size_t n = placed.size();
+  std::vector<std::vector<int>> next(n);
+  for (const auto& seams : face_seams)
+    for (const Seam& s : seams) {
+      const std::size_t m = s.vertices.size();
+      for (std::size_t i = 0; i + 1 < m + (s.closed ? 1 : 0); ++i) {
+        const int a = s.vertices[i], b = s.vertices[(i + 1) % m];
+        next[static_cast<std::size_t>(a)].push_back(b);
+        next[static_cast<std::size_t>(b)].push_back(a);
+      }
+    }
+  std::vector<double> target(n);
+  using Entry = std::pair<double, int>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  for (std::size_t v = 0; v < n; ++v) {
+    target[v] = std::min(edge_length(sizing, placed[v].curvature.min_radius), placed[v].seam_target);
+    queue.emplace(target[v], static_cast<int>(v));
+  }
+  while (!queue.empty()) {
+    const auto [t, v] = queue.top();
+    queue.pop();
+    if (t > target[static_cast<std::size_t>(v)]) continue;
+    for (const int u : next[static_cast<std::size_t>(v)]) {
+      const double reach =
+          t + kSeamGradation * (points[static_cast<std::size_t>(u)] - points[static_cast<std::size_t>(v)]).norm();
+      if (reach < target[static_cast<std::size_t>(u)]) {
+        target[static_cast<std::size_t>(u)] = reach;
+        queue.emplace(reach, u);
+      }
+    }
+  }
+  for (std::size_t v = 0; v < n; ++v)
+    if (target[v] < placed[v].seam_target) placed[v].seam_target = target[v];
 }
 
 // The seams of face f: from each corner on its sides to the corner where it leaves, then a loop
@@ -840,6 +904,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
         detail::parallel_blocks(sv.points.size(), kSeamVertexSlice, detail::worker_count(options.threads), measure);
       else
         measure(0, sv.points.size(), 0);
+      if (settings.grading) grade_seam_targets(face_seams, sv.points, settings.sizing, placed);
     }
     std::vector<std::vector<std::vector<int>>> cycles(nblocks);
     for (std::size_t blk = 0; blk < nblocks; ++blk) cycles[blk] = block_cycles(darts[blk]);

@@ -71,7 +71,8 @@ void check_components_apart(const Field& field, const Mesh& mesh, std::size_t co
 // for at that radius, the triangle cuts across a bend finer than its corners saw. On the numpy
 // functions of python/README.md (a torus, a twisted ellipsoid, blobs, a rounded box) at factors
 // 3 and 8, tracked alone and in blocks, the largest ratio was 1.64 wherever the mesh followed the
-// surface; blocks in lockstep cut a rounded box's fillets at factor 8 at ratios up to 7.5.
+// surface; blocks in lockstep cut a rounded box's fillets at factor 8 at ratios up to 7.5 (before
+// the seams between blocks were graded: grade_along, blocks.cpp).
 inline constexpr double kBendChordRatio = 3;
 
 // The mesh's triangles against the bends under them (kBendChordRatio), their middles' distances

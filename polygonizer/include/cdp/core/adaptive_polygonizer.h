@@ -84,8 +84,8 @@ struct AdaptiveOptions {
   // Unset (the default): blocks for a field whose calls are cheap, tracking alone for one whose
   // calls cost more than their points (blocks in lockstep make a sixth to a tenth of a Python
   // function's calls and take 0.4-0.9 times its time on smooth numpy functions, but a black box
-  // with C1 seams, a rounded box, took 7 times as long in blocks, with poorer triangles, and
-  // rounded edges cut by chords that a check then sends to tracking alone (python/README.md):
+  // with C1 seams, a rounded box, takes 3 times as long at factor 5, with poorer triangles: the
+  // repair of the band around many small blocks' seams runs one point a call (python/README.md):
   // the caller chooses) and for a run given
   // max_steps or max_search_visits (bounds on one tracker's work).
   std::optional<bool> blocks;

@@ -16,6 +16,7 @@
 #include "src/adaptive/stage_checks.h"
 #include "src/adaptive/stage_seed_grid.h"
 
+#include <iostream>
 #include <numbers>
 
 namespace cdp::adaptive {
@@ -54,6 +55,37 @@ TEST(AdaptiveBlocks, ATorusCutIntoBlocksMeshesSoundWithGoodTrianglesAtTheWalls) 
   EXPECT_GE(b.wall_min_angle_degrees, 20.0);
   EXPECT_LE(b.wall_under_30_share, 0.01);
   EXPECT_LE(b.wall_mean_edge_ratio, 1.25);
+}
+
+TEST(AdaptiveBlocks, ABlackBoxsRoundedEdgesAreFollowedAcrossTheWalls) {
+  // Quilez's rounded box with its C1 seams hidden (no branch data: a black box, as a compiled
+  // plug-in or a Python function is), cut into blocks: a seam crossing from a flat face onto a
+  // rounded edge, spaced by the targets alone, went from the flat face's long edges to the
+  // rounded edge's short ones at once, and the blocks' fronts started from it with slivers and
+  // chords cutting the rounded edges (its middles up to 0.0057 off at factor 20, 40 % fewer
+  // triangles than tracked alone). The seams' spacing is graded now (grade_along, blocks.cpp).
+  const auto box = test::field_from_json(
+      R"({"type": "expression", "value": "sqrt(max(abs(x)-0.6,0)^2+max(abs(y)-0.4,0)^2+max(abs(z)-0.3,0)^2)+min(max(abs(x)-0.6,max(abs(y)-0.4,abs(z)-0.3)),0)-0.15",
+          "bounds": [[-1.1, -1.1, -1.1], [1.1, 1.1, 1.1]]})");
+  const test::Rewrapped black_box(*box, /*smooth=*/false, /*thread_safe=*/true);
+  AdaptiveOptions o = with_blocks(2, 20);
+  o.creases = CreaseHandling::Ignore;
+  const PolygonizeResult r = polygonize_adaptive(black_box, o);
+  const BlocksReport& b = r.stats.adaptive->blocks;
+  ASSERT_TRUE(b.used) << "[" << b.fallback << "]";
+  const MeshTopology t = analyze_topology(r.mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.genus, 0);
+  double worst = 0;
+  for (const auto& tri : r.mesh.triangles)
+    worst = std::max(worst, std::abs(box->value((r.mesh.positions[tri[0]] + r.mesh.positions[tri[1]] +
+                                                  r.mesh.positions[tri[2]]) / 3)));
+  std::cout << r.mesh.triangles.size() << " triangles (" << b.estimated_triangles << " estimated), middles within "
+            << worst << ", walls' smallest angle " << b.wall_min_angle_degrees << "\n";
+  EXPECT_LE(worst, 0.002);
+  EXPECT_GE(static_cast<double>(r.mesh.triangles.size()), 0.85 * b.estimated_triangles);
+  EXPECT_GE(b.wall_min_angle_degrees, 20.0);
 }
 
 TEST(AdaptiveBlocks, TheMeshIsTheSameOnOneTwoThreeAndEightThreads) {
@@ -146,21 +178,27 @@ TEST(AdaptiveBlocks, ACreaseMeshedAsSmoothFallsBackToTrackingAloneAtOnce) {
   EXPECT_EQ(t.genus, 0);
 }
 
+// 107k triangles, in blocks and then tracked alone: several times slower under the sanitizers
+// (ctest label slow_under_sanitizers, tests/CMakeLists.txt).
 TEST(AdaptiveBlocks, ANeckTheBlocksFrontsSteppedOverIsFound) {
-  // blobs39 of the topology sweep (59 Wyvill blobs, 5 components, genus 4) at chord 1e-2: a
-  // block's front stepped over a neck and closed a handle, and the neck search, which started
-  // only from the seeding tracker's vertices near critical points, did not see it (genus 3,
-  // exit 0). It starts from the blocks' too now, and the run is made again without blocks.
-  const auto f = load_field(std::string(CDP_SOURCE_DIR) + "/tests/polygonizer/fields/topology_sweep_blobs39.json");
-  AdaptiveOptions o = with_blocks(1);
+  // The crowd of 200 Wyvill blobs (3 components, genus 30; sdf_models_test.cpp) at chord 5e-3: a
+  // block's front steps over a neck and closes a handle. The neck search, were it to start only
+  // from the seeding tracker's vertices near critical points (none here: every component crosses
+  // a cut), would not see it (genus 28, exit 0). It starts from the blocks' too, and the run is
+  // made again without blocks. (blobs39 of the topology sweep at chord 1e-2 showed it first;
+  // since the seams are graded, grade_along in blocks.cpp, its block's front stalls at that neck
+  // instead, which falls back as plainly.)
+  const auto f = load_field(std::string(CDP_SOURCE_DIR) + "/tests/polygonizer/fields/crowd_200_wyvill_blobs.json");
+  AdaptiveOptions o = with_blocks(2);
   o.sizing = SizingMode::Chord;
-  o.tolerance = 1e-2;
+  o.tolerance = 5e-3;
   const PolygonizeResult r = polygonize_adaptive(*f, o);
-  EXPECT_GT(r.stats.adaptive->blocks.meshed_blocks, 0u);
+  EXPECT_GT(r.stats.adaptive->blocks.meshed_blocks, 0u) << r.stats.adaptive->blocks.fallback;
+  EXPECT_GE(r.stats.adaptive->necks.reruns, 1u);
   const MeshTopology t = analyze_topology(r.mesh);
   EXPECT_TRUE(t.watertight());
-  EXPECT_EQ(t.components, 5u);
-  EXPECT_EQ(t.genus, 4);
+  EXPECT_EQ(t.components, 3u);
+  EXPECT_EQ(t.genus, 30);
 }
 
 TEST(AdaptiveBlocks, AreTheDefaultForAFieldWhoseCallsAreCheap) {
