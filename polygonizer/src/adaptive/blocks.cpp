@@ -571,11 +571,11 @@ void grade_seam_targets(const std::vector<std::vector<Seam>>& face_seams, const 
         next[static_cast<std::size_t>(b)].push_back(a);
       }
     }
-  std::vector<double> target(n);
+  std::vector<double> own(n), target(n);
   using Entry = std::pair<double, int>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
   for (std::size_t v = 0; v < n; ++v) {
-    target[v] = std::min(edge_length(sizing, placed[v].curvature.min_radius), placed[v].seam_target);
+    own[v] = target[v] = std::min(edge_length(sizing, placed[v].curvature.min_radius), placed[v].seam_target);
     queue.emplace(target[v], static_cast<int>(v));
   }
   while (!queue.empty()) {
@@ -591,8 +591,9 @@ void grade_seam_targets(const std::vector<std::vector<Seam>>& face_seams, const 
       }
     }
   }
+  // Only where lowered: elsewhere seam_target stays what it was (infinite where no C1 seam is near).
   for (std::size_t v = 0; v < n; ++v)
-    if (target[v] < placed[v].seam_target) placed[v].seam_target = target[v];
+    if (target[v] < own[v]) placed[v].seam_target = target[v];
 }
 
 // The seams of face f: from each corner on its sides to the corner where it leaves, then a loop
