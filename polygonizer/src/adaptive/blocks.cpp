@@ -186,10 +186,10 @@ struct Cuts {
 
 // The blocks along each axis: about kTrianglesPerBlock triangles each (fewer for a costly field),
 // shared out in proportion to the box's sides. All ones where the surface is too small to cut.
-std::array<int, 3> block_counts(const Field& field, const SeedGridStage& seeds) {
+std::array<int, 3> block_counts(const Field& field, bool costly, const SeedGridStage& seeds) {
   std::array<int, 3> n{1, 1, 1};
   const double per_block =
-      field.costly_calls() ? std::clamp(seeds.estimated_triangles / static_cast<double>(kLockstepTasks),
+      costly ? std::clamp(seeds.estimated_triangles / static_cast<double>(kLockstepTasks),
                                         kFewestTrianglesPerLockstepBlock, kTrianglesPerBlock)
                            : kTrianglesPerBlock;
   const double blocks = seeds.estimated_triangles / per_block;
@@ -369,10 +369,16 @@ struct Seam {
   bool closed = false;
 };
 
+// SeamTracer::target looks across a black box's seams at these shares of the length the
+// curvature asks for there: a rounded edge narrower than that length could lie between the two.
+constexpr std::array<double, 2> kCrossReach{0.5, 1};
+constexpr int kCrossRounds = 2;
+
 struct SeamTracer {
   const Field& field;
   const Sizing& sizing;
   bool grading;
+  bool looks_across;  // a field neither smooth nor describing its C1 seams (target)
   double tolerance;  // of the Newton steps onto a seam
   std::size_t& points_left;
   std::size_t points_bound;
@@ -400,18 +406,61 @@ struct SeamTracer {
     return t / n;
   }
 
-  // The edge length the surface asks for at x (its curvature and, with grading, its C1 seams').
-  double target(const Vec3& x) const {
+  // The edge length the curvature asks for at x (min_edge where it has none).
+  double curvature_target(const Vec3& x, Vec3* gradient = nullptr) const {
     Vec3 g;
     Mat3 h;
     field.gradient_hessian(x, g, h);
-    double len = sizing.max_edge;
+    if (gradient) *gradient = g;
     try {
-      len = edge_length(sizing, curvature_from_derivatives(g, h).min_radius);
+      return edge_length(sizing, curvature_from_derivatives(g, h).min_radius);
     } catch (const NoSurfaceError&) {
       return sizing.min_edge;
     }
-    if (grading) len = std::min(len, seam_edge_length(field, sizing, x, len));
+  }
+
+  // The edge length the surface asks for at x on a seam in a plane of axis a: its curvature and,
+  // with grading, its C1 seams' (seam_edge_length), and for a field that neither is smooth nor
+  // says where its C1 seams are (a black box), the curvature across the seam: at the points
+  // kCrossReach times x's own length to either side (on the surface, across the seam's tangent),
+  // plus kSeamGradation times their distance. A cut near a black box's C1 seam and along it (a
+  // rounded box's flat face 0.02 wide between the cut and a rounded edge) otherwise gave the
+  // blocks' fronts starting there the flat face's long edges, and slivers where they met the
+  // rounded edge.
+  double target(const Vec3& x, int a) const {
+    Vec3 g;
+    double len = curvature_target(x, &g);
+    if (!grading) return len;
+    len = std::min(len, seam_edge_length(field, sizing, x, len));
+    if (!looks_across) return len;
+    const Vec3 across = g.cross(axis_vector(a).cross(g));  // in the tangent plane, off the seam
+    const double n = across.norm();
+    if (!(n > 0) || !std::isfinite(n)) return len;
+    // The probes of a round in one call (a Python function's calls, not its points, are its
+    // cost), not projected: the level set through a point this near has the surface's curvature
+    // there to within its distance from the surface (a distance field's offsets: 1 / (r + d)).
+    // A round that lowers the length looks again within the new one (a rounded edge narrower than
+    // the old reach could lie between its probes).
+    for (int round = 0; round < kCrossRounds; ++round) {
+      std::array<Vec3, 2 * kCrossReach.size()> at;
+      for (std::size_t i = 0; i < at.size(); ++i)
+        at[i] = x + (i % 2 == 0 ? -1.0 : 1.0) * kCrossReach[i / 2] * len / n * across;
+      std::array<double, at.size()> values;
+      std::array<Vec3, at.size()> gradients;
+      std::array<Mat3, at.size()> hessians;
+      field.gradients_hessians(at.data(), values.data(), gradients.data(), hessians.data(), at.size());
+      const double before = len;
+      for (std::size_t i = 0; i < at.size(); ++i) {
+        double there;
+        try {
+          there = edge_length(sizing, curvature_from_derivatives(gradients[i], hessians[i]).min_radius);
+        } catch (const NoSurfaceError&) {
+          continue;  // a vanishing gradient: no level set to measure there
+        }
+        len = std::min(len, there + kSeamGradation * (at[i] - x).norm());
+      }
+      if (!(len < before)) break;
+    }
     return len;
   }
 
@@ -427,7 +476,7 @@ struct SeamTracer {
   Traced trace(const Face& f, const Vec3& start, double sign, bool loop) const {
     Traced out;
     out.points.push_back(start);
-    out.targets.push_back(target(start));
+    out.targets.push_back(target(start, f.a));
     Vec3 x = start;
     // The tangent at x: the accepted step's own, measured when it was judged.
     std::optional<Vec3> t0 = tangent(x, f.a);
@@ -485,7 +534,7 @@ struct SeamTracer {
         if ((x + s * u - start).norm() < step) return out;  // the chord passes the start
       }
       out.points.push_back(y);
-      out.targets.push_back(target(y));
+      out.targets.push_back(target(y, f.a));
       x = y;
       t0 = t1;
     }
@@ -644,7 +693,7 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
                               format_point(tr.exit) + " (the surface grazes the edge)");
     corners[i].used = corners[static_cast<std::size_t>(end)].used = true;
     tr.points.push_back(corners[static_cast<std::size_t>(end)].point);
-    tr.targets.push_back(tracer.target(tr.points.back()));
+    tr.targets.push_back(tracer.target(tr.points.back(), f.a));
     seams.push_back(
         resample(tracer, f, tr.points, tr.targets, from.vertex, corners[static_cast<std::size_t>(end)].vertex, own));
     traced.push_back(std::move(tr.points));
@@ -794,7 +843,10 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
   const auto start = Clock::now();
   BlockMeshing out;
   out.report.estimated_triangles = seeds.estimated_triangles;
-  const std::array<int, 3> n = block_counts(field, seeds);
+  // Whether the layout is a costly field's (Field::costly_calls, asked once here): its blocks' sizes,
+  // and its seams looking across themselves (SeamTracer::looks_across).
+  const bool costly = field.costly_calls();
+  const std::array<int, 3> n = block_counts(field, costly, seeds);
   if (n[0] * n[1] * n[2] < 2) return out;
   out.report.blocks = n;
   try {
@@ -822,8 +874,12 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     const auto trace_one = [&](const Field& on, std::size_t i) {
       options.cancel.check("adaptive");
       std::size_t points_left = points_bound;
-      const SeamTracer tracer{on,          settings.sizing, settings.grading, kSeamTolerance * settings.diagonal,
-                              points_left, points_bound,    options.cancel};
+      // A Python function's C1 seams are known to nothing (Field::smooth_sides); a cheap field's
+      // are described by its model or absent (a smooth model), and looking across every traced
+      // point would cost it more evaluations than its seams take now.
+      const bool looks_across = settings.grading && costly && !field.smooth();
+      const SeamTracer tracer{on,          settings.sizing, settings.grading, looks_across,
+                              kSeamTolerance * settings.diagonal, points_left, points_bound, options.cancel};
       const Face& f = faces[i];
       face_vertices[i].base = static_cast<int>(ncorners);
       face_seams[i] = trace_face(tracer, f, cuts.planes[f.a][static_cast<std::size_t>(f.cut)], lines, sv.points,
@@ -1081,7 +1137,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
 }
 
 bool worth_cutting(const Field& field, const SeedGridStage& seeds) {
-  const std::array<int, 3> n = block_counts(field, seeds);
+  const std::array<int, 3> n = block_counts(field, field.costly_calls(), seeds);
   return n[0] * n[1] * n[2] >= 2;
 }
 
