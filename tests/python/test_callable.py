@@ -27,8 +27,10 @@ def expression():
 
 
 # Marching at cell 0.1: the root searches and the normals call Python point by point (see
-# python/README.md), and finer cells only take longer.
-@pytest.mark.parametrize("method, options", [("adaptive", {"factor": 3}), ("mc", {"cell": 0.1}), ("mt", {"cell": 0.1})])
+# python/README.md), and finer cells only take longer. The adaptive method tracked alone: in
+# blocks a Python function is cut into smaller blocks than the expression (lockstep), another mesh.
+@pytest.mark.parametrize("method, options",
+                         [("adaptive", {"factor": 3, "blocks": False}), ("mc", {"cell": 0.1}), ("mt", {"cell": 0.1})])
 @pytest.mark.parametrize("gradient", [None, torus_gradient])
 def test_callable_field_meshes_like_the_expression(expression, method, options, gradient):
     field = cdp.callable_field(torus, BOX, gradient=gradient)
@@ -77,7 +79,7 @@ def test_the_tracker_calls_python_once_per_batch_not_once_per_point(expression):
         return torus(p)
 
     field = cdp.callable_field(recorded, BOX, trace=False)
-    V, F, _, stats = cdp.polygonize(field, factor=3)
+    V, F, _, stats = cdp.polygonize(field, factor=3, blocks=False)  # the tracker's own batches
     evaluations = stats["field_evaluations"]
     # Every evaluation is in exactly one call: the seed grid's values all in the first call
     # (this field has no Lipschitz bound, so there is no refinement and no other value), then 7
@@ -95,7 +97,7 @@ def test_the_tracker_calls_python_once_per_batch_not_once_per_point(expression):
     derivative_calls = len(sizes) - 1
     assert derivative_calls < 0.9 * (evaluations["value_gradient"] + evaluations["gradient_hessian"])
     # Deterministic: the same field and options give the same arrays.
-    V2, F2, _, _ = cdp.polygonize(field, factor=3)
+    V2, F2, _, _ = cdp.polygonize(field, factor=3, blocks=False)
     assert np.array_equal(V, V2) and np.array_equal(F, F2)
     # And the mesh is the expression's surface, as in the test above.
     V_ref, F_ref, _, _ = cdp.polygonize(expression, factor=3)
@@ -286,11 +288,14 @@ def test_a_shallow_black_box_crease_convex_or_concave_stops_the_run(combine):
     turn the ends' curvature does not explain is the crease's. Before, both meshed at factors 1,
     3 and 6 with the crease cut by chords and stats["creases"]["across_black_box"] false."""
     box = ((-1.3,) * 3, (1.3,) * 3)
-    for factor in (1, 3, 6):
-        field = cdp.callable_field(two_spheres(combine, 6), box, trace=False)
-        with pytest.raises(cdp.LimitExceededError, match="kink"):
-            cdp.polygonize(field, factor=factor)
-        assert field.python_calls < 1_000
+    # In blocks (the default) the layout traces the seams on the cut planes first, in lockstep:
+    # up to 1,710 calls (the union at factor 6) before a block's front meets the crease.
+    for blocks, calls in ((False, 1_000), (None, 2_000)):
+        for factor in (1, 3, 6):
+            field = cdp.callable_field(two_spheres(combine, 6), box, trace=False)
+            with pytest.raises(cdp.LimitExceededError, match="kink"):
+                cdp.polygonize(field, factor=factor, blocks=blocks)
+            assert field.python_calls < calls
 
 
 def test_a_black_box_promised_smooth_is_meshed_across_its_tight_bends():

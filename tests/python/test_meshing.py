@@ -310,10 +310,11 @@ def test_blocks_give_the_same_mesh_on_one_and_two_threads():
     # Without blocks the surface is tracked alone, into another mesh of the same surface.
     alone = cdp.polygonize(torus, factor=12, threads=1, blocks=False)
     assert not alone.stats["blocks"]["used"] and not alone.stats["blocks"]["requested"]
-    # A Python function is tracked alone unless blocks=True (python/README.md says why).
+    # A Python function too is meshed in blocks by default (in lockstep: python/README.md).
     field = cdp.callable_field(torus.values, torus.bounds, trace=False)
     called = cdp.polygonize(field, factor=3)
-    assert not called.stats["blocks"]["requested"] and not called.stats["blocks"]["used"]
+    assert called.stats["blocks"]["requested"] and called.stats["blocks"]["used"], called.stats["blocks"]["fallback"]
+    assert called.stats["blocks"]["lockstep_batches"] > 0
 
 
 def test_blocks_in_lockstep_never_cut_a_black_box_rounded_edge():

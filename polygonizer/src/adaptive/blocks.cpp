@@ -1141,11 +1141,11 @@ bool worth_cutting(const Field& field, const SeedGridStage& seeds) {
   return n[0] * n[1] * n[2] >= 2;
 }
 
-bool uses_blocks(const AdaptiveOptions& options, const Field& field) {
+bool uses_blocks(const AdaptiveOptions& options) {
   if (options.blocks) return *options.blocks;
   // A caller's max_steps or max_search_visits bound one tracker's work: tracked alone, unless
   // blocks were asked for (then the run says why it tracked alone, blocks.fallback).
-  return !field.costly_calls() && options.max_steps == 0 && options.max_search_visits == 0;
+  return options.max_steps == 0 && options.max_search_visits == 0;
 }
 
 std::vector<char> sealed_triangles(const BlockMeshing& blocks, const Mesh& mesh) {

@@ -93,10 +93,9 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
                          const SeedGridStage& seeds, const QualityOptions* repair = nullptr,
                          std::uint64_t shuffle = 0);
 
-// Whether a run meshes by blocks: AdaptiveOptions::blocks, or where unset, whether the field's
-// calls are cheap (not Field::costly_calls) and no bound on one tracker's work is given
-// (max_steps, max_search_visits).
-bool uses_blocks(const AdaptiveOptions& options, const Field& field);
+// Whether a run meshes by blocks: AdaptiveOptions::blocks, or where unset, whether no bound on
+// one tracker's work is given (max_steps, max_search_visits).
+bool uses_blocks(const AdaptiveOptions& options);
 
 // Whether the seed grid's estimate of the surface is large enough to cut into blocks (else
 // mesh_blocks returns no mesh, and tracking alone meshes it).

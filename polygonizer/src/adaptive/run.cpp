@@ -106,7 +106,7 @@ void Run::prepare() {
     creases = lay_out_creases(ctx.field, ctx.options, settings, seeds.estimated_area, &seeds.grid);
   }
   // Blocks where no crease patches were meshed: the patches' fronts run serially for now.
-  if (uses_blocks(ctx.options, ctx.field) && ctx.options.variant == Variant::Improved && !creases.mesh) {
+  if (uses_blocks(ctx.options) && ctx.options.variant == Variant::Improved && !creases.mesh) {
     // Those bounds are on one tracker's work (its steps; its searches averaged over windows of
     // Tracker's kSearchWindow steps, more than a block takes): each block's tracker would keep
     // them on its own, the whole run not.

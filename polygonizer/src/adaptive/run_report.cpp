@@ -114,7 +114,7 @@ void Run::write_stats() {
 
   BlocksReport& b = r.blocks;
   b = blocks.report;
-  b.requested = uses_blocks(ctx.options, ctx.field);
+  b.requested = uses_blocks(ctx.options);
   b.used = blocks.mesh.has_value();
   b.components = blocks.components;
   b.steps = blocks.mesh ? blocks.mesh->steps : 0;

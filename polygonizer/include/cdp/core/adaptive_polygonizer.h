@@ -81,13 +81,11 @@ struct AdaptiveOptions {
   // The mesh is the same on any number of threads; it is another mesh than the one tracking alone
   // makes. A layout or a block that fails falls back to tracking alone (stats blocks.fallback),
   // except at a kink of a black box (creases: follow), which ends the run as tracking alone would.
-  // Unset (the default): blocks for a field whose calls are cheap, tracking alone for one whose
-  // calls cost more than their points (blocks in lockstep make a sixth to a tenth of a Python
-  // function's calls and take 0.4-0.9 times its time on smooth numpy functions, but a black box
-  // with C1 seams, a rounded box, takes 3 times as long at factor 5, with poorer triangles: the
-  // repair of the band around many small blocks' seams runs one point a call (python/README.md):
-  // the caller chooses) and for a run given
-  // max_steps or max_search_visits (bounds on one tracker's work).
+  // Unset (the default): blocks, except for a run given max_steps or max_search_visits (bounds on
+  // one tracker's work). A Python function too (since December 2026): on the numpy models of
+  // python/README.md blocks in lockstep make a sixth to a twentieth of its calls and take 0.3-1.1
+  // times its time; until its seams looked across themselves (blocks.cpp) a black box with C1
+  // seams, a rounded box, took 3 to 7 times as long in blocks, and was tracked alone by default.
   std::optional<bool> blocks;
   // With `blocks`: the blocks' trackers run elsewhere (block_tasks.h; a Dask cluster from Python,
   // python/cdp/distributed.py) instead of on `threads` threads: the same mesh, bit for bit. Empty:

@@ -216,17 +216,23 @@ TEST(Lockstep, TheSeamsAndBlocksOfALockstepRunAreThoseMadeOneAfterAnother) {
   test::expect_same_mesh(together.mesh->mesh, alone.mesh->mesh);
 }
 
-TEST(Lockstep, ACostlyFieldIsTrackedAloneUnlessBlocksAreAskedFor) {
-  // Lockstep makes a tenth of the calls, but a black box with C1 seams (a rounded box) takes
-  // far longer in blocks: the caller chooses (AdaptiveOptions::blocks unset).
+TEST(Lockstep, ACostlyFieldIsMeshedInBlocksUnlessTrackingAloneIsAskedFor) {
+  // Blocks in lockstep make a sixth to a twentieth of a Python function's calls (python/README.md):
+  // the default (AdaptiveOptions::blocks unset), as for any other field. Until December 2026 a
+  // black box with C1 seams (a rounded box) took far longer in blocks, and the caller chose.
   const auto torus = test::field_from_json(kReadmeTorus);
   const RecordingCostlyField costly(*torus);
   AdaptiveOptions o;
   o.factor = 8;
   const PolygonizeResult r = polygonize_adaptive(costly, o);
-  EXPECT_FALSE(r.stats.adaptive->blocks.requested);
-  EXPECT_FALSE(r.stats.adaptive->blocks.used);
-  EXPECT_EQ(r.stats.adaptive->blocks.lockstep_batches, 0u);
+  EXPECT_TRUE(r.stats.adaptive->blocks.requested);
+  EXPECT_TRUE(r.stats.adaptive->blocks.used) << r.stats.adaptive->blocks.fallback;
+  EXPECT_GT(r.stats.adaptive->blocks.lockstep_batches, 0u);
+  o.blocks = false;
+  const PolygonizeResult alone = polygonize_adaptive(costly, o);
+  EXPECT_FALSE(alone.stats.adaptive->blocks.requested);
+  EXPECT_FALSE(alone.stats.adaptive->blocks.used);
+  EXPECT_EQ(alone.stats.adaptive->blocks.lockstep_batches, 0u);
 }
 
 TEST(Lockstep, ACostlyFieldsBlocksMeshInLockstepSoundAndTheSameInAnyOrder) {
