@@ -46,7 +46,7 @@ const std::vector<OptionSpec>& table() {
        "cut the box into blocks of about 2500 triangles, trace the seams where the surface crosses the cuts, and "
        "mesh the blocks from them on all threads (a surface without followed creases; the same mesh on any number "
        "of threads; stats blocks); default: true (a Python function's blocks are smaller and meshed in lockstep, "
-       "every call of it gathering their evaluations: a sixth to a twentieth of its calls tracked alone); false "
+       "every call of it gathering their evaluations: about a third of its calls tracked alone); false "
        "tracks the surface alone"},
       {"check_self_intersections", OptionKind::Boolean, OptionMethods::Adaptive, "BOOL", "true", "", {}, {}, 0, 0,
        "refuse a mesh whose triangles intersect (the last of the final checks; false skips it, for speed on a "

@@ -378,7 +378,7 @@ struct SeamTracer {
   const Field& field;
   const Sizing& sizing;
   bool grading;
-  bool looks_across;  // a field neither smooth nor describing its C1 seams (target)
+  bool looks_across;  // a costly field, whose C1 seams nothing describes (target)
   double tolerance;  // of the Newton steps onto a seam
   std::size_t& points_left;
   std::size_t points_bound;
@@ -420,8 +420,8 @@ struct SeamTracer {
   }
 
   // The edge length the surface asks for at x on a seam in a plane of axis a: its curvature and,
-  // with grading, its C1 seams' (seam_edge_length), and for a field that neither is smooth nor
-  // says where its C1 seams are (a black box), the curvature across the seam: at the points
+  // with grading, its C1 seams' (seam_edge_length), and for a costly field, whose C1 seams nothing
+  // describes (a Python function: looks_across), the curvature across the seam: at the points
   // kCrossReach times x's own length to either side (on the surface, across the seam's tangent),
   // plus kSeamGradation times their distance. A cut near a black box's C1 seam and along it (a
   // rounded box's flat face 0.02 wide between the cut and a rounded edge) otherwise gave the
@@ -874,10 +874,11 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     const auto trace_one = [&](const Field& on, std::size_t i) {
       options.cancel.check("adaptive");
       std::size_t points_left = points_bound;
-      // A Python function's C1 seams are known to nothing (Field::smooth_sides); a cheap field's
-      // are described by its model or absent (a smooth model), and looking across every traced
-      // point would cost it more evaluations than its seams take now.
-      const bool looks_across = settings.grading && costly && !field.smooth();
+      // A Python function's C1 seams are known to nothing (Field::smooth_sides), promised smooth
+      // or not (smooth: no crease; a rounded box is C1); a cheap field's are described by its
+      // model or absent, and looking across every traced point would cost it more evaluations
+      // than its seams take now.
+      const bool looks_across = settings.grading && costly;
       const SeamTracer tracer{on,          settings.sizing, settings.grading, looks_across,
                               kSeamTolerance * settings.diagonal, points_left, points_bound, options.cancel};
       const Face& f = faces[i];

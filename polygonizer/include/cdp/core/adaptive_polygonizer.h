@@ -82,9 +82,9 @@ struct AdaptiveOptions {
   // makes. A layout or a block that fails falls back to tracking alone (stats blocks.fallback),
   // except at a kink of a black box (creases: follow), which ends the run as tracking alone would.
   // Unset (the default): blocks, except for a run given max_steps or max_search_visits (bounds on
-  // one tracker's work). A Python function too (since December 2026): on the numpy models of
-  // python/README.md blocks in lockstep make a sixth to a twentieth of its calls and take 0.3-1.1
-  // times its time; until its seams looked across themselves (blocks.cpp) a black box with C1
+  // one tracker's work). A Python function too (since December 2026): on nine numpy models
+  // (python/README.md) blocks in lockstep make 0.32 of its calls and take 0.53 of its time
+  // (geometric means; 0.03-1.09 and 0.04-1.19); until its seams looked across themselves (blocks.cpp) a black box with C1
   // seams, a rounded box, took 3 to 7 times as long in blocks, and was tracked alone by default.
   std::optional<bool> blocks;
   // With `blocks`: the blocks' trackers run elsewhere (block_tasks.h; a Dask cluster from Python,

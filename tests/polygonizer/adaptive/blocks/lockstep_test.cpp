@@ -278,7 +278,7 @@ TEST(Lockstep, ABlackBoxsRoundedEdgesAreSeenFromTheSeamsBesideThem) {
   // is) at factor 5: 3 x 3 x 3 blocks, their cuts at +-0.378, one of them 0.022 from where a flat
   // face meets a rounded edge and along it. A seam on that strip took the flat face's long edges
   // from the curvature under it, the blocks' fronts from it met the rounded edge with slivers, and
-  // the band's repair, one point a call, took 12 calls a vertex (a smallest angle of 20.7 degrees;
+  // the band's repair, one point a call, took 12 calls a vertex (a smallest angle of 20.4 degrees;
   // tracked alone 3.5 calls a vertex, 30 degrees). The seam tracer now looks across the seam
   // (SeamTracer::target, blocks.cpp).
   const auto box = test::field_from_json(
