@@ -190,8 +190,8 @@ std::array<int, 3> block_counts(const Field& field, bool costly, const SeedGridS
   std::array<int, 3> n{1, 1, 1};
   const double per_block =
       costly ? std::clamp(seeds.estimated_triangles / static_cast<double>(kLockstepTasks),
-                                        kFewestTrianglesPerLockstepBlock, kTrianglesPerBlock)
-                           : kTrianglesPerBlock;
+                          kFewestTrianglesPerLockstepBlock, kTrianglesPerBlock)
+             : kTrianglesPerBlock;
   const double blocks = seeds.estimated_triangles / per_block;
   if (blocks < kFewestBlocks) return n;
   const Vec3 size = field.bounds().size();
@@ -406,17 +406,23 @@ struct SeamTracer {
     return t / n;
   }
 
+  // The edge length the curvature asks for where the field has gradient g and Hessian h; none
+  // where the gradient vanishes.
+  std::optional<double> curvature_length(const Vec3& g, const Mat3& h) const {
+    try {
+      return edge_length(sizing, curvature_from_derivatives(g, h).min_radius);
+    } catch (const NoSurfaceError&) {
+      return std::nullopt;
+    }
+  }
+
   // The edge length the curvature asks for at x (min_edge where it has none).
   double curvature_target(const Vec3& x, Vec3* gradient = nullptr) const {
     Vec3 g;
     Mat3 h;
     field.gradient_hessian(x, g, h);
     if (gradient) *gradient = g;
-    try {
-      return edge_length(sizing, curvature_from_derivatives(g, h).min_radius);
-    } catch (const NoSurfaceError&) {
-      return sizing.min_edge;
-    }
+    return curvature_length(g, h).value_or(sizing.min_edge);
   }
 
   // The edge length the surface asks for at x on a seam in a plane of axis a: its curvature and,
@@ -450,15 +456,9 @@ struct SeamTracer {
       std::array<Mat3, at.size()> hessians;
       field.gradients_hessians(at.data(), values.data(), gradients.data(), hessians.data(), at.size());
       const double before = len;
-      for (std::size_t i = 0; i < at.size(); ++i) {
-        double there;
-        try {
-          there = edge_length(sizing, curvature_from_derivatives(gradients[i], hessians[i]).min_radius);
-        } catch (const NoSurfaceError&) {
-          continue;  // a vanishing gradient: no level set to measure there
-        }
-        len = std::min(len, there + kSeamGradation * (at[i] - x).norm());
-      }
+      for (std::size_t i = 0; i < at.size(); ++i)
+        if (const std::optional<double> there = curvature_length(gradients[i], hessians[i]))
+          len = std::min(len, *there + kSeamGradation * (at[i] - x).norm());
       if (!(len < before)) break;
     }
     return len;
@@ -871,14 +871,14 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
     const std::size_t ncorners = sv.points.size();
     std::vector<std::vector<Seam>> face_seams(faces.size());
     std::vector<SeamVertices> face_vertices(faces.size());
+    // A Python function's C1 seams are known to nothing (Field::smooth_sides), promised smooth or
+    // not (smooth: no crease; a rounded box is C1); a cheap field's are described by its model or
+    // absent, and looking across every traced point would cost it more evaluations than its seams
+    // take now.
+    const bool looks_across = settings.grading && costly;
     const auto trace_one = [&](const Field& on, std::size_t i) {
       options.cancel.check("adaptive");
       std::size_t points_left = points_bound;
-      // A Python function's C1 seams are known to nothing (Field::smooth_sides), promised smooth
-      // or not (smooth: no crease; a rounded box is C1); a cheap field's are described by its
-      // model or absent, and looking across every traced point would cost it more evaluations
-      // than its seams take now.
-      const bool looks_across = settings.grading && costly;
       const SeamTracer tracer{on,          settings.sizing, settings.grading, looks_across,
                               kSeamTolerance * settings.diagonal, points_left, points_bound, options.cancel};
       const Face& f = faces[i];
