@@ -303,6 +303,47 @@ void RepairContext::probe_creases(const std::vector<int>& vs) {
   }
 }
 
+void RepairContext::prefetch_flip_samples(const std::vector<int>& triangles) {
+  flip_mids_ = {};
+  if (!field_.costly_calls()) return;
+  std::vector<int> corners;
+  std::vector<std::uint64_t>& keys = flip_mids_.keys;
+  for (const int t : triangles) {
+    if (!alive_[t]) continue;
+    const Tri& T = mesh_.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const int a = T[k], b = T[(k + 1) % 3], c = T[(k + 2) % 3];
+      const int u = across(t, a, b);
+      if (u < 0) continue;
+      int d = -1;
+      for (int w : mesh_.triangles[u])
+        if (w != a && w != b) d = w;
+      if (d < 0 || d == c || (fixed(c) && fixed(d))) continue;
+      // try_flip's first test (for_ratio), which nearly every edge fails on an even mesh.
+      const auto dev = [&](int x, int add) {
+        const int q = static_cast<int>(vt_[x].size()) + add - 6;
+        return q * q;
+      };
+      if (dev(a, -1) + dev(b, -1) + dev(c, 1) + dev(d, 1) > dev(a, 0) + dev(b, 0) + dev(c, 0) + dev(d, 0)) continue;
+      corners.insert(corners.end(), {a, b, c, d});
+      keys.insert(keys.end(), {edge_key(a, b), edge_key(a, d), edge_key(d, b), edge_key(b, c), edge_key(c, a),
+                               edge_key(c, d)});
+    }
+  }
+  probe_creases(corners);
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<Vec3> at(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const int x = static_cast<int>(keys[i] >> 32), y = static_cast<int>(keys[i] & 0xffffffffu);
+    at[i] = 0.5 * (P(x) + P(y));
+  }
+  std::vector<double> d;
+  signed_distances(at, d);
+  flip_mids_.d.resize(d.size());
+  for (std::size_t i = 0; i < d.size(); ++i) flip_mids_.d[i] = {d[i], -1};
+}
+
 void RepairContext::probe_chunk(const std::vector<int>& todo) {
   std::vector<Vec3> at(todo.size()), g0(todo.size());
   std::vector<double> values(todo.size());

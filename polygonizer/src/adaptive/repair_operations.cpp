@@ -50,7 +50,14 @@ bool RepairContext::try_flip(int t, int k, bool for_ratio) {
   const bool creased = on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d);
   if (creased && !(face_normal(T).dot(face_normal(U)) > kCreaseFlatCos)) return false;
   // The new diagonal may lie no farther from the surface than the worst edge of the quad.
-  const auto mid = [&](int x, int y) { return std::abs(signed_distance(0.5 * (P(x) + P(y)))); };
+  // Those prefetch_flip_samples measured for this pass of flips are taken as they are.
+  const auto mid = [&](int x, int y) {
+    const std::uint64_t key = edge_key(x, y);
+    const auto it = std::lower_bound(flip_mids_.keys.begin(), flip_mids_.keys.end(), key);
+    if (it != flip_mids_.keys.end() && *it == key)
+      return std::abs(flip_mids_.d[static_cast<std::size_t>(it - flip_mids_.keys.begin())].d);
+    return std::abs(signed_distance(0.5 * (P(x) + P(y))));
+  };
   const double allowed = std::max({mid(a, b), mid(a, d), mid(d, b), mid(b, c), mid(c, a)});
   if (!(mid(c, d) <= allowed)) return false;
   if (!keeps_tolerance({n1, n2}, {t, u})) return false;

@@ -181,6 +181,14 @@ struct RelaxMoves {
 // First the flips (try_flip's for_ratio): each stretched triangle's edges, longest first.
 void flip_stretched(RepairContext& ctx) {
   ctx.flipped_.assign(ctx.mesh_.positions.size(), 0);
+  if (ctx.field_.costly_calls()) {
+    std::vector<int> stretched;
+    for (int t = 0; t < ctx.tri_count(); ++t) {
+      ctx.poll(static_cast<std::size_t>(t));
+      if (ctx.alive_[t] && ctx.tri_ratio(ctx.mesh_.triangles[t]) > kRelaxRatio) stretched.push_back(t);
+    }
+    ctx.prefetch_flip_samples(stretched);
+  }
   for (int t = 0; t < ctx.tri_count(); ++t) {
     ctx.poll(static_cast<std::size_t>(t));
     if (!ctx.alive_[t] || !(ctx.tri_ratio(ctx.mesh_.triangles[t]) > kRelaxRatio)) continue;
@@ -194,6 +202,7 @@ void flip_stretched(RepairContext& ctx) {
     for (int i = 0; i < 3; ++i)
       if (ctx.try_flip(t, (k + i) % 3, true)) break;
   }
+  ctx.forget_flip_samples();
 }
 
 // The corners of stretched triangles; after the first sweep (`moved` given) only those moved in

@@ -4,6 +4,9 @@
 
 #include "polygonizer/adaptive/repair/repair_fixtures.h"
 
+#include <algorithm>
+#include <map>
+
 namespace cdp::adaptive::repair {
 namespace {
 
@@ -65,6 +68,86 @@ TEST(RepairRelax, SearchSweepsGoOnTowardsTheAimAndTwoThreadsMakeTheSameMesh) {
   EXPECT_EQ(one.mesh.triangles, two.mesh.triangles);
   EXPECT_EQ(one.report.relaxed, two.report.relaxed);
   expect_a_sphere(one.mesh);
+}
+
+// The unit sphere, not smooth (the repair probes for creases), its calls costly or not as told
+// (Field::costly_calls, as a Python function's), each call of it counted.
+class CountedCalls final : public Field {
+ public:
+  CountedCalls(const Field& f, bool costly) : f_(f), costly_(costly) { set_bounds(f.bounds()); }
+  std::string type_name() const override { return "counted"; }
+  bool costly_calls() const override { return costly_; }
+  mutable std::size_t calls = 0;
+
+ protected:
+  double eval_value(const Vec3& p) const override { return ++calls, f_.value(p); }
+  double eval_value_gradient(const Vec3& p, Vec3& g) const override { return ++calls, f_.value_gradient(p, g); }
+  double eval_gradient_hessian(const Vec3& p, Vec3& g, Mat3& h) const override {
+    return ++calls, f_.gradient_hessian(p, g, h);
+  }
+  void eval_values(const Vec3* p, double* out, std::size_t n) const override { ++calls, f_.values(p, out, n); }
+  void eval_values_gradients(const Vec3* p, double* v, Vec3* g, std::size_t n) const override {
+    ++calls, f_.values_gradients(p, v, g, n);
+  }
+  void eval_gradients_hessians(const Vec3* p, double* v, Vec3* g, Mat3* h, std::size_t n) const override {
+    ++calls, f_.gradients_hessians(p, v, g, h, n);
+  }
+
+ private:
+  const Field& f_;
+  bool costly_;
+};
+
+// jittered_sphere with one edge in every few triangles flipped (valences 5 and 7 around it),
+// which the relaxation's flips put back.
+Mesh flipped_sphere() {
+  Mesh mesh = jittered_sphere();
+  std::map<std::pair<int, int>, std::vector<int>> edges;
+  for (int t = 0; t < static_cast<int>(mesh.triangles.size()); ++t)
+    for (int k = 0; k < 3; ++k) edges[std::minmax(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3])].push_back(t);
+  std::vector<char> touched(mesh.triangles.size(), 0);
+  for (int t = 0; t < static_cast<int>(mesh.triangles.size()); t += 7) {
+    const auto T = mesh.triangles[t];
+    const int a = T[0], b = T[1], c = T[2];
+    const std::vector<int>& pair = edges[std::minmax(a, b)];
+    const int u = pair[0] == t ? pair[1] : pair[0];
+    int d = -1;
+    for (int w : mesh.triangles[u])
+      if (w != a && w != b) d = w;
+    if (touched[t] || touched[u] || edges.count(std::minmax(c, d))) continue;
+    touched[t] = touched[u] = 1;
+    mesh.triangles[t] = {c, a, d};
+    mesh.triangles[u] = {d, b, c};
+    edges.erase(std::minmax(a, b));
+    edges[std::minmax(c, d)] = {t, u};
+    std::replace(edges[std::minmax(a, d)].begin(), edges[std::minmax(a, d)].end(), u, t);
+    std::replace(edges[std::minmax(b, c)].begin(), edges[std::minmax(b, c)].end(), t, u);
+  }
+  return mesh;
+}
+
+TEST(RepairRelax, ACostlyFieldsFlipsAskForTheirSamplesInBatchesAndMakeTheSameMesh) {
+  // prefetch_flip_samples: the flips' crease probes and midpoint distances asked for together
+  // before the pass of flips, the same numbers as one at a time.
+  const auto sphere = unit_sphere();
+  std::array<Mesh, 2> meshes;
+  std::array<std::size_t, 2> calls{};
+  std::array<std::size_t, 2> flips{};
+  for (int costly = 0; costly < 2; ++costly) {
+    const CountedCalls field(*sphere, costly == 1);
+    meshes[costly] = flipped_sphere();
+    RepairContext ctx(field, meshes[costly], sphere_options());
+    relax(ctx);
+    ctx.compact();
+    calls[costly] = field.calls;
+    flips[costly] = ctx.report_.relax_flips;
+  }
+  EXPECT_GT(flips[0], 10u);
+  EXPECT_EQ(flips[1], flips[0]);
+  EXPECT_EQ(meshes[1].positions, meshes[0].positions);
+  EXPECT_EQ(meshes[1].triangles, meshes[0].triangles);
+  // 2,539 calls one at a time, 5 batched, when written.
+  EXPECT_LT(10 * calls[1], calls[0]) << calls[0] << " calls one at a time, " << calls[1] << " batched";
 }
 
 TEST(RepairCreases, ProbedTogetherTheVerticesGetTheAnswersAndCountsOfOneAtATime) {
