@@ -305,6 +305,32 @@ std::vector<ProjectionResult> project_moves(const RepairContext& ctx, const Rela
   return landed;
 }
 
+// The points whose distances judging moves [begin, end) measures (each star triangle's edge
+// midpoints and centroid, its centre where it is and at its target: may_replace,
+// worst_star_distance), at the positions of now: prefetch_distances. A move judged after a neighbour's asks for its own where they differ.
+void prefetch_stars(RepairContext& ctx, const RelaxMoves& moves, const std::vector<ProjectionResult>& landed,
+                    std::size_t begin, std::size_t end) {
+  ctx.forget_distances();
+  std::vector<Vec3> points;
+  for (std::size_t i = begin; i < end; ++i) {
+    if (!landed[i].ok()) continue;
+    const int v = moves.vertices[i];
+    for (const int u : ctx.vt_[v]) {
+      const Tri& t = ctx.mesh_.triangles[u];
+      // Before the move (may_replace) and after it, as midpoint_sample and estimate_from write
+      // them, for the same bits.
+      std::array<Vec3, 3> p{ctx.P(t[0]), ctx.P(t[1]), ctx.P(t[2])};
+      for (int at = 0; at < 2; ++at) {
+        for (int k = 0; k < 3; ++k) points.push_back(0.5 * (p[k] + p[(k + 1) % 3]));
+        points.push_back((p[0] + p[1] + p[2]) / 3);
+        for (int k = 0; k < 3; ++k)
+          if (t[k] == v) p[k] = landed[i].point;
+      }
+    }
+  }
+  ctx.prefetch_distances(points);
+}
+
 bool apply_moves(RepairContext& ctx, const RelaxMoves& moves, const std::vector<ProjectionResult>& landed, bool search,
                  double keep_cos, std::vector<char>& moved) {
   const std::vector<int>& moving = moves.vertices;
@@ -371,9 +397,11 @@ bool apply_moves(RepairContext& ctx, const RelaxMoves& moves, const std::vector<
     TurnScratch scratch(ctx.mesh_.positions.size(), ctx.workers_);
     std::vector<Turn> turns;
     std::size_t chunk = kRepairBlock;
+    const bool costly_tolerance = ctx.options_.tolerance > 0 && ctx.field_.costly_calls();
     for (std::size_t i = 0; i < moving.size();) {
       ctx.poll();
       turns.clear();
+      if (costly_tolerance) prefetch_stars(ctx, moves, landed, i, std::min(moving.size(), i + chunk));
       // Polled within the chunk too: 4096 judgings, each measuring two stars (and, with a
       // tolerance, evaluating the field), ran 0.1-0.14 s at 2*10^6 triangles on a loaded machine.
       for (const std::size_t stop = std::min(moving.size(), i + chunk); i < stop; ++i) {
@@ -396,6 +424,7 @@ bool apply_moves(RepairContext& ctx, const RelaxMoves& moves, const std::vector<
       // refusal every few moves: 790 chunks of 4096 made the run three times as long).
       chunk = refused < turns.size() ? std::max<std::size_t>(1, chunk / 4) : std::min(kRelaxChunk, 2 * chunk);
     }
+    ctx.forget_distances();
   }
   return changed;
 }

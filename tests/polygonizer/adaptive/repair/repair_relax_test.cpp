@@ -150,6 +150,49 @@ TEST(RepairRelax, ACostlyFieldsFlipsAskForTheirSamplesInBatchesAndMakeTheSameMes
   EXPECT_LT(10 * calls[1], calls[0]) << calls[0] << " calls one at a time, " << calls[1] << " batched";
 }
 
+TEST(RepairRelax, ACostlyFieldsMovesWithATolerancePrefetchTheirStarsAndMakeTheSameMesh) {
+  // prefetch_stars: with a tolerance, judging a move measures its star before and after it; a
+  // costly field's are asked for a chunk of moves at a time, the same numbers as one at a time.
+  const auto sphere = unit_sphere();
+  std::array<Mesh, 2> meshes;
+  std::array<std::size_t, 2> calls{}, relaxed{};
+  for (int costly = 0; costly < 2; ++costly) {
+    const CountedCalls field(*sphere, costly == 1);
+    meshes[costly] = jittered_sphere();
+    QualityOptions o = sphere_options();
+    o.tolerance = 0.05;
+    RepairContext ctx(field, meshes[costly], o);
+    relax(ctx);
+    ctx.compact();
+    calls[costly] = field.calls;
+    relaxed[costly] = ctx.report_.relaxed;
+  }
+  EXPECT_GT(relaxed[0], 50u);
+  EXPECT_EQ(relaxed[1], relaxed[0]);
+  EXPECT_EQ(meshes[1].positions, meshes[0].positions);
+  EXPECT_EQ(meshes[1].triangles, meshes[0].triangles);
+  EXPECT_LT(4 * calls[1], calls[0]) << calls[0] << " calls one at a time, " << calls[1] << " prefetched";
+}
+
+TEST(RepairContext, ACostlyFieldsDenseSamplesOfATriangleAreProjectedTogether) {
+  // sampled_distance: the 28 points of a triangle projected in batched Newton rounds, the same
+  // distance as one point at a time.
+  const auto sphere = unit_sphere();
+  Mesh mesh = icosphere(1);
+  std::array<double, 2> d{};
+  std::array<std::size_t, 2> calls{};
+  for (int costly = 0; costly < 2; ++costly) {
+    const CountedCalls field(*sphere, costly == 1);
+    RepairContext ctx(field, mesh, sphere_options());
+    field.calls = 0;
+    d[costly] = ctx.sampled_distance(mesh.triangles[0], -1);
+    calls[costly] = field.calls;
+  }
+  EXPECT_GT(d[0], 0.01);
+  EXPECT_EQ(d[1], d[0]);
+  EXPECT_LT(4 * calls[1], calls[0]) << calls[0] << " calls one at a time, " << calls[1] << " batched";
+}
+
 TEST(RepairCreases, ProbedTogetherTheVerticesGetTheAnswersAndCountsOfOneAtATime) {
   // A sphere capped by the plane x = 0.5: the icosphere's vertices near the cap's rim straddle
   // the crease, the others see one smooth piece; probe_creases asks for them all in two calls.
