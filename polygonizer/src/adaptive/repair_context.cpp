@@ -229,6 +229,7 @@ double RepairContext::sampled_distance(const Tri& t, double fallback, Projection
   // batched calls give the same numbers as single ones): the random blobs as a numpy function at
   // tolerance 1e-3 spent a third of their run here, one point a call.
   std::vector<Vec3> grid;
+  grid.reserve((kDenseGrid + 1) * (kDenseGrid + 2) / 2);
   for (int i = 0; i <= kDenseGrid; ++i)
     for (int j = 0; i + j <= kDenseGrid; ++j) {
       const double a = double(i) / kDenseGrid, b = double(j) / kDenseGrid;
@@ -318,13 +319,18 @@ void RepairContext::probe_creases(const std::vector<int>& vs) {
 }
 
 void RepairContext::prefetch_distances(const std::vector<Vec3>& points) {
+  // Each point once: the first of equal bits (a star's edges are shared by two of its triangles).
   std::vector<Vec3> todo;
   todo.reserve(points.size());
-  for (const Vec3& p : points)
-    if (known_distances_.emplace(point_bits(p), 0.0).second) todo.push_back(p);
+  {
+    std::unordered_map<PointBits, char, PointBitsHash> seen;
+    for (const Vec3& p : points)
+      if (!known_distances_.contains(point_bits(p)) && seen.emplace(point_bits(p), 0).second) todo.push_back(p);
+  }
+  // Stored only once measured: a call that throws leaves nothing behind.
   std::vector<double> d;
   signed_distances(todo, d);
-  for (std::size_t i = 0; i < todo.size(); ++i) known_distances_[point_bits(todo[i])] = d[i];
+  for (std::size_t i = 0; i < todo.size(); ++i) known_distances_.emplace(point_bits(todo[i]), d[i]);
 }
 
 void RepairContext::prefetch_flip_samples(const std::vector<int>& triangles) {

@@ -278,8 +278,8 @@ class RepairContext {
   // For a field whose calls cost more than their points (Field::costly_calls): signed_distance at
   // `points` asked for in batched calls beforehand and kept until forget_distances, so that the
   // judging of moves one after another, each measuring its star at its target, asks for none
-  // where the prediction of its points held (the same numbers: a distance is a function of its
-  // point's bits). The random blobs as a numpy function at tolerance 1e-3 made 188,478 calls of
+  // where the prediction of its points held (the same numbers where the field's batched calls give
+  // what its single ones do, as BatchProjector asks too). The random blobs as a numpy function at tolerance 1e-3 made 188,478 calls of
   // one point each in the repair, 11 of its 13 seconds.
   void prefetch_distances(const std::vector<Vec3>& points);
   void forget_distances() { known_distances_.clear(); }
@@ -574,13 +574,15 @@ class RepairContext {
   // and lower the pair's summed edge ratio by kRelaxMinGain (see below), and keep the pair's
   // smallest angle or at least kRelaxKeepDegrees.
   bool try_flip(int t, int k, bool for_ratio = false);
-  // For a field whose calls cost more than their points (Field::costly_calls): everything the
-  // relaxation's flips of `triangles`' edges (across each to its neighbour) that pass its
-  // valence test now may ask of the field, asked in batched calls: their corners' crease probes (probe_creases) and the distances of the six
-  // midpoints of each quad, kept in flip_mids_ until forget_flip_samples. A flip moves no vertex,
-  // so those distances stay exact through a pass of flips, and try_flip gets the numbers it
-  // would have measured one point a call (the band's relaxation after blocks in lockstep made
-  // 1,068 calls of one point each on the torus callable at factor 8).
+  // For a field whose calls cost more than their points (Field::costly_calls): what the
+  // relaxation's flips of `triangles`' edges (across each to its neighbour) that pass its valence
+  // test now ask of the field in every case, asked in batched calls: their corners' crease probes
+  // (probe_creases; so crease_vertices counts corners no flip reached, where they are on one) and
+  // the distances of the six midpoints of each quad, kept in flip_mids_ until
+  // forget_flip_samples. A flip moves no vertex, so those distances stay exact through a pass of
+  // flips, and try_flip gets the numbers it would have measured one point a call (the band's
+  // relaxation after blocks in lockstep made 1,068 calls of one point each on the torus callable
+  // at factor 8). With a tolerance, keeps_tolerance's centroids are still measured one at a time.
   void prefetch_flip_samples(const std::vector<int>& triangles);
   void forget_flip_samples() { flip_mids_ = {}; }
 

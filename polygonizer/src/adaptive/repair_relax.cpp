@@ -307,14 +307,20 @@ std::vector<ProjectionResult> project_moves(const RepairContext& ctx, const Rela
 
 // The points whose distances judging moves [begin, end) measures (each star triangle's edge
 // midpoints and centroid, its centre where it is and at its target: may_replace,
-// worst_star_distance), at the positions of now: prefetch_distances. A move judged after a neighbour's asks for its own where they differ.
+// worst_star_distance), at the positions of now: prefetch_distances. A move judged after a
+// neighbour's asks for its own where they differ. Those known from the chunks before are kept
+// (a chunk judged again after a refusal asks for none) up to kKnownDistances.
+constexpr std::size_t kKnownDistances = std::size_t{1} << 18;
 void prefetch_stars(RepairContext& ctx, const RelaxMoves& moves, const std::vector<ProjectionResult>& landed,
                     std::size_t begin, std::size_t end) {
-  ctx.forget_distances();
+  if (ctx.known_distances_.size() > kKnownDistances) ctx.forget_distances();
   std::vector<Vec3> points;
   for (std::size_t i = begin; i < end; ++i) {
-    if (!landed[i].ok()) continue;
     const int v = moves.vertices[i];
+    // judge's first tests, which need no field.
+    if (!landed[i].ok() || !(landed[i].gradient.squaredNorm() > 0) ||
+        !(landed[i].gradient.normalized().dot(ctx.mesh_.normals[v]) > kMoveNormalCos))
+      continue;
     for (const int u : ctx.vt_[v]) {
       const Tri& t = ctx.mesh_.triangles[u];
       // Before the move (may_replace) and after it, as midpoint_sample and estimate_from write

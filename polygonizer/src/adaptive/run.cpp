@@ -189,8 +189,7 @@ std::size_t Run::repair_and_check() {
   ctx.enter("checks", "checking the mesh");
   // After blocks in lockstep, the band's repair can cut a black box's rounded edges
   // (check_bends_kept): the run then tracks the surface alone (attempt's fall_back).
-  if (blocks.mesh && blocks.report.lockstep_batches > 0)
-    check_bends_kept(ctx.field, mesh(), settings.sizing, band.band_from);
+  if (blocks.mesh && blocks.report.lockstep_batches > 0) check_bends_kept(ctx.field, mesh(), settings.sizing);
   return check_mesh(mesh(), expected_components(), ctx.options.check_self_intersections, ctx.options.threads,
                     ctx.options.cancel, &band.sealed);
 }

@@ -174,14 +174,11 @@ double mean_edge_ratio(const Mesh& mesh) {
   return mesh.triangles.empty() ? 0 : sum / static_cast<double>(mesh.triangles.size());
 }
 
-void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing, std::size_t first) {
-  first = std::min(first, mesh.triangles.size());
+void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing) {
   std::vector<Vec3> middles;
-  middles.reserve(mesh.triangles.size() - first);
-  for (std::size_t i = first; i < mesh.triangles.size(); ++i) {
-    const auto& t = mesh.triangles[i];
+  middles.reserve(mesh.triangles.size());
+  for (const auto& t : mesh.triangles)
     middles.push_back((mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3);
-  }
   std::vector<double> values(middles.size());
   std::vector<Vec3> gradients(middles.size());
   field.values_gradients(middles.data(), values.data(), gradients.data(), middles.size());
@@ -196,7 +193,7 @@ void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing
     if (!(g > 0) || !std::isfinite(values[i])) continue;
     const double off = std::abs(values[i]) / g;
     if (!(off > 0)) continue;
-    const auto& t = mesh.triangles[first + i];
+    const auto& t = mesh.triangles[i];
     double edge = 0;
     for (int k = 0; k < 3; ++k) edge = std::max(edge, (mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]).norm());
     const double asked = edge_length(sizing, edge * edge / (6 * off));

@@ -75,14 +75,12 @@ void check_components_apart(const Field& field, const Mesh& mesh, std::size_t co
 // the seams between blocks were graded: grade_along, blocks.cpp).
 inline constexpr double kBendChordRatio = 3;
 
-// The mesh's triangles from `first` on against the bends under them (kBendChordRatio), their
-// middles' distances measured in one batched call of the field. Run after blocks meshed in
-// lockstep (a function whose calls cost more than their points), where the repair of the band
-// around their seams cut a rounded box's fillets with nothing else to say so: the run then tracks
-// the surface alone. The band's triangles are enough (BandChanges::band_from): the blocks' own
-// are their trackers' and repairs', as a mesh tracked alone is.
+// The mesh's triangles against the bends under them (kBendChordRatio), their middles' distances
+// measured in one batched call of the field. Run after blocks meshed in lockstep (a function
+// whose calls cost more than their points), where the repair of the band around their seams cut
+// a rounded box's fillets with nothing else to say so: the run then tracks the surface alone.
 // \throw NoSurfaceError naming the worst triangle's place.
-void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing, std::size_t first = 0);
+void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing);
 
 // The smallest angle of the mesh's triangles, in degrees (180 for no triangle).
 double min_angle_degrees(const Mesh& mesh);

@@ -214,7 +214,6 @@ QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std
       if (sealed) band.sealed.push_back((*sealed)[i]);
     }
   mesh.triangles.resize(outside);
-  band.band_from = outside;
   mesh.triangles.reserve(outside + part.triangles.size());
   for (const auto& t : part.triangles) mesh.triangles.push_back({out_of(t[0]), out_of(t[1]), out_of(t[2])});
   if (sealed) band.sealed.resize(mesh.triangles.size(), 0);

@@ -32,9 +32,6 @@ struct BandChanges {
   // Per triangle after it: sealed (sealed_triangles, blocks.h) and outside the band, so that the
   // final check tests no pair of two such (check_mesh's `sealed`). Empty: test every pair.
   std::vector<char> sealed;
-  // The band's triangles are the mesh's from this one on; those before it are the blocks' own,
-  // as their repairs left them. 0 where the whole mesh was repaired.
-  std::size_t band_from = 0;
 };
 
 // Repairs `mesh` (tracked, the crease patches' components included in `creases`), where the

@@ -84,11 +84,6 @@ TEST(AdaptiveStages, TheBendCheckRefusesTrianglesCuttingAcrossABendFinerThanThei
     EXPECT_NE(std::string(e.what()).find("cuts across a bend"), std::string::npos) << e.what();
   }
   EXPECT_NO_THROW(check_bends_kept(sphere, sphere_octahedron(3), sizing));
-  // From `first` on only (a band's triangles after the blocks' own): the octahedron's last face
-  // is checked, none of them past the last.
-  const Mesh coarse = sphere_octahedron(0);
-  EXPECT_THROW(check_bends_kept(sphere, coarse, sizing, coarse.triangles.size() - 1), NoSurfaceError);
-  EXPECT_NO_THROW(check_bends_kept(sphere, coarse, sizing, coarse.triangles.size()));
   sizing.factor = 1;
   EXPECT_NO_THROW(check_bends_kept(sphere, sphere_octahedron(0), sizing));
 }
