@@ -78,6 +78,7 @@ nlohmann::json blocks_json(const BlocksReport& b) {
           {"blocks", b.blocks},
           {"cuts", b.cuts},
           {"meshed_blocks", b.meshed_blocks},
+          {"layouts", b.layouts},
           {"estimated_triangles", b.estimated_triangles},
           {"corners", b.corners},
           {"seams", b.seams},

@@ -57,6 +57,13 @@ constexpr int kMaxBlocksPerAxis = 16;
 // tangent to the surface cuts it in curves that bend sharply or nearly touch (tiny loops, two
 // seams close together on one face), which the fronts on either side mesh badly.
 constexpr int kCutShift = 2;
+// Layouts tried before tracking alone when the surface grazes a block's edge (GrazedEdgeError):
+// the cuts of each after the first moved by kLayoutShifts of a block from their shares of the box.
+// A block edge (where two cut planes meet) that the surface touches between two of its samples
+// leaves a seam with no corner to end at; another pair of planes meets it elsewhere. The random
+// blobs as a numpy function at tolerance 1e-3 and factor 8, and a rounded cylinder at factor 8,
+// were tracked alone for that, at 4-20 times the calls of blocks in lockstep.
+constexpr std::array<double, 3> kLayoutShifts{0, 1.0 / 3, -1.0 / 3};
 // A plane is good when, at every sample of it within one sample spacing of the surface, the
 // surface's normal leans at least 30 degrees away from the plane's (the gradient's share in the
 // plane is at least sin 30 = 0.5); otherwise the candidate that leans most is taken.
@@ -178,6 +185,12 @@ double plane_lean(const PlaneSamples& s) {
   return lean;
 }
 
+// The surface grazes a block's edge (a seam with no corner to end at): another layout may not.
+class GrazedEdgeError : public CreaseLayoutError {
+ public:
+  using CreaseLayoutError::CreaseLayoutError;
+};
+
 struct Cuts {
   std::array<std::vector<double>, 3> walls;  // per axis: the box's min, the cuts, the box's max
   std::array<std::vector<PlaneSamples>, 3> planes;  // per axis, per cut
@@ -202,7 +215,7 @@ std::array<int, 3> block_counts(const Field& field, bool costly, const SeedGridS
 }
 
 // The cuts along each axis (see kCutShift and kGoodLean); each plane keeps its samples.
-Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int, 3>& n, int threads,
+Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int, 3>& n, double shift, int threads,
                  const CancelToken& cancel) {
   Cuts cuts;
   const Box& box = field.bounds();
@@ -210,7 +223,7 @@ Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int,
     cuts.walls[a].push_back(box.min[a]);
     int last = -1;  // the cell of the cut before: cuts stay in increasing cells, at least one apart
     for (int i = 1; i < n[a]; ++i) {
-      const double ideal = box.min[a] + box.size()[a] * i / n[a];
+      const double ideal = box.min[a] + box.size()[a] * (i + shift) / n[a];
       const int cell = std::clamp(static_cast<int>(std::floor((ideal - grid.origin[a]) / grid.h)), 0, grid.n[a] - 1);
       std::optional<PlaneSamples> best;
       double best_lean = -1;
@@ -677,7 +690,7 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
     const FaceCorner& from = corners[i];
     const std::optional<Vec3> t = tracer.tangent(from.point, f.a);
     if (!t || std::abs(t->dot(from.inward)) < kEdgeGraze)
-      throw CreaseLayoutError("adaptive: the surface grazes a block's edge near " + format_point(from.point));
+      throw GrazedEdgeError("adaptive: the surface grazes a block's edge near " + format_point(from.point));
     const double sign = t->dot(from.inward) > 0 ? 1 : -1;
     SeamTracer::Traced tr = tracer.trace(f, from.point, sign, false);
     // The corner it ends at: on the side it left by, the nearest to the crossing, unused.
@@ -689,8 +702,8 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
       if (dist < best) best = dist, end = static_cast<int>(k);
     }
     if (end < 0 || corners[static_cast<std::size_t>(end)].used)
-      throw CreaseLayoutError("adaptive: a seam reaches a block's edge where no corner was found near " +
-                              format_point(tr.exit) + " (the surface grazes the edge)");
+      throw GrazedEdgeError("adaptive: a seam reaches a block's edge where no corner was found near " +
+                            format_point(tr.exit) + " (the surface grazes the edge)");
     corners[i].used = corners[static_cast<std::size_t>(end)].used = true;
     tr.points.push_back(corners[static_cast<std::size_t>(end)].point);
     tr.targets.push_back(tracer.target(tr.points.back(), f.a));
@@ -849,289 +862,305 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
   const std::array<int, 3> n = block_counts(field, costly, seeds);
   if (n[0] * n[1] * n[2] < 2) return out;
   out.report.blocks = n;
-  try {
-    const Cuts cuts = choose_cuts(field, seeds.grid, n, options.threads, options.cancel);
-    for (int a = 0; a < 3; ++a) out.report.cuts[a].assign(cuts.walls[a].begin() + 1, cuts.walls[a].end() - 1);
-    SeamVertices sv;
-    const Lines lines = find_corners(field, cuts, seeds.grid.h, sv, options.cancel);
-    out.report.corners = sv.points.size();
-    const std::size_t points_bound = std::max(
-        kFewestTracePoints, static_cast<std::size_t>(kTracePointsPerTriangle * seeds.estimated_triangles));
-    std::vector<Face> faces;
-    for (int a = 0; a < 3; ++a) {
-      const int b = (a + 1) % 3, d = (a + 2) % 3;
-      for (int cut = 0; cut + 1 < cuts.count(a); ++cut)
-        for (int jd = 0; jd < cuts.count(d); ++jd)
-          for (int jb = 0; jb < cuts.count(b); ++jb)
-            faces.push_back({a, b, d, cut, {jb, jd}, cuts.walls[a][static_cast<std::size_t>(cut) + 1],
-                             cuts.walls[b][static_cast<std::size_t>(jb)], cuts.walls[b][static_cast<std::size_t>(jb) + 1],
-                             cuts.walls[d][static_cast<std::size_t>(jd)], cuts.walls[d][static_cast<std::size_t>(jd) + 1]});
-    }
-    // Each face's seams, from the corners alone: one after another, or in lockstep for a costly field.
-    const std::size_t ncorners = sv.points.size();
-    std::vector<std::vector<Seam>> face_seams(faces.size());
-    std::vector<SeamVertices> face_vertices(faces.size());
-    // A Python function's C1 seams are known to nothing (Field::smooth_sides), promised smooth or
-    // not (smooth: no crease; a rounded box is C1); a cheap field's are described by its model or
-    // absent, and looking across every traced point would cost it more evaluations than its seams
-    // take now.
-    const bool looks_across = settings.grading && costly;
-    const auto trace_one = [&](const Field& on, std::size_t i) {
-      options.cancel.check("adaptive");
-      std::size_t points_left = points_bound;
-      const SeamTracer tracer{on,          settings.sizing, settings.grading, looks_across,
-                              kSeamTolerance * settings.diagonal, points_left, points_bound, options.cancel};
-      const Face& f = faces[i];
-      face_vertices[i].base = static_cast<int>(ncorners);
-      face_seams[i] = trace_face(tracer, f, cuts.planes[f.a][static_cast<std::size_t>(f.cut)], lines, sv.points,
-                                 face_vertices[i]);
-    };
-    if (field.costly_calls()) {
-      const LockstepReport lockstep =
-          run_in_lockstep(field, faces.size(), trace_one);
-      out.report.lockstep_tasks = lockstep.carriers;
-      out.report.lockstep_batches += lockstep.batches;
-    } else if (field.thread_safe()) {
-      // On all cores, each face into its own slot (an error is the first face's in face order).
-      detail::parallel_blocks(faces.size(), 1, detail::worker_count(options.threads),
-                              [&](std::size_t begin, std::size_t end, unsigned) {
-                                for (std::size_t i = begin; i < end; ++i) trace_one(field, i);
-                              });
-    } else {
-      for (std::size_t i = 0; i < faces.size(); ++i) trace_one(field, i);
-    }
-    // Their vertices numbered in face order, and every seam's middle gradient in one batch.
-    std::vector<Vec3> middles;
-    for (std::size_t i = 0; i < faces.size(); ++i) {
-      const int shift = static_cast<int>(sv.points.size() - ncorners);
-      for (Seam& s : face_seams[i])
-        for (int& v : s.vertices)
-          if (v >= static_cast<int>(ncorners)) v += shift;
-      sv.points.insert(sv.points.end(), face_vertices[i].points.begin(), face_vertices[i].points.end());
-      for (const Seam& s : face_seams[i]) middles.push_back(sv.points[static_cast<std::size_t>(s.vertices[middle(s)])]);
-    }
-    std::vector<double> middle_values(middles.size());
-    std::vector<Vec3> middle_gradients(middles.size());
-    field.values_gradients(middles.data(), middle_values.data(), middle_gradients.data(), middles.size());
-    const auto block_index = [&](int i, int j, int k) { return static_cast<std::size_t>((k * n[1] + j) * n[0] + i); };
-    const std::size_t nblocks = static_cast<std::size_t>(n[0]) * n[1] * n[2];
-    std::vector<std::vector<Dart>> darts(nblocks);
-    for (std::size_t i = 0, m = 0; i < faces.size(); ++i) {
-      const Face& f = faces[i];
-      for (const Seam& s : face_seams[i]) {
-        std::array<int, 3> lo{}, hi{};
-        lo[f.a] = f.cut, hi[f.a] = f.cut + 1;
-        lo[f.b] = hi[f.b] = f.cell[0];
-        lo[f.d] = hi[f.d] = f.cell[1];
-        auto [below, above] = orient(f, s, sv, middle_gradients[m++]);
-        darts[block_index(lo[0], lo[1], lo[2])].push_back(std::move(below));
-        darts[block_index(hi[0], hi[1], hi[2])].push_back(std::move(above));
-        ++out.report.seams;
+  // Layouts from kLayoutShifts in turn while the surface grazes a block's edge.
+  for (std::size_t layout = 0;; ++layout) {
+    out.report.layouts = layout + 1;
+    try {
+      const Cuts cuts = choose_cuts(field, seeds.grid, n, kLayoutShifts[layout], options.threads, options.cancel);
+      for (int a = 0; a < 3; ++a) out.report.cuts[a].assign(cuts.walls[a].begin() + 1, cuts.walls[a].end() - 1);
+      SeamVertices sv;
+      const Lines lines = find_corners(field, cuts, seeds.grid.h, sv, options.cancel);
+      out.report.corners = sv.points.size();
+      const std::size_t points_bound = std::max(
+          kFewestTracePoints, static_cast<std::size_t>(kTracePointsPerTriangle * seeds.estimated_triangles));
+      std::vector<Face> faces;
+      for (int a = 0; a < 3; ++a) {
+        const int b = (a + 1) % 3, d = (a + 2) % 3;
+        for (int cut = 0; cut + 1 < cuts.count(a); ++cut)
+          for (int jd = 0; jd < cuts.count(d); ++jd)
+            for (int jb = 0; jb < cuts.count(b); ++jb)
+              faces.push_back({a, b, d, cut, {jb, jd}, cuts.walls[a][static_cast<std::size_t>(cut) + 1],
+                               cuts.walls[b][static_cast<std::size_t>(jb)], cuts.walls[b][static_cast<std::size_t>(jb) + 1],
+                               cuts.walls[d][static_cast<std::size_t>(jd)], cuts.walls[d][static_cast<std::size_t>(jd) + 1]});
       }
-    }
-    // Every corner ends two seams of each of its four blocks' faces: one unused means a seam
-    // the faces' tracing missed.
-    std::vector<int> ends(out.report.corners, 0);
-    for (const auto& ds : darts)
-      for (const Dart& dt : ds)
-        if (dt.from >= 0) ++ends[static_cast<std::size_t>(dt.from)], ++ends[static_cast<std::size_t>(dt.to)];
-    for (std::size_t c = 0; c < out.report.corners; ++c)
-      if (ends[c] != 8)
-        throw CreaseLayoutError("adaptive: a block corner ends " + std::to_string(ends[c] / 2) +
-                                " seams instead of 4 near " + format_point(sv.points[c]));
-    out.report.seam_vertices = sv.points.size();
-    // The seam vertices measured once, for both blocks that start from them.
-    std::vector<Tracker::Placed> placed(sv.points.size());
-    {
-      std::vector<double> values(sv.points.size());
-      std::vector<Vec3> gradients(sv.points.size());
-      std::vector<Mat3> hessians(sv.points.size());
-      // In one batch, or in slices on all cores for a thread-safe field (each into its own slots).
-      const auto measure = [&](std::size_t begin, std::size_t end, unsigned) {
-        field.gradients_hessians(sv.points.data() + begin, values.data() + begin, gradients.data() + begin,
-                                 hessians.data() + begin, end - begin);
-        for (std::size_t v = begin; v < end; ++v) {
-          placed[v] = {sv.points[v], curvature_from_derivatives(gradients[v], hessians[v]),
-                       step_to_critical_point(gradients[v], hessians[v])};
-          if (settings.grading)
-            placed[v].seam_target = seam_edge_length(field, settings.sizing, sv.points[v],
-                                                     edge_length(settings.sizing, placed[v].curvature.min_radius));
-        }
+      // Each face's seams, from the corners alone: one after another, or in lockstep for a costly field.
+      const std::size_t ncorners = sv.points.size();
+      std::vector<std::vector<Seam>> face_seams(faces.size());
+      std::vector<SeamVertices> face_vertices(faces.size());
+      // A Python function's C1 seams are known to nothing (Field::smooth_sides), promised smooth or
+      // not (smooth: no crease; a rounded box is C1); a cheap field's are described by its model or
+      // absent, and looking across every traced point would cost it more evaluations than its seams
+      // take now.
+      const bool looks_across = settings.grading && costly;
+      const auto trace_one = [&](const Field& on, std::size_t i) {
+        options.cancel.check("adaptive");
+        std::size_t points_left = points_bound;
+        const SeamTracer tracer{on,          settings.sizing, settings.grading, looks_across,
+                                kSeamTolerance * settings.diagonal, points_left, points_bound, options.cancel};
+        const Face& f = faces[i];
+        face_vertices[i].base = static_cast<int>(ncorners);
+        face_seams[i] = trace_face(tracer, f, cuts.planes[f.a][static_cast<std::size_t>(f.cut)], lines, sv.points,
+                                   face_vertices[i]);
       };
-      if (field.thread_safe())
-        detail::parallel_blocks(sv.points.size(), kSeamVertexSlice, detail::worker_count(options.threads), measure);
-      else
-        measure(0, sv.points.size(), 0);
-      if (settings.grading) grade_seam_targets(face_seams, sv.points, settings.sizing, placed);
-    }
-    std::vector<std::vector<std::vector<int>>> cycles(nblocks);
-    for (std::size_t blk = 0; blk < nblocks; ++blk) cycles[blk] = block_cycles(darts[blk]);
-    out.report.layout_seconds = seconds_since(start);
-
-    // The blocks, largest first (by their seam vertices), each into its own slot.
-    std::vector<std::size_t> order;
-    for (std::size_t blk = 0; blk < nblocks; ++blk)
-      if (!cycles[blk].empty()) order.push_back(blk);
-    const auto weight = [&](std::size_t blk) {
-      std::size_t w = 0;
-      for (const auto& c : cycles[blk]) w += c.size();
-      return w;
-    };
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return weight(x) > weight(y); });
-    if (shuffle != 0) std::shuffle(order.begin(), order.end(), std::mt19937_64(shuffle));
-    // Block blk's box: its lowest and highest corners.
-    const auto block_box = [&](std::size_t blk) {
-      const int bi = static_cast<int>(blk % n[0]), bj = static_cast<int>(blk / n[0] % n[1]),
-                bk = static_cast<int>(blk / (static_cast<std::size_t>(n[0]) * n[1]));
-      return std::pair<Vec3, Vec3>{Vec3(cuts.walls[0][bi], cuts.walls[1][bj], cuts.walls[2][bk]),
-                                   Vec3(cuts.walls[0][bi + 1], cuts.walls[1][bj + 1], cuts.walls[2][bk + 1])};
-    };
-    // Block blk's task: all its tracker needs besides the field.
-    const auto block_task = [&](std::size_t blk) {
-      BlockTask task{blk, settings, seeds.estimated_area, {}, {}, {}, {}, options.check_self_intersections};
-      std::tie(task.lo, task.hi) = block_box(blk);
-      for (const std::vector<int>& cycle : cycles[blk]) {
-        std::vector<Tracker::Placed>& loop = task.loops.emplace_back();
-        for (const int v : cycle) loop.push_back(placed[static_cast<std::size_t>(v)]);
-      }
-      if (repair) task.repair = *repair;
-      return task;
-    };
-    std::vector<BlockPart> parts(nblocks);
-    {
-      // The blocks' time is theirs (block_seconds), not a pass of the run's (PassClock).
-      const detail::ScopedPassClock paused;
-      if (options.block_runner) {
-        // Elsewhere (block_tasks.h): every task as bytes, the pieces back in the same order.
-        std::vector<std::string> tasks;
-        for (const std::size_t blk : order) tasks.push_back(write_task(block_task(blk)));
-        for (const std::string& t : tasks) out.report.task_bytes += t.size();
-        const std::vector<std::string> pieces = options.block_runner(tasks);
-        if (pieces.size() != order.size())
-          throw InvalidInputError("adaptive: the block runner returned " + std::to_string(pieces.size()) +
-                                   " pieces for " + std::to_string(order.size()) + " tasks");
-        for (std::size_t i = 0; i < order.size(); ++i) {
-          out.report.piece_bytes += pieces[i].size();
-          BlockPart part = read_part(pieces[i]);
-          const std::size_t blk = order[i];
-          // The piece answers this task, and its seams are the task's (a runner that mixed them up
-          // is an error, never a mesh read out of bounds).
-          bool fits = part.block == blk;
-          if (fits && !part.error) {
-            fits = part.ids.size() == cycles[blk].size();
-            for (std::size_t c = 0; fits && c < part.ids.size(); ++c) fits = part.ids[c].size() == cycles[blk][c].size();
-          }
-          if (!fits)
-            throw InvalidInputError("adaptive: the block runner returned, for block " + std::to_string(blk) +
-                                    ", a piece of another task");
-          parts[blk] = std::move(part);
-        }
-        out.report.threads = 1;
-      } else if (field.costly_calls()) {
-        // The blocks' evaluations gathered, their trackers on this thread between them
-        // (lockstep.h); run_block keeps its errors.
-        out.report.threads = 1;
-        const LockstepReport lockstep = run_in_lockstep(
-            field, order.size(), [&](const Field& on, std::size_t i) { parts[order[i]] = run_block(on, block_task(order[i])); });
-        out.report.lockstep_tasks = std::max(out.report.lockstep_tasks, lockstep.carriers);
+      if (field.costly_calls()) {
+        const LockstepReport lockstep =
+            run_in_lockstep(field, faces.size(), trace_one);
+        out.report.lockstep_tasks = lockstep.carriers;
         out.report.lockstep_batches += lockstep.batches;
+      } else if (field.thread_safe()) {
+        // On all cores, each face into its own slot (an error is the first face's in face order).
+        detail::parallel_blocks(faces.size(), 1, detail::worker_count(options.threads),
+                                [&](std::size_t begin, std::size_t end, unsigned) {
+                                  for (std::size_t i = begin; i < end; ++i) trace_one(field, i);
+                                });
       } else {
-        out.report.threads =
-            field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
-                                                     static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
-                                : 1;
-        detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
-          for (std::size_t i = begin; i < end; ++i) parts[order[i]] = run_block(field, block_task(order[i]));
-        });
+        for (std::size_t i = 0; i < faces.size(); ++i) trace_one(field, i);
       }
-    }
-    // Every block's tightest bend, whether its mesh is kept or not (a kink's place among them).
-    for (const BlockPart& part : parts)
-      if (part.tightest.first < out.tightest.first) out.tightest = part.tightest;
-    // Every block ran, whatever the others threw: a cancellation wins, then the first failing
-    // block in block order (not in time), so that the outcome is the same on any thread count.
-    for (const BlockPart& part : parts)
-      if (part.error) try {
-          std::rethrow_exception(part.error);
-        } catch (const CancelledError&) {
-          throw;
-        } catch (...) {
+      // Their vertices numbered in face order, and every seam's middle gradient in one batch.
+      std::vector<Vec3> middles;
+      for (std::size_t i = 0; i < faces.size(); ++i) {
+        const int shift = static_cast<int>(sv.points.size() - ncorners);
+        for (Seam& s : face_seams[i])
+          for (int& v : s.vertices)
+            if (v >= static_cast<int>(ncorners)) v += shift;
+        sv.points.insert(sv.points.end(), face_vertices[i].points.begin(), face_vertices[i].points.end());
+        for (const Seam& s : face_seams[i]) middles.push_back(sv.points[static_cast<std::size_t>(s.vertices[middle(s)])]);
+      }
+      std::vector<double> middle_values(middles.size());
+      std::vector<Vec3> middle_gradients(middles.size());
+      field.values_gradients(middles.data(), middle_values.data(), middle_gradients.data(), middles.size());
+      const auto block_index = [&](int i, int j, int k) { return static_cast<std::size_t>((k * n[1] + j) * n[0] + i); };
+      const std::size_t nblocks = static_cast<std::size_t>(n[0]) * n[1] * n[2];
+      std::vector<std::vector<Dart>> darts(nblocks);
+      for (std::size_t i = 0, m = 0; i < faces.size(); ++i) {
+        const Face& f = faces[i];
+        for (const Seam& s : face_seams[i]) {
+          std::array<int, 3> lo{}, hi{};
+          lo[f.a] = f.cut, hi[f.a] = f.cut + 1;
+          lo[f.b] = hi[f.b] = f.cell[0];
+          lo[f.d] = hi[f.d] = f.cell[1];
+          auto [below, above] = orient(f, s, sv, middle_gradients[m++]);
+          darts[block_index(lo[0], lo[1], lo[2])].push_back(std::move(below));
+          darts[block_index(hi[0], hi[1], hi[2])].push_back(std::move(above));
+          ++out.report.seams;
         }
-    // Then a black box's kink, in any block: no fallback would get past it (the run ends, its
-    // tightest bend the kink's).
-    for (const BlockPart& part : parts)
-      if (part.error) try {
-          std::rethrow_exception(part.error);
-        } catch (const BlackBoxKinkError&) {
-          out.kink = part.error;
-          throw;
-        } catch (...) {
-        }
-    for (const BlockPart& part : parts)
-      if (part.error) std::rethrow_exception(part.error);
+      }
+      // Every corner ends two seams of each of its four blocks' faces: one unused means a seam
+      // the faces' tracing missed.
+      std::vector<int> ends(out.report.corners, 0);
+      for (const auto& ds : darts)
+        for (const Dart& dt : ds)
+          if (dt.from >= 0) ++ends[static_cast<std::size_t>(dt.from)], ++ends[static_cast<std::size_t>(dt.to)];
+      for (std::size_t c = 0; c < out.report.corners; ++c)
+        if (ends[c] != 8)
+          throw CreaseLayoutError("adaptive: a block corner ends " + std::to_string(ends[c] / 2) +
+                                  " seams instead of 4 near " + format_point(sv.points[c]));
+      out.report.seam_vertices = sv.points.size();
+      // The seam vertices measured once, for both blocks that start from them.
+      std::vector<Tracker::Placed> placed(sv.points.size());
+      {
+        std::vector<double> values(sv.points.size());
+        std::vector<Vec3> gradients(sv.points.size());
+        std::vector<Mat3> hessians(sv.points.size());
+        // In one batch, or in slices on all cores for a thread-safe field (each into its own slots).
+        const auto measure = [&](std::size_t begin, std::size_t end, unsigned) {
+          field.gradients_hessians(sv.points.data() + begin, values.data() + begin, gradients.data() + begin,
+                                   hessians.data() + begin, end - begin);
+          for (std::size_t v = begin; v < end; ++v) {
+            placed[v] = {sv.points[v], curvature_from_derivatives(gradients[v], hessians[v]),
+                         step_to_critical_point(gradients[v], hessians[v])};
+            if (settings.grading)
+              placed[v].seam_target = seam_edge_length(field, settings.sizing, sv.points[v],
+                                                       edge_length(settings.sizing, placed[v].curvature.min_radius));
+          }
+        };
+        if (field.thread_safe())
+          detail::parallel_blocks(sv.points.size(), kSeamVertexSlice, detail::worker_count(options.threads), measure);
+        else
+          measure(0, sv.points.size(), 0);
+        if (settings.grading) grade_seam_targets(face_seams, sv.points, settings.sizing, placed);
+      }
+      std::vector<std::vector<std::vector<int>>> cycles(nblocks);
+      for (std::size_t blk = 0; blk < nblocks; ++blk) cycles[blk] = block_cycles(darts[blk]);
+      out.report.layout_seconds = seconds_since(start);
 
-    // One mesh, in block order: the seam vertices, then each block's own (room made at once: the
-    // torus at factor 40 spent a tenth of its assembly copying arrays as they grew).
-    const std::size_t ns = sv.points.size();
-    CreaseMesh cm = start_shared(sv.points);
-    const Mesh& mesh = cm.mesh;
-    {
-      std::size_t vertices = ns, triangles = 0;
-      for (const BlockPart& part : parts) vertices += part.mesh.positions.size(), triangles += part.mesh.triangles.size();
-      cm.mesh.positions.reserve(vertices), cm.mesh.normals.reserve(vertices), cm.mesh.triangles.reserve(triangles);
-      cm.target.reserve(vertices), cm.mac.reserve(vertices), cm.shape_index.reserve(vertices);
+      // The blocks, largest first (by their seam vertices), each into its own slot.
+      std::vector<std::size_t> order;
+      for (std::size_t blk = 0; blk < nblocks; ++blk)
+        if (!cycles[blk].empty()) order.push_back(blk);
+      const auto weight = [&](std::size_t blk) {
+        std::size_t w = 0;
+        for (const auto& c : cycles[blk]) w += c.size();
+        return w;
+      };
+      std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return weight(x) > weight(y); });
+      if (shuffle != 0) std::shuffle(order.begin(), order.end(), std::mt19937_64(shuffle));
+      // Block blk's box: its lowest and highest corners.
+      const auto block_box = [&](std::size_t blk) {
+        const int bi = static_cast<int>(blk % n[0]), bj = static_cast<int>(blk / n[0] % n[1]),
+                  bk = static_cast<int>(blk / (static_cast<std::size_t>(n[0]) * n[1]));
+        return std::pair<Vec3, Vec3>{Vec3(cuts.walls[0][bi], cuts.walls[1][bj], cuts.walls[2][bk]),
+                                     Vec3(cuts.walls[0][bi + 1], cuts.walls[1][bj + 1], cuts.walls[2][bk + 1])};
+      };
+      // Block blk's task: all its tracker needs besides the field.
+      const auto block_task = [&](std::size_t blk) {
+        BlockTask task{blk, settings, seeds.estimated_area, {}, {}, {}, {}, options.check_self_intersections};
+        std::tie(task.lo, task.hi) = block_box(blk);
+        for (const std::vector<int>& cycle : cycles[blk]) {
+          std::vector<Tracker::Placed>& loop = task.loops.emplace_back();
+          for (const int v : cycle) loop.push_back(placed[static_cast<std::size_t>(v)]);
+        }
+        if (repair) task.repair = *repair;
+        return task;
+      };
+      std::vector<BlockPart> parts(nblocks);
+      {
+        // The blocks' time is theirs (block_seconds), not a pass of the run's (PassClock).
+        const detail::ScopedPassClock paused;
+        if (options.block_runner) {
+          // Elsewhere (block_tasks.h): every task as bytes, the pieces back in the same order.
+          std::vector<std::string> tasks;
+          for (const std::size_t blk : order) tasks.push_back(write_task(block_task(blk)));
+          for (const std::string& t : tasks) out.report.task_bytes += t.size();
+          const std::vector<std::string> pieces = options.block_runner(tasks);
+          if (pieces.size() != order.size())
+            throw InvalidInputError("adaptive: the block runner returned " + std::to_string(pieces.size()) +
+                                     " pieces for " + std::to_string(order.size()) + " tasks");
+          for (std::size_t i = 0; i < order.size(); ++i) {
+            out.report.piece_bytes += pieces[i].size();
+            BlockPart part = read_part(pieces[i]);
+            const std::size_t blk = order[i];
+            // The piece answers this task, and its seams are the task's (a runner that mixed them up
+            // is an error, never a mesh read out of bounds).
+            bool fits = part.block == blk;
+            if (fits && !part.error) {
+              fits = part.ids.size() == cycles[blk].size();
+              for (std::size_t c = 0; fits && c < part.ids.size(); ++c) fits = part.ids[c].size() == cycles[blk][c].size();
+            }
+            if (!fits)
+              throw InvalidInputError("adaptive: the block runner returned, for block " + std::to_string(blk) +
+                                      ", a piece of another task");
+            parts[blk] = std::move(part);
+          }
+          out.report.threads = 1;
+        } else if (field.costly_calls()) {
+          // The blocks' evaluations gathered, their trackers on this thread between them
+          // (lockstep.h); run_block keeps its errors.
+          out.report.threads = 1;
+          const LockstepReport lockstep = run_in_lockstep(
+              field, order.size(), [&](const Field& on, std::size_t i) { parts[order[i]] = run_block(on, block_task(order[i])); });
+          out.report.lockstep_tasks = std::max(out.report.lockstep_tasks, lockstep.carriers);
+          out.report.lockstep_batches += lockstep.batches;
+        } else {
+          out.report.threads =
+              field.thread_safe() ? std::min<unsigned>(detail::worker_count(options.threads),
+                                                       static_cast<unsigned>(std::max<std::size_t>(order.size(), 1)))
+                                  : 1;
+          detail::parallel_blocks(order.size(), 1, out.report.threads, [&](std::size_t begin, std::size_t end, unsigned) {
+            for (std::size_t i = begin; i < end; ++i) parts[order[i]] = run_block(field, block_task(order[i]));
+          });
+        }
+      }
+      // Every block's tightest bend, whether its mesh is kept or not (a kink's place among them).
+      for (const BlockPart& part : parts)
+        if (part.tightest.first < out.tightest.first) out.tightest = part.tightest;
+      // Every block ran, whatever the others threw: a cancellation wins, then the first failing
+      // block in block order (not in time), so that the outcome is the same on any thread count.
+      for (const BlockPart& part : parts)
+        if (part.error) try {
+            std::rethrow_exception(part.error);
+          } catch (const CancelledError&) {
+            throw;
+          } catch (...) {
+          }
+      // Then a black box's kink, in any block: no fallback would get past it (the run ends, its
+      // tightest bend the kink's).
+      for (const BlockPart& part : parts)
+        if (part.error) try {
+            std::rethrow_exception(part.error);
+          } catch (const BlackBoxKinkError&) {
+            out.kink = part.error;
+            throw;
+          } catch (...) {
+          }
+      for (const BlockPart& part : parts)
+        if (part.error) std::rethrow_exception(part.error);
+
+      // One mesh, in block order: the seam vertices, then each block's own (room made at once: the
+      // torus at factor 40 spent a tenth of its assembly copying arrays as they grew).
+      const std::size_t ns = sv.points.size();
+      CreaseMesh cm = start_shared(sv.points);
+      const Mesh& mesh = cm.mesh;
+      {
+        std::size_t vertices = ns, triangles = 0;
+        for (const BlockPart& part : parts) vertices += part.mesh.positions.size(), triangles += part.mesh.triangles.size();
+        cm.mesh.positions.reserve(vertices), cm.mesh.normals.reserve(vertices), cm.mesh.triangles.reserve(triangles);
+        cm.target.reserve(vertices), cm.mac.reserve(vertices), cm.shape_index.reserve(vertices);
+      }
+      out.report.block_seconds.assign(nblocks, 0.0);
+      for (std::size_t blk = 0; blk < nblocks; ++blk) {
+        BlockPart& part = parts[blk];
+        out.report.block_seconds[blk] = part.seconds;
+        if (part.mesh.positions.empty()) continue;
+        ++out.report.meshed_blocks;
+        if (part.forced_closures > 0)
+          throw CreaseLayoutError("adaptive: a block's front had to be closed without its tests");
+        const std::size_t first_own = mesh.positions.size();
+        add_part(cm, part.mesh, part.ids, cycles[blk], part.target, part.mac, part.shape_index);
+        const auto [lo, hi] = block_box(blk);
+        out.own.push_back({first_own, mesh.positions.size(), lo, hi});
+        cm.steps += part.steps;
+        cm.splits += part.splits;
+        cm.merges += part.merges;
+        cm.patch_refusals += part.patch_refusals;
+        add_repair_counts(out.quality, part.quality);
+        add_tracker_counts(out.tracker, part.tracker);
+        out.critical_starts.insert(out.critical_starts.end(), part.critical_starts.begin(), part.critical_starts.end());
+        part = BlockPart{};  // copied: freed as the assembly goes
+      }
+      // Each block's tracker keeps the bounds on its own; the whole mesh keeps max_triangles too.
+      if (settings.max_triangles > 0 && mesh.triangles.size() > settings.max_triangles)
+        throw LimitExceededError("adaptive: the blocks made " + std::to_string(mesh.triangles.size()) +
+                                 " triangles, over max_triangles " + std::to_string(settings.max_triangles));
+      finish_shared(cm, ns, "a seam vertex no block reached");
+      cm.crease_vertices = 0;  // seam vertices are ordinary surface points: the repair may move them
+      // Components by shared vertices (the checks after the repair find any that meet at a vertex
+      // alone): a pass over the triangles, where analyze_topology's edge sort was a second serial
+      // pass over the mesh, as long as a sixth of the blocks' own time on two threads.
+      UnionFind joined(mesh.positions.size());
+      std::vector<char> used(mesh.positions.size(), 0);
+      for (const auto& t : mesh.triangles) {
+        joined.unite(t[0], t[1]);
+        joined.unite(t[0], t[2]);
+        for (const int v : t) used[static_cast<std::size_t>(v)] = 1;
+      }
+      for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+        out.components += used[v] && joined.find(static_cast<int>(v)) == static_cast<int>(v);
+      out.vertices = cm.mesh.positions.size();
+      out.mesh = std::move(cm);
+    } catch (const GrazedEdgeError& e) {
+      if (layout + 1 < kLayoutShifts.size()) {
+        // Afresh, but for the calls the layouts made.
+        const std::uint64_t batches = out.report.lockstep_batches;
+        out = BlockMeshing{};
+        out.report.estimated_triangles = seeds.estimated_triangles;
+        out.report.blocks = n;
+        out.report.lockstep_batches = batches;
+        continue;
+      }
+      out.report.fallback = e.what();
+    } catch (const CreaseLayoutError& e) {
+      out.report.fallback = e.what();
+    } catch (const BlackBoxKinkError& e) {
+      out.report.fallback = e.what();
+    } catch (const LimitExceededError& e) {  // a stalled front among them
+      out.report.fallback = e.what();
+    } catch (const NoSurfaceError& e) {
+      out.report.fallback = e.what();
+    } catch (const std::logic_error& e) {  // a tracker's own invariant, broken by a block's loops
+      out.report.fallback = std::string("adaptive: a block's tracker failed: ") + e.what();
     }
-    out.report.block_seconds.assign(nblocks, 0.0);
-    for (std::size_t blk = 0; blk < nblocks; ++blk) {
-      BlockPart& part = parts[blk];
-      out.report.block_seconds[blk] = part.seconds;
-      if (part.mesh.positions.empty()) continue;
-      ++out.report.meshed_blocks;
-      if (part.forced_closures > 0)
-        throw CreaseLayoutError("adaptive: a block's front had to be closed without its tests");
-      const std::size_t first_own = mesh.positions.size();
-      add_part(cm, part.mesh, part.ids, cycles[blk], part.target, part.mac, part.shape_index);
-      const auto [lo, hi] = block_box(blk);
-      out.own.push_back({first_own, mesh.positions.size(), lo, hi});
-      cm.steps += part.steps;
-      cm.splits += part.splits;
-      cm.merges += part.merges;
-      cm.patch_refusals += part.patch_refusals;
-      add_repair_counts(out.quality, part.quality);
-      add_tracker_counts(out.tracker, part.tracker);
-      out.critical_starts.insert(out.critical_starts.end(), part.critical_starts.begin(), part.critical_starts.end());
-      part = BlockPart{};  // copied: freed as the assembly goes
-    }
-    // Each block's tracker keeps the bounds on its own; the whole mesh keeps max_triangles too.
-    if (settings.max_triangles > 0 && mesh.triangles.size() > settings.max_triangles)
-      throw LimitExceededError("adaptive: the blocks made " + std::to_string(mesh.triangles.size()) +
-                               " triangles, over max_triangles " + std::to_string(settings.max_triangles));
-    finish_shared(cm, ns, "a seam vertex no block reached");
-    cm.crease_vertices = 0;  // seam vertices are ordinary surface points: the repair may move them
-    // Components by shared vertices (the checks after the repair find any that meet at a vertex
-    // alone): a pass over the triangles, where analyze_topology's edge sort was a second serial
-    // pass over the mesh, as long as a sixth of the blocks' own time on two threads.
-    UnionFind joined(mesh.positions.size());
-    std::vector<char> used(mesh.positions.size(), 0);
-    for (const auto& t : mesh.triangles) {
-      joined.unite(t[0], t[1]);
-      joined.unite(t[0], t[2]);
-      for (const int v : t) used[static_cast<std::size_t>(v)] = 1;
-    }
-    for (std::size_t v = 0; v < mesh.positions.size(); ++v)
-      out.components += used[v] && joined.find(static_cast<int>(v)) == static_cast<int>(v);
-    out.vertices = cm.mesh.positions.size();
-    out.mesh = std::move(cm);
-  } catch (const CreaseLayoutError& e) {
-    out.report.fallback = e.what();
-  } catch (const BlackBoxKinkError& e) {
-    out.report.fallback = e.what();
-  } catch (const LimitExceededError& e) {  // a stalled front among them
-    out.report.fallback = e.what();
-  } catch (const NoSurfaceError& e) {
-    out.report.fallback = e.what();
-  } catch (const std::logic_error& e) {  // a tracker's own invariant, broken by a block's loops
-    out.report.fallback = std::string("adaptive: a block's tracker failed: ") + e.what();
+    break;
   }
   out.report.seconds = seconds_since(start);
   return out;

@@ -86,6 +86,8 @@ struct BlocksReport {
   std::array<int, 3> blocks{1, 1, 1};  // along x, y, z
   std::array<std::vector<double>, 3> cuts;  // the cut planes' positions along each axis
   std::size_t meshed_blocks = 0, corners = 0, seams = 0, seam_vertices = 0, components = 0, steps = 0;
+  // Layouts of cuts tried: more than 1 where the surface grazed a block's edge (its cuts moved).
+  std::size_t layouts = 0;
   double estimated_triangles = 0;  // the surface's triangles as the seed grid estimates them
   unsigned threads = 1;  // that meshed the blocks (1 with a block runner: they ran elsewhere)
   // With AdaptiveOptions::block_runner: the bytes of the tasks handed to it and of the pieces it
