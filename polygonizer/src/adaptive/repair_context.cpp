@@ -340,21 +340,11 @@ void RepairContext::prefetch_flip_samples(const std::vector<int>& triangles) {
   std::vector<std::uint64_t>& keys = flip_mids_.keys;
   for (const int t : triangles) {
     if (!alive_[t]) continue;
-    const Tri& T = mesh_.triangles[t];
     for (int k = 0; k < 3; ++k) {
-      const int a = T[k], b = T[(k + 1) % 3], c = T[(k + 2) % 3];
-      const int u = across(t, a, b);
-      if (u < 0) continue;
-      int d = -1;
-      for (int w : mesh_.triangles[u])
-        if (w != a && w != b) d = w;
-      if (d < 0 || d == c || (fixed(c) && fixed(d))) continue;
-      // try_flip's first test (for_ratio), which nearly every edge fails on an even mesh.
-      const auto dev = [&](int x, int add) {
-        const int q = static_cast<int>(vt_[x].size()) + add - 6;
-        return q * q;
-      };
-      if (dev(a, -1) + dev(b, -1) + dev(c, 1) + dev(d, 1) > dev(a, 0) + dev(b, 0) + dev(c, 0) + dev(d, 0)) continue;
+      const std::optional<FlipQuad> q = flip_candidate(t, k, true);
+      if (!q) continue;
+      const auto [u, a, b, c, d] = *q;
+      (void)u;
       corners.insert(corners.end(), {a, b, c, d});
       keys.insert(keys.end(), {edge_key(a, b), edge_key(a, d), edge_key(d, b), edge_key(b, c), edge_key(c, a),
                                edge_key(c, d)});

@@ -574,9 +574,15 @@ class RepairContext {
   // and lower the pair's summed edge ratio by kRelaxMinGain (see below), and keep the pair's
   // smallest angle or at least kRelaxKeepDegrees.
   bool try_flip(int t, int k, bool for_ratio = false);
+  // The flip of edge k of triangle t (corners a, b; apexes c of t and d of u across it), where
+  // try_flip's tests that need no field pass now.
+  struct FlipQuad {
+    int u, a, b, c, d;
+  };
+  std::optional<FlipQuad> flip_candidate(int t, int k, bool for_ratio) const;
   // For a field whose calls cost more than their points (Field::costly_calls): what the
-  // relaxation's flips of `triangles`' edges (across each to its neighbour) that pass its valence
-  // test now ask of the field in every case, asked in batched calls: their corners' crease probes
+  // relaxation's flips of `triangles`' edges that pass the tests needing no field now
+  // (flip_candidate) ask of the field in every case, asked in batched calls: their corners' crease probes
   // (probe_creases; so crease_vertices counts corners no flip reached, where they are on one) and
   // the distances of the six midpoints of each quad, kept in flip_mids_ until
   // forget_flip_samples. A flip moves no vertex, so those distances stay exact through a pass of

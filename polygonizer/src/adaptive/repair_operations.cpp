@@ -4,18 +4,18 @@
 
 namespace cdp::adaptive::repair {
 
-bool RepairContext::try_flip(int t, int k, bool for_ratio) {
-  const Tri T = mesh_.triangles[t];
+std::optional<RepairContext::FlipQuad> RepairContext::flip_candidate(int t, int k, bool for_ratio) const {
+  const Tri& T = mesh_.triangles[t];
   const int a = T[k], b = T[(k + 1) % 3], c = T[(k + 2) % 3];
   const int u = across(t, a, b);
-  if (u < 0) return false;
+  if (u < 0) return std::nullopt;
   const Tri& U = mesh_.triangles[u];
   int d = -1;
   for (int w : U)
     if (w != a && w != b) d = w;
   // Two boundary vertices may already share an edge beyond the piece (a neighbouring block's
   // seam edge, a triangle outside the band) that has_edge cannot see.
-  if (d < 0 || d == c || (fixed(c) && fixed(d))) return false;
+  if (d < 0 || d == c || (fixed(c) && fixed(d))) return std::nullopt;
   // Each relaxation flip lowers the valences' summed squared distance from 6, or keeps it and
   // lowers the summed edge ratio (below): no flip can be undone, and the relaxation's moves
   // then have a more regular mesh to work on (an interior vertex of valence 6 can have six
@@ -28,24 +28,33 @@ bool RepairContext::try_flip(int t, int k, bool for_ratio) {
   };
   const int val_before = for_ratio ? dev(a, 0) + dev(b, 0) + dev(c, 0) + dev(d, 0) : 0;
   const int val_after = for_ratio ? dev(a, -1) + dev(b, -1) + dev(c, 1) + dev(d, 1) : 0;
-  if (val_after > val_before) return false;
-  if (has_edge(c, d)) return false;
-  // The tests that need no field evaluation first.
+  if (val_after > val_before) return std::nullopt;
+  if (has_edge(c, d)) return std::nullopt;
   const Tri n1{c, a, d}, n2{d, b, c};
   if (for_ratio) {
     const double ratio_before = tri_ratio(T) + tri_ratio(U), ratio_after = tri_ratio(n1) + tri_ratio(n2);
     const bool better = ratio_after < ratio_before * (1 - kRelaxMinGain)
                             ? val_after <= val_before
                             : val_after < val_before && ratio_after < ratio_before * kFlipRatioSlack;
-    if (!better) return false;
+    if (!better) return std::nullopt;
   }
   const double before = std::min(tri_min_angle(T), tri_min_angle(U));
   const double after = std::min(tri_min_angle(n1), tri_min_angle(n2));
   if (for_ratio ? !(after >= std::min(before, kRelaxKeepDegrees * std::numbers::pi / 180))
                 : !(after > before + kMinGain))
-    return false;
+    return std::nullopt;
   const double floor = facing_floor({t, u});
-  if (!faces_surface(n1, floor) || !faces_surface(n2, floor)) return false;
+  if (!faces_surface(n1, floor) || !faces_surface(n2, floor)) return std::nullopt;
+  return FlipQuad{u, a, b, c, d};
+}
+
+bool RepairContext::try_flip(int t, int k, bool for_ratio) {
+  // The tests that need no field evaluation first.
+  const std::optional<FlipQuad> q = flip_candidate(t, k, for_ratio);
+  if (!q) return false;
+  const auto [u, a, b, c, d] = *q;
+  const Tri T = mesh_.triangles[t], U = mesh_.triangles[u];
+  const Tri n1{c, a, d}, n2{d, b, c};
   // A flip must not remove a crease edge nor cut across one.
   const bool creased = on_crease(a) || on_crease(b) || on_crease(c) || on_crease(d);
   if (creased && !(face_normal(T).dot(face_normal(U)) > kCreaseFlatCos)) return false;

@@ -181,7 +181,13 @@ void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing
     middles.push_back((mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3);
   std::vector<double> values(middles.size());
   std::vector<Vec3> gradients(middles.size());
-  field.values_gradients(middles.data(), values.data(), gradients.data(), middles.size());
+  // In batches of kBendCheckBatch: a Python function's central differences make seven points of
+  // each, and its arrays for 146,440 points at once (the torus callable at factor 8) were fresh
+  // pages, faulted in one by one: 2/3 of the check's time.
+  for (std::size_t begin = 0; begin < middles.size(); begin += kBendCheckBatch) {
+    const std::size_t n = std::min(kBendCheckBatch, middles.size() - begin);
+    field.values_gradients(middles.data() + begin, values.data() + begin, gradients.data() + begin, n);
+  }
   // The triangle whose longest edge most exceeds what its bend asks for, beyond kBendChordRatio.
   struct Worst {
     double ratio = kBendChordRatio;

@@ -74,9 +74,12 @@ void check_components_apart(const Field& field, const Mesh& mesh, std::size_t co
 // surface; blocks in lockstep cut a rounded box's fillets at factor 8 at ratios up to 7.5 (before
 // the seams between blocks were graded: grade_along, blocks.cpp).
 inline constexpr double kBendChordRatio = 3;
+// Triangles per call of the field in check_bends_kept: a Python function's arrays of their
+// stencils (seven points each) stay near 100 kB, within the allocator's heap.
+inline constexpr std::size_t kBendCheckBatch = 2048;
 
 // The mesh's triangles against the bends under them (kBendChordRatio), their middles' distances
-// measured in one batched call of the field. Run after blocks meshed in lockstep (a function
+// measured in batched calls of the field. Run after blocks meshed in lockstep (a function
 // whose calls cost more than their points), where the repair of the band around their seams cut
 // a rounded box's fillets with nothing else to say so: the run then tracks the surface alone.
 // \throw NoSurfaceError naming the worst triangle's place.
