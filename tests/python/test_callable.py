@@ -291,12 +291,13 @@ def test_a_shallow_black_box_crease_convex_or_concave_stops_the_run(combine):
     # In blocks (the default) the layout traces the seams on the cut planes first, in lockstep:
     # up to 1,710 calls (the union at factor 6) before a block's front meets the crease; a layout
     # whose block edge the surface grazes is traced again with its cuts moved (blocks.layouts):
-    # the lens at factor 6, 3,495 calls over two layouts.
-    for blocks, calls in ((False, 1_000), (None, 4_000)):
+    # the lens at factor 6, 3,178 calls over two layouts (1,300-2,000 with one).
+    for blocks, bound in ((False, 1_000), (None, 2_000)):
         for factor in (1, 3, 6):
             field = cdp.callable_field(two_spheres(combine, 6), box, trace=False)
             with pytest.raises(cdp.LimitExceededError, match="kink"):
                 cdp.polygonize(field, factor=factor, blocks=blocks)
+            calls = 3_500 if blocks is None and combine is np.maximum and factor == 6 else bound
             assert field.python_calls < calls
 
 

@@ -215,7 +215,7 @@ std::array<int, 3> block_counts(const Field& field, bool costly, const SeedGridS
 }
 
 // The cuts along each axis (see kCutShift and kGoodLean); each plane keeps its samples.
-Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int, 3>& n, double shift, int threads,
+Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int, 3>& n, double offset, int threads,
                  const CancelToken& cancel) {
   Cuts cuts;
   const Box& box = field.bounds();
@@ -223,7 +223,7 @@ Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int,
     cuts.walls[a].push_back(box.min[a]);
     int last = -1;  // the cell of the cut before: cuts stay in increasing cells, at least one apart
     for (int i = 1; i < n[a]; ++i) {
-      const double ideal = box.min[a] + box.size()[a] * (i + shift) / n[a];
+      const double ideal = box.min[a] + box.size()[a] * (i + offset) / n[a];
       const int cell = std::clamp(static_cast<int>(std::floor((ideal - grid.origin[a]) / grid.h)), 0, grid.n[a] - 1);
       std::optional<PlaneSamples> best;
       double best_lean = -1;
@@ -765,8 +765,8 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
                                   " was not traced from a corner");
         SeamTracer::Traced tr = tracer.trace(f, *start, 1, true);
         if (tr.side >= 0)
-          throw CreaseLayoutError("adaptive: a seam leaves its face where no corner was found near " +
-                                  format_point(tr.exit) + " (the surface grazes a block's edge)");
+          throw GrazedEdgeError("adaptive: a seam leaves its face where no corner was found near " +
+                                format_point(tr.exit) + " (the surface grazes a block's edge)");
         if (tr.points.size() < 3) throw CreaseLayoutError("adaptive: a seam loop too small to mesh near " + format_point(x));
         seams.push_back(resample(tracer, f, tr.points, tr.targets, -1, -1, own));
         tr.points.push_back(tr.points.front());  // the closing chord too, for the crossings it makes
@@ -862,11 +862,17 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
   const std::array<int, 3> n = block_counts(field, costly, seeds);
   if (n[0] * n[1] * n[2] < 2) return out;
   out.report.blocks = n;
-  // Layouts from kLayoutShifts in turn while the surface grazes a block's edge.
+  // Layouts from kLayoutShifts in turn while the surface grazes a block's edge; one whose cuts
+  // came out as an earlier one's (blocks a few seed cells wide, or the same planes chosen near
+  // both shifts) is not traced again.
+  std::vector<std::array<std::vector<double>, 3>> tried;
+  std::string grazed;
   for (std::size_t layout = 0;; ++layout) {
     out.report.layouts = layout + 1;
     try {
       const Cuts cuts = choose_cuts(field, seeds.grid, n, kLayoutShifts[layout], options.threads, options.cancel);
+      if (std::find(tried.begin(), tried.end(), cuts.walls) != tried.end()) throw GrazedEdgeError(grazed);
+      tried.push_back(cuts.walls);
       for (int a = 0; a < 3; ++a) out.report.cuts[a].assign(cuts.walls[a].begin() + 1, cuts.walls[a].end() - 1);
       SeamVertices sv;
       const Lines lines = find_corners(field, cuts, seeds.grid.h, sv, options.cancel);
@@ -892,17 +898,28 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       // absent, and looking across every traced point would cost it more evaluations than its seams
       // take now.
       const bool looks_across = settings.grading && costly;
+      // In lockstep (one thread, in face order per carrier) a face after one that failed is not
+      // traced: only the lowest failed face's error is rethrown, and a layout that fails costs
+      // a Python function no more calls than it must.
+      std::size_t first_failed = faces.size();
+      const bool faces_in_lockstep = field.costly_calls();
       const auto trace_one = [&](const Field& on, std::size_t i) {
         options.cancel.check("adaptive");
+        if (faces_in_lockstep && i > first_failed) return;
         std::size_t points_left = points_bound;
         const SeamTracer tracer{on,          settings.sizing, settings.grading, looks_across,
                                 kSeamTolerance * settings.diagonal, points_left, points_bound, options.cancel};
         const Face& f = faces[i];
         face_vertices[i].base = static_cast<int>(ncorners);
-        face_seams[i] = trace_face(tracer, f, cuts.planes[f.a][static_cast<std::size_t>(f.cut)], lines, sv.points,
-                                   face_vertices[i]);
+        try {
+          face_seams[i] = trace_face(tracer, f, cuts.planes[f.a][static_cast<std::size_t>(f.cut)], lines, sv.points,
+                                     face_vertices[i]);
+        } catch (...) {
+          if (faces_in_lockstep) first_failed = std::min(first_failed, i);
+          throw;
+        }
       };
-      if (field.costly_calls()) {
+      if (faces_in_lockstep) {
         const LockstepReport lockstep =
             run_in_lockstep(field, faces.size(), trace_one);
         out.report.lockstep_tasks = lockstep.carriers;
@@ -1139,6 +1156,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       out.vertices = cm.mesh.positions.size();
       out.mesh = std::move(cm);
     } catch (const GrazedEdgeError& e) {
+      grazed = e.what();
       if (layout + 1 < kLayoutShifts.size()) {
         // Afresh, but for the calls the layouts made.
         const std::uint64_t batches = out.report.lockstep_batches;
