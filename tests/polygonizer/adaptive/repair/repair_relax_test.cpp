@@ -126,22 +126,35 @@ Mesh flipped_sphere() {
   return mesh;
 }
 
+// `mesh` relaxed on the unit sphere told costly or not (CountedCalls), and the calls it made.
+struct CostlyOrNot {
+  Mesh mesh;
+  QualityReport report;
+  std::size_t calls = 0;
+};
+CostlyOrNot relaxed_counting(bool costly, Mesh mesh, const QualityOptions& o) {
+  const auto sphere = unit_sphere();
+  const CountedCalls field(*sphere, costly);
+  CostlyOrNot r;
+  {
+    RepairContext ctx(field, mesh, o);
+    relax(ctx);
+    ctx.compact();
+    r.report = ctx.report_;
+  }
+  r.calls = field.calls;
+  r.mesh = std::move(mesh);
+  return r;
+}
+
 TEST(RepairRelax, ACostlyFieldsFlipsAskForTheirSamplesInBatchesAndMakeTheSameMesh) {
   // prefetch_flip_samples: the flips' crease probes and midpoint distances asked for together
   // before the pass of flips, the same numbers as one at a time.
-  const auto sphere = unit_sphere();
-  std::array<Mesh, 2> meshes;
-  std::array<std::size_t, 2> calls{};
-  std::array<std::size_t, 2> flips{};
-  for (int costly = 0; costly < 2; ++costly) {
-    const CountedCalls field(*sphere, costly == 1);
-    meshes[costly] = flipped_sphere();
-    RepairContext ctx(field, meshes[costly], sphere_options());
-    relax(ctx);
-    ctx.compact();
-    calls[costly] = field.calls;
-    flips[costly] = ctx.report_.relax_flips;
-  }
+  const std::array<CostlyOrNot, 2> r{relaxed_counting(false, flipped_sphere(), sphere_options()),
+                                     relaxed_counting(true, flipped_sphere(), sphere_options())};
+  const std::array<std::size_t, 2> flips{r[0].report.relax_flips, r[1].report.relax_flips};
+  const std::array<Mesh, 2> meshes{r[0].mesh, r[1].mesh};
+  const std::array<std::size_t, 2> calls{r[0].calls, r[1].calls};
   EXPECT_GT(flips[0], 10u);
   EXPECT_EQ(flips[1], flips[0]);
   EXPECT_EQ(meshes[1].positions, meshes[0].positions);
@@ -153,20 +166,13 @@ TEST(RepairRelax, ACostlyFieldsFlipsAskForTheirSamplesInBatchesAndMakeTheSameMes
 TEST(RepairRelax, ACostlyFieldsMovesWithATolerancePrefetchTheirStarsAndMakeTheSameMesh) {
   // prefetch_stars: with a tolerance, judging a move measures its star before and after it; a
   // costly field's are asked for a chunk of moves at a time, the same numbers as one at a time.
-  const auto sphere = unit_sphere();
-  std::array<Mesh, 2> meshes;
-  std::array<std::size_t, 2> calls{}, relaxed{};
-  for (int costly = 0; costly < 2; ++costly) {
-    const CountedCalls field(*sphere, costly == 1);
-    meshes[costly] = jittered_sphere();
-    QualityOptions o = sphere_options();
-    o.tolerance = 0.05;
-    RepairContext ctx(field, meshes[costly], o);
-    relax(ctx);
-    ctx.compact();
-    calls[costly] = field.calls;
-    relaxed[costly] = ctx.report_.relaxed;
-  }
+  QualityOptions o = sphere_options();
+  o.tolerance = 0.05;
+  const std::array<CostlyOrNot, 2> r{relaxed_counting(false, jittered_sphere(), o),
+                                     relaxed_counting(true, jittered_sphere(), o)};
+  const std::array<std::size_t, 2> relaxed{r[0].report.relaxed, r[1].report.relaxed};
+  const std::array<Mesh, 2> meshes{r[0].mesh, r[1].mesh};
+  const std::array<std::size_t, 2> calls{r[0].calls, r[1].calls};
   EXPECT_GT(relaxed[0], 50u);
   EXPECT_EQ(relaxed[1], relaxed[0]);
   EXPECT_EQ(meshes[1].positions, meshes[0].positions);
