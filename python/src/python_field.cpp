@@ -53,6 +53,39 @@ double step_up(const Vec3& p, int k, double h) { return (p[k] + h) - p[k]; }
 double step_down(const Vec3& p, int k, double h) { return p[k] - (p[k] - h); }
 double spacing(const Vec3& p, int k, double h) { return step_up(p, k, h) + step_down(p, k, h); }
 
+// The points of p's stencil for a value and gradient (0-6 above), or a value, gradient and Hessian
+// from values alone (0-24).
+void add_gradient_stencil(const Vec3& p, double hg, std::vector<Vec3>& out) {
+  out.push_back(p);
+  add_axis_points(p, hg, out);
+}
+void add_full_stencil(const Vec3& p, double hg, double hh, std::vector<Vec3>& out) {
+  add_gradient_stencil(p, hg, out);
+  add_axis_points(p, hh, out);
+  add_mixed_points(p, hh, out);
+}
+
+// The value and gradient at p from F on its stencil, fi[0..6].
+double value_gradient_from(const double* fi, const Vec3& p, double hg, Vec3& gradient) {
+  for (int k = 0; k < 3; ++k) gradient[k] = (fi[1 + 2 * k] - fi[2 + 2 * k]) / spacing(p, k, hg);
+  return fi[0];
+}
+
+// The Hessian at p from F on its full stencil, fi[0..24].
+Mat3 hessian_from(const double* fi, const Vec3& p, double hh) {
+  Mat3 hessian;
+  for (int k = 0; k < 3; ++k) {
+    const double hp = step_up(p, k, hh), hm = step_down(p, k, hh);
+    hessian(k, k) = 2 * ((fi[7 + 2 * k] - fi[0]) / hp - (fi[0] - fi[8 + 2 * k]) / hm) / (hp + hm);
+  }
+  for (int m = 0; m < 3; ++m) {
+    const auto [a, b] = kPairs[m];
+    const double* q = &fi[13 + 4 * m];  // ++, +-, -+, --
+    hessian(a, b) = hessian(b, a) = (q[0] - q[1] - q[2] + q[3]) / (spacing(p, a, hh) * spacing(p, b, hh));
+  }
+  return hessian;
+}
+
 }  // namespace
 
 PythonField::PythonField(PythonFieldFunctions functions, const Box& bounds, std::optional<double> lipschitz,
@@ -162,16 +195,10 @@ void PythonField::eval_values_gradients(const Vec3* points, double* values, Vec3
   }
   std::vector<Vec3> stencil;
   stencil.reserve(kGradientStencil * n);
-  for (std::size_t i = 0; i < n; ++i) {
-    stencil.push_back(points[i]);
-    add_axis_points(points[i], gradient_step_, stencil);
-  }
+  for (std::size_t i = 0; i < n; ++i) add_gradient_stencil(points[i], gradient_step_, stencil);
   const std::vector<double> f = call_value(stencil.data(), stencil.size());
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* fi = &f[kGradientStencil * i];
-    values[i] = fi[0];
-    for (int k = 0; k < 3; ++k) gradients[i][k] = (fi[1 + 2 * k] - fi[2 + 2 * k]) / spacing(points[i], k, gradient_step_);
-  }
+  for (std::size_t i = 0; i < n; ++i)
+    values[i] = value_gradient_from(&f[kGradientStencil * i], points[i], gradient_step_, gradients[i]);
 }
 
 void PythonField::eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
@@ -210,37 +237,50 @@ void PythonField::eval_gradients_hessians(const Vec3* points, double* values, Ve
   const std::size_t size = mixed ? kFullStencil : kAxisStencil;
   stencil.reserve(size * n);
   for (std::size_t i = 0; i < n; ++i) {
-    stencil.push_back(points[i]);
-    add_axis_points(points[i], gradient_step_, stencil);
-    add_axis_points(points[i], hessian_step_, stencil);
-    if (mixed) add_mixed_points(points[i], hessian_step_, stencil);
+    if (mixed) {
+      add_full_stencil(points[i], gradient_step_, hessian_step_, stencil);
+    } else {
+      add_gradient_stencil(points[i], gradient_step_, stencil);
+      add_axis_points(points[i], hessian_step_, stencil);
+    }
   }
   const std::vector<double> f = call_value(stencil.data(), stencil.size());
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3& p = points[i];
-    const double* fi = &f[size * i];
-    values[i] = fi[0];
-    for (int k = 0; k < 3; ++k) gradients[i][k] = (fi[1 + 2 * k] - fi[2 + 2 * k]) / spacing(p, k, gradient_step_);
-  }
+  for (std::size_t i = 0; i < n; ++i) values[i] = value_gradient_from(&f[size * i], points[i], gradient_step_, gradients[i]);
   if (!mixed) {
     const std::vector<Mat3> h = call_hessian(points, n);
     std::copy(h.begin(), h.end(), hessians);
     return;
   }
-  const double hh = hessian_step_;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3& p = points[i];
-    const double* fi = &f[size * i];
-    Mat3& hessian = hessians[i];
-    for (int k = 0; k < 3; ++k) {
-      const double hp = step_up(p, k, hh), hm = step_down(p, k, hh);
-      hessian(k, k) = 2 * ((fi[7 + 2 * k] - fi[0]) / hp - (fi[0] - fi[8 + 2 * k]) / hm) / (hp + hm);
-    }
-    for (int m = 0; m < 3; ++m) {
-      const auto [a, b] = kPairs[m];
-      const double* q = &fi[13 + 4 * m];  // ++, +-, -+, --
-      hessian(a, b) = hessian(b, a) = (q[0] - q[1] - q[2] + q[3]) / (spacing(p, a, hh) * spacing(p, b, hh));
-    }
+  for (std::size_t i = 0; i < n; ++i) hessians[i] = hessian_from(&f[size * i], points[i], hessian_step_);
+}
+
+void PythonField::eval_together(const Batch& plain, const Batch& with_gradients, const Batch& with_hessians) const {
+  // A function given with derivatives of its own is called once for each it needs, as the three
+  // batched hooks call it.
+  if (has_gradient() || has_hessian()) {
+    Field::eval_together(plain, with_gradients, with_hessians);
+    return;
+  }
+  const std::size_t n = plain.n + kGradientStencil * with_gradients.n + kFullStencil * with_hessians.n;
+  if (n == 0) return;
+  py::gil_scoped_acquire gil;
+  // One call: the plain points, then the gradients' stencils, then the Hessians', each laid out as
+  // the hooks lay theirs, so each point gets the numbers its own hook would give it.
+  std::vector<Vec3> stencil;
+  stencil.reserve(n);
+  stencil.insert(stencil.end(), plain.points, plain.points + plain.n);
+  for (std::size_t i = 0; i < with_gradients.n; ++i) add_gradient_stencil(with_gradients.points[i], gradient_step_, stencil);
+  for (std::size_t i = 0; i < with_hessians.n; ++i)
+    add_full_stencil(with_hessians.points[i], gradient_step_, hessian_step_, stencil);
+  const std::vector<double> f = call_value(stencil.data(), stencil.size());
+  std::copy_n(f.begin(), plain.n, plain.values);
+  const double* at = f.data() + plain.n;
+  for (std::size_t i = 0; i < with_gradients.n; ++i, at += kGradientStencil)
+    with_gradients.values[i] = value_gradient_from(at, with_gradients.points[i], gradient_step_, with_gradients.gradients[i]);
+  for (std::size_t i = 0; i < with_hessians.n; ++i, at += kFullStencil) {
+    const Vec3& p = with_hessians.points[i];
+    with_hessians.values[i] = value_gradient_from(at, p, gradient_step_, with_hessians.gradients[i]);
+    with_hessians.hessians[i] = hessian_from(at, p, hessian_step_);
   }
 }
 

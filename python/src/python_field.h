@@ -8,7 +8,8 @@
 // the finite differences putting all the stencil points of all the batch's points into that one
 // call: the seed grid and the marching lattices ask for values in slabs, the adaptive tracker for
 // the points of each expansion's Newton round and curvature together, the batched Newton
-// projection for its points still iterating. A single-point evaluation is a batch of one.
+// projection for its points still iterating; tasks in lockstep ask for all three kinds in one call
+// (eval_together). A single-point evaluation is a batch of one.
 #pragma once
 
 #include "bindings.h"
@@ -65,6 +66,8 @@ class PythonField final : public Field {
   void eval_values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const override;
   void eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
                                std::size_t n) const override;
+  // Without derivatives of its own: one call of F for the three batches' stencils.
+  void eval_together(const Batch& plain, const Batch& with_gradients, const Batch& with_hessians) const override;
 
  private:
   // The GIL must be held. Check the shapes the functions return and throw InvalidInputError

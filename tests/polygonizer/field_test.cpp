@@ -4,6 +4,7 @@
 
 #include <cdp/core/field.h>
 #include <cdp/core/models/compiled.h>
+#include <cdp/core/models/level_shift.h>
 #include <cdp/core/models/mpu.h>
 #include <cdp/core/models/vis.h>
 
@@ -76,10 +77,54 @@ TEST(FieldBatches, GiveTheSinglePointNumbersAndCountsForEveryModel) {
   }
 }
 
+// evaluate_together: the three batched kinds in one evaluation, each point's numbers and the counts
+// those of its own kind's batch, for every model and through a level shift (F - c).
+TEST(FieldBatches, TogetherGiveEachKindsNumbersAndCounts) {
+  std::mt19937 rng(2026);
+  constexpr std::size_t kPlain = 5, kGradients = 7, kHessians = 11;
+  for (const auto& model : models()) {
+    const LevelShift shifted(*model, 0.125);
+    for (const Field* field : {static_cast<const Field*>(model.get()), static_cast<const Field*>(&shifted)}) {
+      SCOPED_TRACE(field->type_name() + (field == &shifted ? " - 0.125" : ""));
+      const Box box = field->bounds();
+      std::uniform_real_distribution<double> u(0, 1);
+      std::vector<Vec3> p(kPlain + kGradients + kHessians);
+      for (Vec3& x : p) x = box.min + box.size().cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
+      const Vec3* pg = p.data() + kPlain;
+      const Vec3* ph = pg + kGradients;
+
+      std::vector<double> v(p.size()), w(p.size());
+      std::vector<Vec3> g(p.size()), gw(p.size());
+      std::vector<Mat3> h(kHessians), hw(kHessians);
+      field->reset_counts();
+      field->values(p.data(), w.data(), kPlain);
+      field->values_gradients(pg, w.data() + kPlain, gw.data() + kPlain, kGradients);
+      field->gradients_hessians(ph, w.data() + kPlain + kGradients, gw.data() + kPlain + kGradients, hw.data(), kHessians);
+      const EvaluationCounts apart = field->counts();
+      field->reset_counts();
+      field->evaluate_together({p.data(), v.data(), nullptr, nullptr, kPlain},
+                               {pg, v.data() + kPlain, g.data() + kPlain, nullptr, kGradients},
+                               {ph, v.data() + kPlain + kGradients, g.data() + kPlain + kGradients, h.data(), kHessians});
+      const EvaluationCounts together = field->counts();
+      EXPECT_EQ(together.value, kPlain);
+      EXPECT_EQ(together.value_gradient, kGradients);
+      EXPECT_EQ(together.gradient_hessian, kHessians);
+      EXPECT_EQ(together.total(), apart.total());
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        ASSERT_TRUE(same_bits(v[i], w[i])) << "value at point " << i;
+        if (i >= kPlain) ASSERT_TRUE(same_bits(g[i], gw[i])) << "gradient at point " << i;
+      }
+      for (std::size_t i = 0; i < kHessians; ++i) ASSERT_TRUE(same_bits(h[i], hw[i])) << "Hessian at point " << i;
+      if (field == &shifted) EXPECT_EQ(v[0], model->value(p[0]) - 0.125);
+    }
+  }
+}
+
 TEST(FieldBatches, AnEmptyBatchEvaluatesAndCountsNothing) {
   const auto field = test::tanglecube();
   field->values_gradients(nullptr, nullptr, nullptr, 0);
   field->gradients_hessians(nullptr, nullptr, nullptr, nullptr, 0);
+  field->evaluate_together({}, {}, {});
   EXPECT_EQ(field->counts().total(), 0u);
 }
 

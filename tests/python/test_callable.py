@@ -108,8 +108,9 @@ def test_the_tracker_calls_python_once_per_batch_not_once_per_point(expression):
 
 def test_blocks_of_a_callable_share_their_calls_in_lockstep(expression):
     """With blocks, a callable field's blocks are meshed in lockstep and their faces' seams traced
-    so: one call of f makes the evaluations of all of them (issue 58: at most 0.5 calls per vertex
-    on this torus at factor 8, against about 5.5 tracked alone). The batches are the same on
+    so: one call of f makes the evaluations of all of them, values, gradients and Hessians alike
+    (issue 58: at most 0.5 calls per vertex on this torus at factor 8, against about 5.5 tracked
+    alone; 0.38 with a call for each kind a round, 0.21 with one). The batches are the same on
     every run, so the mesh is too."""
     sizes = []
 
@@ -125,7 +126,7 @@ def test_blocks_of_a_callable_share_their_calls_in_lockstep(expression):
     assert topology(V, F) == (1, 1, True)
     evaluations = stats["field_evaluations"]
     assert sum(sizes) == evaluations["value"] + 7 * evaluations["value_gradient"] + 25 * evaluations["gradient_hessian"]
-    assert len(sizes) <= 0.5 * len(V), (len(sizes), len(V))
+    assert len(sizes) <= 0.3 * len(V), (len(sizes), len(V))
     calls = len(sizes)
     V2, F2, _, _ = cdp.polygonize(field, factor=8, blocks=True)
     assert len(sizes) == 2 * calls

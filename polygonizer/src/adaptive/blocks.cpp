@@ -397,27 +397,36 @@ struct SeamTracer {
   std::size_t points_bound;
   const CancelToken& cancel;
 
+  // A point on a seam with F's gradient there: the last Newton step's, so that the seam's tangent
+  // there costs no evaluation of its own (one round of a Python function's calls a traced step).
+  struct OnSeam {
+    Vec3 point;
+    Vec3 gradient;
+  };
+
   // x moved onto F = 0 within its plane (axis a fixed); nothing where Newton fails.
-  std::optional<Vec3> onto_seam(Vec3 x, int a) const {
+  std::optional<OnSeam> onto_seam(Vec3 x, int a) const {
     for (int it = 0; it < kSeamNewtonSteps; ++it) {
-      Vec3 g;
-      const double v = field.value_gradient(x, g);
+      Vec3 gradient;
+      const double v = field.value_gradient(x, gradient);
+      Vec3 g = gradient;
       g[a] = 0;
       const double gg = g.squaredNorm();
       if (!std::isfinite(v) || !(gg > 0)) return std::nullopt;
-      if (std::abs(v) <= tolerance * std::sqrt(gg)) return x;
+      if (std::abs(v) <= tolerance * std::sqrt(gg)) return OnSeam{x, gradient};
       x -= v / gg * g;
     }
     return std::nullopt;
   }
 
-  // The seam's direction at x: the plane's normal crossed with the gradient, unit.
-  std::optional<Vec3> tangent(const Vec3& x, int a) const {
-    const Vec3 t = axis_vector(a).cross(field.gradient(x));
+  // The seam's direction where F has gradient g: the plane's normal crossed with it, unit.
+  static std::optional<Vec3> tangent_of(const Vec3& g, int a) {
+    const Vec3 t = axis_vector(a).cross(g);
     const double n = t.norm();
     if (!(n > 0) || !std::isfinite(n)) return std::nullopt;
     return t / n;
   }
+  std::optional<Vec3> tangent(const Vec3& x, int a) const { return tangent_of(field.gradient(x), a); }
 
   // The edge length the curvature asks for where the field has gradient g and Hessian h; none
   // where the gradient vanishes.
@@ -503,9 +512,11 @@ struct SeamTracer {
       double step = kTraceShare * out.targets.back();
       std::optional<Vec3> next, t1;
       for (;;) {
-        next = onto_seam(x + sign * step * *t0, f.a);
-        if (next) {
-          t1 = tangent(*next, f.a);
+        const std::optional<OnSeam> on = onto_seam(x + sign * step * *t0, f.a);
+        next.reset();
+        if (on) {
+          next = on->point;
+          t1 = tangent_of(on->gradient, f.a);
           // A step must land between half and twice its length on: where Newton brings it back
           // to x (a crease meshed as smooth, the blended block with creases ignored), the trace
           // stood still for 10^5 steps.
@@ -606,7 +617,12 @@ Seam resample(const SeamTracer& tracer, const Face& f, const std::vector<Vec3>& 
     const double span = cumulative[j + 1] - cumulative[j];
     const double t = span > 0 ? std::clamp((s - cumulative[j]) / span, 0.0, 1.0) : 0.0;
     const Vec3 guess = at(j) + t * (at(j + 1) - at(j));
-    const std::optional<Vec3> x = k == 0 ? std::optional<Vec3>(points[0]) : tracer.onto_seam(guess, f.a);
+    std::optional<Vec3> x;
+    if (k == 0) {
+      x = points[0];
+    } else if (const auto on = tracer.onto_seam(guess, f.a)) {
+      x = on->point;
+    }
     if (!x || (*x - guess).norm() > 0.5 * std::max(h[j], h[(j + 1) % n]))
       throw CreaseLayoutError("adaptive: a seam vertex could not be put on its seam near " + format_point(guess));
     out.vertices.push_back(sv.add(*x));
@@ -752,7 +768,8 @@ std::vector<Seam> trace_face(const SeamTracer& tracer, const Face& f, const Plan
         const Vec3 p = plane.point(i, j), q = plane.point(i2, j2);
         const Vec3 x = p + va / (va - vb) * (q - p);
         if (!f.inside(x) || crossed(p, q)) continue;
-        const std::optional<Vec3> start = tracer.onto_seam(x, f.a);
+        std::optional<Vec3> start;
+        if (const auto on = tracer.onto_seam(x, f.a)) start = on->point;
         if (!start)
           throw CreaseLayoutError("adaptive: a crossing of a block's wall could not be put on its seam near " +
                                   format_point(x));

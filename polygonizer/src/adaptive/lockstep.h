@@ -2,8 +2,9 @@
 // evaluate a field whose every call costs far more than the arithmetic of its points
 // (Field::costly_calls: a Python function, each call a trip into the interpreter) run each on a
 // stack of its own (a fiber: ../fiber.h), and every evaluation waits until each task still
-// running has asked for one; then all of them are made together, one batched call of the field
-// per kind asked for (values; values and gradients; gradients and Hessians). The tracker's calls
+// running has asked for one; then all of them are made together, one evaluation of the field for
+// every kind asked for (values; values and gradients; gradients and Hessians:
+// Field::evaluate_together, one call of a Python function). The tracker's calls
 // come one after another (each expansion starts from the mesh the last one left), so one task
 // cannot batch them; many tasks can.
 //
@@ -31,7 +32,7 @@ constexpr std::size_t kLockstepTasks = 64;
 
 struct LockstepReport {
   std::size_t carriers = 0;  // fibers that carried the tasks (at most kLockstepTasks)
-  std::uint64_t batches = 0;  // gathered evaluations: calls of the field (one per kind in each)
+  std::uint64_t batches = 0;  // gathered evaluations (Field::evaluate_together), one a round
 };
 
 // Runs task(view, i) for every i in [0, n): task i on carrier i % carriers (carriers =

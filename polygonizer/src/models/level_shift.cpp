@@ -38,6 +38,12 @@ void LevelShift::eval_gradients_hessians(const Vec3* points, double* values, Vec
   for (std::size_t i = 0; i < n; ++i) values[i] -= level_;
 }
 
+void LevelShift::eval_together(const Batch& plain, const Batch& with_gradients, const Batch& with_hessians) const {
+  field_.eval_together(plain, with_gradients, with_hessians);
+  for (const Batch* b : {&plain, &with_gradients, &with_hessians})
+    for (std::size_t i = 0; i < b->n; ++i) b->values[i] -= level_;
+}
+
 FieldPiece LevelShift::eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
   FieldPiece piece = field_.eval_piece(p, branch);
   piece.value -= level_;

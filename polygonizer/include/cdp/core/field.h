@@ -160,6 +160,31 @@ class Field {
     eval_gradients_hessians(points, values, gradients, hessians, n);
   }
 
+  // One batch of points and where their evaluations go, for evaluate_together: `gradients` for
+  // values with gradients and Hessians, `hessians` for those with Hessians.
+  struct Batch {
+    const Vec3* points = nullptr;
+    double* values = nullptr;
+    Vec3* gradients = nullptr;
+    Mat3* hessians = nullptr;
+    std::size_t n = 0;
+  };
+  // values(plain), values_gradients(with_gradients) and gradients_hessians(with_hessians) in one
+  // evaluation where the model can (each batch may be empty): the same numbers, counted as those
+  // three would count them. A field whose calls cost more than their points (costly_calls: a Python
+  // function without derivatives of its own) makes one call for all three batches' points where
+  // three calls would cost three trips into the interpreter; tasks in lockstep ask for every kind
+  // together (adaptive/lockstep.h).
+  // \pre each batch's arrays hold its n elements (plain needs no gradients, with_gradients no
+  //      Hessians).
+  // 	hrow as value().
+  void evaluate_together(const Batch& plain, const Batch& with_gradients, const Batch& with_hessians) const {
+    n_value_.fetch_add(plain.n, std::memory_order_relaxed);
+    n_value_gradient_.fetch_add(with_gradients.n, std::memory_order_relaxed);
+    n_gradient_hessian_.fetch_add(with_hessians.n, std::memory_order_relaxed);
+    eval_together(plain, with_gradients, with_hessians);
+  }
+
   // The smooth pieces of the field near p: one per choice of branches of its min, max and abs
   // that is taken somewhere within `radius` of p (to first order: a branch point counts when
   // the surface where its two arguments are equal lies within `radius`), each evaluated at p,
@@ -445,6 +470,15 @@ class Field {
   virtual void eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
                                        std::size_t n) const {
     for (std::size_t i = 0; i < n; ++i) values[i] = eval_gradient_hessian(points[i], gradients[i], hessians[i]);
+  }
+  // By default the three batched hooks, each for a batch that is not empty.
+  virtual void eval_together(const Batch& plain, const Batch& with_gradients, const Batch& with_hessians) const {
+    if (plain.n > 0) eval_values(plain.points, plain.values, plain.n);
+    if (with_gradients.n > 0)
+      eval_values_gradients(with_gradients.points, with_gradients.values, with_gradients.gradients, with_gradients.n);
+    if (with_hessians.n > 0)
+      eval_gradients_hessians(with_hessians.points, with_hessians.values, with_hessians.gradients,
+                              with_hessians.hessians, with_hessians.n);
   }
 
   // The pieces near p (Field::pieces; without Hessians, pieces_first_order, unless `hessians`):

@@ -50,6 +50,7 @@ class LevelShift final : public Field {
   void eval_values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const override;
   void eval_gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians,
                                std::size_t n) const override;
+  void eval_together(const Batch& plain, const Batch& with_gradients, const Batch& with_hessians) const override;
   FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
   bool has_branch_points() const override { return field_.has_branch_points(); }
   bool eval_branch_record(const Vec3& p, const std::vector<std::uint8_t>& branch, BranchRecord& record) const override;
