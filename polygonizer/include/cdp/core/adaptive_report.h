@@ -94,8 +94,9 @@ struct BlocksReport {
   // returned for the run whose mesh was kept (what a cluster moves).
   std::size_t task_bytes = 0, piece_bytes = 0;
   // With a field whose calls cost more than their points (Field::costly_calls: a Python
-  // function): the most faces or blocks traced and meshed in lockstep, their evaluations gathered
-  // into one call of the field (polygonizer/src/adaptive/lockstep.h), and those calls; 0 otherwise.
+  // function): the most faces or blocks traced and meshed in lockstep, each round's evaluations
+  // of every kind gathered into one evaluation of the field (Field::evaluate_together, one call
+  // of a Python function: polygonizer/src/adaptive/lockstep.h), and those rounds; 0 otherwise.
   std::size_t lockstep_tasks = 0;
   std::uint64_t lockstep_batches = 0;
   double layout_seconds = 0, seconds = 0;
