@@ -177,7 +177,7 @@ class Field {
   // together (adaptive/lockstep.h).
   // \pre each batch's arrays hold its n elements (plain needs no gradients, with_gradients no
   //      Hessians).
-  // 	hrow as value().
+  // \throw as value().
   void evaluate_together(const Batch& plain, const Batch& with_gradients, const Batch& with_hessians) const {
     n_value_.fetch_add(plain.n, std::memory_order_relaxed);
     n_value_gradient_.fetch_add(with_gradients.n, std::memory_order_relaxed);
