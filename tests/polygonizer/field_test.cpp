@@ -112,10 +112,14 @@ TEST(FieldBatches, TogetherGiveEachKindsNumbersAndCounts) {
       EXPECT_EQ(together.total(), apart.total());
       for (std::size_t i = 0; i < p.size(); ++i) {
         ASSERT_TRUE(same_bits(v[i], w[i])) << "value at point " << i;
-        if (i >= kPlain) ASSERT_TRUE(same_bits(g[i], gw[i])) << "gradient at point " << i;
+        if (i >= kPlain) {
+          ASSERT_TRUE(same_bits(g[i], gw[i])) << "gradient at point " << i;
+        }
       }
       for (std::size_t i = 0; i < kHessians; ++i) ASSERT_TRUE(same_bits(h[i], hw[i])) << "Hessian at point " << i;
-      if (field == &shifted) EXPECT_EQ(v[0], model->value(p[0]) - 0.125);
+      if (field == &shifted) {
+        EXPECT_EQ(v[0], model->value(p[0]) - 0.125);
+      }
     }
   }
 }
