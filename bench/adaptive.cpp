@@ -338,8 +338,10 @@ BENCHMARK(BM_AdaptiveBookkeeping)->ArgName("shape")->DenseRange(0, 1)->UseManual
 // large VIS with a helper thread) and requires the two meshes to be the same bit for bit; it
 // reports both times and their ratio, speedup_1_to_2. The manual time is the two-thread run's.
 // Tanglecube (a cheap field: the serial tracking dominates), the bunny VIS-800 (a dear one,
-// too small to split) and the Igea VIS-4004 (which splits), at factor 3. On a machine with one
-// core the second run has nothing to share and the ratio is about 1.
+// too small to split) and the Igea VIS-4004 (which splits), at factor 3, and the gyroid clipped by
+// a ball of the hard-surface suite at factor 3 (issue 58's surface with creases: meshed along
+// them, not in blocks). On a machine with one core the second run has nothing to share and the
+// ratio is about 1.
 const Field& igea() {
   static const std::unique_ptr<Field> field =
       load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/igea_vis4004.json");
@@ -347,10 +349,14 @@ const Field& igea() {
 }
 
 void BM_AdaptiveThreads(benchmark::State& state) {
-  const int shape = static_cast<int>(state.range(0));  // 0 tanglecube, 1 bunny VIS-800, 2 Igea VIS-4004
-  std::unique_ptr<Field> tanglecube;
-  if (shape == 0) tanglecube = make_shape(kTanglecube);
-  const Field& field = shape == 0 ? *tanglecube : shape == 1 ? bunny() : igea();
+  // 0 tanglecube, 1 bunny VIS-800, 2 Igea VIS-4004, 3 the gyroid ball
+  const int shape = static_cast<int>(state.range(0));
+  std::unique_ptr<Field> own;
+  if (shape == 0) own = make_shape(kTanglecube);
+  if (shape == 3)
+    own = std::make_unique<Expression>("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)",
+                                       std::map<std::string, double>{}, Box{{-2.2, -2.2, -2.2}, {2.2, 2.2, 2.2}});
+  const Field& field = shape == 1 ? bunny() : shape == 2 ? igea() : *own;
   AdaptiveOptions o;
   o.factor = 3;
   double one = 0, two = 0;
@@ -374,9 +380,10 @@ void BM_AdaptiveThreads(benchmark::State& state) {
   state.counters["speedup_1_to_2"] = one / two;
   state.SetLabel(shape == 0   ? "tanglecube/adaptive/threads"
                  : shape == 1 ? "bunny_vis800/adaptive/threads"
-                              : "igea_vis4004/adaptive/threads");
+                 : shape == 2 ? "igea_vis4004/adaptive/threads"
+                              : "gyroid_ball/adaptive/threads");
 }
-BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 2)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 3)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // Issue 58's blocks (AdaptiveOptions::blocks): each iteration meshes the field by tracking alone
 // on one thread, then with blocks on one thread and on two, in turn, and requires the two block
@@ -393,7 +400,9 @@ BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 2)->UseManualTime
 // their time divides among the threads, the rest does not), and the rest of the time outside the
 // blocks as serial. Shapes: 0 the torus of
 // experiments/fields/torus.json at factor 40 (4 * 10^5 triangles), 1 tanglecube at factor 12,
-// 2 the bunny VIS-800 at factor 5, 3 the random blobs at tolerance 1e-3.
+// 2 the bunny VIS-800 at factor 5, 3 the random blobs at tolerance 1e-3, 4 the bunny VIS-800 at
+// factor 3. BM_AdaptiveBlocksLargeSlow: the same torus at tolerance 1e-5 (about 1.9 * 10^6
+// triangles, issue 58's large run; about 30 s an iteration, not in bench-short).
 double greedy_makespan(std::vector<double> times, int threads) {
   std::sort(times.rbegin(), times.rend());
   std::vector<double> load(static_cast<std::size_t>(threads), 0.0);
@@ -403,17 +412,9 @@ double greedy_makespan(std::vector<double> times, int threads) {
 
 double cpu_seconds() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
-void BM_AdaptiveBlocks(benchmark::State& state) {
-  const int shape = static_cast<int>(state.range(0));
-  static const std::unique_ptr<Field> torus = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/torus.json");
-  static const std::unique_ptr<Field> tangle = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/tanglecube.json");
-  static const std::unique_ptr<Field> blobs = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/random_blobs.json");
-  const Field& field = shape == 0 ? *torus : shape == 1 ? *tangle : shape == 2 ? bunny() : *blobs;
-  AdaptiveOptions serial;
-  serial.threads = 1;
-  serial.blocks = false;
-  if (shape == 3) serial.sizing = SizingMode::Tolerance, serial.tolerance = 1e-3;
-  else serial.factor = shape == 0 ? 40 : shape == 1 ? 12 : 5;
+// The measures above of `field` meshed with `serial` (tracking alone on one thread), then in
+// blocks on one thread and on two.
+void measure_blocks(benchmark::State& state, const Field& field, const AdaptiveOptions& serial) {
   AdaptiveOptions blocks1 = serial;
   blocks1.blocks = true;
   AdaptiveOptions blocks2 = blocks1;
@@ -474,12 +475,42 @@ void BM_AdaptiveBlocks(benchmark::State& state) {
   state.counters["pass_speedup_1_to_2"] = passes2 > 0 ? passes1 / passes2 : 0.0;
   state.counters["triangles"] = triangles;
   state.counters["meshed_blocks"] = nblocks;
+}
+
+const Field& torus_field() {
+  static const std::unique_ptr<Field> torus = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/torus.json");
+  return *torus;
+}
+
+void BM_AdaptiveBlocks(benchmark::State& state) {
+  const int shape = static_cast<int>(state.range(0));
+  static const std::unique_ptr<Field> tangle = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/tanglecube.json");
+  static const std::unique_ptr<Field> blobs = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/random_blobs.json");
+  const Field& field = shape == 0 ? torus_field() : shape == 1 ? *tangle : shape == 3 ? *blobs : bunny();
+  AdaptiveOptions serial;
+  serial.threads = 1;
+  serial.blocks = false;
+  if (shape == 3) serial.sizing = SizingMode::Tolerance, serial.tolerance = 1e-3;
+  else serial.factor = shape == 0 ? 40 : shape == 1 ? 12 : shape == 2 ? 5 : 3;
+  measure_blocks(state, field, serial);
   state.SetLabel(shape == 0   ? "torus_f40/adaptive/blocks"
                  : shape == 1 ? "tanglecube_f12/adaptive/blocks"
                  : shape == 2 ? "bunny_vis800_f5/adaptive/blocks"
-                              : "random_blobs_tol1e-3/adaptive/blocks");
+                 : shape == 3 ? "random_blobs_tol1e-3/adaptive/blocks"
+                              : "bunny_vis800_f3/adaptive/blocks");
 }
-BENCHMARK(BM_AdaptiveBlocks)->ArgName("shape")->DenseRange(0, 3)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AdaptiveBlocks)->ArgName("shape")->DenseRange(0, 4)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+void BM_AdaptiveBlocksLargeSlow(benchmark::State& state) {
+  AdaptiveOptions serial;
+  serial.threads = 1;
+  serial.blocks = false;
+  serial.sizing = SizingMode::Tolerance;
+  serial.tolerance = 1e-5;
+  measure_blocks(state, torus_field(), serial);
+  state.SetLabel("torus_tol1e-5/adaptive/blocks");
+}
+BENCHMARK(BM_AdaptiveBlocksLargeSlow)->Iterations(1)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // Issue 60's scale on paper: the blocks of a run handed to a cluster (AdaptiveOptions::block_runner,
 // python/cdp/distributed.py), projected to a run of 10^9 triangles on 64 workers from what one
