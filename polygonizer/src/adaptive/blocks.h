@@ -11,6 +11,7 @@
 // The steps, each in one place (blocks.cpp):
 //   choose_cuts     the cut planes: near equal shares of the box, through the middle of seed-grid
 //                   cells, moved by up to kCutShift cells where the surface grazes the plane
+//                   (a candidate the seed grid predicts to graze sampled last, predicted_lean)
 //   find_corners    where the surface crosses a block edge (F = 0 on a line), once per edge,
 //                   every edge's roots bisected together
 //   trace_face      every seam of one face of a block: from corner to corner, and loops found
@@ -92,6 +93,14 @@ struct BlockMeshing {
 BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, const Settings& settings,
                          const SeedGridStage& seeds, const QualityOptions* repair = nullptr,
                          std::uint64_t shuffle = 0);
+
+// The lean of the cut plane through the middle of the seed grid's cells of `layer` along `axis`
+// (the smallest share of F's gradient in the plane near the surface, 1 where it is not near) as
+// the layout's samples of the plane would measure it, predicted from the grid's values with no
+// evaluation (F and its gradient from the grid's nodes either side of the plane; the columns
+// within 0.4 of a cell of the surface count): choose_cuts samples a candidate predicted under
+// kSkipLean only if no other is good.
+double predicted_lean(const SeedGrid& grid, const Box& box, int axis, int layer);
 
 // Whether a run meshes by blocks: AdaptiveOptions::blocks, or where unset, whether no bound on
 // one tracker's work is given (max_steps, max_search_visits).

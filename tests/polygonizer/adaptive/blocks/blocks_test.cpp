@@ -57,6 +57,38 @@ TEST(AdaptiveBlocks, ATorusCutIntoBlocksMeshesSoundWithGoodTrianglesAtTheWalls) 
   EXPECT_LE(b.wall_mean_edge_ratio, 1.25);
 }
 
+// A cut plane's lean predicted from the seed grid (no evaluation): through a sphere's middle the
+// surface crosses it square; just above its top it grazes it (the layout's samples there see the
+// normal across the plane); in between, what exact gradients give at the grid's columns within
+// 0.4 of a cell of the surface (kPredictedBand), to the differences' error.
+TEST(AdaptiveBlocks, ACutPlanesLeanIsPredictedFromTheSeedGrid) {
+  const auto f = test::field_from_json(
+      R"({"type": "expression", "value": "sqrt(x^2+y^2+z^2)-1", "bounds": [[-1.2, -1.2, -1.2], [1.2, 1.2, 1.2]]})");
+  SeedOptions so;
+  so.resolution = 32;
+  const SeedGrid grid = sample_seed_grid(*f, so);
+  ASSERT_NEAR(grid.h, 0.075, 1e-12);
+  const Box& box = f->bounds();
+  const auto plane_z = [&](int layer) { return grid.origin[2] + (layer + 0.5) * grid.h; };
+  ASSERT_NEAR(plane_z(15), -0.0375, 1e-12);
+  EXPECT_GT(predicted_lean(grid, box, 2, 15), 0.95);
+  ASSERT_NEAR(plane_z(29), 1.0125, 1e-12);
+  EXPECT_LT(predicted_lean(grid, box, 2, 29), 0.1);
+  const int layer = 22;  // z = 0.4875
+  double exact = 1;
+  for (int j = 0; j <= grid.n[1]; ++j)
+    for (int i = 0; i <= grid.n[0]; ++i) {
+      const Vec3 p(grid.origin[0] + grid.h * i, grid.origin[1] + grid.h * j, plane_z(layer));
+      if (!box.contains(p)) continue;
+      Vec3 g;
+      const double v = f->value_gradient(p, g);
+      if (std::abs(v) > 0.4 * grid.h * g.norm()) continue;  // kPredictedBand
+      exact = std::min(exact, std::hypot(g[0], g[1]) / g.norm());
+    }
+  ASSERT_LT(exact, 0.95);
+  EXPECT_NEAR(predicted_lean(grid, box, 2, layer), exact, 0.05);
+}
+
 // 126k triangles: several times slower under the sanitizers (ctest label slow_under_sanitizers).
 TEST(AdaptiveBlocks, ABlackBoxsRoundedEdgesAreFollowedAcrossTheWalls) {
   // Quilez's rounded box with its C1 seams hidden (no branch data: a black box, as a compiled
