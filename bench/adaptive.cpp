@@ -150,6 +150,12 @@ void BM_AdaptiveScaling(benchmark::State& state) {
 // Factors 6.3, 20, 63 give about 10^4, 10^5, 10^6 triangles on this torus.
 BENCHMARK(BM_AdaptiveScaling)->ArgName("factor_x10")->Arg(63)->Arg(200)->Arg(630)->UseManualTime()->Unit(benchmark::kMillisecond);
 
+// The torus of experiments/fields/torus.json (the field files' torus, not make_shape's), built once.
+const Field& torus_field() {
+  static const std::unique_ptr<Field> torus = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/torus.json");
+  return *torus;
+}
+
 // Table 1 at the paper's middle setting: bunny VIS-800, adaptive factor 3 against MT and MC at
 // precision 3 (comparable triangle counts). The model is built once.
 const Field& bunny() {
@@ -252,7 +258,7 @@ BENCHMARK(BM_AdaptivePaperVariant)
 // most 1.2), and each one's microseconds a triangle. Manual time: the default's. About 9 s an
 // iteration, so not in bench-short.
 void BM_SpeedPerCoreSlow(benchmark::State& state) {
-  static const std::unique_ptr<Field> torus = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/torus.json");
+  const Field& torus = torus_field();
   AdaptiveOptions improved;
   improved.factor = 40;
   improved.threads = 1;
@@ -265,7 +271,7 @@ void BM_SpeedPerCoreSlow(benchmark::State& state) {
   for (auto _ : state) {
     for (int k = 0; k < 3; ++k) {
       const PolygonizeResult r =
-          k == 2 ? marching_cubes(*torus, mc) : polygonize_adaptive(*torus, k == 0 ? improved : paper);
+          k == 2 ? marching_cubes(torus, mc) : polygonize_adaptive(torus, k == 0 ? improved : paper);
       seconds[k] += r.stats.seconds;
       triangles[k] += static_cast<double>(r.stats.triangles);
       if (k == 0) state.SetIterationTime(r.stats.seconds);
@@ -477,11 +483,6 @@ void measure_blocks(benchmark::State& state, const Field& field, const AdaptiveO
   state.counters["meshed_blocks"] = nblocks;
 }
 
-const Field& torus_field() {
-  static const std::unique_ptr<Field> torus = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/torus.json");
-  return *torus;
-}
-
 void BM_AdaptiveBlocks(benchmark::State& state) {
   const int shape = static_cast<int>(state.range(0));
   static const std::unique_ptr<Field> tangle = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/tanglecube.json");
@@ -538,18 +539,18 @@ constexpr double kDaskTaskSeconds = 1e-3;
 constexpr double kClientBytesPerSecond = 1.25e9;  // 10 Gb/s Ethernet
 
 void BM_BlocksClusterProjectionSlow(benchmark::State& state) {
-  static const std::unique_ptr<Field> torus = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/torus.json");
+  const Field& torus = torus_field();
   AdaptiveOptions o;
   o.factor = 40;
   o.threads = 1;
   o.blocks = true;
-  const PolygonizeResult local = polygonize_adaptive(*torus, o);
+  const PolygonizeResult local = polygonize_adaptive(torus, o);
   std::vector<double> task_seconds;
   o.block_runner = [&](const std::vector<std::string>& tasks) {
     std::vector<std::string> pieces;
     for (const std::string& t : tasks) {
       const auto t0 = std::chrono::steady_clock::now();
-      pieces.push_back(run_block_task(*torus, t));
+      pieces.push_back(run_block_task(torus, t));
       task_seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
     return pieces;
@@ -557,7 +558,7 @@ void BM_BlocksClusterProjectionSlow(benchmark::State& state) {
   double client = 0, in_tasks = 0, largest = 0, task_bytes = 0, piece_bytes = 0, triangles = 0, tasks = 0, mesh_bytes = 0;
   for (auto _ : state) {
     task_seconds.clear();  // every layout's tasks (a run that meshes again lays out again)
-    const PolygonizeResult r = polygonize_adaptive(*torus, o);
+    const PolygonizeResult r = polygonize_adaptive(torus, o);
     const BlocksReport& b = r.stats.adaptive->blocks;
     if (!b.used || r.mesh.positions != local.mesh.positions || r.mesh.triangles != local.mesh.triangles) {
       state.SkipWithError(b.used ? "the mesh of the tasks run from their bytes differs" : b.fallback.c_str());

@@ -248,7 +248,7 @@ Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int,
       // if no other is good (kSkipLean).
       struct Candidate {
         int cell;
-        double c, lean = -1;
+        double c, lean;  // lean: the samples', once sampled
         bool skipped;
         std::optional<PlaneSamples> samples;
       };
@@ -258,7 +258,7 @@ Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int,
         if (k <= last || k > grid.n[a] - 1 - (n[a] - 1 - i)) continue;
         const double c = grid.origin[a] + (k + 0.5) * grid.h;
         if (!(c > box.min[a] && c < box.max[a])) continue;  // the grid's last layer may pass the box
-        candidates.push_back({k, c, -1, predicted_lean(grid, box, a, k) < kSkipLean, std::nullopt});
+        candidates.push_back({k, c, -1, predicted_lean(grid, box, a, k) < kSkipLean, {}});
       }
       const auto sample = [&](Candidate& m) {
         cancel.check("adaptive");
@@ -266,11 +266,14 @@ Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int,
         m.lean = plane_lean(*m.samples);
       };
       Candidate* best = nullptr;
-      for (Candidate& m : candidates)
-        if (!m.skipped && (sample(m), m.lean >= kGoodLean)) {
+      for (Candidate& m : candidates) {
+        if (m.skipped) continue;
+        sample(m);
+        if (m.lean >= kGoodLean) {
           best = &m;
           break;
         }
+      }
       if (!best)
         for (Candidate& m : candidates) {
           if (!m.samples) sample(m);
