@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 PYTHON ?= /usr/bin/python3
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build test test-sanitize reproduce experiment bench bench-short bench-record dashboard viewer test-browser clean
+.PHONY: all deps build test-programs test test-slow test-sanitize reproduce experiment bench bench-short bench-record dashboard viewer test-browser clean
 
 all: build
 
@@ -17,11 +17,21 @@ build: deps
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) > /dev/null
 	@cmake --build $(BUILD) -j $(JOBS)
 
-test: build
-	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+# What the tests run (the target cdp_test_programs: no benchmarks).
+test-programs: deps
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) > /dev/null
+	@cmake --build $(BUILD) -j $(JOBS) --target cdp_test_programs
+
+# Every test but the slow tier (ctest label slow, tests/CMakeLists.txt: CDP_SLOW), which
+# make test-slow runs; CI runs both.
+test: test-programs
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) -LE '^slow$$'
+
+test-slow: test-programs
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) -L '^slow$$'
 
 # The same tests under AddressSanitizer and UndefinedBehaviorSanitizer (CI runs this too), but
-# for those labelled slow_under_sanitizers (tests/CMakeLists.txt).
+# for those labelled slow_under_sanitizers or slow (tests/CMakeLists.txt).
 # -O1 -g1 (line tables, enough for the sanitizers' stack traces): the instrumented build was
 # the longest step of CI (23 of its 46 minutes at -O2 -g); these halve the compile time of a
 # heavy file (quality.cpp 45 -> 24 s, adaptive/polygonizer_test.cpp 36 -> 20 s).
@@ -30,7 +40,7 @@ test-sanitize: deps
 	    -DCDP_SANITIZE=ON -DCDP_BUILD_BENCHMARKS=OFF > /dev/null
 	@cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS) \
-	    -LE slow_under_sanitizers
+	    -LE '^(slow_under_sanitizers|slow)$$'
 
 reproduce: build
 	$(PYTHON) scripts/reproduce.py --build $(BUILD) --jobs $(JOBS)

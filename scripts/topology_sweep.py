@@ -6,7 +6,7 @@ only where both agree).
 
 A run ends one of three ways: a mesh with the reference's components and genus (correct), a
 non-zero exit with a one-line error (a clear error), or a mesh with another topology and exit 0
-(wrong without saying so, the worst outcome; issue 12). The hard-surface suite of `make test`
+(wrong without saying so, the worst outcome; issue 12). The hard-surface suite of `make test` and `make test-slow`
 checks a few such fields at every factor; this sweep is the larger sample it leaves out."""
 import argparse
 import concurrent.futures
