@@ -50,7 +50,11 @@ QualityReport run_repair(RepairContext& ctx) {
     beyond = measure_densely(ctx, ctx.merged(left, ctx.since_check_));
   }
   for (const Beyond& b : beyond) {
-    if (!ctx.options_.count_near_boundary && ctx.near_boundary(b.T)) continue;  // the caller measures it again
+    // The caller measures it again: every triangle near the boundary, or near the vertices it
+    // names (improve_mesh's measured_again).
+    if (ctx.options_.count_near_boundary ? ctx.measured_again_ && ctx.near_boundary(b.T, true)
+                                         : ctx.near_boundary(b.T))
+      continue;
     ++ctx.report_.over_tolerance;
     if (!(b.d <= ctx.report_.over_tolerance_worst)) {
       ctx.report_.over_tolerance_worst = b.d;
@@ -65,7 +69,7 @@ QualityReport run_repair(RepairContext& ctx) {
 }  // namespace repair
 
 QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions& options,
-                           std::vector<int>* renumbered) {
+                           std::vector<int>* renumbered, const std::vector<char>* measured_again) {
   if (mesh.normals.size() != mesh.positions.size())
     throw std::logic_error("improve_mesh: the mesh needs one normal per vertex");
   if (renumbered) {
@@ -74,6 +78,10 @@ QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions&
   }
   if (mesh.triangles.empty()) return {};
   repair::RepairContext ctx(field, mesh, options);
+  if (measured_again && options.keep_boundary) {
+    ctx.mark_measured_again(*measured_again);
+    ctx.measured_again_ = true;
+  }
   QualityReport report = repair::run_repair(ctx);
   if (renumbered) *renumbered = std::move(ctx.renumbered_);
   ctx.release();

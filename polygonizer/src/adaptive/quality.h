@@ -81,11 +81,15 @@ struct QualityOptions {
 // Repairs `mesh` in place (positions, normals, triangles; vertices and triangles that
 // collapses remove are dropped, so indices change where anything was collapsed; vertices the
 // splits add come last). `renumbered` (optional): each input vertex's index in the result, -1
-// for one removed.
+// for one removed. `measured_again` (optional, one flag per input vertex; with keep_boundary and
+// count_near_boundary): the boundary vertices whose neighbourhood the caller repairs and measures
+// again, so that over_tolerance leaves out the triangles on or next to them (the parts of a band
+// repaired side by side, stage_repair.h).
 // \pre the mesh is oriented and manifold, with one unit normal per vertex, and closed unless
 //      options.keep_boundary.
 QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions& options,
-                           std::vector<int>* renumbered = nullptr);
+                           std::vector<int>* renumbered = nullptr,
+                           const std::vector<char>* measured_again = nullptr);
 
 // Adds the counts of one repair's report to `sum` (repairs of parts of one mesh: the blocks',
 // the band's): counts summed, the search sweeps' most, the worst distance beyond the tolerance

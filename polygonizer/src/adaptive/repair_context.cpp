@@ -404,15 +404,22 @@ void RepairContext::mark_boundary() {
   }
 }
 
-bool RepairContext::near_boundary(const Tri& T) const {
+void RepairContext::mark_measured_again(const std::vector<char>& again) {
+  for (std::size_t v = 0; v < std::min(again.size(), fixed_.size()); ++v)
+    if (fixed_[v] && again[v]) fixed_[v] = 2;
+}
+
+bool RepairContext::near_boundary(const Tri& T, bool again) const {
   // From the stars as they are now: flips change a boundary vertex's neighbours, and splits add
   // vertices beside it, so the band the caller cuts out after the repair is these triangles.
+  const char level = again ? 2 : 1;
+  const auto marked = [&](int v) { return fixed(v) && fixed_[v] >= level; };
   for (int v : T) {
-    if (fixed(v)) return true;
+    if (marked(v)) return true;
     for (int u : vt_[v])
       if (alive_[u])
         for (int w : mesh_.triangles[u])
-          if (fixed(w)) return true;
+          if (marked(w)) return true;
   }
   return false;
 }

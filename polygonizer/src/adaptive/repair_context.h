@@ -442,8 +442,12 @@ class RepairContext {
   // Whether v lies on the boundary (never moved, removed or merged). Vertices the splits add
   // never do.
   bool fixed(int v) const { return static_cast<std::size_t>(v) < fixed_.size() && fixed_[v]; }
-  // Whether triangle T has a corner on the boundary or next to it, now.
-  bool near_boundary(const Tri& T) const;
+  // Boundary vertices whose neighbourhood the caller repairs and measures again (improve_mesh's
+  // `measured_again`): marked 2 in fixed_.
+  void mark_measured_again(const std::vector<char>& again);
+  // Whether triangle T has a corner on the boundary or next to it, now; with `again`, on or next
+  // to a boundary vertex the caller measures again.
+  bool near_boundary(const Tri& T, bool again = false) const;
 
   // ---- adjacency
   // The triangle other than t on edge (a, b), or -1.
@@ -680,8 +684,11 @@ class RepairContext {
   unsigned workers_;  // threads of the parallel passes (QualityOptions::threads)
   std::vector<std::vector<int>> vt_;
   std::vector<signed char> crease_;
-  // The input's boundary vertices (mark_boundary); empty without QualityOptions::keep_boundary.
+  // The input's boundary vertices (mark_boundary): 1, or 2 for one the caller measures again
+  // (mark_measured_again); empty without QualityOptions::keep_boundary.
   std::vector<char> fixed_;
+  // Whether some of them are marked 2 (mark_measured_again).
+  bool measured_again_ = false;
   // Each input vertex's index after compact, -1 when removed.
   std::vector<int> renumbered_;
   std::vector<char> alive_;

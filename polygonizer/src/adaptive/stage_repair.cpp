@@ -1,11 +1,14 @@
 #include "stage_repair.h"
 
+#include "../parallel.h"
+#include "../union_find.h"
 #include "resolve_settings.h"
 #include "stage_checks.h"
 
 #include <cdp/core/curvature.h>
 
 #include <algorithm>
+#include <array>
 #include <numbers>
 #include <utility>
 #include <vector>
@@ -100,8 +103,8 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
   in_band.aim_mean_edge_ratio = 0;  // as the blocks': the whole mesh's mean decides (below)
   const std::vector<char> sealed =
       run.options.check_self_intersections ? sealed_triangles(blocks, mesh) : std::vector<char>{};
-  QualityReport own = repair_band(run.field, mesh, blocks.report.seam_vertices, blocks.vertices,
-                                  in_band, band, sealed.empty() ? nullptr : &sealed);
+  QualityReport own = repair_band(run.field, mesh, blocks.report.seam_vertices, blocks.vertices, in_band, band,
+                                  sealed.empty() ? nullptr : &sealed, &blocks.report.cuts);
   add_repair_counts(report, own);
   // The relaxation's search (QualityOptions::aim_mean_edge_ratio) aims at the whole mesh's mean
   // edge ratio, which neither a block nor the band knows: where it is over the aim, the whole
@@ -122,102 +125,277 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
   return report;
 }
 
-QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std::size_t finished, QualityOptions qo,
-                          BandChanges& band, const std::vector<char>* sealed) {
+namespace {
+
+// What repair_parts did: the counts summed over the parts in part order, each input vertex's
+// index after it (-1 for one removed), and per vertex after it whether a part moved or added it.
+struct PartsRepair {
+  QualityReport report;
+  std::vector<int> renumbered;
+  std::vector<char> changed;
+};
+
+// Repairs the triangles t of `mesh` with part[t] >= 0, each part (0 .. parts-1) cut out as an open
+// mesh of its own and repaired with its boundary kept (QualityOptions::keep_boundary), the parts
+// on up to `workers` threads: they share only boundary vertices, which no part moves, so each
+// part's repair is the same whoever runs it and whenever. Put back in place: the vertices in their
+// order without those removed, then each part's added ones, part by part; the triangles of no part
+// in their order, then each part's. `measured_again` (optional, per vertex of `mesh`): see
+// improve_mesh. `flags` (optional, per triangle): carried with the triangles of no part, 0 for
+// the parts'.
+PartsRepair repair_parts(const Field& field, Mesh& mesh, const std::vector<int>& part, std::size_t parts,
+                         QualityOptions qo, const std::vector<char>* measured_again, std::vector<char>* flags,
+                         unsigned workers) {
   const std::size_t nv = mesh.positions.size();
+  std::vector<std::vector<int>> triangles(parts);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    if (part[t] >= 0) triangles[static_cast<std::size_t>(part[t])].push_back(static_cast<int>(t));
+  struct Piece {
+    Mesh mesh;
+    std::vector<int> global;      // its input vertices' numbers in `mesh`, ascending
+    std::vector<int> renumbered;  // improve_mesh's
+    QualityReport report;
+  };
+  std::vector<Piece> pieces(parts);
+  qo.keep_boundary = true;
+  if (parts > 1 && workers > 1) qo.threads = 1;  // the parts are the threads' work
+  detail::parallel_blocks(parts, 1, workers, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t g = begin; g < end; ++g) {
+      Piece& p = pieces[g];
+      for (int t : triangles[g])
+        for (int v : mesh.triangles[static_cast<std::size_t>(t)]) p.global.push_back(v);
+      std::sort(p.global.begin(), p.global.end());
+      p.global.erase(std::unique(p.global.begin(), p.global.end()), p.global.end());
+      const auto local = [&](int v) {
+        return static_cast<int>(std::lower_bound(p.global.begin(), p.global.end(), v) - p.global.begin());
+      };
+      p.mesh.positions.reserve(p.global.size());
+      p.mesh.normals.reserve(p.global.size());
+      for (int v : p.global) {
+        p.mesh.positions.push_back(mesh.positions[static_cast<std::size_t>(v)]);
+        p.mesh.normals.push_back(mesh.normals[static_cast<std::size_t>(v)]);
+      }
+      p.mesh.triangles.reserve(triangles[g].size());
+      for (int t : triangles[g]) {
+        const auto& x = mesh.triangles[static_cast<std::size_t>(t)];
+        p.mesh.triangles.push_back({local(x[0]), local(x[1]), local(x[2])});
+      }
+      std::vector<char> again;
+      if (measured_again)
+        for (int v : p.global) again.push_back((*measured_again)[static_cast<std::size_t>(v)]);
+      p.report = improve_mesh(field, p.mesh, qo, &p.renumbered, measured_again ? &again : nullptr);
+    }
+  });
+
+  PartsRepair out;
+  for (const Piece& p : pieces) add_repair_counts(out.report, p.report);
+  // In place, without a second copy of the mesh (at 1.85M triangles the copy was most of the
+  // repair's memory, then the run's peak): a kept vertex or triangle moves down, never up, so
+  // each is read before anything is written over it.
+  std::vector<char> removed(nv, 0);
+  for (const Piece& p : pieces)
+    for (std::size_t l = 0; l < p.global.size(); ++l)
+      if (p.renumbered[l] < 0) removed[static_cast<std::size_t>(p.global[l])] = 1;
+  out.renumbered.assign(nv, -1);
+  std::size_t kept = 0;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (removed[v]) continue;
+    out.renumbered[v] = static_cast<int>(kept);
+    mesh.positions[kept] = mesh.positions[v];
+    mesh.normals[kept] = mesh.normals[v];
+    ++kept;
+  }
+  std::size_t added = 0, in_parts = 0;
+  for (const Piece& p : pieces) added += p.mesh.positions.size(), in_parts += p.mesh.triangles.size();
+  mesh.positions.resize(kept);
+  mesh.normals.resize(kept);
+  // Room for what the parts add made once (a doubling would hold the old array beside the new).
+  mesh.positions.reserve(kept + added);
+  mesh.normals.reserve(kept + added);
+  out.changed.assign(kept, 0);
+  std::vector<std::vector<int>> placed(parts);  // each part's vertex -> the output's
+  for (std::size_t g = 0; g < parts; ++g) {
+    const Piece& p = pieces[g];
+    std::vector<int>& at = placed[g];
+    at.assign(p.mesh.positions.size(), -1);
+    for (std::size_t l = 0; l < p.global.size(); ++l)
+      if (p.renumbered[l] >= 0)
+        at[static_cast<std::size_t>(p.renumbered[l])] = out.renumbered[static_cast<std::size_t>(p.global[l])];
+    for (std::size_t q = 0; q < at.size(); ++q) {
+      if (at[q] < 0) {
+        at[q] = static_cast<int>(mesh.positions.size());
+        mesh.positions.push_back(p.mesh.positions[q]);
+        mesh.normals.push_back(p.mesh.normals[q]);
+        out.changed.push_back(1);
+        continue;
+      }
+      const auto v = static_cast<std::size_t>(at[q]);
+      if (mesh.positions[v] == p.mesh.positions[q]) continue;
+      mesh.positions[v] = p.mesh.positions[q];
+      mesh.normals[v] = p.mesh.normals[q];
+      out.changed[v] = 1;
+    }
+  }
+  std::size_t outside = 0;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    if (part[t] < 0) {
+      const auto x = mesh.triangles[t];
+      if (flags) (*flags)[outside] = (*flags)[t];
+      mesh.triangles[outside++] = {out.renumbered[x[0]], out.renumbered[x[1]], out.renumbered[x[2]]};
+    }
+  mesh.triangles.resize(outside);
+  mesh.triangles.reserve(outside + in_parts);
+  for (std::size_t g = 0; g < parts; ++g)
+    for (const auto& x : pieces[g].mesh.triangles)
+      mesh.triangles.push_back({placed[g][x[0]], placed[g][x[1]], placed[g][x[2]]});
+  if (flags) {
+    flags->resize(outside);
+    flags->resize(mesh.triangles.size(), 0);
+  }
+  return out;
+}
+
+// Which part of the band triangle t is in: the cell of its centroid in a grid whose cells are
+// centred on the cut planes (bounded by the planes halfway between two cuts), so that each
+// part holds where the seams of one block corner's planes meet, and the parts' own boundaries
+// cross the seams' strips halfway along them.
+class BandCells {
+ public:
+  explicit BandCells(const std::array<std::vector<double>, 3>& cuts) {
+    for (int a = 0; a < 3; ++a) {
+      for (std::size_t i = 1; i < cuts[a].size(); ++i) mids_[a].push_back(0.5 * (cuts[a][i - 1] + cuts[a][i]));
+      size_[a] = mids_[a].size() + 1;
+    }
+  }
+  std::size_t cells() const { return size_[0] * size_[1] * size_[2]; }
+  std::size_t cell(const Vec3& p) const {
+    std::size_t c = 0;
+    for (int a = 0; a < 3; ++a)
+      c = c * size_[a] +
+          static_cast<std::size_t>(std::upper_bound(mids_[a].begin(), mids_[a].end(), p[a]) - mids_[a].begin());
+    return c;
+  }
+
+ private:
+  std::array<std::vector<double>, 3> mids_;
+  std::array<std::size_t, 3> size_{};
+};
+
+}  // namespace
+
+QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std::size_t finished, QualityOptions qo,
+                          BandChanges& band, const std::vector<char>* sealed,
+                          const std::array<std::vector<double>, 3>* cuts) {
+  const std::size_t nv = mesh.positions.size(), nt = mesh.triangles.size();
   // The seams and their neighbours.
   std::vector<char> near(nv, 0);
   for (std::size_t v = 0; v < std::min(seams, nv); ++v) near[v] = 1;
   for (const auto& t : mesh.triangles)
     if (static_cast<std::size_t>(std::min({t[0], t[1], t[2]})) < seams)
       for (int v : t) near[static_cast<std::size_t>(v)] = 1;
-  // The band: its triangles in mesh order, its vertices numbered in mesh order.
-  std::vector<char> in_band(mesh.triangles.size(), 0);
-  std::vector<int> local(nv, -1);
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-    const auto& t = mesh.triangles[i];
-    for (int v : t)
-      if (near[static_cast<std::size_t>(v)] || static_cast<std::size_t>(v) >= finished) in_band[i] = 1;
-    if (in_band[i])
-      for (int v : t) local[static_cast<std::size_t>(v)] = 0;
-  }
-  Mesh part;
-  std::vector<int> global;  // part's vertex -> mesh's
-  for (std::size_t v = 0; v < nv; ++v)
-    if (local[v] == 0) {
-      local[v] = static_cast<int>(global.size());
-      global.push_back(static_cast<int>(v));
-      part.positions.push_back(mesh.positions[v]);
-      part.normals.push_back(mesh.normals[v]);
-    }
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
-    if (in_band[i]) {
-      const auto& t = mesh.triangles[i];
-      part.triangles.push_back({local[t[0]], local[t[1]], local[t[2]]});
-    }
-  qo.keep_boundary = true;
+  // The band: the triangles with a corner among them or added beside the blocks.
+  std::vector<int> part(nt, -1);
+  for (std::size_t i = 0; i < nt; ++i)
+    for (int v : mesh.triangles[i])
+      if (near[static_cast<std::size_t>(v)] || static_cast<std::size_t>(v) >= finished) part[i] = 0;
+  near = {};
   qo.count_near_boundary = true;
-  std::vector<int> renumbered;
-  const QualityReport report = improve_mesh(field, part, qo, &renumbered);
+  std::vector<char> flags;
+  if (sealed) flags = *sealed;
+  // One part, as on one thread, for a field whose calls are costly: its repair gathers the
+  // band's evaluations into batches (a Python function), which parts would split.
+  const bool in_parts = cuts && !field.costly_calls();
+  if (!in_parts) {
+    PartsRepair r = repair_parts(field, mesh, part, 1, qo, nullptr, sealed ? &flags : nullptr, 1);
+    band.renumbered = std::move(r.renumbered);
+    for (std::size_t v = 0; v < r.changed.size(); ++v)
+      if (r.changed[v]) band.moved.push_back(static_cast<int>(v));
+    if (sealed) band.sealed = std::move(flags);
+    band.parts = 1;
+    return r.report;
+  }
+  const unsigned workers = field.thread_safe() ? detail::worker_count(qo.threads) : 1;
 
-  // Back into the mesh: its vertices in their order without those removed, then those added.
-  std::vector<int> part_to_mesh(part.positions.size(), -1);
-  std::vector<char> removed(nv, 0);
-  for (std::size_t l = 0; l < global.size(); ++l) {
-    if (renumbered[l] < 0)
-      removed[static_cast<std::size_t>(global[l])] = 1;
-    else
-      part_to_mesh[static_cast<std::size_t>(renumbered[l])] = global[l];
+  // First the band's parts by the cells of their centroids, side by side, each leaving out of
+  // its count the triangles beside a vertex it shares with another part; ...
+  const BandCells cells(*cuts);
+  std::vector<int> id(cells.cells(), -1);
+  for (std::size_t i = 0; i < nt; ++i)
+    if (part[i] >= 0) {
+      const auto& t = mesh.triangles[i];
+      id[cells.cell((mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3)] = 0;
+    }
+  std::size_t parts = 0;
+  for (int& c : id)
+    if (c == 0) c = static_cast<int>(parts++);
+  std::vector<int> owner(nv, -1);
+  std::vector<char> shared(nv, 0);
+  for (std::size_t i = 0; i < nt; ++i)
+    if (part[i] >= 0) {
+      const auto& t = mesh.triangles[i];
+      part[i] = id[cells.cell((mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3)];
+      for (int v : t) {
+        int& o = owner[static_cast<std::size_t>(v)];
+        if (o < 0) o = part[i];
+        else if (o != part[i]) shared[static_cast<std::size_t>(v)] = 1;
+      }
+    }
+  owner = {};
+  id = {};
+  const std::size_t from = nt - static_cast<std::size_t>(std::count_if(part.begin(), part.end(), [](int p) { return p >= 0; }));
+  const PartsRepair first = repair_parts(field, mesh, part, parts, qo, &shared, sealed ? &flags : nullptr, workers);
+
+  // ... then the triangles beside those shared vertices (on or next to one), in parts that
+  // touch at most at a vertex, each counting all it measures.
+  std::vector<char> again(mesh.positions.size(), 0);  // shared vertices are kept: each is still there
+  for (std::size_t v = 0; v < nv; ++v)
+    if (shared[v]) again[static_cast<std::size_t>(first.renumbered[v])] = 1;
+  shared = {};
+  const std::size_t ntr = mesh.triangles.size();  // the band's triangles are those from `from` on
+  part.assign(ntr, -1);
+  std::vector<char> next(mesh.positions.size(), 0);
+  for (std::size_t i = from; i < ntr; ++i) {
+    const auto& t = mesh.triangles[i];
+    if (again[t[0]] || again[t[1]] || again[t[2]])
+      for (int v : t) next[static_cast<std::size_t>(v)] = 1;
   }
-  // In place, without a second copy of the mesh (at 1.85M triangles the copy was most of the
-  // repair's memory, then the run's peak): a kept vertex or triangle moves down, never up, so
-  // each is read before anything is written over it.
+  UnionFind components(mesh.positions.size());
+  for (std::size_t i = from; i < ntr; ++i) {
+    const auto& t = mesh.triangles[i];
+    if (next[t[0]] || next[t[1]] || next[t[2]]) {
+      part[i] = 0;
+      components.unite(t[0], t[1]);
+      components.unite(t[0], t[2]);
+    }
+  }
+  std::vector<int> label(mesh.positions.size(), -1);
+  std::size_t parts2 = 0;
+  for (std::size_t i = from; i < ntr; ++i)
+    if (part[i] >= 0) {
+      int& l = label[static_cast<std::size_t>(components.find(mesh.triangles[i][0]))];
+      if (l < 0) l = static_cast<int>(parts2++);
+      part[i] = l;
+    }
+  label = {};
+  next = {};
+  again = {};
+  components.parent = {};
+  const PartsRepair second = repair_parts(field, mesh, part, parts2, qo, nullptr, sealed ? &flags : nullptr, workers);
+
+  QualityReport report = first.report;
+  add_repair_counts(report, second.report);
+  report.bad_before = first.report.bad_before;  // the second pass's were the first's, left near the shared vertices
   band.renumbered.assign(nv, -1);
-  std::size_t kept = 0;
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (removed[v]) continue;
-    band.renumbered[v] = static_cast<int>(kept);
-    mesh.positions[kept] = mesh.positions[v];
-    mesh.normals[kept] = mesh.normals[v];
-    ++kept;
-  }
-  mesh.positions.resize(kept);
-  mesh.normals.resize(kept);
-  // Room for what the part adds made once (a doubling would hold the old array beside the new).
-  mesh.positions.reserve(kept + part.positions.size());
-  mesh.normals.reserve(kept + part.positions.size());
-  for (std::size_t p = 0; p < part.positions.size(); ++p) {
-    int at;
-    if (part_to_mesh[p] >= 0) {
-      at = band.renumbered[static_cast<std::size_t>(part_to_mesh[p])];
-      if (mesh.positions[static_cast<std::size_t>(at)] == part.positions[p]) continue;
-    } else {
-      at = static_cast<int>(mesh.positions.size());
-      mesh.positions.emplace_back();
-      mesh.normals.emplace_back();
-    }
-    part_to_mesh[p] = -2 - at;  // placed
-    mesh.positions[static_cast<std::size_t>(at)] = part.positions[p];
-    mesh.normals[static_cast<std::size_t>(at)] = part.normals[p];
-    band.moved.push_back(at);
-  }
-  // The part's vertex p is the output's vertex out_of(p).
-  const auto out_of = [&](int p) {
-    const int m = part_to_mesh[static_cast<std::size_t>(p)];
-    return m <= -2 ? -2 - m : band.renumbered[static_cast<std::size_t>(m)];
-  };
-  std::size_t outside = 0;
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
-    if (!in_band[i]) {
-      const auto t = mesh.triangles[i];
-      mesh.triangles[outside++] = {band.renumbered[t[0]], band.renumbered[t[1]], band.renumbered[t[2]]};
-      if (sealed) band.sealed.push_back((*sealed)[i]);
-    }
-  mesh.triangles.resize(outside);
-  mesh.triangles.reserve(outside + part.triangles.size());
-  for (const auto& t : part.triangles) mesh.triangles.push_back({out_of(t[0]), out_of(t[1]), out_of(t[2])});
-  if (sealed) band.sealed.resize(mesh.triangles.size(), 0);
-  std::sort(band.moved.begin(), band.moved.end());
+  std::vector<char> moved = second.changed;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (const int r = first.renumbered[v]; r >= 0) band.renumbered[v] = second.renumbered[static_cast<std::size_t>(r)];
+  for (std::size_t u = 0; u < first.changed.size(); ++u)
+    if (first.changed[u] && second.renumbered[u] >= 0) moved[static_cast<std::size_t>(second.renumbered[u])] = 1;
+  for (std::size_t v = 0; v < moved.size(); ++v)
+    if (moved[v]) band.moved.push_back(static_cast<int>(v));
+  if (sealed) band.sealed = std::move(flags);
+  band.parts = parts;
+  band.junctions = parts2;
   return report;
 }
 

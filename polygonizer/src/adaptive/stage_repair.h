@@ -9,6 +9,7 @@
 #include "stage_creases.h"
 #include "stage_tracking.h"
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -32,6 +33,9 @@ struct BandChanges {
   // Per triangle after it: sealed (sealed_triangles, blocks.h) and outside the band, so that the
   // final check tests no pair of two such (check_mesh's `sealed`). Empty: test every pair.
   std::vector<char> sealed;
+  // The parts the band was repaired in (repair_band's `cuts`): the cells' (1 for the band as one
+  // open mesh), then those around the vertices two cells' parts share.
+  std::size_t parts = 0, junctions = 0;
 };
 
 // Repairs `mesh` (tracked, the crease patches' components included in `creases`), where the
@@ -55,8 +59,13 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
 // vertices in their places, those the repair added appended, those it removed dropped.
 // `sealed` (optional, one flag per triangle of `mesh`): carried over to band.sealed for the
 // triangles outside the band, 0 for the band's.
+// `cuts` (optional, the blocks' cut planes): the band is repaired in parts, on the threads of
+// qo.threads for a thread-safe field (the same mesh on any number): first the parts by the cells
+// of a grid centred on the cut planes, then the triangles beside the vertices two of them share.
+// Without, or for a field whose calls are costly, the band is repaired as one open mesh.
 QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std::size_t finished, QualityOptions qo,
-                          BandChanges& band, const std::vector<char>* sealed = nullptr);
+                          BandChanges& band, const std::vector<char>* sealed = nullptr,
+                          const std::array<std::vector<double>, 3>* cuts = nullptr);
 
 // The "mac" and "shape_index" vertex scalars (AdaptiveOptions::curvature_properties): the
 // tracker's own where the repair changed nothing, else measured again at every vertex (at the

@@ -102,9 +102,10 @@ struct BlocksReport {
   double layout_seconds = 0, seconds = 0;
   std::vector<double> block_seconds;  // each block's tracking, in block order
   // Each data-parallel pass the run made on its own thread besides the blocks (the seed grid, the
-  // cut planes' samples, the seams' Hessians, the relaxation's targets, the final checks, ...):
-  // its wall time and the blocks of work it was cut into, which `threads` threads share. With or
-  // without blocks; what the projected speedups on more threads divide (BM_AdaptiveBlocks).
+  // cut planes' samples, the seams' Hessians, the relaxation's targets, the band's repair in
+  // parts, the final checks, ...): its wall time and the blocks of work it was cut into, which
+  // `threads` threads share. With or without blocks; what the projected speedups on more threads
+  // divide (BM_AdaptiveBlocks).
   std::vector<double> pass_seconds;
   std::vector<std::size_t> pass_blocks;
   std::string fallback;
