@@ -425,7 +425,7 @@ bool Tracker::rollback(int f, int node, bool at_node) {
       std::max(s_.sizing.min_edge, rollback_place_targets_[at] * std::ldexp(1.0, -(times + 1)));
   const FinerZone zone{center, radius + longest_target, finer};
   finer_zones_.push_back(zone);
-  vertex_hash_.for_each_near(zone.center, zone.radius, [&](int w) {
+  vertex_hash().for_each_near(zone.center, zone.radius, [&](int w) {
     if (static_cast<std::size_t>(w) >= first_vertex_ && !dead_[w]) target_[w] = zone_capped(mesh_.positions[w], target_[w]);
   });
   return true;
@@ -438,7 +438,7 @@ std::vector<char> Tracker::rollback_region(const std::vector<int>& stuck, double
   for (const int u : stuck) {
     const Vec3& pu = mesh_.positions[u];
     in_s[u] = 1;
-    vertex_hash_.for_each_near(pu, radius, [&](int w) {
+    vertex_hash().for_each_near(pu, radius, [&](int w) {
       if (static_cast<std::size_t>(w) >= first_vertex_ && (mesh_.positions[w] - pu).norm() < radius &&
           same_side(mesh_.normals[u], w))
         in_s[w] = 1;
@@ -478,7 +478,7 @@ void Tracker::cut_hole(const std::vector<int>& absorbed, const std::vector<char>
   for (std::size_t v = first_vertex_; v < nv; ++v)
     if (had[v] && uses[v] == 0 && !dead_[v]) {
       dead_[v] = 1;
-      vertex_hash_.remove(static_cast<int>(v), mesh_.positions[v]);
+      vertex_hash().remove(static_cast<int>(v), mesh_.positions[v]);
     }
   // The hole's loops as new fronts (two-point loops enclose nothing).
   for (const std::vector<int>& loop : loops) {
@@ -521,7 +521,7 @@ void Tracker::compact() {
   dead_.assign(m, 0);
   vertex_hash_ = SpatialHash(s_.hash_cell, Crowding::split);
   vertex_hash_.set_cancel(s_.cancel);
-  for (int v = 0; v < m; ++v) vertex_hash_.insert(v, mesh_.positions[v], vertex_position());
+  unhashed_ = static_cast<std::size_t>(m);  // hashed when first asked for (vertex_hash)
 }
 
 }  // namespace cdp::adaptive

@@ -124,6 +124,7 @@ void Tracker::release_bulk() {
   released_visits_ = search_visits();
   const auto drop = [](auto& x) { std::decay_t<decltype(x)>(std::move(x)); };
   drop(front_hash_), drop(vertex_hash_), drop(fs_), drop(front_edges_);
+  unhashed_ = 0;
   drop(target_), drop(mac_), drop(shape_index_), drop(front_refs_), drop(dead_), drop(loop_vertex_);
 }
 
@@ -187,7 +188,7 @@ int Tracker::add_vertex(const Placed& placed) {
   mac_.push_back(c.mac);
   shape_index_.push_back(c.shape_index);
   front_refs_.push_back(0);
-  vertex_hash_.insert(v, placed.point, vertex_position());
+  vertex_hash().insert(v, placed.point, vertex_position());
   return v;
 }
 
@@ -461,7 +462,7 @@ bool Tracker::over_finished_mesh(const Vec3& x, const Vec3& normal, double d) co
   // run over it and would go on meshing the surface again. Refused, such placements turn a
   // runaway front into a stalled one, which the stall bounds end with an error naming the place.
   const double r = kOverMesh * d;
-  const bool hit = vertex_hash_.any_in(x.array() - r, x.array() + r, [&](int w) {
+  const bool hit = vertex_hash().any_in(x.array() - r, x.array() + r, [&](int w) {
     return front_refs_[w] == 0 && (mesh_.positions[w] - x).norm() < r && same_side(normal, w);
   });
   if (hit) ++over_mesh_;
@@ -639,7 +640,7 @@ bool Tracker::mesh_from_seed(const Vec3& seed) {
     corners = place_points(c, dirs, d);
   if (corners.size() < 6) {
     // Keep the mesh free of an isolated vertex: the seed vertex is the last one added.
-    vertex_hash_.remove(c, mesh_.positions[c]);
+    vertex_hash().remove(c, mesh_.positions[c]);
     mesh_.positions.pop_back();
     mesh_.normals.pop_back();
     target_.pop_back();
@@ -711,11 +712,16 @@ void Tracker::adopt_finished(std::vector<double>&& target, std::vector<double>&&
   mac_ = std::move(mac);
   shape_index_ = std::move(shape_index);
   front_refs_.assign(n, 0);
-  for (std::size_t v = 0; v < n; ++v) vertex_hash_.insert(static_cast<int>(v), mesh_.positions[v], vertex_position());
+  unhashed_ = n;  // hashed when first asked for (vertex_hash)
   for (const auto& t : mesh_.triangles) {
     const Vec3& pa = mesh_.positions[t[0]];
     area_ += 0.5 * (mesh_.positions[t[1]] - pa).cross(mesh_.positions[t[2]] - pa).norm();
   }
+}
+
+void Tracker::hash_vertices() const {
+  const std::size_t n = std::exchange(unhashed_, 0);
+  for (std::size_t v = 0; v < n; ++v) vertex_hash_.insert(static_cast<int>(v), mesh_.positions[v], vertex_position());
 }
 
 void Tracker::check_limits() {
@@ -793,7 +799,7 @@ std::optional<std::pair<int, int>> Tracker::thin_feature_at(int node, double rad
   do {
     const int u = fs_.nodes[x].vertex;
     const Vec3& pu = mesh_.positions[u];
-    vertex_hash_.for_each_near(pu, radius, [&](int w) {
+    vertex_hash().for_each_near(pu, radius, [&](int w) {
       const double d = (mesh_.positions[w] - pu).norm();
       if (d >= radius || mesh_.normals[u].dot(mesh_.normals[w]) > kOppositeCosine) return;
       if (d < best_d || (d == best_d && best && std::pair(u, w) < *best)) best_d = d, best = std::pair(u, w);
