@@ -155,22 +155,43 @@ int missed_bounds(const Mesh& mesh, std::size_t over_tolerance) {
   return under20 + (share_under_30 > kBoundShareUnder30) + (mean_ratio > kBoundMeanEdgeRatio) + (over_tolerance > 0);
 }
 
-std::size_t triangles_under(const Mesh& mesh, double bound) {
-  const double tan_bound = std::tan(bound);
-  std::size_t n = 0;
-  for (const auto& t : mesh.triangles) {
-    const SmallestCorner c = smallest_corner(mesh, t);
-    n += !(c.sine >= tan_bound * c.cosine);
-  }
-  return n;
+namespace {
+
+// Triangles per share of the passes below: a share's sum is the same whichever thread adds it,
+// and the shares are added in order, so the result is the same on any number of threads.
+constexpr std::size_t kTrianglesPerShare = std::size_t{1} << 16;
+
+// Sums term(triangle) over the mesh's triangles, share by share on up to `threads` threads.
+template <class T, class Term>
+T sum_over_triangles(const Mesh& mesh, int threads, Term term) {
+  const std::size_t n = mesh.triangles.size();
+  std::vector<T> share((n + kTrianglesPerShare - 1) / kTrianglesPerShare, T{0});
+  detail::parallel_blocks(n, kTrianglesPerShare, detail::worker_count(threads),
+                          [&](std::size_t begin, std::size_t end, unsigned) {
+                            T sum{0};
+                            for (std::size_t i = begin; i < end; ++i) sum += term(mesh.triangles[i]);
+                            share[begin / kTrianglesPerShare] = sum;
+                          });
+  T sum{0};
+  for (const T s : share) sum += s;
+  return sum;
 }
 
-double mean_edge_ratio(const Mesh& mesh) {
-  double sum = 0;
-  for (const auto& t : mesh.triangles) {
+}  // namespace
+
+std::size_t triangles_under(const Mesh& mesh, double bound, int threads) {
+  const double tan_bound = std::tan(bound);
+  return sum_over_triangles<std::size_t>(mesh, threads, [&](const std::array<int, 3>& t) -> std::size_t {
     const SmallestCorner c = smallest_corner(mesh, t);
-    sum += c.shortest2 > 0 ? std::sqrt(c.longest2 / c.shortest2) : std::numeric_limits<double>::infinity();
-  }
+    return !(c.sine >= tan_bound * c.cosine);
+  });
+}
+
+double mean_edge_ratio(const Mesh& mesh, int threads) {
+  const double sum = sum_over_triangles<double>(mesh, threads, [&](const std::array<int, 3>& t) {
+    const SmallestCorner c = smallest_corner(mesh, t);
+    return c.shortest2 > 0 ? std::sqrt(c.longest2 / c.shortest2) : std::numeric_limits<double>::infinity();
+  });
   return mesh.triangles.empty() ? 0 : sum / static_cast<double>(mesh.triangles.size());
 }
 

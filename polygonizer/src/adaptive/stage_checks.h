@@ -88,12 +88,14 @@ void check_bends_kept(const Field& field, const Mesh& mesh, const Sizing& sizing
 // The smallest angle of the mesh's triangles, in degrees (180 for no triangle).
 double min_angle_degrees(const Mesh& mesh);
 
-// The triangles whose smallest angle is under `bound` (radians, under 60 degrees).
-std::size_t triangles_under(const Mesh& mesh, double bound);
+// The triangles whose smallest angle is under `bound` (radians, under 60 degrees). `threads` as
+// AdaptiveOptions::threads (the same count on any number).
+std::size_t triangles_under(const Mesh& mesh, double bound, int threads = 1);
 
 // The mean over the triangles of the longest edge over the shortest (infinite with a zero-length
-// edge), the relaxation's measure (QualityOptions::aim_mean_edge_ratio).
-double mean_edge_ratio(const Mesh& mesh);
+// edge), the relaxation's measure (QualityOptions::aim_mean_edge_ratio). Summed in shares of
+// 2^16 triangles, in order: the same number on any number of `threads`.
+double mean_edge_ratio(const Mesh& mesh, int threads = 1);
 
 // How many of the quality bounds `mesh` misses (see kBoundMinDegrees): a smallest angle under
 // kBoundMinDegrees, more than kBoundShareUnder30 of the triangles with one under 30 degrees, a

@@ -111,7 +111,7 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
   // mesh is repaired again with the search, as a mesh tracked alone would be (rare: the blocks'
   // meshes are better shaped; a block's own mean over it made the random blobs at 1e-3 search in
   // four of their eight blocks, 1.5 times the evaluations of the whole run).
-  if (qo.aim_mean_edge_ratio > 0 && mean_edge_ratio(mesh) > qo.aim_mean_edge_ratio) {
+  if (qo.aim_mean_edge_ratio > 0 && mean_edge_ratio(mesh, qo.threads) > qo.aim_mean_edge_ratio) {
     const QualityReport whole = improve_mesh(run.field, mesh, qo);
     add_repair_counts(report, whole);
     // It measured every triangle against the tolerance: its count is the mesh's.
@@ -121,7 +121,7 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
     band = {};  // every vertex measured again (add_curvature_properties)
   }
   // Afresh: the blocks' counts include triangles beside a seam that the band's repair changed.
-  report.bad_after = triangles_under(mesh, qo.improve_below);
+  report.bad_after = triangles_under(mesh, qo.improve_below, qo.threads);
   return report;
 }
 
