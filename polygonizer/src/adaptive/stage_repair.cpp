@@ -205,11 +205,17 @@ PartsRepair repair_parts(const Field& field, Mesh& mesh, const std::vector<int>&
     mesh.normals[kept] = mesh.normals[v];
     ++kept;
   }
-  std::size_t added = 0, in_parts = 0;
-  for (const Piece& p : pieces) added += p.mesh.positions.size(), in_parts += p.mesh.triangles.size();
+  std::size_t added = 0, in_parts = 0;  // the vertices the parts added, their triangles
+  for (const Piece& p : pieces) {
+    added += p.mesh.positions.size() -
+             static_cast<std::size_t>(std::count_if(p.renumbered.begin(), p.renumbered.end(), [](int r) { return r >= 0; }));
+    in_parts += p.mesh.triangles.size();
+  }
   mesh.positions.resize(kept);
   mesh.normals.resize(kept);
-  // Room for what the parts add made once (a doubling would hold the old array beside the new).
+  // Room for what the parts add made once (a doubling would hold the old array beside the new),
+  // and only that: the arrays' spare room (the blocks' assembly leaves some) often holds it, where
+  // a new array is fresh pages (0.055 s for the torus at 1.85M triangles).
   mesh.positions.reserve(kept + added);
   mesh.normals.reserve(kept + added);
   out.changed.assign(kept, 0);
