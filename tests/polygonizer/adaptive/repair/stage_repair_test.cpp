@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <set>
 
@@ -44,25 +45,43 @@ TEST(AdaptiveStages, TheRepairRaisesTheSmallestAngleAndThePaperVariantSkipsIt) {
   EXPECT_EQ(again.positions, mesh.positions);
 }
 
-// The band's repair of a mesh meshed in blocks: the triangles beside the first `seams` vertices
-// and those with a vertex numbered `finished` or more are repaired; every other triangle stays as
-// it was, and the mesh stays sound.
-TEST(AdaptiveStages, TheBandsRepairChangesOnlyTheBandAndKeepsTheMeshSound) {
-  AdaptiveOptions paper;  // unrepaired: triangles under 30 degrees everywhere
+// Tanglecube tracked as the paper variant meshes it at `factor`: unrepaired, with triangles under
+// 30 degrees everywhere and, at a tolerance, beyond it.
+Mesh unrepaired_tanglecube(double factor, Settings& settings, std::unique_ptr<Field>& field) {
+  AdaptiveOptions paper;
   paper.variant = Variant::Paper;
-  paper.factor = 1;
+  paper.factor = factor;
   Stages s(kTanglecube, paper);
   const SeedGridStage seeds = sample_seed_grid_stage(*s.field, s.options, s.settings);
   Mesh mesh;
   Tracking tracking;
   track(s, seeds, mesh, tracking);
-  const std::size_t nv = mesh.positions.size(), seams = 40, finished = nv - nv / 4;
-  // The triangles outside the band, by their corners' positions.
-  std::vector<char> near(nv, 0);
+  settings = s.settings;
+  field = std::move(s.field);
+  return mesh;
+}
+
+// The seams (the first `seams` vertices) and their neighbours: a triangle with a corner among them
+// is in the band.
+std::vector<char> near_seams(const Mesh& mesh, std::size_t seams) {
+  std::vector<char> near(mesh.positions.size(), 0);
   for (std::size_t v = 0; v < seams; ++v) near[v] = 1;
   for (const auto& t : mesh.triangles)
     if (static_cast<std::size_t>(std::min({t[0], t[1], t[2]})) < seams)
       for (int v : t) near[static_cast<std::size_t>(v)] = 1;
+  return near;
+}
+
+// The band's repair of a mesh meshed in blocks: the triangles beside the first `seams` vertices
+// and those with a vertex numbered `finished` or more are repaired; every other triangle stays as
+// it was, and the mesh stays sound.
+TEST(AdaptiveStages, TheBandsRepairChangesOnlyTheBandAndKeepsTheMeshSound) {
+  Settings settings;
+  std::unique_ptr<Field> field;
+  Mesh mesh = unrepaired_tanglecube(1, settings, field);
+  const std::size_t nv = mesh.positions.size(), seams = 40, finished = nv - nv / 4;
+  // The triangles outside the band, by their corners' positions.
+  const std::vector<char> near = near_seams(mesh, seams);
   std::vector<std::array<Vec3, 3>> outside;
   std::size_t bad_inside = 0;
   for (const auto& t : mesh.triangles) {
@@ -77,12 +96,12 @@ TEST(AdaptiveStages, TheBandsRepairChangesOnlyTheBandAndKeepsTheMeshSound) {
   ASSERT_GT(bad_inside, 0u);
   QualityOptions q;
   q.improve_below = 30 * std::numbers::pi / 180;
-  q.diagonal = s.settings.diagonal;
-  q.min_edge = s.settings.sizing.min_edge;
+  q.diagonal = settings.diagonal;
+  q.min_edge = settings.sizing.min_edge;
   q.aim_mean_edge_ratio = 1.25;
   const Mesh input = mesh;
   BandChanges band;
-  const QualityReport r = repair_band(*s.field, mesh, seams, finished, q, band);
+  const QualityReport r = repair_band(*field, mesh, seams, finished, q, band);
   EXPECT_EQ(r.bad_before, bad_inside);
   EXPECT_LT(r.bad_after, r.bad_before);
   EXPECT_FALSE(band.moved.empty());
@@ -143,29 +162,24 @@ std::size_t number_seams_first(Mesh& mesh, const std::array<std::vector<double>,
 // counted once: the count is what measuring the band's triangles afresh finds (a first pass
 // that counted the triangles beside its parts' shared vertices would count them twice).
 TEST(AdaptiveStages, TheBandRepairedInPartsIsTheSameOnAnyThreadsAndCountsEachTriangleOnce) {
-  AdaptiveOptions paper;  // unrepaired: triangles under 30 degrees and beyond the tolerance
-  paper.variant = Variant::Paper;
-  paper.factor = 3;
-  Stages s(kTanglecube, paper);
-  const SeedGridStage seeds = sample_seed_grid_stage(*s.field, s.options, s.settings);
-  Mesh mesh;
-  Tracking tracking;
-  track(s, seeds, mesh, tracking);
+  Settings settings;
+  std::unique_ptr<Field> field;
+  Mesh mesh = unrepaired_tanglecube(3, settings, field);
   const std::array<std::vector<double>, 3> cuts{{{-1.1, 0.3, 1.7}, {-0.9, 0.6}, {-1.3, 0.2, 1.4}}};
   const std::size_t seams = number_seams_first(mesh, cuts, 0.03);
   ASSERT_GT(seams, 50u);
   QualityOptions q;
   q.improve_below = 30 * std::numbers::pi / 180;
-  q.diagonal = s.settings.diagonal;
+  q.diagonal = settings.diagonal;
   q.min_edge = 0.2;  // splits that would clear the tolerance refused: some triangles stay beyond it
   q.last_resort_min_edge = 0.2;
   q.tolerance = 2e-3;
   Mesh one = mesh, two = mesh;
   BandChanges b1, b2;
   q.threads = 1;
-  const QualityReport r1 = repair_band(*s.field, one, seams, mesh.positions.size(), q, b1, nullptr, &cuts);
+  const QualityReport r1 = repair_band(*field, one, seams, mesh.positions.size(), q, b1, nullptr, &cuts);
   q.threads = 2;
-  const QualityReport r2 = repair_band(*s.field, two, seams, mesh.positions.size(), q, b2, nullptr, &cuts);
+  const QualityReport r2 = repair_band(*field, two, seams, mesh.positions.size(), q, b2, nullptr, &cuts);
   EXPECT_GT(b1.parts, 5u);
   EXPECT_GT(b1.junctions, 5u);
   EXPECT_EQ(one.positions, two.positions);
@@ -176,23 +190,17 @@ TEST(AdaptiveStages, TheBandRepairedInPartsIsTheSameOnAnyThreadsAndCountsEachTri
   test::expect_sound(one, "tanglecube, its band repaired in parts");
   // The band's triangles come after those outside it, which stay as they were (renumbered).
   std::size_t outside = 0;
-  {
-    std::vector<char> near(mesh.positions.size(), 0);
-    for (std::size_t v = 0; v < seams; ++v) near[v] = 1;
-    for (const auto& t : mesh.triangles)
-      if (static_cast<std::size_t>(std::min({t[0], t[1], t[2]})) < seams)
-        for (int v : t) near[static_cast<std::size_t>(v)] = 1;
-    for (const auto& t : mesh.triangles) {
-      if (near[t[0]] || near[t[1]] || near[t[2]]) continue;
-      const std::array<int, 3> now = one.triangles[outside++];
-      for (int c = 0; c < 3; ++c) EXPECT_EQ(one.positions[now[c]], mesh.positions[t[c]]);
-    }
+  const std::vector<char> near = near_seams(mesh, seams);
+  for (const auto& t : mesh.triangles) {
+    if (near[t[0]] || near[t[1]] || near[t[2]]) continue;
+    const std::array<int, 3> now = one.triangles[outside++];
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(one.positions[now[c]], mesh.positions[t[c]]);
   }
   ASSERT_GT(r1.over_tolerance, 0u);
   Mesh measured = one;
   QualityOptions plain = q;
   plain.threads = 1;
-  repair::RepairContext ctx(*s.field, measured, plain);
+  repair::RepairContext ctx(*field, measured, plain);
   std::vector<int> band_triangles;
   for (std::size_t t = outside; t < one.triangles.size(); ++t) band_triangles.push_back(static_cast<int>(t));
   EXPECT_EQ(repair::measure_densely(ctx, band_triangles).size(), r1.over_tolerance);
