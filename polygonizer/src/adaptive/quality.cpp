@@ -50,11 +50,7 @@ QualityReport run_repair(RepairContext& ctx) {
     beyond = measure_densely(ctx, ctx.merged(left, ctx.since_check_));
   }
   for (const Beyond& b : beyond) {
-    // The caller measures it again: every triangle near the boundary, or near the vertices it
-    // names (improve_mesh's measured_again).
-    if (ctx.options_.count_near_boundary ? ctx.measured_again_ && ctx.near_boundary(b.T, true)
-                                         : ctx.near_boundary(b.T))
-      continue;
+    if (ctx.near_measured_again(b.T)) continue;  // the caller measures it again
     ++ctx.report_.over_tolerance;
     if (!(b.d <= ctx.report_.over_tolerance_worst)) {
       ctx.report_.over_tolerance_worst = b.d;
@@ -78,10 +74,7 @@ QualityReport improve_mesh(const Field& field, Mesh& mesh, const QualityOptions&
   }
   if (mesh.triangles.empty()) return {};
   repair::RepairContext ctx(field, mesh, options);
-  if (measured_again && options.keep_boundary) {
-    ctx.mark_measured_again(*measured_again);
-    ctx.measured_again_ = true;
-  }
+  if (measured_again && options.keep_boundary) ctx.mark_measured_again(*measured_again);
   QualityReport report = repair::run_repair(ctx);
   if (renumbered) *renumbered = std::move(ctx.renumbered_);
   ctx.release();

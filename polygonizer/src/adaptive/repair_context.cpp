@@ -395,12 +395,14 @@ void RepairContext::probe_chunk(const std::vector<int>& todo) {
 }
 
 void RepairContext::mark_boundary() {
+  // Without count_near_boundary the caller measures again around every boundary vertex.
+  const char kept = options_.count_near_boundary ? 1 : 2;
   fixed_.assign(mesh_.positions.size(), 0);
   for (int t = 0; t < tri_count(); ++t) {
     poll(static_cast<std::size_t>(t));
     const Tri& x = mesh_.triangles[t];
     for (int k = 0; k < 3; ++k)
-      if (across(t, x[k], x[(k + 1) % 3]) < 0) fixed_[x[k]] = fixed_[x[(k + 1) % 3]] = 1;
+      if (across(t, x[k], x[(k + 1) % 3]) < 0) fixed_[x[k]] = fixed_[x[(k + 1) % 3]] = kept;
   }
 }
 
@@ -409,17 +411,16 @@ void RepairContext::mark_measured_again(const std::vector<char>& again) {
     if (fixed_[v] && again[v]) fixed_[v] = 2;
 }
 
-bool RepairContext::near_boundary(const Tri& T, bool again) const {
+bool RepairContext::near_measured_again(const Tri& T) const {
   // From the stars as they are now: flips change a boundary vertex's neighbours, and splits add
   // vertices beside it, so the band the caller cuts out after the repair is these triangles.
-  const char level = again ? 2 : 1;
-  const auto marked = [&](int v) { return fixed(v) && fixed_[v] >= level; };
+  const auto again = [&](int v) { return fixed(v) && fixed_[v] == 2; };
   for (int v : T) {
-    if (marked(v)) return true;
+    if (again(v)) return true;
     for (int u : vt_[v])
       if (alive_[u])
         for (int w : mesh_.triangles[u])
-          if (marked(w)) return true;
+          if (again(w)) return true;
   }
   return false;
 }

@@ -443,11 +443,10 @@ class RepairContext {
   // never do.
   bool fixed(int v) const { return static_cast<std::size_t>(v) < fixed_.size() && fixed_[v]; }
   // Boundary vertices whose neighbourhood the caller repairs and measures again (improve_mesh's
-  // `measured_again`): marked 2 in fixed_.
+  // `measured_again`; every one without QualityOptions::count_near_boundary): marked 2 in fixed_.
   void mark_measured_again(const std::vector<char>& again);
-  // Whether triangle T has a corner on the boundary or next to it, now; with `again`, on or next
-  // to a boundary vertex the caller measures again.
-  bool near_boundary(const Tri& T, bool again = false) const;
+  // Whether triangle T has a corner on such a vertex or next to one, now.
+  bool near_measured_again(const Tri& T) const;
 
   // ---- adjacency
   // The triangle other than t on edge (a, b), or -1.
@@ -687,8 +686,6 @@ class RepairContext {
   // The input's boundary vertices (mark_boundary): 1, or 2 for one the caller measures again
   // (mark_measured_again); empty without QualityOptions::keep_boundary.
   std::vector<char> fixed_;
-  // Whether some of them are marked 2 (mark_measured_again).
-  bool measured_again_ = false;
   // Each input vertex's index after compact, -1 when removed.
   std::vector<int> renumbered_;
   std::vector<char> alive_;

@@ -287,6 +287,84 @@ class BandCells {
   std::array<std::size_t, 3> size_{};
 };
 
+// The band's triangles (part[t] >= 0 on entry) numbered by the cell of their centroids
+// (BandCells), the cells in order; `shared` flags each vertex two cells' triangles share.
+// \return the number of parts.
+std::size_t cell_parts(const Mesh& mesh, const std::array<std::vector<double>, 3>& cuts, std::vector<int>& part,
+                       std::vector<char>& shared) {
+  const BandCells cells(cuts);
+  std::vector<int> id(cells.cells(), -1);
+  for (std::size_t i = 0; i < part.size(); ++i)
+    if (part[i] >= 0) {
+      const auto& t = mesh.triangles[i];
+      part[i] = static_cast<int>(cells.cell((mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3));
+      id[static_cast<std::size_t>(part[i])] = 0;
+    }
+  std::size_t parts = 0;
+  for (int& c : id)
+    if (c == 0) c = static_cast<int>(parts++);
+  std::vector<int> owner(mesh.positions.size(), -1);
+  shared.assign(mesh.positions.size(), 0);
+  for (std::size_t i = 0; i < part.size(); ++i)
+    if (part[i] >= 0) {
+      part[i] = id[static_cast<std::size_t>(part[i])];
+      for (int v : mesh.triangles[i]) {
+        int& o = owner[static_cast<std::size_t>(v)];
+        if (o < 0) o = part[i];
+        else if (o != part[i]) shared[static_cast<std::size_t>(v)] = 1;
+      }
+    }
+  return parts;
+}
+
+// The triangles from `from` on (the band's, after its first pass) with a corner on or next to a
+// vertex flagged in `again`, numbered by their components through shared vertices, in order of
+// their first triangles; every other triangle -1.
+std::vector<int> junction_parts(const Mesh& mesh, std::size_t from, const std::vector<char>& again, std::size_t& parts) {
+  const std::size_t nt = mesh.triangles.size();
+  std::vector<char> next(mesh.positions.size(), 0);
+  for (std::size_t i = from; i < nt; ++i) {
+    const auto& t = mesh.triangles[i];
+    if (again[t[0]] || again[t[1]] || again[t[2]])
+      for (int v : t) next[static_cast<std::size_t>(v)] = 1;
+  }
+  std::vector<int> part(nt, -1);
+  UnionFind components(mesh.positions.size());
+  for (std::size_t i = from; i < nt; ++i) {
+    const auto& t = mesh.triangles[i];
+    if (next[t[0]] || next[t[1]] || next[t[2]]) {
+      part[i] = 0;
+      components.unite(t[0], t[1]);
+      components.unite(t[0], t[2]);
+    }
+  }
+  std::vector<int> label(mesh.positions.size(), -1);
+  parts = 0;
+  for (std::size_t i = from; i < nt; ++i)
+    if (part[i] >= 0) {
+      int& l = label[static_cast<std::size_t>(components.find(mesh.triangles[i][0]))];
+      if (l < 0) l = static_cast<int>(parts++);
+      part[i] = l;
+    }
+  return part;
+}
+
+// Two repairs one after the other as one: the second's counts added to the first's (but
+// bad_before, the first's: the second's were left by the first), each input vertex's index after
+// both, and the vertices either moved or added, numbered after both.
+PartsRepair one_after_the_other(PartsRepair first, const PartsRepair& second) {
+  const std::size_t bad_before = first.report.bad_before;
+  add_repair_counts(first.report, second.report);
+  first.report.bad_before = bad_before;
+  for (int& r : first.renumbered)
+    if (r >= 0) r = second.renumbered[static_cast<std::size_t>(r)];
+  std::vector<char> changed = second.changed;
+  for (std::size_t u = 0; u < first.changed.size(); ++u)
+    if (first.changed[u] && second.renumbered[u] >= 0) changed[static_cast<std::size_t>(second.renumbered[u])] = 1;
+  first.changed = std::move(changed);
+  return first;
+}
+
 }  // namespace
 
 QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std::size_t finished, QualityOptions qo,
@@ -308,101 +386,37 @@ QualityReport repair_band(const Field& field, Mesh& mesh, std::size_t seams, std
   qo.count_near_boundary = true;
   std::vector<char> flags;
   if (sealed) flags = *sealed;
+  std::vector<char>* carried = sealed ? &flags : nullptr;
+  PartsRepair done;
   // One part, as on one thread, for a field whose calls are costly: its repair gathers the
   // band's evaluations into batches (a Python function), which parts would split.
-  const bool in_parts = cuts && !field.costly_calls();
-  if (!in_parts) {
-    PartsRepair r = repair_parts(field, mesh, part, 1, qo, nullptr, sealed ? &flags : nullptr, 1);
-    band.renumbered = std::move(r.renumbered);
-    for (std::size_t v = 0; v < r.changed.size(); ++v)
-      if (r.changed[v]) band.moved.push_back(static_cast<int>(v));
-    if (sealed) band.sealed = std::move(flags);
+  if (!cuts || field.costly_calls()) {
+    done = repair_parts(field, mesh, part, 1, qo, nullptr, carried, 1);
     band.parts = 1;
-    return r.report;
+  } else {
+    const unsigned workers = field.thread_safe() ? detail::worker_count(qo.threads) : 1;
+    // First the cells' parts side by side, each leaving out of its count the triangles beside a
+    // vertex it shares with another part; ...
+    std::vector<char> shared;
+    band.parts = cell_parts(mesh, *cuts, part, shared);
+    const std::size_t from = nt - static_cast<std::size_t>(std::count_if(part.begin(), part.end(), [](int p) { return p >= 0; }));
+    done = repair_parts(field, mesh, part, band.parts, qo, &shared, carried, workers);
+    // ... then the triangles beside those shared vertices (kept, so each is still there), in
+    // parts that touch at most at a vertex, each counting all it measures.
+    std::vector<char> again(mesh.positions.size(), 0);
+    for (std::size_t v = 0; v < nv; ++v)
+      if (shared[v]) again[static_cast<std::size_t>(done.renumbered[v])] = 1;
+    shared = {};
+    part = junction_parts(mesh, from, again, band.junctions);
+    again = {};
+    done = one_after_the_other(std::move(done),
+                               repair_parts(field, mesh, part, band.junctions, qo, nullptr, carried, workers));
   }
-  const unsigned workers = field.thread_safe() ? detail::worker_count(qo.threads) : 1;
-
-  // First the band's parts by the cells of their centroids, side by side, each leaving out of
-  // its count the triangles beside a vertex it shares with another part; ...
-  const BandCells cells(*cuts);
-  std::vector<int> id(cells.cells(), -1);
-  for (std::size_t i = 0; i < nt; ++i)
-    if (part[i] >= 0) {
-      const auto& t = mesh.triangles[i];
-      id[cells.cell((mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3)] = 0;
-    }
-  std::size_t parts = 0;
-  for (int& c : id)
-    if (c == 0) c = static_cast<int>(parts++);
-  std::vector<int> owner(nv, -1);
-  std::vector<char> shared(nv, 0);
-  for (std::size_t i = 0; i < nt; ++i)
-    if (part[i] >= 0) {
-      const auto& t = mesh.triangles[i];
-      part[i] = id[cells.cell((mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3)];
-      for (int v : t) {
-        int& o = owner[static_cast<std::size_t>(v)];
-        if (o < 0) o = part[i];
-        else if (o != part[i]) shared[static_cast<std::size_t>(v)] = 1;
-      }
-    }
-  owner = {};
-  id = {};
-  const std::size_t from = nt - static_cast<std::size_t>(std::count_if(part.begin(), part.end(), [](int p) { return p >= 0; }));
-  const PartsRepair first = repair_parts(field, mesh, part, parts, qo, &shared, sealed ? &flags : nullptr, workers);
-
-  // ... then the triangles beside those shared vertices (on or next to one), in parts that
-  // touch at most at a vertex, each counting all it measures.
-  std::vector<char> again(mesh.positions.size(), 0);  // shared vertices are kept: each is still there
-  for (std::size_t v = 0; v < nv; ++v)
-    if (shared[v]) again[static_cast<std::size_t>(first.renumbered[v])] = 1;
-  shared = {};
-  const std::size_t ntr = mesh.triangles.size();  // the band's triangles are those from `from` on
-  part.assign(ntr, -1);
-  std::vector<char> next(mesh.positions.size(), 0);
-  for (std::size_t i = from; i < ntr; ++i) {
-    const auto& t = mesh.triangles[i];
-    if (again[t[0]] || again[t[1]] || again[t[2]])
-      for (int v : t) next[static_cast<std::size_t>(v)] = 1;
-  }
-  UnionFind components(mesh.positions.size());
-  for (std::size_t i = from; i < ntr; ++i) {
-    const auto& t = mesh.triangles[i];
-    if (next[t[0]] || next[t[1]] || next[t[2]]) {
-      part[i] = 0;
-      components.unite(t[0], t[1]);
-      components.unite(t[0], t[2]);
-    }
-  }
-  std::vector<int> label(mesh.positions.size(), -1);
-  std::size_t parts2 = 0;
-  for (std::size_t i = from; i < ntr; ++i)
-    if (part[i] >= 0) {
-      int& l = label[static_cast<std::size_t>(components.find(mesh.triangles[i][0]))];
-      if (l < 0) l = static_cast<int>(parts2++);
-      part[i] = l;
-    }
-  label = {};
-  next = {};
-  again = {};
-  components.parent = {};
-  const PartsRepair second = repair_parts(field, mesh, part, parts2, qo, nullptr, sealed ? &flags : nullptr, workers);
-
-  QualityReport report = first.report;
-  add_repair_counts(report, second.report);
-  report.bad_before = first.report.bad_before;  // the second pass's were the first's, left near the shared vertices
-  band.renumbered.assign(nv, -1);
-  std::vector<char> moved = second.changed;
-  for (std::size_t v = 0; v < nv; ++v)
-    if (const int r = first.renumbered[v]; r >= 0) band.renumbered[v] = second.renumbered[static_cast<std::size_t>(r)];
-  for (std::size_t u = 0; u < first.changed.size(); ++u)
-    if (first.changed[u] && second.renumbered[u] >= 0) moved[static_cast<std::size_t>(second.renumbered[u])] = 1;
-  for (std::size_t v = 0; v < moved.size(); ++v)
-    if (moved[v]) band.moved.push_back(static_cast<int>(v));
+  band.renumbered = std::move(done.renumbered);
+  for (std::size_t v = 0; v < done.changed.size(); ++v)
+    if (done.changed[v]) band.moved.push_back(static_cast<int>(v));
   if (sealed) band.sealed = std::move(flags);
-  band.parts = parts;
-  band.junctions = parts2;
-  return report;
+  return done.report;
 }
 
 void add_curvature_properties(const Field& field, const Tracker& tracker, const QualityReport& quality,
