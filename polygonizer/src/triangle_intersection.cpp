@@ -6,6 +6,7 @@
 // 1e-50 and 1e100 in magnitude).
 #include <cdp/core/triangle_intersection.h>
 
+#include "fresh_vector.h"
 #include "parallel.h"
 #include "polled_growth.h"
 #include "vertex_triangles.h"
@@ -20,6 +21,7 @@
 #include <functional>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <string>
 
 namespace cdp {
@@ -537,43 +539,67 @@ std::uint64_t cell_hash(int x, int y, int z) {
 // (16 + sqrt n) n box comparisons.
 // With `involved`, only the pairs with at least one involved triangle (a bucket with none is
 // passed over).
-void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollector& out, int threads,
+void hash_grid_pairs(const Mesh& mesh, std::span<const Box> boxes, PairCollector& out, int threads,
                      const CancelToken* cancel, const std::vector<char>* involved = nullptr) {
   const auto either = [involved](int f, int g) {
     return !involved || (*involved)[static_cast<std::size_t>(f)] || (*involved)[static_cast<std::size_t>(g)];
   };
-  // The preparation's loops poll too: at 2*10^6 triangles they take a few hundred milliseconds.
   const auto poll = [cancel](std::size_t i) {
     if (cancel && i % kPollEvery == 0) cancel->check("self-intersections");
   };
+  // The preparation's passes over the triangles and buckets run on the threads, kPollEvery
+  // items a slice (polled at its start), each slice writing its own elements, or its own results
+  // gathered in slice order: the same on any number of threads. Its fresh arrays are
+  // FreshVectors whose pages those passes write first: made and zero-filled on one thread, their
+  // page faults (30-40 MB for the 6 * 10^5 triangles near the seams of the blocks' torus at
+  // tolerance 1e-5, at 8-13 us a page on the test machine) were most of the serial preparation's
+  // 0.2 s. The counting sort stays serial. Below kParallelTriangles threads cost more than they
+  // save (see the pairs' pass below).
+  constexpr std::size_t kParallelTriangles = 2048, kBlocksPerWorker = 8, kMinBlock = 1024;
+  const unsigned workers = boxes.size() >= kParallelTriangles ? detail::worker_count(threads) : 1;
+  const auto slices = [&](std::size_t count, const auto& fn) {
+    detail::parallel_blocks(count, kPollEvery, count >= 2 * kPollEvery ? workers : 1,
+                            [&](std::size_t begin, std::size_t end, unsigned) {
+                              if (cancel) cancel->check("self-intersections");
+                              fn(begin / kPollEvery, begin, end);
+                            });
+  };
+  const auto slice_count = [](std::size_t count) { return (count + kPollEvery - 1) / kPollEvery; };
+  std::vector<std::vector<int>> slice_live(slice_count(boxes.size()));
+  slices(boxes.size(), [&](std::size_t s, std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f)
+      if ((boxes[f].min.array() <= boxes[f].max.array()).all()) slice_live[s].push_back(static_cast<int>(f));
+  });
   std::vector<int> live;
-  for (std::size_t f = 0; f < boxes.size(); ++f) {
-    poll(f);
-    if ((boxes[f].min.array() <= boxes[f].max.array()).all()) live.push_back(static_cast<int>(f));
-  }
+  for (std::vector<int>& s : slice_live) live.insert(live.end(), s.begin(), s.end()), s = {};
   const std::size_t n = live.size();
   if (n < 2) return;
 
   // Cell size: kCellEdges median longest edges, grown so that at most about 16 + sqrt(n)
   // triangles are wider than kMaxSpan - 1 cells.
-  std::vector<double> sizes(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    poll(k);
-    const Tri t = corners(mesh, live[k]);
-    sizes[k] = std::sqrt(std::max({(t[1] - t[0]).squaredNorm(), (t[2] - t[1]).squaredNorm(), (t[0] - t[2]).squaredNorm()}));
-  }
+  detail::FreshVector<double> sizes(n);
+  slices(n, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const Tri t = corners(mesh, live[k]);
+      sizes[k] = std::sqrt(std::max({(t[1] - t[0]).squaredNorm(), (t[2] - t[1]).squaredNorm(), (t[0] - t[2]).squaredNorm()}));
+    }
+  });
   std::nth_element(sizes.begin(), sizes.begin() + static_cast<std::ptrdiff_t>(n / 2), sizes.end());
   poll(0);  // each selection takes tens of milliseconds at 2*10^6 triangles
   double h = kCellEdges * sizes[n / 2];
   const auto max_large = static_cast<std::size_t>(16.0 + std::sqrt(static_cast<double>(n)));
-  Box all{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
-  for (std::size_t k = 0; k < n; ++k) {
-    poll(k);
-    const Box& b = boxes[static_cast<std::size_t>(live[k])];
-    sizes[k] = b.size().maxCoeff();
-    all.min = all.min.cwiseMin(b.min);
-    all.max = all.max.cwiseMax(b.max);
-  }
+  const Box none{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
+  std::vector<Box> slice_bounds(slice_count(n), none);
+  slices(n, [&](std::size_t s, std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const Box& b = boxes[static_cast<std::size_t>(live[k])];
+      sizes[k] = b.size().maxCoeff();
+      slice_bounds[s].min = slice_bounds[s].min.cwiseMin(b.min);
+      slice_bounds[s].max = slice_bounds[s].max.cwiseMax(b.max);
+    }
+  });
+  Box all = none;
+  for (const Box& b : slice_bounds) all.min = all.min.cwiseMin(b.min), all.max = all.max.cwiseMax(b.max);
   if (n > max_large) {
     std::nth_element(sizes.begin(), sizes.begin() + static_cast<std::ptrdiff_t>(max_large), sizes.end(), std::greater<>());
     poll(0);
@@ -592,28 +618,36 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   struct CellRange {
     int lo[3], hi[3];
   };
-  // Zero-filled a block at a time between polls: at 2*10^6 triangles, 48 MB of fresh pages
-  // filled at once were the check's longest unpolled stretch.
-  std::vector<CellRange> ranges = detail::polled_vector<CellRange>(boxes.size(), [&] { poll(0); });
+  // Written for the live triangles only, the only ones read.
+  detail::FreshVector<CellRange> ranges(boxes.size());
+  detail::FreshVector<unsigned char> is_large(boxes.size());
+  std::vector<std::vector<int>> slice_large(slice_count(n));
+  std::vector<std::size_t> slice_entries(slice_count(n), 0);
+  slices(n, [&](std::size_t s, std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const int f = live[k];
+      const Box& b = boxes[static_cast<std::size_t>(f)];
+      CellRange& r = ranges[static_cast<std::size_t>(f)];
+      for (int a = 0; a < 3; ++a) {
+        r.lo[a] = cell(b.min[a], a);
+        r.hi[a] = cell(b.max[a], a);
+      }
+      const bool wide = r.hi[0] - r.lo[0] >= kMaxSpan || r.hi[1] - r.lo[1] >= kMaxSpan || r.hi[2] - r.lo[2] >= kMaxSpan;
+      is_large[static_cast<std::size_t>(f)] = wide ? 1 : 0;
+      if (wide)
+        slice_large[s].push_back(f);
+      else
+        slice_entries[s] += static_cast<std::size_t>(r.hi[0] - r.lo[0] + 1) * static_cast<std::size_t>(r.hi[1] - r.lo[1] + 1) *
+                            static_cast<std::size_t>(r.hi[2] - r.lo[2] + 1);
+    }
+  });
   std::vector<int> large;
-  std::vector<unsigned char> is_large(boxes.size(), 0);
   std::size_t entries = 0;
-  for (const int f : live) {
-    poll(static_cast<std::size_t>(f));
-    const Box& b = boxes[static_cast<std::size_t>(f)];
-    CellRange& r = ranges[static_cast<std::size_t>(f)];
-    for (int a = 0; a < 3; ++a) {
-      r.lo[a] = cell(b.min[a], a);
-      r.hi[a] = cell(b.max[a], a);
-    }
-    if (r.hi[0] - r.lo[0] >= kMaxSpan || r.hi[1] - r.lo[1] >= kMaxSpan || r.hi[2] - r.lo[2] >= kMaxSpan) {
-      large.push_back(f);
-      is_large[static_cast<std::size_t>(f)] = 1;
-    } else {
-      entries += static_cast<std::size_t>(r.hi[0] - r.lo[0] + 1) * static_cast<std::size_t>(r.hi[1] - r.lo[1] + 1) *
-                 static_cast<std::size_t>(r.hi[2] - r.lo[2] + 1);
-    }
+  for (std::size_t s = 0; s < slice_large.size(); ++s) {
+    large.insert(large.end(), slice_large[s].begin(), slice_large[s].end());
+    entries += slice_entries[s];
   }
+  slice_large = {};
   if (entries >= std::numeric_limits<std::uint32_t>::max())
     throw LimitExceededError("self-intersections: too many triangles for the hash grid");
 
@@ -639,8 +673,9 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   };
   // Counts, then their running sums (the end of each bucket), then filled backwards from the last
   // triangle: start[b] ends at the beginning of bucket b, its triangles in increasing order.
-  // Zero-filled between polls, as the ranges: tens of megabytes at 2*10^6 triangles.
-  std::vector<std::uint32_t> start = detail::polled_vector<std::uint32_t>(buckets + 1, [&] { poll(0); }, 0);
+  // Both arrays' pages are written first on the threads (zeros), for the serial sort.
+  detail::FreshVector<std::uint32_t> start(buckets + 1);
+  slices(buckets + 1, [&](std::size_t, std::size_t begin, std::size_t end) { std::fill(start.begin() + begin, start.begin() + end, 0u); });
   for (const int f : live) {
     poll(static_cast<std::size_t>(f));
     if (!is_large[static_cast<std::size_t>(f)]) for_each_cell(f, [&](int, int, int, std::size_t b) { ++start[b]; });
@@ -649,7 +684,8 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
     poll(b);
     start[b] += start[b - 1];
   }
-  std::vector<int> members = detail::polled_vector<int>(entries, [&] { poll(0); });
+  detail::FreshVector<int> members(entries);
+  slices(entries, [&](std::size_t, std::size_t begin, std::size_t end) { std::fill(members.begin() + begin, members.begin() + end, 0); });
   for (auto it = live.rbegin(); it != live.rend(); ++it) {
     poll(static_cast<std::size_t>(*it));
     if (!is_large[static_cast<std::size_t>(*it)])
@@ -664,8 +700,6 @@ void hash_grid_pairs(const Mesh& mesh, const std::vector<Box>& boxes, PairCollec
   // collectors are merged, which gives the same count and smallest pairs in any order. Below
   // kParallelTriangles threads cost more than they save (starting one costs tens of
   // microseconds; 2048 triangles take about a millisecond).
-  constexpr std::size_t kParallelTriangles = 2048, kBlocksPerWorker = 8, kMinBlock = 1024;
-  const unsigned workers = n >= kParallelTriangles ? detail::worker_count(threads) : 1;
   const std::size_t block = std::max(kMinBlock, buckets / (kBlocksPerWorker * workers));
   std::vector<PairCollector> found(workers, PairCollector(out.max_pairs()));
   // Pairs that share a vertex with a flat star do not intersect (see flat_stars): skipped.
@@ -783,41 +817,43 @@ namespace {
 
 // The checks of triangle_boxes_for_intersection before any box: every index in range, every
 // position a triangle uses finite; `cancel` (when given) polled every kPollEvery triangles.
-void validate_for_intersection(const Mesh& mesh, const char* what, const CancelToken* cancel) {
+// Each pass on the threads, a slice at a time: the error is the lowest slice's, the one a single
+// thread meets first, and every index is checked before any position.
+void validate_for_intersection(const Mesh& mesh, const char* what, const CancelToken* cancel, int threads = 1) {
   if (mesh.triangles.size() > static_cast<std::size_t>(INT_MAX))
     throw InvalidInputError(std::string(what) + ": too many triangles");
   const auto nv = static_cast<long long>(mesh.positions.size());
   const std::size_t n = mesh.triangles.size();
-  const auto poll = [&](std::size_t f) {
-    if (cancel && f % kPollEvery == 0) cancel->check(what);
+  const auto slices = [&](const auto& fn) {
+    detail::parallel_blocks(n, kPollEvery, n >= 2 * kPollEvery ? detail::worker_count(threads) : 1,
+                            [&](std::size_t begin, std::size_t end, unsigned) {
+                              if (cancel) cancel->check(what);
+                              for (std::size_t f = begin; f < end; ++f) fn(mesh.triangles[f]);
+                            });
   };
-  for (std::size_t f = 0; f < n; ++f) {
-    poll(f);
-    for (int i : mesh.triangles[f])
+  slices([&](const std::array<int, 3>& t) {
+    for (int i : t)
       if (i < 0 || i >= nv) throw InvalidInputError(std::string(what) + ": a triangle index is out of range");
-  }
-  for (std::size_t f = 0; f < n; ++f) {
-    poll(f);
-    for (int i : mesh.triangles[f])
+  });
+  slices([&](const std::array<int, 3>& t) {
+    for (int i : t)
       if (!mesh.positions[static_cast<std::size_t>(i)].allFinite())
         throw InvalidInputError(std::string(what) + ": a vertex position is not finite");
-  }
+  });
 }
 
 // triangle_boxes_for_intersection, polling `cancel` (when given) every kPollEvery triangles.
-std::vector<Box> boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate, const char* what,
-                                        const CancelToken* cancel, int threads = 1) {
-  validate_for_intersection(mesh, what, cancel);
+detail::FreshVector<Box> boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate, const char* what,
+                                                const CancelToken* cancel, int threads = 1) {
+  validate_for_intersection(mesh, what, cancel, threads);
   const std::size_t n = mesh.triangles.size();
   const auto poll = [&](std::size_t f) {
     if (cancel && f % kPollEvery == 0) cancel->check(what);
   };
-  // The boxes made room for in polled blocks (a hundred megabytes of fresh pages at 2*10^6
-  // triangles), then each slice of triangles on a thread into its own slots: the degeneracy test
-  // was a fifth of the blocks' final check on the torus at factor 40, all of it serial.
-  std::vector<Box> boxes = detail::polled_vector<Box>(n, [&] {
-    if (cancel) cancel->check(what);
-  });
+  // Each slice of triangles on a thread, into its own slots of the fresh array, whose pages it
+  // faults in (a hundred megabytes at 2*10^6 triangles): the degeneracy test was a fifth of the
+  // blocks' final check on the torus at factor 40, all of it serial.
+  detail::FreshVector<Box> boxes(n);
   std::atomic<std::size_t> skipped{0};
   detail::parallel_blocks(n, kPollEvery, detail::worker_count(threads), [&](std::size_t begin, std::size_t end, unsigned) {
     poll(begin);
@@ -840,12 +876,13 @@ std::vector<Box> boxes_for_intersection(const Mesh& mesh, std::size_t* degenerat
 }  // namespace
 
 std::vector<Box> triangle_boxes_for_intersection(const Mesh& mesh, std::size_t* degenerate, const char* what) {
-  return boxes_for_intersection(mesh, degenerate, what, nullptr);
+  const detail::FreshVector<Box> boxes = boxes_for_intersection(mesh, degenerate, what, nullptr);
+  return {boxes.begin(), boxes.end()};
 }
 
 std::vector<std::pair<int, int>> self_intersecting_pairs(const Mesh& mesh, std::size_t max_pairs, int threads,
                                                          const CancelToken* cancel) {
-  const std::vector<Box> boxes = boxes_for_intersection(mesh, nullptr, "self_intersecting_pairs", cancel, threads);
+  const detail::FreshVector<Box> boxes = boxes_for_intersection(mesh, nullptr, "self_intersecting_pairs", cancel, threads);
   PairCollector out(max_pairs);
   hash_grid_pairs(mesh, boxes, out, threads, cancel);
   return out.sorted_pairs();
@@ -863,28 +900,52 @@ namespace {
 // of 444 MB at 1.9 * 10^6 triangles, the blocks' torus at tolerance 1e-5), where most triangles
 // are in no pair to test.
 constexpr unsigned char kFarFromInvolved = 0, kNearInvolved = 1, kInStar = 2;
-std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<char>& involved, const CancelToken* cancel) {
+std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<char>& involved, unsigned workers,
+                                         const CancelToken* cancel) {
   constexpr double kCoarseCellEdges = 2;
   constexpr double kMaxCoarseCells = 1 << 27;  // a bit each: 16 MB
   constexpr double kCoarseCellGrowth = 1.25;
+  constexpr std::size_t kPolledWords = std::size_t{1} << 16;  // 512 KB of marks between two polls
   const std::size_t n = mesh.triangles.size();
-  const auto poll = [&](std::size_t f) {
-    if (cancel && f % kPollEvery == 0) cancel->check("self-intersections");
+  // The passes over every triangle run on the threads, a slice of kPollEvery triangles at a time
+  // (polled at its start); each writes only its own triangles' marks or its slice's results,
+  // gathered in slice order, so the marks are the same on any number of threads. The function
+  // takes 0.08-0.1 s on one thread for the blocks' torus at tolerance 1e-5 (1.85 * 10^6
+  // triangles), all of it serial before.
+  const auto slices = [&](const auto& fn) {
+    detail::parallel_blocks(n, kPollEvery, n >= 2 * kPollEvery ? workers : 1, [&](std::size_t begin, std::size_t end, unsigned) {
+      if (cancel) cancel->check("self-intersections");
+      fn(begin, end);
+    });
   };
   const auto box_of = [&](std::size_t f) {
     const Tri t = corners(mesh, static_cast<int>(f));
     return Box{t[0].cwiseMin(t[1]).cwiseMin(t[2]), t[0].cwiseMax(t[1]).cwiseMax(t[2])};
   };
-  std::vector<double> sides;
-  Box all{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
-  for (std::size_t f = 0; f < n; ++f) {
-    poll(f);
-    const Box b = box_of(f);
-    all.min = all.min.cwiseMin(b.min);
-    all.max = all.max.cwiseMax(b.max);
-    if (involved[f]) sides.push_back(b.size().maxCoeff());
+  const Box none{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
+  const std::size_t slice_count = (n + kPollEvery - 1) / kPollEvery;
+  std::vector<Box> slice_bounds(slice_count, none);
+  std::vector<std::vector<int>> slice_involved(slice_count);
+  slices([&](std::size_t begin, std::size_t end) {
+    Box& bounds = slice_bounds[begin / kPollEvery];
+    for (std::size_t f = begin; f < end; ++f) {
+      const Box b = box_of(f);
+      bounds.min = bounds.min.cwiseMin(b.min);
+      bounds.max = bounds.max.cwiseMax(b.max);
+      if (involved[f]) slice_involved[begin / kPollEvery].push_back(static_cast<int>(f));
+    }
+  });
+  Box all = none;
+  std::vector<int> ids;  // the involved triangles, in increasing order
+  for (std::size_t s = 0; s < slice_count; ++s) {
+    all.min = all.min.cwiseMin(slice_bounds[s].min);
+    all.max = all.max.cwiseMax(slice_bounds[s].max);
+    ids.insert(ids.end(), slice_involved[s].begin(), slice_involved[s].end());
   }
-  if (sides.empty()) return std::vector<unsigned char>(n, kFarFromInvolved);  // no pair to test
+  slice_involved = {};
+  if (ids.empty()) return std::vector<unsigned char>(n, kFarFromInvolved);  // no pair to test
+  std::vector<double> sides(ids.size());
+  for (std::size_t k = 0; k < ids.size(); ++k) sides[k] = box_of(static_cast<std::size_t>(ids[k])).size().maxCoeff();
   std::nth_element(sides.begin(), sides.begin() + static_cast<std::ptrdiff_t>(sides.size() / 2), sides.end());
   double h = kCoarseCellEdges * sides[sides.size() / 2];
   if (!(h > 0)) return {};
@@ -911,7 +972,15 @@ std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<cha
   const auto cell = [&](double x, int a) {
     return std::clamp(static_cast<long long>((x - all.min[a]) / h), 0LL, dims[a] - 1);
   };
-  std::vector<bool> marked(static_cast<std::size_t>(cells), false);
+  // A bit per cell, set here and only read on the threads; zeroed there (16 MB of fresh pages at
+  // most).
+  const auto words = (static_cast<std::size_t>(cells) + 63) / 64;
+  detail::FreshVector<std::uint64_t> marked(words);
+  detail::parallel_blocks(words, kPolledWords, words >= 2 * kPolledWords ? workers : 1, [&](std::size_t begin, std::size_t end, unsigned) {
+    if (cancel) cancel->check("self-intersections");
+    std::fill(marked.begin() + static_cast<std::ptrdiff_t>(begin), marked.begin() + static_cast<std::ptrdiff_t>(end), 0);
+  });
+  const auto is_marked = [&](std::size_t c) { return (marked[c >> 6] >> (c & 63) & 1) != 0; };
   // Calls fn(index) for every coarse cell box f touches, until fn returns true.
   const auto any_cell = [&](std::size_t f, const auto& fn) {
     const Box b = box_of(f);
@@ -921,26 +990,31 @@ std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<cha
           if (fn(static_cast<std::size_t>((z * dims[1] + y) * dims[0] + x))) return true;
     return false;
   };
-  for (std::size_t f = 0; f < n; ++f) {
-    poll(f);
-    if (involved[f]) any_cell(f, [&](std::size_t c) { return marked[c] = true, false; });
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    if (cancel && k % kPollEvery == 0) cancel->check("self-intersections");
+    any_cell(static_cast<std::size_t>(ids[k]), [&](std::size_t c) { return marked[c >> 6] |= std::uint64_t{1} << (c & 63), false; });
   }
   std::vector<unsigned char> near(n, kFarFromInvolved);
-  std::vector<bool> at_vertex(mesh.positions.size(), false);
+  slices([&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f)
+      if (involved[f] || any_cell(f, is_marked)) near[f] = kNearInvolved;
+  });
+  // The vertices of the near triangles, marked on one thread (neighbouring slices share them).
+  std::vector<unsigned char> at_vertex(mesh.positions.size(), 0);
   for (std::size_t f = 0; f < n; ++f) {
-    poll(f);
-    if (!involved[f] && !any_cell(f, [&](std::size_t c) { return bool(marked[c]); })) continue;
-    near[f] = kNearInvolved;
-    for (const int v : mesh.triangles[f]) at_vertex[static_cast<std::size_t>(v)] = true;
+    if (cancel && f % kPollEvery == 0) cancel->check("self-intersections");
+    if (near[f] == kNearInvolved)
+      for (const int v : mesh.triangles[f]) at_vertex[static_cast<std::size_t>(v)] = 1;
   }
-  for (std::size_t f = 0; f < n; ++f) {
-    poll(f);
-    if (near[f] != kFarFromInvolved) continue;
-    const auto& t = mesh.triangles[f];
-    if (at_vertex[static_cast<std::size_t>(t[0])] || at_vertex[static_cast<std::size_t>(t[1])] ||
-        at_vertex[static_cast<std::size_t>(t[2])])
-      near[f] = kInStar;
-  }
+  slices([&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      if (near[f] != kFarFromInvolved) continue;
+      const auto& t = mesh.triangles[f];
+      if (at_vertex[static_cast<std::size_t>(t[0])] || at_vertex[static_cast<std::size_t>(t[1])] ||
+          at_vertex[static_cast<std::size_t>(t[2])])
+        near[f] = kInStar;
+    }
+  });
   return near;
 }
 
@@ -952,11 +1026,11 @@ std::vector<std::pair<int, int>> self_intersecting_pairs_involving(const Mesh& m
   if (involved.size() != mesh.triangles.size())
     throw InvalidInputError("self_intersecting_pairs_involving: expects one flag per triangle");
   const char* what = "self_intersecting_pairs";
-  validate_for_intersection(mesh, what, cancel);
-  const std::vector<unsigned char> near = near_involved(mesh, involved, cancel);
+  validate_for_intersection(mesh, what, cancel, threads);
+  const std::vector<unsigned char> near = near_involved(mesh, involved, detail::worker_count(threads), cancel);
   PairCollector out(max_pairs);
   if (near.empty()) {
-    const std::vector<Box> boxes = boxes_for_intersection(mesh, nullptr, what, cancel, threads);
+    const detail::FreshVector<Box> boxes = boxes_for_intersection(mesh, nullptr, what, cancel, threads);
     hash_grid_pairs(mesh, boxes, out, threads, cancel, &involved);
     return out.sorted_pairs();
   }
@@ -983,7 +1057,7 @@ std::vector<std::pair<int, int>> self_intersecting_pairs_involving(const Mesh& m
     ids.push_back(static_cast<int>(f));
   }
   vertex = {};
-  std::vector<Box> boxes = boxes_for_intersection(part, nullptr, what, cancel, threads);
+  detail::FreshVector<Box> boxes = boxes_for_intersection(part, nullptr, what, cancel, threads);
   std::vector<char> part_involved(ids.size(), 0);
   for (std::size_t k = 0; k < ids.size(); ++k) {
     const auto f = static_cast<std::size_t>(ids[k]);
@@ -997,7 +1071,7 @@ std::vector<std::pair<int, int>> self_intersecting_pairs_involving(const Mesh& m
 }
 
 std::size_t count_self_intersecting_pairs(const Mesh& mesh, int threads) {
-  const std::vector<Box> boxes = triangle_boxes_for_intersection(mesh, nullptr, "count_self_intersecting_pairs");
+  const detail::FreshVector<Box> boxes = boxes_for_intersection(mesh, nullptr, "count_self_intersecting_pairs", nullptr, threads);
   PairCollector out(0);
   hash_grid_pairs(mesh, boxes, out, threads, nullptr);
   return out.count();

@@ -19,6 +19,7 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <string>
 
 #include "common/intersection_helpers.h"
 
@@ -429,6 +430,54 @@ TEST(TriangleIntersection, PairsInvolvingFlaggedTrianglesAreTheFullChecksWithOne
     }
   }
   EXPECT_THROW(self_intersecting_pairs_involving(meshes[0], std::vector<char>(3, 1)), InvalidInputError);
+}
+
+// Over 2 * 4096 triangles the checks' passes are cut in slices shared among the threads: the
+// same pairs, counts and restricted pairs on any number of them.
+TEST(TriangleIntersection, AMeshOfManySlicesHasTheSamePairsOnAnyNumberOfThreads) {
+  const Mesh m = merged(icosphere(5), icosphere(5, Vec3(0.31, 0.7, -0.2), 0.8));  // 40,960 triangles
+  const Pairs all = self_intersecting_pairs(m, kAll, 1);
+  ASSERT_GT(all.size(), 100u);
+  std::vector<char> involved(m.triangles.size());
+  std::mt19937_64 rng(7);
+  std::bernoulli_distribution pick(0.02);
+  for (auto& f : involved) f = pick(rng);
+  Pairs expected;
+  for (const auto& [f, g] : all)
+    if (involved[static_cast<std::size_t>(f)] || involved[static_cast<std::size_t>(g)]) expected.push_back({f, g});
+  ASSERT_GT(expected.size(), 2u);
+  ASSERT_LT(expected.size(), all.size());
+  for (const int threads : {1, 2, 3, 8}) {
+    EXPECT_EQ(self_intersecting_pairs(m, kAll, threads), all) << threads;
+    EXPECT_EQ(count_self_intersecting_pairs(m, threads), all.size()) << threads;
+    EXPECT_EQ(self_intersecting_pairs_involving(m, involved, kAll, threads), expected) << threads;
+  }
+}
+
+// The error of a mesh with several faults is the one a single thread meets first, on any number:
+// an index out of range before a position that is not finite, the lowest triangle's first.
+TEST(TriangleIntersection, AMeshOfManySlicesNamesTheSameFaultOnAnyNumberOfThreads) {
+  Mesh m = icosphere(6);  // 81,920 triangles
+  m.positions[static_cast<std::size_t>(m.triangles[100][0])].x() = std::numeric_limits<double>::quiet_NaN();
+  m.triangles[70000][1] = static_cast<int>(m.positions.size());
+  const auto message = [&](int threads, bool involving) {
+    try {
+      if (involving)
+        self_intersecting_pairs_involving(m, std::vector<char>(m.triangles.size(), 0), kAll, threads);
+      else
+        self_intersecting_pairs(m, kAll, threads);
+    } catch (const InvalidInputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  for (const bool involving : {false, true})
+    for (const int threads : {1, 2, 8}) {
+      EXPECT_NE(message(threads, involving).find("a triangle index is out of range"), std::string::npos) << threads;
+    }
+  m.triangles[70000][1] = m.triangles[70000][0] == 0 ? 1 : 0;
+  for (const int threads : {1, 2, 8})
+    EXPECT_NE(message(threads, false).find("a vertex position is not finite"), std::string::npos) << threads;
 }
 
 }  // namespace
