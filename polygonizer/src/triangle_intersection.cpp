@@ -514,6 +514,39 @@ constexpr int kMaxSpan = 4;
 // hash_grid_pairs tells a pair's bucket by the place of a cell in its block of 8 x 8 x 8 cells.
 static_assert(kMaxSpan < 8);
 
+// Calls fn(slice, begin, end) for each slice [begin, end) of kPollEvery items of [0, count), on
+// up to `workers` threads, polling `cancel` at each slice's start. Each slice writes only its own
+// items, or its own results that the caller gathers in slice order: the same on any number of
+// threads.
+template <class Fn>
+void in_slices(std::size_t count, unsigned workers, const CancelToken* cancel, const char* what, const Fn& fn) {
+  detail::parallel_blocks(count, kPollEvery, workers, [&](std::size_t begin, std::size_t end, unsigned) {
+    if (cancel) cancel->check(what);
+    fn(begin / kPollEvery, begin, end);
+  });
+}
+
+std::size_t slice_count(std::size_t count) { return (count + kPollEvery - 1) / kPollEvery; }
+
+// n copies of `value` in a FreshVector, its pages first written (faulted in) on the threads.
+template <class T>
+detail::FreshVector<T> filled_on_threads(std::size_t n, const T& value, unsigned workers, const CancelToken* cancel) {
+  detail::FreshVector<T> v(n);
+  in_slices(n, workers, cancel, "self-intersections", [&](std::size_t, std::size_t begin, std::size_t end) {
+    std::fill(v.begin() + static_cast<std::ptrdiff_t>(begin), v.begin() + static_cast<std::ptrdiff_t>(end), value);
+  });
+  return v;
+}
+
+// The bounds of no box, and `bounds` grown to hold `b`.
+Box no_bounds() {
+  return {Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
+}
+void extend(Box& bounds, const Box& b) {
+  bounds.min = bounds.min.cwiseMin(b.min);
+  bounds.max = bounds.max.cwiseMax(b.max);
+}
+
 std::uint64_t cell_hash(int x, int y, int z) {
   std::uint64_t k = static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ull ^
                     static_cast<std::uint64_t>(y) * 0xC2B2AE3D27D4EB4Full ^
@@ -557,14 +590,7 @@ void hash_grid_pairs(const Mesh& mesh, std::span<const Box> boxes, PairCollector
   // save (see the pairs' pass below).
   constexpr std::size_t kParallelTriangles = 2048, kBlocksPerWorker = 8, kMinBlock = 1024;
   const unsigned workers = boxes.size() >= kParallelTriangles ? detail::worker_count(threads) : 1;
-  const auto slices = [&](std::size_t count, const auto& fn) {
-    detail::parallel_blocks(count, kPollEvery, count >= 2 * kPollEvery ? workers : 1,
-                            [&](std::size_t begin, std::size_t end, unsigned) {
-                              if (cancel) cancel->check("self-intersections");
-                              fn(begin / kPollEvery, begin, end);
-                            });
-  };
-  const auto slice_count = [](std::size_t count) { return (count + kPollEvery - 1) / kPollEvery; };
+  const auto slices = [&](std::size_t count, const auto& fn) { in_slices(count, workers, cancel, "self-intersections", fn); };
   std::vector<std::vector<int>> slice_live(slice_count(boxes.size()));
   slices(boxes.size(), [&](std::size_t s, std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f)
@@ -588,18 +614,16 @@ void hash_grid_pairs(const Mesh& mesh, std::span<const Box> boxes, PairCollector
   poll(0);  // each selection takes tens of milliseconds at 2*10^6 triangles
   double h = kCellEdges * sizes[n / 2];
   const auto max_large = static_cast<std::size_t>(16.0 + std::sqrt(static_cast<double>(n)));
-  const Box none{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
-  std::vector<Box> slice_bounds(slice_count(n), none);
+  std::vector<Box> slice_bounds(slice_count(n), no_bounds());
   slices(n, [&](std::size_t s, std::size_t begin, std::size_t end) {
     for (std::size_t k = begin; k < end; ++k) {
       const Box& b = boxes[static_cast<std::size_t>(live[k])];
       sizes[k] = b.size().maxCoeff();
-      slice_bounds[s].min = slice_bounds[s].min.cwiseMin(b.min);
-      slice_bounds[s].max = slice_bounds[s].max.cwiseMax(b.max);
+      extend(slice_bounds[s], b);
     }
   });
-  Box all = none;
-  for (const Box& b : slice_bounds) all.min = all.min.cwiseMin(b.min), all.max = all.max.cwiseMax(b.max);
+  Box all = no_bounds();
+  for (const Box& b : slice_bounds) extend(all, b);
   if (n > max_large) {
     std::nth_element(sizes.begin(), sizes.begin() + static_cast<std::ptrdiff_t>(max_large), sizes.end(), std::greater<>());
     poll(0);
@@ -674,8 +698,7 @@ void hash_grid_pairs(const Mesh& mesh, std::span<const Box> boxes, PairCollector
   // Counts, then their running sums (the end of each bucket), then filled backwards from the last
   // triangle: start[b] ends at the beginning of bucket b, its triangles in increasing order.
   // Both arrays' pages are written first on the threads (zeros), for the serial sort.
-  detail::FreshVector<std::uint32_t> start(buckets + 1);
-  slices(buckets + 1, [&](std::size_t, std::size_t begin, std::size_t end) { std::fill(start.begin() + begin, start.begin() + end, 0u); });
+  detail::FreshVector<std::uint32_t> start = filled_on_threads<std::uint32_t>(buckets + 1, 0, workers, cancel);
   for (const int f : live) {
     poll(static_cast<std::size_t>(f));
     if (!is_large[static_cast<std::size_t>(f)]) for_each_cell(f, [&](int, int, int, std::size_t b) { ++start[b]; });
@@ -684,8 +707,7 @@ void hash_grid_pairs(const Mesh& mesh, std::span<const Box> boxes, PairCollector
     poll(b);
     start[b] += start[b - 1];
   }
-  detail::FreshVector<int> members(entries);
-  slices(entries, [&](std::size_t, std::size_t begin, std::size_t end) { std::fill(members.begin() + begin, members.begin() + end, 0); });
+  detail::FreshVector<int> members = filled_on_threads<int>(entries, 0, workers, cancel);
   for (auto it = live.rbegin(); it != live.rend(); ++it) {
     poll(static_cast<std::size_t>(*it));
     if (!is_large[static_cast<std::size_t>(*it)])
@@ -825,11 +847,9 @@ void validate_for_intersection(const Mesh& mesh, const char* what, const CancelT
   const auto nv = static_cast<long long>(mesh.positions.size());
   const std::size_t n = mesh.triangles.size();
   const auto slices = [&](const auto& fn) {
-    detail::parallel_blocks(n, kPollEvery, n >= 2 * kPollEvery ? detail::worker_count(threads) : 1,
-                            [&](std::size_t begin, std::size_t end, unsigned) {
-                              if (cancel) cancel->check(what);
-                              for (std::size_t f = begin; f < end; ++f) fn(mesh.triangles[f]);
-                            });
+    in_slices(n, detail::worker_count(threads), cancel, what, [&](std::size_t, std::size_t begin, std::size_t end) {
+      for (std::size_t f = begin; f < end; ++f) fn(mesh.triangles[f]);
+    });
   };
   slices([&](const std::array<int, 3>& t) {
     for (int i : t)
@@ -905,41 +925,29 @@ std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<cha
   constexpr double kCoarseCellEdges = 2;
   constexpr double kMaxCoarseCells = 1 << 27;  // a bit each: 16 MB
   constexpr double kCoarseCellGrowth = 1.25;
-  constexpr std::size_t kPolledWords = std::size_t{1} << 16;  // 512 KB of marks between two polls
   const std::size_t n = mesh.triangles.size();
   // The passes over every triangle run on the threads, a slice of kPollEvery triangles at a time
   // (polled at its start); each writes only its own triangles' marks or its slice's results,
   // gathered in slice order, so the marks are the same on any number of threads. The function
   // takes 0.08-0.1 s on one thread for the blocks' torus at tolerance 1e-5 (1.85 * 10^6
   // triangles), all of it serial before.
-  const auto slices = [&](const auto& fn) {
-    detail::parallel_blocks(n, kPollEvery, n >= 2 * kPollEvery ? workers : 1, [&](std::size_t begin, std::size_t end, unsigned) {
-      if (cancel) cancel->check("self-intersections");
-      fn(begin, end);
-    });
-  };
+  const auto slices = [&](const auto& fn) { in_slices(n, workers, cancel, "self-intersections", fn); };
   const auto box_of = [&](std::size_t f) {
     const Tri t = corners(mesh, static_cast<int>(f));
     return Box{t[0].cwiseMin(t[1]).cwiseMin(t[2]), t[0].cwiseMax(t[1]).cwiseMax(t[2])};
   };
-  const Box none{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
-  const std::size_t slice_count = (n + kPollEvery - 1) / kPollEvery;
-  std::vector<Box> slice_bounds(slice_count, none);
-  std::vector<std::vector<int>> slice_involved(slice_count);
-  slices([&](std::size_t begin, std::size_t end) {
-    Box& bounds = slice_bounds[begin / kPollEvery];
+  std::vector<Box> slice_bounds(slice_count(n), no_bounds());
+  std::vector<std::vector<int>> slice_involved(slice_count(n));
+  slices([&](std::size_t s, std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
-      const Box b = box_of(f);
-      bounds.min = bounds.min.cwiseMin(b.min);
-      bounds.max = bounds.max.cwiseMax(b.max);
-      if (involved[f]) slice_involved[begin / kPollEvery].push_back(static_cast<int>(f));
+      extend(slice_bounds[s], box_of(f));
+      if (involved[f]) slice_involved[s].push_back(static_cast<int>(f));
     }
   });
-  Box all = none;
+  Box all = no_bounds();
   std::vector<int> ids;  // the involved triangles, in increasing order
-  for (std::size_t s = 0; s < slice_count; ++s) {
-    all.min = all.min.cwiseMin(slice_bounds[s].min);
-    all.max = all.max.cwiseMax(slice_bounds[s].max);
+  for (std::size_t s = 0; s < slice_bounds.size(); ++s) {
+    extend(all, slice_bounds[s]);
     ids.insert(ids.end(), slice_involved[s].begin(), slice_involved[s].end());
   }
   slice_involved = {};
@@ -974,12 +982,8 @@ std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<cha
   };
   // A bit per cell, set here and only read on the threads; zeroed there (16 MB of fresh pages at
   // most).
-  const auto words = (static_cast<std::size_t>(cells) + 63) / 64;
-  detail::FreshVector<std::uint64_t> marked(words);
-  detail::parallel_blocks(words, kPolledWords, words >= 2 * kPolledWords ? workers : 1, [&](std::size_t begin, std::size_t end, unsigned) {
-    if (cancel) cancel->check("self-intersections");
-    std::fill(marked.begin() + static_cast<std::ptrdiff_t>(begin), marked.begin() + static_cast<std::ptrdiff_t>(end), 0);
-  });
+  detail::FreshVector<std::uint64_t> marked =
+      filled_on_threads<std::uint64_t>((static_cast<std::size_t>(cells) + 63) / 64, 0, workers, cancel);
   const auto is_marked = [&](std::size_t c) { return (marked[c >> 6] >> (c & 63) & 1) != 0; };
   // Calls fn(index) for every coarse cell box f touches, until fn returns true.
   const auto any_cell = [&](std::size_t f, const auto& fn) {
@@ -995,7 +999,7 @@ std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<cha
     any_cell(static_cast<std::size_t>(ids[k]), [&](std::size_t c) { return marked[c >> 6] |= std::uint64_t{1} << (c & 63), false; });
   }
   std::vector<unsigned char> near(n, kFarFromInvolved);
-  slices([&](std::size_t begin, std::size_t end) {
+  slices([&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f)
       if (involved[f] || any_cell(f, is_marked)) near[f] = kNearInvolved;
   });
@@ -1006,7 +1010,7 @@ std::vector<unsigned char> near_involved(const Mesh& mesh, const std::vector<cha
     if (near[f] == kNearInvolved)
       for (const int v : mesh.triangles[f]) at_vertex[static_cast<std::size_t>(v)] = 1;
   }
-  slices([&](std::size_t begin, std::size_t end) {
+  slices([&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
       if (near[f] != kFarFromInvolved) continue;
       const auto& t = mesh.triangles[f];
