@@ -13,7 +13,6 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -23,13 +22,6 @@ namespace cdp::python {
 namespace {
 
 using namespace pybind11::literals;
-
-std::string shortest(double v) {
-  char buf[32];
-  return std::string(buf, std::to_chars(buf, buf + sizeof(buf), v).ptr);
-}
-
-std::string point_text(const Vec3& p) { return "(" + shortest(p.x()) + ", " + shortest(p.y()) + ", " + shortest(p.z()) + ")"; }
 
 py::dict curvature(const Field& field, py::handle points_in) {
   const std::vector<Vec3> points = points_from(points_in, "points");

@@ -56,6 +56,9 @@ py::array_t<double> to_array(const Box& box);
 // NaN and infinities are refused: a JSON file cannot hold them, so the readers never see them.
 nlohmann::json to_json(py::handle object, const std::string& where);
 py::object from_json(const nlohmann::json& j);
+// "(x, y, z)" with the shortest decimals that read back as the same doubles, as Python's repr of
+// a float writes them: the messages and reprs of the module.
+std::string point_text(const Vec3& p);
 
 // --- interruption (errors.cpp) ---
 

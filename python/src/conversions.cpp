@@ -2,6 +2,7 @@
 
 #include <cdp/core/errors.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -26,7 +27,7 @@ std::string type_of(py::handle h) { return py::str(py::type::handle_of(h).attr("
 constexpr int kMaxDepth = 256;
 
 // `source` names the object, `path` the place inside it: "cdp.sphere: center[1]: problem".
-nlohmann::json to_json(py::handle h, const std::string& source, const std::string& path, int depth) {
+nlohmann::json json_at(py::handle h, const std::string& source, const std::string& path, int depth) {
   const auto fail = [&](const std::string& problem) -> InvalidInputError {
     return InvalidInputError(source + ": " + (path.empty() ? "" : path + ": ") + problem);
   };
@@ -50,27 +51,35 @@ nlohmann::json to_json(py::handle h, const std::string& source, const std::strin
     for (auto [key, value] : h.cast<py::dict>()) {
       if (!py::isinstance<py::str>(key)) throw fail("keys must be strings, found " + type_of(key) + " " + std::string(py::repr(key)));
       const std::string k = key.cast<std::string>();
-      object[k] = to_json(value, source, path.empty() ? k : path + "." + k, depth + 1);
+      object[k] = json_at(value, source, path.empty() ? k : path + "." + k, depth + 1);
     }
     return object;
   }
   if (py::isinstance<py::list>(h) || py::isinstance<py::tuple>(h)) {
     nlohmann::json array = nlohmann::json::array();
     std::size_t i = 0;
-    for (auto item : h) array.push_back(to_json(item, source, path + "[" + std::to_string(i++) + "]", depth + 1));
+    for (auto item : h) array.push_back(json_at(item, source, path + "[" + std::to_string(i++) + "]", depth + 1));
     return array;
   }
   // numpy arrays and scalars (np.float64 is a float already, np.int64 and np.bool_ are not).
   const py::module_ numpy = py::module_::import("numpy");
   if (py::isinstance(h, numpy.attr("ndarray")) || py::isinstance(h, numpy.attr("generic")))
-    return to_json(h.attr("tolist")(), source, path, depth + 1);
-  if (py::hasattr(h, "__fspath__")) return to_json(py::module_::import("os").attr("fspath")(h), source, path, depth + 1);
+    return json_at(h.attr("tolist")(), source, path, depth + 1);
+  if (py::hasattr(h, "__fspath__")) return json_at(py::module_::import("os").attr("fspath")(h), source, path, depth + 1);
   throw fail("a " + type_of(h) + " cannot be written as JSON");
 }
 
 }  // namespace
 
-nlohmann::json to_json(py::handle object, const std::string& where) { return to_json(object, where, "", 0); }
+nlohmann::json to_json(py::handle object, const std::string& where) { return json_at(object, where, "", 0); }
+
+std::string point_text(const Vec3& p) {
+  const auto shortest = [](double v) {
+    char buf[32];
+    return std::string(buf, std::to_chars(buf, buf + sizeof(buf), v).ptr);
+  };
+  return "(" + shortest(p.x()) + ", " + shortest(p.y()) + ", " + shortest(p.z()) + ")";
+}
 
 py::object from_json(const nlohmann::json& j) {
   switch (j.type()) {

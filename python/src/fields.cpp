@@ -11,7 +11,6 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <filesystem>
 
@@ -103,16 +102,9 @@ py::dict counts_dict(const EvaluationCounts& c) {
   return d;
 }
 
-// Shortest decimals that read back as the same double, as Python's repr of a float.
-std::string shortest(double v) {
-  char buf[32];
-  return std::string(buf, std::to_chars(buf, buf + sizeof(buf), v).ptr);
-}
-
 std::string repr(const Field& f) {
   const Box& b = f.bounds();
-  const auto point = [](const Vec3& p) { return "(" + shortest(p.x()) + ", " + shortest(p.y()) + ", " + shortest(p.z()) + ")"; };
-  return "<cdp.Field " + f.type_name() + " bounds=(" + point(b.min) + ", " + point(b.max) + ")>";
+  return "<cdp.Field " + f.type_name() + " bounds=(" + point_text(b.min) + ", " + point_text(b.max) + ")>";
 }
 
 }  // namespace
