@@ -1,6 +1,8 @@
 // Generates the Marching Cubes table from the rule stated in cube_cases.h.
 #include <cdp/baselines/cube_cases.h>
 
+#include "lattice_mesher.h"
+
 #include <cdp/core/field.h>
 
 #include <algorithm>
@@ -12,7 +14,7 @@ namespace cdp {
 
 namespace {
 
-Vec3 corner_position(int c) { return Vec3(c & 1, (c >> 1) & 1, (c >> 2) & 1); }
+using marching::corner_position;
 
 Vec3 edge_midpoint(int e) { return 0.5 * (corner_position(kCubeEdges[e][0]) + corner_position(kCubeEdges[e][1])); }
 

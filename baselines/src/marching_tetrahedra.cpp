@@ -10,8 +10,7 @@ namespace {
 
 using marching::CubeTriangle;
 using marching::LocalEdge;
-
-Vec3 corner_position(int c) { return Vec3(c & 1, (c >> 1) & 1, (c >> 2) & 1); }
+using marching::corner_position;
 
 LocalEdge local_edge(int a, int b) {
   // Freudenthal edges join corners whose offsets are ordered, so the smaller index is below.

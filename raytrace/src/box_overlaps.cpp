@@ -4,6 +4,8 @@
 
 #include <cdp/core/errors.h>
 
+#include "embree_error.h"
+
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -37,11 +39,6 @@ struct EmbreeHandles {
     if (!error.empty()) throw InvalidInputError(std::string("overlapping_box_pairs: ") + what + ": " + error);
   }
 };
-
-void record_error(void* user, RTCError code, const char* message) {
-  auto* first = static_cast<std::string*>(user);
-  if (first->empty()) first->assign("Embree error " + std::to_string(static_cast<int>(code)) + ": " + (message ? message : ""));
-}
 
 // Boxes as Embree sees them: lower x, y, z, upper x, y, z.
 using FloatBox = std::array<float, 6>;
@@ -142,7 +139,7 @@ std::vector<std::pair<int, int>> overlapping_box_pairs(const std::vector<Box>& b
   EmbreeHandles e;
   e.device = rtcNewDevice(nullptr);
   if (!e.device) throw InvalidInputError("overlapping_box_pairs: cannot create an Embree device");
-  rtcSetDeviceErrorFunction(e.device, record_error, &e.error);
+  rtcSetDeviceErrorFunction(e.device, embree::record_first_error, &e.error);
   e.scene = rtcNewScene(e.device);
   // rtcCollide works on scenes made of user geometries only: one primitive per box.
   RTCGeometry geom = rtcNewGeometry(e.device, RTC_GEOMETRY_TYPE_USER);

@@ -3,6 +3,8 @@
 
 #include <cdp/core/errors.h>
 
+#include "embree_error.h"
+
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -15,11 +17,6 @@
 namespace cdp {
 
 namespace {
-
-void record_error(void* user, RTCError code, const char* message) {
-  auto* first = static_cast<std::string*>(user);
-  if (first->empty()) first->assign("Embree error " + std::to_string(static_cast<int>(code)) + ": " + (message ? message : ""));
-}
 
 constexpr unsigned kRayBlock = 256;
 // Embree works in float and takes nothing farther than FLT_LARGE (about 1.8e18) from the scene's
@@ -86,7 +83,7 @@ EmbreeScene::EmbreeScene(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
 
   m.device = rtcNewDevice(nullptr);
   if (!m.device) throw InvalidInputError("EmbreeScene: cannot create an Embree device");
-  rtcSetDeviceErrorFunction(m.device, record_error, &m.error);
+  rtcSetDeviceErrorFunction(m.device, embree::record_first_error, &m.error);
   m.scene = rtcNewScene(m.device);
   rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(m.scene, RTC_BUILD_QUALITY_HIGH);

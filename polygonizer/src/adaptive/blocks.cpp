@@ -134,9 +134,6 @@ constexpr double kLoopShortest = 3;
 constexpr double kLongestSeam = 100;
 // Seam vertices measured together by one thread of a thread-safe field (their Hessians and curvature).
 constexpr std::size_t kSeamVertexSlice = 256;
-// Fewest edges of a seam: two between corners (two seams between the same two corners bound a
-// patch of at least four vertices), three for a loop.
-constexpr std::size_t kMinOpenEdges = 2, kMinLoopEdges = 3;
 
 Vec3 axis_vector(int a) { return Vec3::Unit(a); }
 
@@ -875,7 +872,7 @@ constexpr double kOrientMargin = 0.1;
 
 // One side of a seam as a block's boundary: vertices with the block's patch on the left seen
 // from outside.
-struct Dart {
+struct SeamDart {
   std::vector<int> vertices;
   int from = -1, to = -1;  // corner vertices of an open seam
 };
@@ -886,7 +883,7 @@ std::size_t middle(const Seam& s) { return s.closed ? 0 : s.vertices.size() / 2;
 // The two darts of a seam of face f: the first for the block below the plane, the second above.
 // With the gradient g at a vertex, the direction a x g has the side p[a] > c on its left seen
 // from outside (g x (a x g) leans along +a). `g`: the gradient at the seam's middle() vertex.
-std::array<Dart, 2> orient(const Face& f, const Seam& s, const SeamVertices& sv, const Vec3& g) {
+std::array<SeamDart, 2> orient(const Face& f, const Seam& s, const SeamVertices& sv, const Vec3& g) {
   const std::size_t n = s.vertices.size();
   const std::size_t m = middle(s);
   const Vec3& x = sv.points[static_cast<std::size_t>(s.vertices[m])];
@@ -897,8 +894,8 @@ std::array<Dart, 2> orient(const Face& f, const Seam& s, const SeamVertices& sv,
   if (!(std::abs(along_t) > kOrientMargin * dir.norm() * t.norm()))
     throw CreaseLayoutError("adaptive: a seam's direction is unclear near " + format_point(x));
   const bool along = along_t > 0;
-  Dart up{s.vertices, s.closed ? -1 : s.vertices.front(), s.closed ? -1 : s.vertices.back()};
-  Dart down = up;
+  SeamDart up{s.vertices, s.closed ? -1 : s.vertices.front(), s.closed ? -1 : s.vertices.back()};
+  SeamDart down = up;
   std::reverse(down.vertices.begin(), down.vertices.end());
   std::swap(down.from, down.to);
   if (!along) std::swap(up, down);
@@ -906,7 +903,7 @@ std::array<Dart, 2> orient(const Face& f, const Seam& s, const SeamVertices& sv,
 }
 
 // A block's boundary cycles: loops as they are, open darts joined at their corners.
-std::vector<std::vector<int>> block_cycles(const std::vector<Dart>& darts) {
+std::vector<std::vector<int>> block_cycles(const std::vector<SeamDart>& darts) {
   std::vector<std::vector<int>> cycles;
   std::vector<bool> used(darts.size(), false);
   const auto next_from = [&](int corner) {
@@ -930,7 +927,7 @@ std::vector<std::vector<int>> block_cycles(const std::vector<Dart>& darts) {
     for (std::size_t guard = 0; guard <= darts.size(); ++guard) {
       if (used[k]) throw CreaseLayoutError("adaptive: a block's seams do not close into a cycle");
       used[k] = true;
-      const Dart& d = darts[k];
+      const SeamDart& d = darts[k];
       cycle.insert(cycle.end(), d.vertices.begin(), d.vertices.end() - 1);  // its end starts the next
       const int next = next_from(d.to);
       if (next < 0) throw CreaseLayoutError("adaptive: a block's seam ends at a corner no other leaves");
@@ -1042,7 +1039,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       field.values_gradients(middles.data(), middle_values.data(), middle_gradients.data(), middles.size());
       const auto block_index = [&](int i, int j, int k) { return static_cast<std::size_t>((k * n[1] + j) * n[0] + i); };
       const std::size_t nblocks = static_cast<std::size_t>(n[0]) * n[1] * n[2];
-      std::vector<std::vector<Dart>> darts(nblocks);
+      std::vector<std::vector<SeamDart>> darts(nblocks);
       for (std::size_t i = 0, m = 0; i < faces.size(); ++i) {
         const Face& f = faces[i];
         for (const Seam& s : face_seams[i]) {
@@ -1060,7 +1057,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       // the faces' tracing missed.
       std::vector<int> ends(out.report.corners, 0);
       for (const auto& ds : darts)
-        for (const Dart& dt : ds)
+        for (const SeamDart& dt : ds)
           if (dt.from >= 0) ++ends[static_cast<std::size_t>(dt.from)], ++ends[static_cast<std::size_t>(dt.to)];
       for (std::size_t c = 0; c < out.report.corners; ++c)
         if (ends[c] != 8)

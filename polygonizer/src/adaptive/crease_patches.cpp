@@ -27,9 +27,6 @@ constexpr double kCornerMatch = 5e-4;
 // The side test of orient_darts steps this share of min_edge off the crease: far beyond the
 // Newton tolerance, far inside the patch next to a crease sample.
 constexpr double kSideProbe = 0.05;
-// Fewest edges of a crease: two for a curve between corners (so that two curves joining the
-// same two corners bound a patch of at least four vertices), three for a loop.
-constexpr std::size_t kMinOpenEdges = 2, kMinLoopEdges = 3;
 
 // A piece as a field of its own: the smooth function with the piece's branches fixed. Its zero
 // set continues past the crease (where the CSG field takes another piece), so the fronts of its

@@ -31,6 +31,11 @@
 
 namespace cdp::adaptive {
 
+// Fewest edges of a patch's fixed boundary when it is resampled (a crease here, a block's seam
+// in blocks.cpp): two between corners (two curves joining the same two corners bound a patch of
+// at least four vertices), three for a loop.
+inline constexpr std::size_t kMinOpenEdges = 2, kMinLoopEdges = 3;
+
 // The creases cannot be laid out as patch boundaries (a crease that ends without a corner, a
 // corner where a piece's boundary cannot be followed, a sample that Newton cannot put on its
 // crease). The caller meshes the surface without crease handling instead.
