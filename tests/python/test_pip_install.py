@@ -50,6 +50,7 @@ def run(args, **kwargs):
     return result
 
 
+@pytest.mark.slow
 def test_pip_install_into_a_venv_meshes_a_sphere(tmp_path):
     build_dir = pathlib.Path(cdp.__file__).resolve().parents[2]
     if not (build_dir / "CMakeCache.txt").exists():
