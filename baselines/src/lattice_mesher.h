@@ -23,11 +23,11 @@ struct LocalEdge {
   std::uint8_t a = 0, b = 0;
 };
 inline constexpr std::uint8_t kCentre = 255;
+using CubeTriangle = std::array<LocalEdge, 3>;  // counter-clockwise seen from outside
 
 // Corner c of the unit cube at its offset (c & 1, (c >> 1) & 1, (c >> 2) & 1), numbered as in
 // cube_cases.h.
 inline Vec3 corner_position(int c) { return Vec3(c & 1, (c >> 1) & 1, (c >> 2) & 1); }
-using CubeTriangle = std::array<LocalEdge, 3>;  // counter-clockwise seen from outside
 
 struct CubeMesh {
   std::vector<CubeTriangle> triangles;
