@@ -97,6 +97,16 @@ constexpr double kPredictedBand = 0.4;
 // (its grazing and the loops of the seams inside a face).
 constexpr int kLineSamples = 4;
 constexpr int kPlaneSamples = 2;
+// A cut plane's sample is evaluated only near the surface as the seed grid sees it: not where the
+// eight nodes of its grid cell have one sign and each is further from zero than this many times
+// the largest change of F along the cell's edges. For F linear over the cell, that change is at
+// least |grad F| h / sqrt 3, so the surface is more than sqrt 3 h from each node and more than
+// (sqrt 3 - sqrt 3 / 2) h = 0.87 h from the sample: beyond the half cell within which plane_lean
+// looks. Such a sample takes the nodes' sign (their mean) and no gradient; one beside an evaluated
+// sample of the other sign is evaluated after all (a surface the grid does not see). The bunny
+// VIS-800 at factor 5 sampled five planes of 3,500-4,200 gradients, a fifth of its evaluations
+// in blocks; 47 % of the samples are evaluated now.
+constexpr double kFarFromSurface = 3;
 // Bisection steps for a root on a block edge: 2^-60 of a sample spacing, below rounding.
 constexpr int kRootBisections = 60;
 // Newton steps onto a seam (F = 0 in the cut plane), and their tolerance as a share of the box
@@ -137,54 +147,113 @@ constexpr std::size_t kSeamVertexSlice = 256;
 
 Vec3 axis_vector(int a) { return Vec3::Unit(a); }
 
-// A cut plane sampled over the box: values and gradients at kPlaneSamples per seed cell.
-struct PlaneSamples {
-  int a = 0, b = 1, d = 2;  // the plane's normal axis and the two axes in it (a+1, a+2 mod 3)
-  double c = 0;             // p[a] = c
-  int nb = 0, nd = 0;       // intervals along b and d
-  Vec3 origin;
-  double sb = 0, sd = 0;    // spacings
-  std::vector<double> values;
-  std::vector<Vec3> gradients;
-  Vec3 point(int i, int j) const {
-    Vec3 p = origin;
-    p[b] += sb * i;
-    p[d] += sd * j;
-    return p;
-  }
-  std::size_t index(int i, int j) const { return static_cast<std::size_t>(j) * (nb + 1) + i; }
-};
 
-PlaneSamples sample_plane(const Field& field, int a, double c, double cell, int threads) {
+// Whether the seed grid's cell of `layer` along axis a, at (ib, id) along the other two (b, d),
+// is far from the surface (kFarFromSurface).
+bool far_from_surface(const SeedGrid& grid, int a, int layer, int ib, int id) {
+  std::array<int, 3> lo{};
+  lo[a] = layer, lo[(a + 1) % 3] = ib, lo[(a + 2) % 3] = id;
+  std::array<double, 8> v{};
+  for (int corner = 0; corner < 8; ++corner) {
+    v[static_cast<std::size_t>(corner)] = grid.value(lo[0] + (corner & 1), lo[1] + (corner >> 1 & 1), lo[2] + (corner >> 2 & 1));
+    // sample_seed_grid's stand-ins for NaN and the infinities are no distance.
+    if (std::abs(v[static_cast<std::size_t>(corner)]) == std::numeric_limits<double>::max()) return false;
+  }
+  double least = std::numeric_limits<double>::infinity(), change = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const double x = v[static_cast<std::size_t>(corner)];
+    if ((x < 0) != (v[0] < 0)) return false;
+    least = std::min(least, std::abs(x));
+    for (const int bit : {1, 2, 4})  // the cell's edges, each once from its lower end
+      if (!(corner & bit)) change = std::max(change, std::abs(v[static_cast<std::size_t>(corner | bit)] - x));
+  }
+  return least > kFarFromSurface * change;
+}
+
+}  // namespace
+
+PlaneSamples sample_plane(const Field& field, const SeedGrid& grid, int a, int layer, double c, int threads) {
   PlaneSamples s;
   s.a = a, s.b = (a + 1) % 3, s.d = (a + 2) % 3, s.c = c;
   const Box& box = field.bounds();
   const Vec3 size = box.size();
-  s.nb = std::max(1, static_cast<int>(std::ceil(kPlaneSamples * size[s.b] / cell)));
-  s.nd = std::max(1, static_cast<int>(std::ceil(kPlaneSamples * size[s.d] / cell)));
+  s.nb = std::max(1, static_cast<int>(std::ceil(kPlaneSamples * size[s.b] / grid.h)));
+  s.nd = std::max(1, static_cast<int>(std::ceil(kPlaneSamples * size[s.d] / grid.h)));
   s.sb = size[s.b] / s.nb, s.sd = size[s.d] / s.nd;
   s.origin = box.min;
   s.origin[a] = c;
-  std::vector<Vec3> points;
-  points.reserve(static_cast<std::size_t>(s.nb + 1) * (s.nd + 1));
+  const std::size_t count = static_cast<std::size_t>(s.nb + 1) * (s.nd + 1);
+  s.values.resize(count);
+  s.gradients.assign(count, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
+  // Each sample's cell column, and whether it is far from the surface: the columns' answers kept.
+  const auto column = [&](int axis, double x) {
+    return std::clamp(static_cast<int>(std::floor((x - grid.origin[axis]) / grid.h)), 0, grid.n[axis] - 1);
+  };
+  std::vector<signed char> far_column(static_cast<std::size_t>(grid.n[s.b]) * grid.n[s.d], -1);
+  std::vector<char> evaluated(count, 0);
+  std::vector<std::size_t> todo;
   for (int j = 0; j <= s.nd; ++j)
-    for (int i = 0; i <= s.nb; ++i) points.push_back(s.point(i, j));
-  s.values.resize(points.size());
-  s.gradients.resize(points.size());
-  // On all cores for a thread-safe field, as the seed grid (each sample in its own slot): a
-  // plane of the bunny VIS-800 at factor 5 is 4225 gradients, and its cuts' planes were most of
-  // the layout's evaluations.
+    for (int i = 0; i <= s.nb; ++i) {
+      const Vec3 p = s.point(i, j);
+      const int ib = column(s.b, p[s.b]), id = column(s.d, p[s.d]);
+      signed char& far = far_column[static_cast<std::size_t>(id) * grid.n[s.b] + ib];
+      if (far < 0) far = far_from_surface(grid, a, layer, ib, id) ? 1 : 0;
+      const std::size_t k = s.index(i, j);
+      if (far == 0) {
+        todo.push_back(k);
+        continue;
+      }
+      std::array<int, 3> n0{};
+      n0[a] = layer, n0[s.b] = ib, n0[s.d] = id;
+      double sum = 0;
+      for (int corner = 0; corner < 8; ++corner)
+        sum += grid.value(n0[0] + (corner & 1), n0[1] + (corner >> 1 & 1), n0[2] + (corner >> 2 & 1));
+      s.values[k] = sum / 8;
+    }
+  // The samples in `todo` evaluated; then those not yet evaluated beside an evaluated one of the
+  // other sign, until none is (a surface the grid did not see, reaching into its far samples).
   constexpr std::size_t kBlock = 512;
-  if (field.thread_safe() && points.size() > kBlock)
-    detail::parallel_blocks(points.size(), kBlock, detail::worker_count(threads),
-                            [&](std::size_t begin, std::size_t end, unsigned) {
-                              field.values_gradients(points.data() + begin, s.values.data() + begin,
-                                                     s.gradients.data() + begin, end - begin);
-                            });
-  else
-    field.values_gradients(points.data(), s.values.data(), s.gradients.data(), points.size());
+  std::vector<Vec3> points;
+  std::vector<double> values;
+  std::vector<Vec3> gradients;
+  while (!todo.empty()) {
+    points.clear();
+    for (const std::size_t k : todo) {
+      points.push_back(s.point(static_cast<int>(k % (s.nb + 1)), static_cast<int>(k / (s.nb + 1))));
+      evaluated[k] = 1;
+    }
+    values.resize(points.size());
+    gradients.resize(points.size());
+    // On all cores for a thread-safe field, as the seed grid (each sample in its own slot).
+    if (field.thread_safe() && points.size() > kBlock)
+      detail::parallel_blocks(points.size(), kBlock, detail::worker_count(threads),
+                              [&](std::size_t begin, std::size_t end, unsigned) {
+                                field.values_gradients(points.data() + begin, values.data() + begin,
+                                                       gradients.data() + begin, end - begin);
+                              });
+    else
+      field.values_gradients(points.data(), values.data(), gradients.data(), points.size());
+    for (std::size_t m = 0; m < todo.size(); ++m) s.values[todo[m]] = values[m], s.gradients[todo[m]] = gradients[m];
+    std::vector<std::size_t> next;
+    for (const std::size_t k : todo) {
+      const int i = static_cast<int>(k % (s.nb + 1)), j = static_cast<int>(k / (s.nb + 1));
+      const std::array<std::pair<int, int>, 4> around{{{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}}};
+      for (const auto& [i2, j2] : around) {
+        if (i2 < 0 || j2 < 0 || i2 > s.nb || j2 > s.nd) continue;
+        const std::size_t k2 = s.index(i2, j2);
+        if (evaluated[k2] || (s.values[k2] < 0) == (s.values[k] < 0)) continue;
+        evaluated[k2] = 1;
+        next.push_back(k2);
+      }
+    }
+    // The next round's points in index order, whatever order the neighbours were met in.
+    std::sort(next.begin(), next.end());
+    todo = std::move(next);
+  }
   return s;
 }
+
+namespace {
 
 // The smallest lean (share of the gradient in the plane) over the samples within a spacing of
 // the surface; 1 where none is.
@@ -259,7 +328,7 @@ Cuts choose_cuts(const Field& field, const SeedGrid& grid, const std::array<int,
       }
       const auto sample = [&](Candidate& m) {
         cancel.check("adaptive");
-        m.samples = sample_plane(field, a, m.c, grid.h, threads);
+        m.samples = sample_plane(field, grid, a, m.cell, m.c, threads);
         m.lean = plane_lean(*m.samples);
       };
       Candidate* best = nullptr;

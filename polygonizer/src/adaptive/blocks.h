@@ -94,6 +94,34 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
                          const SeedGridStage& seeds, const QualityOptions* repair = nullptr,
                          std::uint64_t shuffle = 0);
 
+// A cut plane p[a] = c sampled over the box at kPlaneSamples per seed-grid cell each way (its
+// grazing, plane_lean, and the loops of the seams inside a face, trace_face, are found from them).
+struct PlaneSamples {
+  int a = 0, b = 1, d = 2;  // the plane's normal axis and the two axes in it (a+1, a+2 mod 3)
+  double c = 0;             // p[a] = c
+  int nb = 0, nd = 0;       // intervals along b and d
+  Vec3 origin;
+  double sb = 0, sd = 0;    // spacings
+  // F at every sample; its gradient where F was evaluated, NaN at the samples the seed grid puts
+  // far from the surface, whose value is the mean of their grid cell's nodes (kFarFromSurface).
+  std::vector<double> values;
+  std::vector<Vec3> gradients;
+  Vec3 point(int i, int j) const {
+    Vec3 p = origin;
+    p[b] += sb * i;
+    p[d] += sd * j;
+    return p;
+  }
+  std::size_t index(int i, int j) const { return static_cast<std::size_t>(j) * (nb + 1) + i; }
+};
+
+// Samples the cut plane p[a] = c through the middle of `grid`'s cells of `layer` along a. Only
+// the samples near the surface as the grid sees it are evaluated (kFarFromSurface in blocks.cpp:
+// every sample within a sample spacing of the surface to first order), and those beside an
+// evaluated one of the other sign; on `threads` threads for a thread-safe field.
+// \throw what the field's evaluations throw.
+PlaneSamples sample_plane(const Field& field, const SeedGrid& grid, int a, int layer, double c, int threads);
+
 // The lean of the cut plane through the middle of the seed grid's cells of `layer` along `axis`
 // (the smallest share of F's gradient in the plane near the surface, 1 where it is not near) as
 // the layout's samples of the plane would measure it, predicted from the grid's values with no
