@@ -147,7 +147,6 @@ constexpr std::size_t kSeamVertexSlice = 256;
 
 Vec3 axis_vector(int a) { return Vec3::Unit(a); }
 
-
 // Whether the seed grid's cell of `layer` along axis a, at (ib, id) along the other two (b, d),
 // is far from the surface (kFarFromSurface).
 bool far_from_surface(const SeedGrid& grid, int a, int layer, int ib, int id) {

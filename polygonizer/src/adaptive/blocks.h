@@ -12,6 +12,7 @@
 //   choose_cuts     the cut planes: near equal shares of the box, through the middle of seed-grid
 //                   cells, moved by up to kCutShift cells where the surface grazes the plane
 //                   (a candidate the seed grid predicts to graze sampled last, predicted_lean)
+//   sample_plane    a candidate plane's samples, evaluated only near the surface the seed grid sees
 //   find_corners    where the surface crosses a block edge (F = 0 on a line), once per edge,
 //                   every edge's roots bisected together
 //   trace_face      every seam of one face of a block: from corner to corner, and loops found
