@@ -9,13 +9,13 @@ import pytest
 import cdp  # noqa: F401  (a missing PYTHONPATH fails here, before any test)
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
+BIN = pathlib.Path(os.environ.get("CDP_BIN_DIR", ROOT / "build" / "bin"))
 
 
 def pytest_configure(config):
     # ctest runs the tests marked slow as python.pytest_slow (label slow: make test-slow) and the
     # rest as python.pytest (make test); pytest alone runs both.
     config.addinivalue_line("markers", "slow: a test of a second or more that make test leaves to make test-slow")
-BIN = pathlib.Path(os.environ.get("CDP_BIN_DIR", ROOT / "build" / "bin"))
 
 
 def program(name):

@@ -147,26 +147,28 @@ constexpr std::size_t kSeamVertexSlice = 256;
 
 Vec3 axis_vector(int a) { return Vec3::Unit(a); }
 
-// Whether the seed grid's cell of `layer` along axis a, at (ib, id) along the other two (b, d),
-// is far from the surface (kFarFromSurface).
-bool far_from_surface(const SeedGrid& grid, int a, int layer, int ib, int id) {
+// The seed grid's cell of `layer` along axis a, at (ib, id) along the other two (b, d): the mean
+// of its eight nodes where it is far from the surface (kFarFromSurface), NaN where it is not.
+double far_cell_value(const SeedGrid& grid, int a, int layer, int ib, int id) {
+  constexpr double kNear = std::numeric_limits<double>::quiet_NaN();
   std::array<int, 3> lo{};
   lo[a] = layer, lo[(a + 1) % 3] = ib, lo[(a + 2) % 3] = id;
   std::array<double, 8> v{};
   for (int corner = 0; corner < 8; ++corner) {
     v[static_cast<std::size_t>(corner)] = grid.value(lo[0] + (corner & 1), lo[1] + (corner >> 1 & 1), lo[2] + (corner >> 2 & 1));
     // sample_seed_grid's stand-ins for NaN and the infinities are no distance.
-    if (std::abs(v[static_cast<std::size_t>(corner)]) == std::numeric_limits<double>::max()) return false;
+    if (std::abs(v[static_cast<std::size_t>(corner)]) == std::numeric_limits<double>::max()) return kNear;
   }
-  double least = std::numeric_limits<double>::infinity(), change = 0;
+  double least = std::numeric_limits<double>::infinity(), change = 0, sum = 0;
   for (int corner = 0; corner < 8; ++corner) {
     const double x = v[static_cast<std::size_t>(corner)];
-    if ((x < 0) != (v[0] < 0)) return false;
+    if ((x < 0) != (v[0] < 0)) return kNear;
     least = std::min(least, std::abs(x));
+    sum += x;
     for (const int bit : {1, 2, 4})  // the cell's edges, each once from its lower end
       if (!(corner & bit)) change = std::max(change, std::abs(v[static_cast<std::size_t>(corner | bit)] - x));
   }
-  return least > kFarFromSurface * change;
+  return least > kFarFromSurface * change ? sum / 8 : kNear;
 }
 
 }  // namespace
@@ -184,30 +186,25 @@ PlaneSamples sample_plane(const Field& field, const SeedGrid& grid, int a, int l
   const std::size_t count = static_cast<std::size_t>(s.nb + 1) * (s.nd + 1);
   s.values.resize(count);
   s.gradients.assign(count, Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
-  // Each sample's cell column, and whether it is far from the surface: the columns' answers kept.
+  // Each sample's cell column, and its value where that cell is far from the surface.
   const auto column = [&](int axis, double x) {
     return std::clamp(static_cast<int>(std::floor((x - grid.origin[axis]) / grid.h)), 0, grid.n[axis] - 1);
   };
-  std::vector<signed char> far_column(static_cast<std::size_t>(grid.n[s.b]) * grid.n[s.d], -1);
+  std::vector<double> far_value(static_cast<std::size_t>(grid.n[s.b]) * grid.n[s.d]);
+  for (int id = 0; id < grid.n[s.d]; ++id)
+    for (int ib = 0; ib < grid.n[s.b]; ++ib)
+      far_value[static_cast<std::size_t>(id) * grid.n[s.b] + ib] = far_cell_value(grid, a, layer, ib, id);
   std::vector<char> evaluated(count, 0);
   std::vector<std::size_t> todo;
   for (int j = 0; j <= s.nd; ++j)
     for (int i = 0; i <= s.nb; ++i) {
       const Vec3 p = s.point(i, j);
-      const int ib = column(s.b, p[s.b]), id = column(s.d, p[s.d]);
-      signed char& far = far_column[static_cast<std::size_t>(id) * grid.n[s.b] + ib];
-      if (far < 0) far = far_from_surface(grid, a, layer, ib, id) ? 1 : 0;
+      const double far = far_value[static_cast<std::size_t>(column(s.d, p[s.d])) * grid.n[s.b] + column(s.b, p[s.b])];
       const std::size_t k = s.index(i, j);
-      if (far == 0) {
+      if (std::isnan(far))
         todo.push_back(k);
-        continue;
-      }
-      std::array<int, 3> n0{};
-      n0[a] = layer, n0[s.b] = ib, n0[s.d] = id;
-      double sum = 0;
-      for (int corner = 0; corner < 8; ++corner)
-        sum += grid.value(n0[0] + (corner & 1), n0[1] + (corner >> 1 & 1), n0[2] + (corner >> 2 & 1));
-      s.values[k] = sum / 8;
+      else
+        s.values[k] = far;
     }
   // The samples in `todo` evaluated; then those not yet evaluated beside an evaluated one of the
   // other sign, until none is (a surface the grid did not see, reaching into its far samples).
