@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <numeric>
 #include <optional>
@@ -540,10 +541,8 @@ std::vector<int> cycle_regions(const Field& field, const std::vector<Cycle>& cyc
     hash.insert(static_cast<int>(samples.size()), p);
     samples.push_back({p, gradient.normalized(), std::move(code), cycle});
   };
-  const auto code_at = [&](const Vec3& p) {
-    const std::vector<FieldPiece> at = field.pieces(p, 0);
-    return at.empty() ? Branch{} : at.front().branch;
-  };
+  RegionCodes codes(field, step);
+  const auto code_at = [&codes](const Vec3& p) { return codes.at(p); };
   for (std::size_t i = 0; i < cycles.size(); ++i)
     for (const Vec3& x : inside[i])
       if (const auto q = onto_surface(x)) {
@@ -817,6 +816,20 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
   out.crease_vertices = nc;
   out.pieces = groups.size();
   return out;
+}
+
+std::vector<std::uint8_t> RegionCodes::at(const Vec3& p) {
+  Field::BranchRecord record;
+  if (!field_.branch_record(p, record)) return {};
+  const bool near_switch = std::any_of(record.distance.begin(), record.distance.end(),
+                                       [&](double d) { return !(d > kFreshCode * step_); });
+  if (!near_switch)
+    if (const auto known = known_.find(record.taken); known != known_.end()) return known->second;
+  ++fresh_;
+  const std::vector<FieldPiece> pieces = field_.pieces_first_order(p, 0);
+  std::vector<std::uint8_t> code = pieces.empty() ? std::vector<std::uint8_t>{} : pieces.front().branch;
+  if (!near_switch) known_.emplace(std::move(record.taken), code);
+  return code;
 }
 
 }  // namespace cdp::adaptive

@@ -24,7 +24,10 @@
 #include <cdp/core/crease_curves.h>
 #include <cdp/core/errors.h>
 
+#include <algorithm>
 #include <cstddef>
+#include <cstdint>
+#include <map>
 #include <span>
 #include <string>
 #include <vector>
@@ -71,6 +74,39 @@ void add_part(CreaseMesh& out, const Mesh& part, const std::vector<std::vector<i
 // Normalizes the first `shared` vertices' summed normals.
 // \throw CreaseLayoutError "adaptive: <unreached> near <point>" for one no part reached.
 void finish_shared(CreaseMesh& out, std::size_t shared, const std::string& unreached);
+
+// A point's code as the region growth of crease-aware meshing compares them (grouping the
+// patches' boundary cycles by the smooth region they bound): its branches as the values take
+// them, with the choices that change nothing there free (Field::pieces). Which choices those are
+// follows from the branches taken (a min or max that discards an argument, a clamp that
+// saturates to an exact constant), so the code found at one point serves every later point
+// that takes the same branches: one evaluation (Field::branch_record) instead of one for each
+// branch point. Found afresh, and not kept, where a branch point's switch lies within
+// kFreshCode of `step` (a region growth step): there a product may be small rather than zero.
+class RegionCodes {
+ public:
+  static constexpr double kFreshCode = 1e-3;
+  RegionCodes(const Field& field, double step) : field_(field), step_(step) {}
+  // The code at p (empty for a model without branch points).
+  // \throw as Field::pieces.
+  std::vector<std::uint8_t> at(const Vec3& p);
+  // The codes found afresh (Field::pieces_first_order) so far.
+  std::size_t fresh() const { return fresh_; }
+
+ private:
+  const Field& field_;
+  double step_;
+  // Ordered element by element (std::less on byte vectors compares them with memcmp, where GCC 12
+  // warns of a bound it cannot see).
+  struct ByElement {
+    bool operator()(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) const {
+      return std::lexicographical_compare(a.begin(), a.end(), b.begin(), b.end(),
+                                          [](std::uint8_t x, std::uint8_t y) { return x < y; });
+    }
+  };
+  std::map<std::vector<std::uint8_t>, std::vector<std::uint8_t>, ByElement> known_;
+  std::size_t fresh_ = 0;
+};
 
 // Lays out `creases` (from trace_creases on `field`) and meshes every patch they bound, its
 // fronts looking ahead with `look_ahead_gradation` (Settings::look_ahead_gradation;

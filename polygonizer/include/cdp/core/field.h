@@ -441,6 +441,14 @@ class Field {
     Vec3 gradient = Vec3::Zero();
     void add(bool branch, double gap, const Vec3& slope);  // gap a - b, slope grad (a - b)
   };
+  // The record of one evaluation at p, the branches as the values take them (the first step of
+  // pieces(), without the pieces). Counted as one value_gradient.
+  // \return false, the record left alone, for a model without branch points.
+  // \throw as value().
+  bool branch_record(const Vec3& p, BranchRecord& record) const {
+    n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+    return has_branch_points() && eval_branch_record(p, {}, record);
+  }
   // In a piece's branch (FieldPiece::branch, Field::piece), this choice at a branch point means
   // "the branch the values take": a switch with no crease (C1), which the piece follows.
   static constexpr std::uint8_t kFreeBranch = 2;

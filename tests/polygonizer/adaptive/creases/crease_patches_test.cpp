@@ -7,7 +7,9 @@
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_topology.h>
+#include <cdp/core/models/expression.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -18,6 +20,7 @@
 
 #include "common/test_fields.h"
 #include "polygonizer/mesh_checks.h"
+#include "src/adaptive/crease_patches.h"
 
 namespace cdp {
 namespace {
@@ -60,6 +63,44 @@ void expect_valid(const PolygonizeResult& r, int genus) {
 constexpr double kOffset = 0.0137;
 std::string offset_cube() {
   return expression("max(abs(x+0.0137),max(abs(y+0.0137),abs(z+0.0137)))-1", -1.6, 1.6);
+}
+
+// RegionCodes, the codes cycle_regions grows regions by: a code reused from another point that
+// takes the same branches is the one found afresh (Field::pieces_first_order), at every vertex
+// of fogleman/sdf's README model with its holes cut by a smooth difference (choices hidden behind
+// a clamp that saturates, and behind mins and maxes), and most points reuse one.
+TEST(AdaptiveCreases, RegionCodesReusedAreTheCodesFoundAfresh) {
+  const Expression field("d0-(d1+d0)*h+0.1*h*(1-h)", {}, Box{Vec3::Constant(-0.9), Vec3::Constant(0.9)},
+                         {{"d0", "max(hypot(x,y,z)-1, max(abs(x),abs(y),abs(z))-0.75)"},
+                          {"d1", "min(hypot(y,z)-0.5, hypot(x,z)-0.5, hypot(x,y)-0.5)"},
+                          {"h", "clamp(0.5-(d1+d0)*5,0,1)"}});
+  AdaptiveOptions o;
+  o.factor = 2;
+  const PolygonizeResult r = polygonize_adaptive(field, o);
+  constexpr double kStep = 0.02;
+  adaptive::RegionCodes codes(field, kStep);
+  std::size_t differ = 0, free_somewhere = 0, near_switch = 0;
+  std::set<std::vector<std::uint8_t>> taken;
+  for (const Vec3& p : r.mesh.positions) {
+    const std::vector<FieldPiece> fresh = field.pieces_first_order(p, 0);
+    ASSERT_FALSE(fresh.empty());
+    if (codes.at(p) != fresh.front().branch) ++differ;
+    free_somewhere += std::count(fresh.front().branch.begin(), fresh.front().branch.end(), Field::kFreeBranch) > 0;
+    Field::BranchRecord record;
+    ASSERT_TRUE(field.branch_record(p, record));
+    if (std::any_of(record.distance.begin(), record.distance.end(),
+                    [](double d) { return !(d > adaptive::RegionCodes::kFreshCode * kStep); }))
+      ++near_switch;  // the crease vertices among them
+    else
+      taken.insert(record.taken);
+  }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_GT(free_somewhere, r.mesh.positions.size() / 2);  // hidden choices are the case here
+  // Away from the switches, one code found for each way of taking the branches.
+  EXPECT_EQ(codes.fresh(), near_switch + taken.size());
+  const std::size_t away = r.mesh.positions.size() - near_switch;
+  EXPECT_GT(away, r.mesh.positions.size() / 2);
+  EXPECT_LT(taken.size(), away / 4) << near_switch << " vertices near a switch";
 }
 
 TEST(AdaptiveCreases, CubeEdgesLieOnTheCreasesAndCoverThem) {
