@@ -113,8 +113,23 @@ inline double angle_at(const Vec3& p, const Vec3& q, const Vec3& r) {
   return std::atan2(u.cross(v).norm(), u.dot(v));
 }
 
+// A triangle's smallest angle faces its shortest edge: the arc tangent is taken there, and at a
+// corner whose opposite edge's squared length is within a share kAngleTie of the shortest's (where
+// the two angles differ by rounding, either may come out smaller), so the result is the least of
+// the three arc tangents
+// but where a sliver's cross product is lost to rounding. One arc tangent for most triangles
+// instead of three: the repair asks for a star's angles at every position it tries.
+inline constexpr double kAngleTie = 1e-9;
 inline double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
+  const std::array<double, 3> l2{(b - c).squaredNorm(), (c - a).squaredNorm(), (a - b).squaredNorm()};
+  if (!std::isfinite(l2[0] + l2[1] + l2[2]))  // as the three arc tangents have it
+    return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
+  const double shortest = std::min({l2[0], l2[1], l2[2]});
+  const std::array<const Vec3*, 3> p{&a, &b, &c};
+  double out = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k)
+    if (l2[k] <= shortest * (1 + kAngleTie)) out = std::min(out, angle_at(*p[k], *p[(k + 1) % 3], *p[(k + 2) % 3]));
+  return out;
 }
 
 // The barycentric coordinates (i/12, j/12, 1 - i/12 - j/12), i + j <= 12, where estimate_from

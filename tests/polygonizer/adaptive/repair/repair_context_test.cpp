@@ -8,6 +8,10 @@
 
 #include <cdp/core/triangle_geometry.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
 #include <numeric>
 
 namespace cdp::adaptive::repair {
@@ -205,6 +209,34 @@ TEST(RepairContext, PredictedEstimatesAreTheSameOnAnyThreadsAndInBatches) {
     EXPECT_EQ(one.spent.value_gradient, other->spent.value_gradient);
     EXPECT_EQ(one.spent.gradient_hessian, other->spent.gradient_hessian);
   }
+}
+
+// min_angle takes the arc tangent at the corner facing the shortest edge (and at corners whose
+// edges tie with it): the least of the three corners' angle_at, bit for bit, on triangles of
+// every shape but slivers, exact isosceles and equilateral ones (ties) among them.
+TEST(RepairContext, MinAngleIsTheLeastOfTheThreeCorners) {
+  const auto three = [](const Vec3& a, const Vec3& b, const Vec3& c) {
+    return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
+  };
+  std::uint64_t state = 12345;
+  const auto uniform = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  std::size_t tested = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 a(uniform(), uniform(), uniform()), b(uniform(), uniform(), uniform()), c(uniform(), uniform(), uniform());
+    if (three(a, b, c) < 1e-3) continue;  // a sliver: its cross product is rounding
+    ++tested;
+    ASSERT_EQ(min_angle(a, b, c), three(a, b, c)) << i;
+  }
+  EXPECT_GT(tested, 19000u);
+  const double h = std::sqrt(3.0) / 2;
+  for (const auto& [a, b, c] : {std::array<Vec3, 3>{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0.5, h, 0)},
+                                std::array<Vec3, 3>{Vec3(0.1, 0.2, 0.3), Vec3(1.1, 0.2, 0.3), Vec3(0.6, 3.2, 0.3)},
+                                std::array<Vec3, 3>{Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, 0.1, 0)},
+                                std::array<Vec3, 3>{Vec3(0, 0, 0), Vec3(0, 0, 0), Vec3(1, 0, 0)}})
+    EXPECT_EQ(min_angle(a, b, c), three(a, b, c)) << a.transpose() << " | " << b.transpose() << " | " << c.transpose();
 }
 
 }  // namespace
