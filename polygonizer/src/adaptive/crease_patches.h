@@ -15,7 +15,7 @@
 //                    along the other crease of the same piece
 //   group_cycles     the cycles of one smooth region together (by function, or where hidden
 //                    choices code one region differently along its boundaries, by growing the
-//                    regions over the surface), on one code
+//                    regions over the surface, each sample's code from RegionCodes), on one code
 //   mesh_crease_patches  one tracker per group, its fronts the group's cycles, then one mesh
 #pragma once
 

@@ -116,9 +116,9 @@ inline double angle_at(const Vec3& p, const Vec3& q, const Vec3& r) {
 // A triangle's smallest angle faces its shortest edge: the arc tangent is taken there, and at a
 // corner whose opposite edge's squared length is within a share kAngleTie of the shortest's (where
 // the two angles differ by rounding, either may come out smaller), so the result is the least of
-// the three arc tangents
-// but where a sliver's cross product is lost to rounding. One arc tangent for most triangles
-// instead of three: the repair asks for a star's angles at every position it tries.
+// the three arc tangents but where a sliver's cross product is lost to rounding. One arc tangent
+// for most triangles instead of three: the repair asks for a star's angles at every position it
+// tries.
 inline constexpr double kAngleTie = 1e-9;
 inline double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   const std::array<double, 3> l2{(b - c).squaredNorm(), (c - a).squaredNorm(), (a - b).squaredNorm()};
