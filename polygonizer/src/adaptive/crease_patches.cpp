@@ -542,11 +542,10 @@ std::vector<int> cycle_regions(const Field& field, const std::vector<Cycle>& cyc
     samples.push_back({p, gradient.normalized(), std::move(code), cycle});
   };
   RegionCodes codes(field, step);
-  const auto code_at = [&codes](const Vec3& p) { return codes.at(p); };
   for (std::size_t i = 0; i < cycles.size(); ++i)
     for (const Vec3& x : inside[i])
       if (const auto q = onto_surface(x)) {
-        Branch code = code_at(q->first);
+        Branch code = codes.at(q->first);
         if (compatible(code, cycles[i].piece)) add(q->first, q->second, std::move(code), static_cast<int>(i));
       }
   // Whether the region of `cycle` has a sample within half a step of c: then nothing there is
@@ -571,7 +570,7 @@ std::vector<int> cycle_regions(const Field& field, const std::vector<Cycle>& cyc
       if (covered(c, s.cycle)) continue;
       const auto q = onto_surface(c);
       if (!q || (q->first - s.p).norm() > 2 * step || !field.bounds().contains(q->first)) continue;
-      Branch code = code_at(q->first);
+      Branch code = codes.at(q->first);
       if (compatible(code, s.code)) add(q->first, q->second, std::move(code), s.cycle);
     }
   }

@@ -15,18 +15,6 @@ double RepairContext::cell_size(const Mesh& m) {
   return std::max(2 * lengths[lengths.size() / 2], 1e-12);
 }
 
-bool RepairContext::tri_below(const Tri& t, double limit) const {
-  constexpr double kSurelyAbove = 1e-9;  // radians
-  int k = 0;
-  double shortest = (P(t[2]) - P(t[1])).squaredNorm();  // faces t[0]
-  for (int i = 1; i < 3; ++i) {
-    const double l = (P(t[(i + 2) % 3]) - P(t[(i + 1) % 3])).squaredNorm();
-    if (l < shortest) shortest = l, k = i;
-  }
-  if (angle_at(P(t[k]), P(t[(k + 1) % 3]), P(t[(k + 2) % 3])) > limit + kSurelyAbove) return false;
-  return tri_min_angle(t) < limit;
-}
-
 RepairContext::Mid RepairContext::midpoint_distance(int x, int y, MidpointMemo* memo) const {
   const std::pair<int, int> key = std::minmax(x, y);
   if (memo && memo->table) {

@@ -247,11 +247,9 @@ class RepairContext {
     return {len, order};
   }
   double tri_min_angle(const Tri& t) const { return min_angle(P(t[0]), P(t[1]), P(t[2])); }
-  // tri_min_angle(t) < limit, with one arc tangent for most triangles instead of three: the
-  // smallest angle is the one facing the shortest edge, and the two differ only by rounding
-  // (far below kSurelyAbove) where edges tie, so a triangle whose angle there is clearly above
-  // the limit is above it; the others are decided by tri_min_angle itself (same answers).
-  bool tri_below(const Tri& t, double limit) const;
+  // Whether t's smallest angle is under `limit` (min_angle takes one arc tangent for most
+  // triangles).
+  bool tri_below(const Tri& t, double limit) const { return tri_min_angle(t) < limit; }
   Vec3 face_normal(const Tri& t) const {
     const Vec3 n = (P(t[1]) - P(t[0])).cross(P(t[2]) - P(t[0]));
     const double l = n.norm();
