@@ -192,17 +192,27 @@ std::optional<RepairContext::Mid> RepairContext::predicted_centroid(const Tri& t
 
 double RepairContext::estimate_from_samples(double mab, double mbc, double mca, double centroid) {
   if (!std::isfinite(mab + mbc + mca + centroid)) return std::numeric_limits<double>::infinity();
-  // The quadratic through 0 at the corners and these at the midpoints, sampled on a grid of
-  // step 1/12 (its maximum lies within 1% of a grid point's), from a table of the grid's
-  // barycentric coordinates, all points at once: a loop computing them took two divisions a
-  // point and was 15 % of the instructions of tanglecube at tolerance 1e-3.
-  // Each point's value is the scalar expression's, (m_ab l_a) l_b + ..., bit for bit; the
-  // maximum of finite values is the same in any order.
-  const BarycentricGrid& g = barycentric_grid();
-  const double q_max = (4 * (mab * g.a * g.b + mbc * g.b * g.c + mca * g.c * g.a)).abs().maxCoeff();
-  const double predicted = std::abs(4.0 / 9.0 * (mab + mbc + mca));
+  const double x = mab, y = mbc, z = mca;
+  const double predicted = std::abs(4.0 / 9.0 * (x + y + z));
   const double scale = predicted > 0 ? std::max(1.0, std::abs(centroid) / predicted) : 1.0;
-  return std::max({q_max * scale, std::abs(centroid), std::abs(mab), std::abs(mbc), std::abs(mca)});
+  const double edges = std::max({std::abs(x), std::abs(y), std::abs(z)});
+  return std::max({quadratic_max(x, y, z) * scale, std::abs(centroid), edges});
+}
+
+double RepairContext::quadratic_max(double x, double y, double z) {
+  // q = 4 (x a b + y b c + z c a) over a + b + c = 1, a, b, c >= 0 is 0 at the corners and
+  // 4 x a b on the edge c = 0, at most |x| there (at its midpoint): so the edges give the
+  // largest of |x|, |y|, |z|. Inside, q's one critical point (where the quadratic is not
+  // degenerate, D != 0) is (a, b, c) = (y (x - y + z), z (x + y - z), x (y + z - x)) / D with
+  // D = 2 (x y + y z + z x) - x^2 - y^2 - z^2, and q = 4 x y z / D there. A saddle's value lies
+  // between q's extremes, so taking it too changes nothing. Where rounding makes D nearly 0 and
+  // the point inside, the value is held to the bound |q| <= 4 max|m| (a b + b c + c a) <= 4/3 max|m|.
+  const double edges = std::max({std::abs(x), std::abs(y), std::abs(z)});
+  const double d = 2 * (x * y + y * z + z * x) - (x * x + y * y + z * z);
+  if (!(d != 0)) return edges;
+  const double a = y * (x - y + z) / d, b = z * (x + y - z) / d, c = x * (y + z - x) / d;
+  if (!(a >= 0 && b >= 0 && c >= 0)) return edges;
+  return std::max(edges, std::min(std::abs(4 * x * y * z / d), 4.0 / 3.0 * edges));
 }
 
 double RepairContext::sampled_distance(const Tri& t, double fallback, ProjectionResult* worst_at) const {

@@ -132,30 +132,6 @@ inline double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   return out;
 }
 
-// The barycentric coordinates (i/12, j/12, 1 - i/12 - j/12), i + j <= 12, where estimate_from
-// samples a triangle's quadratic; the last slot pads to whole SIMD packets with (0, 0, 0),
-// where the quadratic is 0, which the maximum of its absolute value starts from anyway.
-struct BarycentricGrid {
-  static constexpr int kSteps = 12;
-  static constexpr int kPoints = (kSteps + 1) * (kSteps + 2) / 2;
-  using Column = Eigen::Array<double, kPoints + 1, 1>;
-  Column a = Column::Zero(), b = Column::Zero(), c = Column::Zero();
-};
-inline const BarycentricGrid& barycentric_grid() {
-  static const BarycentricGrid grid = [] {
-    BarycentricGrid g;
-    int k = 0;
-    for (int i = 0; i <= BarycentricGrid::kSteps; ++i)
-      for (int j = 0; i + j <= BarycentricGrid::kSteps; ++j, ++k) {
-        g.a[k] = double(i) / BarycentricGrid::kSteps;
-        g.b[k] = double(j) / BarycentricGrid::kSteps;
-        g.c[k] = 1 - g.a[k] - g.b[k];
-      }
-    return g;
-  }();
-  return grid;
-}
-
 using Tri = std::array<int, 3>;
 
 // All public: the algorithms (the headers above) are free functions that read and change it.
@@ -376,8 +352,14 @@ class RepairContext {
   // else measured. The predictions' error bounds are added: 4/3 of the midpoints' largest (the
   // most a midpoint moves the quadratic through them) and the centroid's.
   double estimate_from(const Tri& t, const std::array<Mid, 3>& mid, const Mid* centroid = nullptr) const;
-  // ... from the midpoints' and the centroid's signed distances.
+  // ... from the midpoints' and the centroid's signed distances: the largest distance of the
+  // quadratic through 0 at the corners and these at the midpoints (quadratic_max), scaled so that
+  // it meets the centroid's, and of the samples themselves.
   static double estimate_from_samples(double mab, double mbc, double mca, double centroid);
+  // The largest |q| over the triangle of the quadratic q in barycentric coordinates that is 0 at
+  // the corners and x, y, z at the midpoints of edges ab, bc, ca: q = 4 (x a b + y b c + z c a),
+  // in closed form (its edges' and its critical point's).
+  static double quadratic_max(double x, double y, double z);
 
   // Predicted estimates (QualityOptions::predict_estimates): with a tolerance and a smooth field
   // (Field::smooth) whose derivatives are exact (not differences of values), the edge midpoints

@@ -239,5 +239,49 @@ TEST(RepairContext, MinAngleIsTheLeastOfTheThreeCorners) {
     EXPECT_EQ(min_angle(a, b, c), three(a, b, c)) << a.transpose() << " | " << b.transpose() << " | " << c.transpose();
 }
 
+// quadratic_max is the largest |q| of q = 4 (x a b + y b c + z c a) over the triangle: at least
+// every sample of a fine barycentric grid (to rounding), and within that grid's spacing of its
+// largest sample, on random midpoint values of either sign, equal ones (the maximum at the
+// centroid, 4/3 of them), and degenerate ones (D = 0).
+TEST(RepairContext, QuadraticMaxIsTheLargestOverTheTriangle) {
+  constexpr int kSteps = 240;
+  const auto sampled = [](double x, double y, double z) {
+    double best = 0;
+    for (int i = 0; i <= kSteps; ++i)
+      for (int j = 0; i + j <= kSteps; ++j) {
+        const double a = double(i) / kSteps, b = double(j) / kSteps, c = 1 - a - b;
+        best = std::max(best, std::abs(4 * (x * a * b + y * b * c + z * c * a)));
+      }
+    return best;
+  };
+  std::uint64_t state = 777;
+  const auto uniform = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  std::size_t inside = 0;
+  for (int i = 0; i < 3000; ++i) {
+    // Mostly of one sign, as on a curved surface, some of mixed signs.
+    const double s = i % 4 == 0 ? -1 : 1;
+    const double x = uniform() + 0.2, y = s * (uniform() + 0.2), z = (i % 3 == 0 ? -1 : 1) * (uniform() + 0.2);
+    const double got = RepairContext::quadratic_max(x, y, z), want = sampled(x, y, z);
+    const double edges = std::max({std::abs(x), std::abs(y), std::abs(z)});
+    inside += got > edges;
+    ASSERT_GE(got, want * (1 - 1e-12)) << x << " " << y << " " << z;
+    ASSERT_LE(got, want * (1 + 1e-4)) << x << " " << y << " " << z;
+  }
+  EXPECT_GT(inside, 1000u);  // the critical point inside, above the edges' largest
+  EXPECT_DOUBLE_EQ(RepairContext::quadratic_max(0.3, 0.3, 0.3), 0.4);
+  EXPECT_DOUBLE_EQ(RepairContext::quadratic_max(-0.3, -0.3, -0.3), 0.4);
+  EXPECT_EQ(RepairContext::quadratic_max(0, 0, 0), 0);
+  // D = 0: x = y = 1, z = 4 (2 (1 + 4 + 4) - 18 = 0), and z = 0 with x = y (a parabolic cylinder).
+  EXPECT_DOUBLE_EQ(RepairContext::quadratic_max(1, 1, 4), sampled(1, 1, 4));
+  EXPECT_NEAR(RepairContext::quadratic_max(1, 1, 0), sampled(1, 1, 0), 1e-4);
+  // The estimate: the quadratic scaled to meet the centroid's sample, and the samples.
+  EXPECT_DOUBLE_EQ(RepairContext::estimate_from_samples(0.3, 0.3, 0.3, 0.8), 0.8);
+  EXPECT_DOUBLE_EQ(RepairContext::estimate_from_samples(0.3, 0.3, 0.3, 0.2), 0.4);
+  EXPECT_EQ(RepairContext::estimate_from_samples(0.3, 0.3, std::nan(""), 0.2), std::numeric_limits<double>::infinity());
+}
+
 }  // namespace
 }  // namespace cdp::adaptive::repair
