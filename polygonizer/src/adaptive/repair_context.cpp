@@ -17,12 +17,8 @@ double RepairContext::cell_size(const Mesh& m) {
 
 RepairContext::Mid RepairContext::midpoint_distance(int x, int y, MidpointMemo* memo) const {
   const std::pair<int, int> key = std::minmax(x, y);
-  if (memo && memo->table) {
-    const auto& keys = memo->table->keys;
-    const std::uint64_t k = edge_key(x, y);
-    const auto it = std::lower_bound(keys.begin(), keys.end(), k);
-    if (it != keys.end() && *it == k) return memo->table->d[static_cast<std::size_t>(it - keys.begin())];
-  }
+  if (memo && memo->table)
+    if (const std::optional<std::size_t> i = memo->table->find(x, y)) return memo->table->d[*i];
   if (memo)
     for (const auto& [k, d] : memo->known)
       if (k == key) return d;
@@ -335,7 +331,6 @@ void RepairContext::prefetch_flip_samples(const std::vector<int>& triangles) {
   flip_mids_ = {};
   if (!field_.costly_calls()) return;
   std::vector<int> corners;
-  std::vector<std::uint64_t>& keys = flip_mids_.keys;
   for (const int t : triangles) {
     if (!alive_[t]) continue;
     for (int k = 0; k < 3; ++k) {
@@ -344,16 +339,13 @@ void RepairContext::prefetch_flip_samples(const std::vector<int>& triangles) {
       const auto [u, a, b, c, d] = *q;
       (void)u;
       corners.insert(corners.end(), {a, b, c, d});
-      keys.insert(keys.end(), {edge_key(a, b), edge_key(a, d), edge_key(d, b), edge_key(b, c), edge_key(c, a),
-                               edge_key(c, d)});
+      for (const auto& [x, y] : {std::pair{a, b}, {a, d}, {d, b}, {b, c}, {c, a}, {c, d}}) flip_mids_.add(x, y);
     }
   }
   probe_creases(corners);
-  std::sort(keys.begin(), keys.end());
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  std::vector<Vec3> at(keys.size());
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    const int x = static_cast<int>(keys[i] >> 32), y = static_cast<int>(keys[i] & 0xffffffffu);
+  std::vector<Vec3> at(flip_mids_.size());
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    const auto [x, y] = flip_mids_.ends(i);
     at[i] = 0.5 * (P(x) + P(y));
   }
   std::vector<double> d;

@@ -61,10 +61,7 @@ bool RepairContext::try_flip(int t, int k, bool for_ratio) {
   // The new diagonal may lie no farther from the surface than the worst edge of the quad.
   // Those prefetch_flip_samples measured for this pass of flips are taken as they are.
   const auto mid = [&](int x, int y) {
-    const std::uint64_t key = edge_key(x, y);
-    const auto it = std::lower_bound(flip_mids_.keys.begin(), flip_mids_.keys.end(), key);
-    if (it != flip_mids_.keys.end() && *it == key)
-      return std::abs(flip_mids_.d[static_cast<std::size_t>(it - flip_mids_.keys.begin())].d);
+    if (const std::optional<std::size_t> i = flip_mids_.find(x, y)) return std::abs(flip_mids_.d[*i].d);
     return std::abs(signed_distance(0.5 * (P(x) + P(y))));
   };
   const double allowed = std::max({mid(a, b), mid(a, d), mid(d, b), mid(b, c), mid(c, a)});

@@ -34,16 +34,12 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
     if (ctx.alive_[t] && !ctx.remembered(t)) {
       todo.push_back(t);
       const Tri& T = ctx.mesh_.triangles[t];
-      for (int i = 0; i < 3; ++i) table.keys.push_back(ctx.edge_key(T[i], T[(i + 1) % 3]));
+      for (int i = 0; i < 3; ++i) table.add(T[i], T[(i + 1) % 3]);
     }
   }
   ctx.poll();
-  std::sort(table.keys.begin(), table.keys.end());
-  table.keys.erase(std::unique(table.keys.begin(), table.keys.end()), table.keys.end());
-  table.d.resize(table.keys.size());
-  const auto ends = [&](std::size_t i) {
-    return std::pair{static_cast<int>(table.keys[i] >> 32), static_cast<int>(table.keys[i] & 0xffffffffu)};
-  };
+  table.d.resize(table.size());
+  const auto ends = [&](std::size_t i) { return table.ends(i); };
   const auto midpoint = [&](std::size_t i) {
     const auto [x, y] = ends(i);
     return Vec3(0.5 * (ctx.P(x) + ctx.P(y)));
@@ -56,7 +52,7 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
     ctx.fill_jets(corners);
   }
   if (ctx.field_.thread_safe()) {
-    detail::parallel_blocks(table.keys.size(), kRepairBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned) {
+    detail::parallel_blocks(table.size(), kRepairBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned) {
       ctx.poll();
       for (std::size_t i = begin; i < end; ++i) {
         const auto [x, y] = ends(i);
@@ -73,7 +69,7 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
     // The same samples as above: the predicted ones, then the rest measured in one batch.
     std::vector<Vec3> points;
     std::vector<std::size_t> which;
-    for (std::size_t i = 0; i < table.keys.size(); ++i) {
+    for (std::size_t i = 0; i < table.size(); ++i) {
       const auto [x, y] = ends(i);
       const std::optional<RepairContext::Mid> m = ctx.predict_ ? ctx.predicted_midpoint(x, y) : std::nullopt;
       if (m) {
