@@ -72,7 +72,7 @@ void repair_angles(RepairContext& ctx) {
   std::vector<int> work;
   for (int t = 0; t < ctx.tri_count(); ++t) {
     ctx.poll(static_cast<std::size_t>(t));
-    if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t], ctx.options_.improve_below)) work.push_back(t);
+    if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t])) work.push_back(t);
   }
   ctx.report_.bad_before = std::max(ctx.report_.bad_before, work.size());
   for (int round = 0; round < kQualityRounds && !work.empty(); ++round) {
@@ -99,13 +99,13 @@ void repair_angles(RepairContext& ctx) {
     for (std::size_t i = 0; i < next.size(); ++i) {
       ctx.poll(i);
       const int t = next[i];
-      if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t], ctx.options_.improve_below)) work.push_back(t);
+      if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t])) work.push_back(t);
     }
   }
   std::size_t bad = 0;
   for (int t = 0; t < ctx.tri_count(); ++t) {
     ctx.poll(static_cast<std::size_t>(t));
-    if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t], ctx.options_.improve_below)) ++bad;
+    if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t])) ++bad;
   }
   ctx.report_.bad_after = bad;
 }

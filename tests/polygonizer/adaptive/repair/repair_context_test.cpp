@@ -12,6 +12,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <numbers>
 #include <numeric>
 
 namespace cdp::adaptive::repair {
@@ -281,6 +283,46 @@ TEST(RepairContext, QuadraticMaxIsTheLargestOverTheTriangle) {
   EXPECT_DOUBLE_EQ(RepairContext::estimate_from_samples(0.3, 0.3, 0.3, 0.8), 0.8);
   EXPECT_DOUBLE_EQ(RepairContext::estimate_from_samples(0.3, 0.3, 0.3, 0.2), 0.4);
   EXPECT_EQ(RepairContext::estimate_from_samples(0.3, 0.3, std::nan(""), 0.2), std::numeric_limits<double>::infinity());
+}
+
+// tri_below skips the arc tangent only where the angle is clearly above the bound: the same
+// answer as tri_min_angle(t) < improve_below on random triangles, on isosceles triangles whose
+// apex angle is the bound to within a few units in the last place (either side), and on
+// degenerate ones.
+TEST(RepairContext, TriBelowIsTheSmallestAngleUnderTheBound) {
+  SeamField field(1);
+  Mesh mesh;
+  std::uint64_t state = 4242;
+  const auto uniform = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  for (int i = 0; i < 30000; ++i) mesh.positions.push_back(Vec3(uniform(), uniform(), uniform()));
+  const double bound = 30 * std::numbers::pi / 180;
+  // Isosceles: apex at the origin, the apex angle the bound plus k units in the last place.
+  for (int k = -40; k <= 40; ++k) {
+    const double angle = bound + k * std::numeric_limits<double>::epsilon();
+    const int at = static_cast<int>(mesh.positions.size());
+    mesh.positions.push_back(Vec3(0.3, 0.1, 0.2));
+    mesh.positions.push_back(Vec3(0.3, 0.1, 0.2) + Vec3(1, 0, 0));
+    mesh.positions.push_back(Vec3(0.3, 0.1, 0.2) + Vec3(std::cos(angle), std::sin(angle), 0));
+    mesh.triangles.push_back({at, at + 1, at + 2});
+  }
+  for (int i = 0; i + 2 < 30000; i += 3) mesh.triangles.push_back({i, i + 1, i + 2});
+  mesh.triangles.push_back({0, 0, 1});  // degenerate
+  mesh.positions.push_back(Vec3(std::nan(""), 0, 0));
+  mesh.triangles.push_back({0, 1, static_cast<int>(mesh.positions.size()) - 1});
+  mesh.normals.assign(mesh.positions.size(), Vec3::UnitZ());
+  QualityOptions o = sphere_options();
+  o.improve_below = bound;
+  RepairContext ctx(field, mesh, o);
+  std::size_t below = 0;
+  for (const Tri& t : mesh.triangles) {
+    const bool want = ctx.tri_min_angle(t) < bound;
+    below += want;
+    ASSERT_EQ(ctx.tri_below(t), want) << t[0];
+  }
+  EXPECT_GT(below, 2000u);
 }
 
 }  // namespace
