@@ -466,24 +466,25 @@ void RepairContext::hash_cover(int t, const Vec3& lo, const Vec3& hi) {
 
 bool RepairContext::intersects(const std::vector<Tri>& added, const std::vector<int>& ignored, int mv, const Vec3& moved) {
   const auto pos = [&](int v) -> const Vec3& { return v == mv ? moved : P(v); };
+  std::vector<StarTriangle>& star = star_buffer_;
+  star.clear();
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  double magnitude = 0;
   for (const Tri& a : added) {
-    const std::array<Vec3, 3> pa{pos(a[0]), pos(a[1]), pos(a[2])};
-    if (triangle_is_degenerate(pa[0], pa[1], pa[2])) return true;
-    const Vec3 lo = pa[0].cwiseMin(pa[1]).cwiseMin(pa[2]), hi = pa[0].cwiseMax(pa[1]).cwiseMax(pa[2]);
-    ++stamp_id_;
-    for (int t : ignored) stamp_[t] = stamp_id_;
-    const bool hit = hash_.any_in(lo, hi, [&](int u) {
-      if (stamp_[u] == stamp_id_ || !alive_[u]) return false;
-      stamp_[u] = stamp_id_;
-      const Tri& x = mesh_.triangles[u];
-      const std::array<Vec3, 3> pb{pos(x[0]), pos(x[1]), pos(x[2])};
-      const Vec3 blo = pb[0].cwiseMin(pb[1]).cwiseMin(pb[2]), bhi = pb[0].cwiseMax(pb[1]).cwiseMax(pb[2]);
-      if ((blo.array() > hi.array()).any() || (bhi.array() < lo.array()).any()) return false;
-      return exact_intersect(pa, pb);
-    });
-    if (hit) return true;
+    StarTriangle x{a, {pos(a[0]), pos(a[1]), pos(a[2])}, {}, {}, {}};
+    if (triangle_is_degenerate(x.p[0], x.p[1], x.p[2])) return true;
+    x.lo = x.p[0].cwiseMin(x.p[1]).cwiseMin(x.p[2]);
+    x.hi = x.p[0].cwiseMax(x.p[1]).cwiseMax(x.p[2]);
+    x.normal = (x.p[1] - x.p[0]).cross(x.p[2] - x.p[0]);
+    lo = lo.cwiseMin(x.lo);
+    hi = hi.cwiseMax(x.hi);
+    magnitude = std::max({magnitude, x.lo.cwiseAbs().maxCoeff(), x.hi.cwiseAbs().maxCoeff()});
+    star.push_back(x);
   }
-  return false;
+  if (star.empty()) return false;
+  ++stamp_id_;
+  for (int t : ignored) stamp_[t] = stamp_id_;
+  return star_meets(star, lo, hi, magnitude, pos, stamp_.data(), stamp_id_);
 }
 
 bool RepairContext::apart_by_plane(const std::array<Vec3, 3>& a, const Tri& ia, const Vec3& n, const std::array<Vec3, 3>& b,

@@ -325,5 +325,62 @@ TEST(RepairContext, TriBelowIsTheSmallestAngleUnderTheBound) {
   EXPECT_GT(below, 2000u);
 }
 
+// intersects (one query of the hash over the added triangles' box, the floating-point filters
+// before the exact test) answers as every added triangle tested exactly against every live
+// triangle not ignored: on an icosphere, stars of a vertex moved by up to a few edges (into and
+// through its neighbours) and splits of random edges by a vertex placed within a few edges.
+TEST(RepairContext, IntersectsIsTheExactTestOfEveryPair) {
+  const auto field = unit_sphere();
+  Mesh mesh = icosphere(3);
+  RepairContext ctx(*field, mesh, sphere_options());
+  std::uint64_t state = 99;
+  const auto uniform = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  const double edge = (mesh.positions[mesh.triangles[0][0]] - mesh.positions[mesh.triangles[0][1]]).norm();
+  const auto brute = [&](const std::vector<Tri>& added, const std::vector<int>& ignored, int mv, const Vec3& moved) {
+    const auto pos = [&](int v) { return v == mv ? moved : mesh.positions[v]; };
+    for (const Tri& a : added) {
+      const std::array<Vec3, 3> pa{pos(a[0]), pos(a[1]), pos(a[2])};
+      for (int u = 0; u < static_cast<int>(mesh.triangles.size()); ++u) {
+        if (std::find(ignored.begin(), ignored.end(), u) != ignored.end()) continue;
+        const Tri& x = mesh.triangles[u];
+        if (triangles_intersect(pa, {pos(x[0]), pos(x[1]), pos(x[2])})) return true;
+      }
+    }
+    return false;
+  };
+  std::size_t hits = 0, misses = 0;
+  for (int i = 0; i < 600; ++i) {
+    const int v = static_cast<int>(uniform() * static_cast<double>(mesh.positions.size()));
+    const Vec3 moved = mesh.positions[v] + 6 * edge * Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5);
+    std::vector<Tri> star;
+    for (int u : ctx.vt_[v]) star.push_back(mesh.triangles[u]);
+    const bool want = brute(star, ctx.vt_[v], v, moved);
+    ASSERT_EQ(ctx.intersects(star, ctx.vt_[v], v, moved), want) << i;
+    (want ? hits : misses)++;
+    // A split of edge k of triangle t: a new vertex (an id past the mesh's) anywhere within a
+    // few edges of the edge's middle, joined to its ends and the two apexes.
+    const int t = static_cast<int>(uniform() * static_cast<double>(mesh.triangles.size()));
+    const int k = static_cast<int>(uniform() * 3);
+    const Tri T = mesh.triangles[t];
+    const int a = T[k], b = T[(k + 1) % 3], c = T[(k + 2) % 3];
+    const int u = ctx.across(t, a, b);
+    ASSERT_GE(u, 0);
+    int d = -1;
+    for (int w : mesh.triangles[u])
+      if (w != a && w != b) d = w;
+    const int m = static_cast<int>(mesh.positions.size());
+    const Vec3 at = 0.5 * (mesh.positions[a] + mesh.positions[b]) + 5 * edge * Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5);
+    const std::vector<Tri> split{Tri{a, m, c}, Tri{m, b, c}, Tri{b, m, d}, Tri{m, a, d}};
+    const bool want_split = brute(split, {t, u}, m, at);
+    ASSERT_EQ(ctx.intersects(split, {t, u}, m, at), want_split) << i;
+    (want_split ? hits : misses)++;
+  }
+  EXPECT_GT(hits, 100u);
+  EXPECT_GT(misses, 100u);
+}
+
 }  // namespace
 }  // namespace cdp::adaptive::repair
