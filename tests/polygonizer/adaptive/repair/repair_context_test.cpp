@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <numeric>
 
@@ -380,6 +381,53 @@ TEST(RepairContext, IntersectsIsTheExactTestOfEveryPair) {
   }
   EXPECT_GT(hits, 100u);
   EXPECT_GT(misses, 100u);
+}
+
+// keep_boundary fixes the ends of every edge held by other than two triangles: an icosphere
+// with triangles cut away (boundary edges, one triangle) and one edge given a third triangle
+// (non-manifold), against the edges counted over the whole mesh; with a triangle of a repeated
+// corner too (that case is left to across).
+TEST(RepairContext, TheBoundaryKeptIsTheEdgesNotHeldByTwoTriangles) {
+  const auto field = unit_sphere();
+  for (const bool repeated : {false, true}) {
+    Mesh mesh = icosphere(2);
+    std::vector<Tri> kept;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      if (t % 7 != 3) kept.push_back(mesh.triangles[t]);
+    mesh.triangles = kept;
+    const Tri first = mesh.triangles[0];
+    mesh.positions.push_back(Vec3(0, 0, 2));
+    mesh.triangles.push_back({first[0], first[1], static_cast<int>(mesh.positions.size()) - 1});
+    if (repeated) mesh.triangles.push_back({first[2], first[2], first[0]});
+    mesh.normals.assign(mesh.positions.size(), Vec3::UnitZ());
+    std::map<std::pair<int, int>, int> held;
+    for (const Tri& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) ++held[std::minmax(t[k], t[(k + 1) % 3])];
+    QualityOptions o = sphere_options();
+    o.keep_boundary = true;
+    RepairContext ctx(*field, mesh, o);
+    std::vector<char> want(mesh.positions.size(), 0);
+    if (!repeated)
+      for (const auto& [edge, n] : held)
+        if (n != 2) want[edge.first] = want[edge.second] = 1;
+    std::size_t fixed = 0;
+    for (int v = 0; v < static_cast<int>(mesh.positions.size()); ++v) {
+      fixed += ctx.fixed(v);
+      if (!repeated) {
+        EXPECT_EQ(ctx.fixed(v), want[v] != 0) << v;
+      }
+    }
+    EXPECT_GT(fixed, 20u);
+    if (repeated) {  // as across has it, edge by edge
+      for (int t = 0; t < ctx.tri_count(); ++t)
+        for (int k = 0; k < 3; ++k) {
+          const Tri& x = mesh.triangles[t];
+          if (ctx.across(t, x[k], x[(k + 1) % 3]) < 0) {
+            EXPECT_TRUE(ctx.fixed(x[k]) && ctx.fixed(x[(k + 1) % 3]));
+          }
+        }
+    }
+  }
 }
 
 }  // namespace
