@@ -226,6 +226,55 @@ void BM_ToleranceEvaluations(benchmark::State& state) {
 }
 BENCHMARK(BM_ToleranceEvaluations)->ArgName("shape")->DenseRange(0, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
 
+// Tolerance mode against factor mode at about the same triangle count, one thread, the two in
+// turn in every iteration (issue 57: tolerance mode at most 1.3 times factor mode's time a
+// triangle). Shapes: 0 the torus of experiments/fields/torus.json at 1e-4 against factor 27
+// (1.86 and 1.73 * 10^5 triangles), 1 the random blobs at 1e-3 against factor 11 (20,352 and
+// 19,932). BM_ToleranceVsFactorSlow: the torus at 1e-5 against factor 88 (about 1.9 * 10^6
+// triangles each, the issue's size; about 20 s an iteration, not in bench-short). Counters:
+// tolerance_vs_factor (the ratio of their times a triangle), each one's microseconds a
+// triangle and triangles. Manual time: tolerance mode's.
+void measure_tolerance_vs_factor(benchmark::State& state, const Field& field, double tolerance, double factor) {
+  AdaptiveOptions by_tolerance;
+  by_tolerance.sizing = SizingMode::Tolerance;
+  by_tolerance.tolerance = tolerance;
+  by_tolerance.threads = 1;
+  AdaptiveOptions by_factor;
+  by_factor.factor = factor;
+  by_factor.threads = 1;
+  std::array<double, 2> seconds{}, triangles{};
+  for (auto _ : state) {
+    for (int k = 0; k < 2; ++k) {
+      const PolygonizeResult r = polygonize_adaptive(field, k == 0 ? by_tolerance : by_factor);
+      seconds[k] += r.stats.seconds;
+      triangles[k] += static_cast<double>(r.stats.triangles);
+      if (k == 0) state.SetIterationTime(r.stats.seconds);
+    }
+  }
+  const auto us_per_triangle = [&](int k) { return 1e6 * seconds[k] / triangles[k]; };
+  const auto n = static_cast<double>(state.iterations());
+  state.counters["tolerance_us_per_triangle"] = us_per_triangle(0);
+  state.counters["factor_us_per_triangle"] = us_per_triangle(1);
+  state.counters["tolerance_vs_factor"] = us_per_triangle(0) / us_per_triangle(1);
+  state.counters["tolerance_triangles"] = triangles[0] / n;
+  state.counters["factor_triangles"] = triangles[1] / n;
+}
+
+void BM_ToleranceVsFactor(benchmark::State& state) {
+  const int shape = static_cast<int>(state.range(0));
+  static const std::unique_ptr<Field> blobs = load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/random_blobs.json");
+  if (shape == 0) measure_tolerance_vs_factor(state, torus_field(), 1e-4, 27);
+  else measure_tolerance_vs_factor(state, *blobs, 1e-3, 11);
+  state.SetLabel(shape == 0 ? "torus/tol1e-4_vs_factor27/threads1" : "random_blobs/tol1e-3_vs_factor11/threads1");
+}
+BENCHMARK(BM_ToleranceVsFactor)->ArgName("shape")->DenseRange(0, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+void BM_ToleranceVsFactorSlow(benchmark::State& state) {
+  measure_tolerance_vs_factor(state, torus_field(), 1e-5, 88);
+  state.SetLabel("torus/tol1e-5_vs_factor88/threads1");
+}
+BENCHMARK(BM_ToleranceVsFactorSlow)->Iterations(1)->UseManualTime()->Unit(benchmark::kMillisecond);
+
 // The paper's algorithm as printed (Variant::Paper: no grading, repair, relaxation or tolerance
 // refinement), with the robustness of the tracker and the seeding and the final
 // self-intersection check: the torus at the factors of BM_Adaptive and the bunny VIS-800 at
