@@ -230,17 +230,21 @@ BENCHMARK(BM_ToleranceEvaluations)->ArgName("shape")->DenseRange(0, 1)->UseManua
 // turn in every iteration (issue 57: tolerance mode at most 1.3 times factor mode's time a
 // triangle). Shapes: 0 the torus of experiments/fields/torus.json at 1e-4 against factor 27
 // (1.86 and 1.73 * 10^5 triangles), 1 the random blobs at 1e-3 against factor 11 (20,352 and
-// 19,932). BM_ToleranceVsFactorSlow: the torus at 1e-5 against factor 88 (about 1.9 * 10^6
-// triangles each, the issue's size; about 20 s an iteration, not in bench-short). Counters:
+// 19,932). BM_ToleranceVsFactorSlow: the torus at 1e-5 against factor 88 with min_edge 4e-4
+// (1.85 and 1.84 * 10^6 triangles, the issue's size: the default min_edge, 2e-3 of the diagonal,
+// stops factor 88 at 5.4 * 10^5; tolerance 1e-5 reaches 4.1e-4), about 20 s an iteration, not in
+// bench-short. Counters:
 // tolerance_vs_factor (the ratio of their times a triangle), each one's microseconds a
 // triangle and triangles. Manual time: tolerance mode's.
-void measure_tolerance_vs_factor(benchmark::State& state, const Field& field, double tolerance, double factor) {
+void measure_tolerance_vs_factor(benchmark::State& state, const Field& field, double tolerance, double factor,
+                                 double min_edge = 0) {
   AdaptiveOptions by_tolerance;
   by_tolerance.sizing = SizingMode::Tolerance;
   by_tolerance.tolerance = tolerance;
   by_tolerance.threads = 1;
   AdaptiveOptions by_factor;
   by_factor.factor = factor;
+  by_factor.min_edge = min_edge;
   by_factor.threads = 1;
   std::array<double, 2> seconds{}, triangles{};
   for (auto _ : state) {
@@ -270,7 +274,7 @@ void BM_ToleranceVsFactor(benchmark::State& state) {
 BENCHMARK(BM_ToleranceVsFactor)->ArgName("shape")->DenseRange(0, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 void BM_ToleranceVsFactorSlow(benchmark::State& state) {
-  measure_tolerance_vs_factor(state, torus_field(), 1e-5, 88);
+  measure_tolerance_vs_factor(state, torus_field(), 1e-5, 88, 4e-4);
   state.SetLabel("torus/tol1e-5_vs_factor88/threads1");
 }
 BENCHMARK(BM_ToleranceVsFactorSlow)->Iterations(1)->UseManualTime()->Unit(benchmark::kMillisecond);
