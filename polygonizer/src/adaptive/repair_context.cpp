@@ -494,17 +494,8 @@ bool RepairContext::intersects(const std::vector<Tri>& added, const std::vector<
   star.clear();
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   double magnitude = 0;
-  for (const Tri& a : added) {
-    StarTriangle x{a, {pos(a[0]), pos(a[1]), pos(a[2])}, {}, {}, {}};
-    if (triangle_is_degenerate(x.p[0], x.p[1], x.p[2])) return true;
-    x.lo = x.p[0].cwiseMin(x.p[1]).cwiseMin(x.p[2]);
-    x.hi = x.p[0].cwiseMax(x.p[1]).cwiseMax(x.p[2]);
-    x.normal = (x.p[1] - x.p[0]).cross(x.p[2] - x.p[0]);
-    lo = lo.cwiseMin(x.lo);
-    hi = hi.cwiseMax(x.hi);
-    magnitude = std::max({magnitude, x.lo.cwiseAbs().maxCoeff(), x.hi.cwiseAbs().maxCoeff()});
-    star.push_back(x);
-  }
+  for (const Tri& a : added)
+    if (!add_star_triangle(star, a, {pos(a[0]), pos(a[1]), pos(a[2])}, lo, hi, magnitude)) return true;
   if (star.empty()) return false;
   ++stamp_id_;
   for (int t : ignored) stamp_[t] = stamp_id_;

@@ -571,6 +571,21 @@ class RepairContext {
   // the torus (callgrind), star_intersects' one thread included.
   [[gnu::noinline]] static bool meets_star(const std::vector<StarTriangle>& star, const Vec3& lo, const Vec3& hi, double magnitude,
                          const Tri& x, const std::array<Vec3, 3>& pb);
+  // Appends triangle t with corners p to `star`, growing the star's box [lo, hi] and its
+  // corners' largest magnitude; false (nothing added) for a degenerate triangle.
+  static bool add_star_triangle(std::vector<StarTriangle>& star, const Tri& t, const std::array<Vec3, 3>& p, Vec3& lo,
+                                Vec3& hi, double& magnitude) {
+    StarTriangle x{t, p, {}, {}, {}};
+    if (triangle_is_degenerate(x.p[0], x.p[1], x.p[2])) return false;
+    x.lo = x.p[0].cwiseMin(x.p[1]).cwiseMin(x.p[2]);
+    x.hi = x.p[0].cwiseMax(x.p[1]).cwiseMax(x.p[2]);
+    x.normal = (x.p[1] - x.p[0]).cross(x.p[2] - x.p[0]);
+    lo = lo.cwiseMin(x.lo);
+    hi = hi.cwiseMax(x.hi);
+    magnitude = std::max({magnitude, x.lo.cwiseAbs().maxCoeff(), x.hi.cwiseAbs().maxCoeff()});
+    star.push_back(x);
+    return true;
+  }
   // star_intersects with every vertex but v at at(w), where the box each triangle is stored
   // with in the hash must hold it (hash_box, hash_cover).
   // Reads the mesh and the hash only (stamp and star are the caller's), so that calls with
@@ -585,15 +600,7 @@ class RepairContext {
     for (int u : vt_[v]) {
       stamp[u] = id;
       const Tri& t = mesh_.triangles[u];
-      StarTriangle x{t, {pos(t[0]), pos(t[1]), pos(t[2])}, {}, {}, {}};
-      if (triangle_is_degenerate(x.p[0], x.p[1], x.p[2])) return true;
-      x.lo = x.p[0].cwiseMin(x.p[1]).cwiseMin(x.p[2]);
-      x.hi = x.p[0].cwiseMax(x.p[1]).cwiseMax(x.p[2]);
-      x.normal = (x.p[1] - x.p[0]).cross(x.p[2] - x.p[0]);
-      lo = lo.cwiseMin(x.lo);
-      hi = hi.cwiseMax(x.hi);
-      magnitude = std::max({magnitude, x.lo.cwiseAbs().maxCoeff(), x.hi.cwiseAbs().maxCoeff()});
-      star.push_back(x);
+      if (!add_star_triangle(star, t, {pos(t[0]), pos(t[1]), pos(t[2])}, lo, hi, magnitude)) return true;
     }
     // The triangles found are not in v's star, so v is not among their corners.
     return star_meets(star, lo, hi, magnitude, at, stamp, id);

@@ -214,6 +214,15 @@ TEST(RepairContext, PredictedEstimatesAreTheSameOnAnyThreadsAndInBatches) {
   }
 }
 
+// Uniform numbers in [0, 1) from a 64-bit linear congruential generator: the same on every machine.
+struct Uniform {
+  std::uint64_t state;
+  double operator()() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  }
+};
+
 // min_angle takes the arc tangent at the corner facing the shortest edge (and at corners whose
 // edges tie with it): the least of the three corners' angle_at, bit for bit, on triangles of
 // every shape but slivers, exact isosceles and equilateral ones (ties) among them.
@@ -221,11 +230,7 @@ TEST(RepairContext, MinAngleIsTheLeastOfTheThreeCorners) {
   const auto three = [](const Vec3& a, const Vec3& b, const Vec3& c) {
     return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
   };
-  std::uint64_t state = 12345;
-  const auto uniform = [&state] {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(state >> 11) / 9007199254740992.0;
-  };
+  Uniform uniform{12345ull};
   std::size_t tested = 0;
   for (int i = 0; i < 20000; ++i) {
     const Vec3 a(uniform(), uniform(), uniform()), b(uniform(), uniform(), uniform()), c(uniform(), uniform(), uniform());
@@ -257,11 +262,7 @@ TEST(RepairContext, QuadraticMaxIsTheLargestOverTheTriangle) {
       }
     return best;
   };
-  std::uint64_t state = 777;
-  const auto uniform = [&state] {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(state >> 11) / 9007199254740992.0;
-  };
+  Uniform uniform{777ull};
   std::size_t inside = 0;
   for (int i = 0; i < 3000; ++i) {
     // Mostly of one sign, as on a curved surface, some of mixed signs.
@@ -293,11 +294,7 @@ TEST(RepairContext, QuadraticMaxIsTheLargestOverTheTriangle) {
 TEST(RepairContext, TriBelowIsTheSmallestAngleUnderTheBound) {
   SeamField field(1);
   Mesh mesh;
-  std::uint64_t state = 4242;
-  const auto uniform = [&state] {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(state >> 11) / 9007199254740992.0;
-  };
+  Uniform uniform{4242ull};
   for (int i = 0; i < 30000; ++i) mesh.positions.push_back(Vec3(uniform(), uniform(), uniform()));
   const double bound = 30 * std::numbers::pi / 180;
   // Isosceles: apex at the origin, the apex angle the bound plus k units in the last place.
@@ -334,11 +331,7 @@ TEST(RepairContext, IntersectsIsTheExactTestOfEveryPair) {
   const auto field = unit_sphere();
   Mesh mesh = icosphere(3);
   RepairContext ctx(*field, mesh, sphere_options());
-  std::uint64_t state = 99;
-  const auto uniform = [&state] {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(state >> 11) / 9007199254740992.0;
-  };
+  Uniform uniform{99ull};
   const double edge = (mesh.positions[mesh.triangles[0][0]] - mesh.positions[mesh.triangles[0][1]]).norm();
   const auto brute = [&](const std::vector<Tri>& added, const std::vector<int>& ignored, int mv, const Vec3& moved) {
     const auto pos = [&](int v) { return v == mv ? moved : mesh.positions[v]; };
