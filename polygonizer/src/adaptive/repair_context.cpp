@@ -188,11 +188,10 @@ std::optional<RepairContext::Mid> RepairContext::predicted_centroid(const Tri& t
 
 double RepairContext::estimate_from_samples(double mab, double mbc, double mca, double centroid) {
   if (!std::isfinite(mab + mbc + mca + centroid)) return std::numeric_limits<double>::infinity();
-  const double x = mab, y = mbc, z = mca;
-  const double predicted = std::abs(4.0 / 9.0 * (x + y + z));
+  const double predicted = std::abs(4.0 / 9.0 * (mab + mbc + mca));
   const double scale = predicted > 0 ? std::max(1.0, std::abs(centroid) / predicted) : 1.0;
-  const double edges = std::max({std::abs(x), std::abs(y), std::abs(z)});
-  return std::max({quadratic_max(x, y, z) * scale, std::abs(centroid), edges});
+  // quadratic_max is at least every midpoint's |m| (its edges), and scale at least 1.
+  return std::max(quadratic_max(mab, mbc, mca) * scale, std::abs(centroid));
 }
 
 double RepairContext::quadratic_max(double x, double y, double z) {

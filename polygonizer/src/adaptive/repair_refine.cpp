@@ -39,9 +39,8 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
   }
   ctx.poll();
   table.d.resize(table.size());
-  const auto ends = [&](std::size_t i) { return table.ends(i); };
   const auto midpoint = [&](std::size_t i) {
-    const auto [x, y] = ends(i);
+    const auto [x, y] = table.ends(i);
     return Vec3(0.5 * (ctx.P(x) + ctx.P(y)));
   };
   if (ctx.predict_) {
@@ -55,7 +54,7 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
     detail::parallel_blocks(table.size(), kRepairBlock, ctx.workers_, [&](std::size_t begin, std::size_t end, unsigned) {
       ctx.poll();
       for (std::size_t i = begin; i < end; ++i) {
-        const auto [x, y] = ends(i);
+        const auto [x, y] = table.ends(i);
         table.d[i] = ctx.midpoint_sample(x, y);
       }
     });
@@ -70,7 +69,7 @@ void estimate_ahead(RepairContext& ctx, const std::vector<int>& work) {
     std::vector<Vec3> points;
     std::vector<std::size_t> which;
     for (std::size_t i = 0; i < table.size(); ++i) {
-      const auto [x, y] = ends(i);
+      const auto [x, y] = table.ends(i);
       const std::optional<RepairContext::Mid> m = ctx.predict_ ? ctx.predicted_midpoint(x, y) : std::nullopt;
       if (m) {
         table.d[i] = *m;
