@@ -30,6 +30,23 @@ TEST(CancelToken, CopiesShareOneFlagAndResetClearsIt) {
   EXPECT_FALSE(a.cancelled());
 }
 
+TEST(CancelToken, ALinkedTokenFollowsItsParentAndNotTheOtherWay) {
+  const CancelToken run;
+  const CancelToken part = run.linked(), other = run.linked(), deeper = part.linked();
+  part.cancel();
+  EXPECT_TRUE(part.cancelled());
+  EXPECT_TRUE(deeper.cancelled());
+  EXPECT_FALSE(run.cancelled());
+  EXPECT_FALSE(other.cancelled());
+  part.reset();
+  EXPECT_FALSE(deeper.cancelled());
+  run.cancel();
+  EXPECT_TRUE(part.cancelled() && other.cancelled() && deeper.cancelled());
+  EXPECT_THROW(deeper.check("x"), CancelledError);
+  run.reset();
+  EXPECT_FALSE(deeper.cancelled());
+}
+
 TEST(CancelToken, EveryMethodEndsWithCancelledErrorWhenCancelledBeforeItStarts) {
   const Sphere sphere(Vec3::Zero(), 1);
   AdaptiveOptions a;

@@ -156,9 +156,9 @@ constexpr std::uint64_t kPartTag = 0x32'74'72'61'70'70'64'63;  // "cdppart2"
 // this platform, and this reminds whoever adds it to write it too (a field left out would be
 // the worker's default: another mesh than the one-process run's, silently).
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-static_assert(sizeof(Sizing) == 48 && sizeof(FinerZone) == 40 && sizeof(Settings) == 184,
+static_assert(sizeof(Sizing) == 48 && sizeof(FinerZone) == 40 && sizeof(Settings) == 200,
               "a field added to Settings: write and read it in block_task.cpp");
-static_assert(sizeof(QualityOptions) == 88, "a field added to QualityOptions: write and read it in block_task.cpp");
+static_assert(sizeof(QualityOptions) == 104, "a field added to QualityOptions: write and read it in block_task.cpp");
 static_assert(sizeof(QualityReport) == 184, "a field added to QualityReport: write and read it in block_task.cpp");
 static_assert(sizeof(TrackerReport) == 112, "a field added to TrackerReport: write and read it in block_task.cpp");
 static_assert(sizeof(Tracker::Placed) == 264 && sizeof(Curvature) == 200 && sizeof(CriticalStart) == 56,

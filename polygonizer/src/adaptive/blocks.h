@@ -71,6 +71,9 @@ struct BlockMeshing {
   // A block's tracker stopped at a kink of a black box (BlackBoxKinkError, creases: follow): no
   // mesh, and the run ends with this error (tracking alone would stop at the same kind of place).
   std::exception_ptr kink;
+  // The blocks after `kink`'s in block order that its stop ended before they were done (their
+  // parts, which could not change the outcome, dropped).
+  std::size_t stopped = 0;
   // The stage's part of the run's stats (adaptive_report.h): the blocks, cuts, seams, times
   // (block_seconds: what the projected speedups at more threads are computed from) and the
   // fallback; the run adds what it alone knows (requested, used, components, steps, wall_*).

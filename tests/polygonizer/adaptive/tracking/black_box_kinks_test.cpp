@@ -11,11 +11,15 @@
 #include <cdp/core/mesh_topology.h>
 #include <cdp/core/models/analytic.h>
 
+#include "src/adaptive/blocks.h"
 #include "src/adaptive/resolve_settings.h"
+#include "src/adaptive/stage_seed_grid.h"
 #include "src/adaptive/tracker.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <numbers>
 #include <optional>
@@ -101,6 +105,53 @@ TEST(BlackBoxKinks, AStepAcrossACreaseStopsARunThatFollowsCreases) {
     EXPECT_NE(message.find("creases: ignore meshes across"), std::string::npos) << message;
   }
   EXPECT_LT(calls_past_the_grid(field), calls_past_the_grid(across) / 2);
+}
+
+// A torus (R = 1, r = 0.4) with a knob, a ball of radius 0.15 under its tube at 225 degrees: a
+// crease circle where they meet, inside the first of the 2 x 2 x 2 blocks the torus is cut into
+// at factor 12 (the cuts at 0.05).
+double torus_with_a_knob(const Vec3& p) {
+  const double q = std::hypot(p.x(), p.y()) - 1, c = -std::sqrt(0.5);
+  return std::min(std::hypot(q, p.z()) - 0.4, (p - Vec3(c, c, -0.45)).norm() - 0.15);
+}
+
+std::string what(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+}
+
+TEST(BlackBoxKinks, AKinkInABlockStopsTheBlocksAfterItAndEndsTheRunTheSameInAnyOrder) {
+  // The run ends with the kink of the lowest block that meets one, so the blocks after it in
+  // block order are stopped as soon as it does (a Python function's blocks in lockstep ran to
+  // their end first): in the orders where it runs before some of them, they are stopped, and the
+  // error and the tightest bend are the same in every order.
+  const DifferencedField field(torus_with_a_knob, 1.6);
+  AdaptiveOptions o = black_box_options(12);
+  o.blocks = true;
+  o.threads = 1;
+  adaptive::Settings settings = adaptive::resolve_settings(field, o);
+  const adaptive::SeedGridStage seeds = adaptive::sample_seed_grid_stage(field, o, settings);
+  settings.hash_cell = seeds.hash_cell;
+  std::string first;
+  std::pair<double, Vec3> tightest;
+  std::size_t most_stopped = 0;
+  for (const std::uint64_t shuffle : {0u, 1u, 2u, 3u, 4u, 5u}) {
+    const adaptive::BlockMeshing b = adaptive::mesh_blocks(field, o, settings, seeds, nullptr, shuffle);
+    ASSERT_TRUE(b.kink) << "order " << shuffle << ": " << b.report.fallback;
+    EXPECT_FALSE(b.mesh);
+    const std::string message = what(b.kink);
+    if (first.empty()) first = message, tightest = b.tightest;
+    EXPECT_EQ(message, first) << "order " << shuffle;
+    EXPECT_EQ(b.tightest.first, tightest.first) << "order " << shuffle;
+    EXPECT_EQ(b.tightest.second, tightest.second) << "order " << shuffle;
+    most_stopped = std::max(most_stopped, b.stopped);
+  }
+  EXPECT_NE(first.find("a kink of a field without branch data"), std::string::npos) << first;
+  EXPECT_GT(most_stopped, 0u);
+  EXPECT_THROW(polygonize_adaptive(field, o), LimitExceededError);
 }
 
 constexpr double kDegree = std::numbers::pi / 180;
