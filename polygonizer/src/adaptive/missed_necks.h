@@ -49,13 +49,17 @@ struct MissedNeck {
 
 struct NeckSearch {
   std::vector<MissedNeck> missed;   // every tested critical point on the wrong side, thinnest first
-  std::size_t walks = 0;            // Newton walks started (at most kMaxNeckWalks)
+  std::size_t walks = 0;            // Newton walks started (bounded: missed_necks.cpp)
   std::size_t critical_points = 0;  // distinct critical points they reached
-  std::size_t tested = 0;           // thin enough to test against the mesh (at most kMaxNeckTests)
+  std::size_t tested = 0;           // thin enough to test against the mesh
+  // Starts left unwalked once the walks reached their bound (their predicted critical point not
+  // claimed by a walk before them): necks there, if any, were not looked for.
+  std::size_t unwalked = 0;
 };
 
 // Walks Newton from the starts (the tracker keeps only those whose step is at most kCriticalReach
-// of their edge; in order, skipping one whose predicted critical point is already claimed), keeps the critical points whose
+// of their edge; in order, skipping one whose predicted critical point is already claimed, at
+// most max(4096, a quarter of the mesh's vertices) walks), keeps the critical points whose
 // quadratic model reaches zero within kThinWaist edges (the thin ones, which fronts can step
 // over), and tests each, thinnest first, for the side of the mesh it lies on (MeshSides). The
 // mesh must be closed (the tracker's checks come first).
