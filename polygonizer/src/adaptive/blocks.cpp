@@ -1285,6 +1285,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
           } catch (...) {
           }
       if (kinked < nblocks) {
+        settings.cancel.check("adaptive");  // the caller's cancel, in a block after the kink, wins too
         for (std::size_t blk = kinked + 1; blk < nblocks; ++blk)
           if (parts[blk].error) try {
               std::rethrow_exception(parts[blk].error);
