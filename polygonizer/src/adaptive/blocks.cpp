@@ -1009,12 +1009,13 @@ std::vector<std::vector<int>> block_cycles(const std::vector<SeamDart>& darts) {
   return cycles;
 }
 
-// Whether `error` is a black box's kink (BlackBoxKinkError).
-bool is_kink(const std::exception_ptr& error) {
+// Whether `error` holds an E (a block's kink, BlackBoxKinkError; a stop, CancelledError).
+template <class E>
+bool holds(const std::exception_ptr& error) {
   if (!error) return false;
   try {
     std::rethrow_exception(error);
-  } catch (const BlackBoxKinkError&) {
+  } catch (const E&) {
     return true;
   } catch (...) {
     return false;
@@ -1215,7 +1216,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       // Block blk run here (on any thread: each its own slot, and cancel() is one atomic store).
       const auto run_here = [&](const Field& on, std::size_t blk) {
         parts[blk] = run_block(on, block_task(blk));
-        if (is_kink(parts[blk].error))
+        if (holds<BlackBoxKinkError>(parts[blk].error))
           for (std::size_t later = blk + 1; later < nblocks; ++later) stops[later].cancel();
       };
       {
@@ -1269,7 +1270,7 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       // every run; those after it may have been stopped anywhere (`stops`) and count for nothing.
       std::size_t kinked = nblocks;
       for (std::size_t blk = 0; blk < nblocks && kinked == nblocks; ++blk)
-        if (is_kink(parts[blk].error)) kinked = blk;
+        if (holds<BlackBoxKinkError>(parts[blk].error)) kinked = blk;
       const std::size_t counted = std::min(nblocks, kinked + 1);
       // Every counted block's tightest bend, whether its mesh is kept or not (a kink's place among them).
       for (std::size_t blk = 0; blk < counted; ++blk)
@@ -1278,21 +1279,10 @@ BlockMeshing mesh_blocks(const Field& field, const AdaptiveOptions& options, con
       // get past it: the run ends, its tightest bend the kink's), then the first failing block in
       // block order (not in time), so that the outcome is the same on any thread count.
       for (std::size_t blk = 0; blk < counted; ++blk)
-        if (parts[blk].error) try {
-            std::rethrow_exception(parts[blk].error);
-          } catch (const CancelledError&) {
-            throw;
-          } catch (...) {
-          }
+        if (holds<CancelledError>(parts[blk].error)) std::rethrow_exception(parts[blk].error);
       if (kinked < nblocks) {
         settings.cancel.check("adaptive");  // the caller's cancel, in a block after the kink, wins too
-        for (std::size_t blk = kinked + 1; blk < nblocks; ++blk)
-          if (parts[blk].error) try {
-              std::rethrow_exception(parts[blk].error);
-            } catch (const CancelledError&) {
-              ++out.stopped;
-            } catch (...) {
-            }
+        for (std::size_t blk = kinked + 1; blk < nblocks; ++blk) out.stopped += holds<CancelledError>(parts[blk].error);
         out.kink = parts[kinked].error;
         std::rethrow_exception(out.kink);
       }
