@@ -6,7 +6,10 @@
 // the neck then lies on the wrong side of the mesh: outside it where F < 0 (a cut neck), inside
 // where F > 0 (a closed tunnel). A mesh with the neck has its core inside the tube it makes, so
 // the test below does not fire on a correct mesh whose distance to the surface is below the
-// neck's radius.
+// neck's radius. A front that capped the neck at its waist leaves the core on the cap, its side
+// decided by rounding; there the mesh crosses the neck's axis twice (a cap on each side) where
+// the field says the solid (or the tunnel's void) runs on, which a correct mesh never does: the
+// axis lies inside the tube its vertices ring.
 #pragma once
 
 #include <cdp/core/field.h>
@@ -52,6 +55,7 @@ struct NeckSearch {
   std::size_t walks = 0;            // Newton walks started (bounded: missed_necks.cpp)
   std::size_t critical_points = 0;  // distinct critical points they reached
   std::size_t tested = 0;           // thin enough to test against the mesh
+  std::size_t capped = 0;           // of missed: the core's side right or undecided, two sheets across its axis
   // Starts left unwalked once the walks reached their bound (their predicted critical point not
   // claimed by a walk before them): necks there, if any, were not looked for.
   std::size_t unwalked = 0;
@@ -61,8 +65,9 @@ struct NeckSearch {
 // of their edge; in order, skipping one whose predicted critical point is already claimed, at
 // most max(4096, a quarter of the mesh's vertices) walks), keeps the critical points whose
 // quadratic model reaches zero within kThinWaist edges (the thin ones, which fronts can step
-// over), and tests each, thinnest first, for the side of the mesh it lies on (MeshSides). The
-// mesh must be closed (the tracker's checks come first).
+// over), and tests each, thinnest first, for the side of the mesh it lies on (MeshSides) and, when
+// that side is right or undecided, for two sheets of the mesh across its axis (missed_necks.cpp,
+// kAxisReach). The mesh must be closed (the tracker's checks come first).
 NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<const CriticalStart> starts);
 
 // Which side of a closed mesh points lie on: the parity of the triangles a ray from the point
@@ -74,6 +79,9 @@ class MeshSides {
   // Whether p is inside; nothing when the ray passes through an edge or a vertex of the mesh in
   // the projection, or p lies on a triangle (decided neither way).
   std::optional<bool> inside(const Vec3& p) const;
+  // The parameters in [0, 1] at which the segment from a to b crosses the mesh's triangles (a
+  // segment in a triangle's plane crosses it nowhere), in no set order.
+  void crossings(const Vec3& a, const Vec3& b, std::vector<double>& at) const;
 
  private:
   const Mesh& mesh_;
