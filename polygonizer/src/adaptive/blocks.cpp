@@ -113,7 +113,8 @@ constexpr int kRootBisections = 60;
 // sign (both ends' slopes head for zero and their tangents reach it inside): the surface may
 // cross the edge twice between them. The crowd of 200 Wyvill blobs at factor 3 crosses one edge
 // at y = 0.0237 and 0.0507, between samples 0.041 apart, and each layout failed on the seam that
-// reached it with no corner there. 2^-8 of a spacing is 1/1024 of a seed cell.
+// reached it with no corner there. 2^-8 of a spacing is 1/1024 of a seed cell. A line's halvings
+// are bounded by its samples, so that a field dipping everywhere costs at most twice its lines.
 constexpr int kDipHalvings = 8;
 // Newton steps onto a seam (F = 0 in the cut plane), and their tolerance as a share of the box
 // diagonal (the tracker's projections converge to 1e-10 of it).
@@ -453,9 +454,11 @@ Lines find_corners(const Field& field, const Cuts& cuts, double cell, SeamVertic
           return s * da < 0 && s * db > 0 && std::abs(fa) < -s * da * (b - a) && std::abs(fb) < s * db * (b - a);
         };
         // Halves a dip, in order along the line, and brackets the sign changes it finds.
+        int halvings_left = samples;
         const auto halve = [&](const auto& self, double a, double b, double fa, double fb, double da, double db,
                                int depth) -> void {
-          if (depth == kDipHalvings || !dips(a, b, fa, fb, da, db)) return;
+          if (depth == kDipHalvings || halvings_left == 0 || !dips(a, b, fa, fb, da, db)) return;
+          --halvings_left;
           const double m = 0.5 * (a + b);
           Vec3 g;
           const double fm = field.value_gradient(at(m), g);
