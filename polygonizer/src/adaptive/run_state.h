@@ -81,6 +81,10 @@ class Run {
   QualityReport quality;
   std::size_t components = 0;
   NeckSearch necks;  // of the last attempt
+  // The saddles of the necks earlier attempts stepped over, walked from again after every later
+  // attempt (repair_and_check): the finer edges a rerun puts round a neck can leave no vertex near
+  // enough to predict it, and the neck then went unseen.
+  std::vector<CriticalStart> necks_missed_before;
   bool careful = false;  // the careful recovery ran
   bool doomed = false;   // no recovery can mend what failed (needs_shorter_edges)
   std::size_t neck_reruns = 0;

@@ -236,5 +236,29 @@ TEST(SdfCrowd, TwoHundredBlobsJoinedByANarrowNeckMeshWithMinEdgeLowered) {
   EXPECT_GE(r.stats.adaptive->min_angle_degrees, 20.0);
 }
 
+TEST(SdfNecks, ANeckAnEarlierAttemptSteppedOverIsLookedForAgainAfterTheLast) {
+  // cdp.sdf's sphere(1, (-1.049995, 0, 0)) | sphere(1, (1.049995, 0, 0)).k(0.2): the smooth union
+  // makes a neck 0.0065 wide at the origin (F = -5e-6), narrower than min_edge (0.014) at chord
+  // 1e-2. Three runs step over it and the neck search finds it each time. The careful run after
+  // them, with edges of min_edge round it, placed no vertex whose Newton step to the saddle was
+  // within 3 of its edges, so nothing was walked, and its mesh of two balls came out with exit 0.
+  // The saddles found before are walked from again after every attempt: a clear error.
+  const auto field = test::field_from_json(R"J({"type": "expression",
+      "value": "_d1 + (_d0 - _d1)*_h0 - 0.2*_h0*(1 - _h0)",
+      "define": {"_d0": "hypot((x + 1.049995), y, z) - 1.0", "_d1": "hypot((x - 1.049995), y, z) - 1.0",
+                 "_h0": "clamp(0.5 + (_d1 - _d0)*2.5, 0, 1)"},
+      "bounds": [[-2.699994, -1.649999, -1.649999], [2.699994, 1.649999, 1.649999]]})J");
+  AdaptiveOptions o;
+  o.sizing = SizingMode::Chord;
+  o.tolerance = 1e-2;
+  try {
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    ADD_FAILURE() << "meshed with " << analyze_topology(r.mesh).components << " components";
+  } catch (const NoSurfaceError& e) {
+    EXPECT_NE(std::string(e.what()).find("cuts a neck of the solid"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("narrower than min_edge"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace cdp
