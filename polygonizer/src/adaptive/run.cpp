@@ -180,8 +180,8 @@ std::size_t Run::repair_and_check() {
   // The smooth union of two unit balls 0.09999 apart (k = 0.2, a neck 0.0065 wide) at chord 1e-2
   // was found three times; the careful run after them, with edges of min_edge (0.014) round the
   // neck, placed no vertex within kCriticalReach of its edges of it, cut the neck again and ended
-  // with two components and exit 0.
-  starts.insert(starts.end(), necks_missed_before.begin(), necks_missed_before.end());
+  // with two components and exit 0. First, so that the bound on the walks never leaves them out.
+  starts.insert(starts.begin(), necks_missed_before.begin(), necks_missed_before.end());
   try {
     check_necks(ctx.field, mesh(), starts, resolved.sizing.min_edge, necks);
   } catch (const MissedNeckError&) {
