@@ -441,6 +441,10 @@ Lines find_corners(const Field& field, const Cuts& cuts, double cell, SeamVertic
         for (int k = 0; k <= samples; ++k) points[static_cast<std::size_t>(k)] = at(box.min[along] + step * k);
         field.values_gradients(points.data(), values.data(), gradients.data(), points.size());
         const std::size_t line = static_cast<std::size_t>(i) * (nq + 1) + j;
+        const auto finite_at = [&](double v, double t) {
+          if (!std::isfinite(v))
+            throw CreaseLayoutError("adaptive: the field is not finite on a block's edge near " + format_point(at(t)));
+        };
         const auto bracket = [&](double lo, double hi, double flo) {
           if (!interior_i || !interior_j)
             throw CreaseLayoutError("adaptive: the surface reaches the box's side near " + format_point(at(lo)));
@@ -462,8 +466,7 @@ Lines find_corners(const Field& field, const Cuts& cuts, double cell, SeamVertic
           const double m = 0.5 * (a + b);
           Vec3 g;
           const double fm = field.value_gradient(at(m), g);
-          if (!std::isfinite(fm))
-            throw CreaseLayoutError("adaptive: the field is not finite on a block's edge near " + format_point(at(m)));
+          finite_at(fm, m);
           const double dm = g[along];
           if ((fm < 0) != (fa < 0)) {
             bracket(a, m, fa);
@@ -476,8 +479,8 @@ Lines find_corners(const Field& field, const Cuts& cuts, double cell, SeamVertic
         for (int k = 0; k < samples; ++k) {
           const double lo = box.min[along] + step * k;
           const double flo = values[static_cast<std::size_t>(k)], fhi = values[static_cast<std::size_t>(k) + 1];
-          if (!std::isfinite(flo) || !std::isfinite(fhi))
-            throw CreaseLayoutError("adaptive: the field is not finite on a block's edge near " + format_point(at(lo)));
+          finite_at(flo, lo);
+          finite_at(fhi, lo);
           if ((flo < 0) != (fhi < 0)) {
             bracket(lo, lo + step, flo);
             continue;

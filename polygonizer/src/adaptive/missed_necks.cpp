@@ -165,6 +165,57 @@ void MeshSides::crossings(const Vec3& a, const Vec3& b, std::vector<double>& at)
   });
 }
 
+namespace {
+
+// Whether a thin core c, its side of the mesh right or undecided, has two sheets of the mesh
+// across its axis where the field says the neck's solid (or the tunnel's void) runs on, and the
+// surface rings it: a neck a front capped at its waist. `at` is scratch for the crossings.
+bool capped_at_waist(const Field& field, const MeshSides& sides, const Critical& c, std::vector<double>& at) {
+  if (c.axis.isZero()) return false;
+  const double reach = kAxisReach * c.edge;
+  sides.crossings(c.point - reach * c.axis, c.point + reach * c.axis, at);
+  if (at.size() < 2) return false;  // the common case, decided without evaluating F
+  // Where the field keeps its sign and |F| grows from the core, on each side: the solid (or the
+  // void) of the neck runs on there, and the surface is a radius away or more.
+  const double step = std::max(c.radius / 2, reach / kAxisSamples);
+  double extent[2] = {0, 0};
+  for (int side = 0; side < 2; ++side) {
+    const Vec3 dir = side == 0 ? Vec3(-c.axis) : c.axis;
+    double last = std::abs(c.value);
+    for (int k = 1; k <= kAxisSamples; ++k) {
+      const double s = std::min(reach, k * step);
+      const double v = field.value(c.point + s * dir);
+      if (!(v * c.value > 0) || std::abs(v) < last) break;
+      last = std::abs(v);
+      extent[side] = s;
+      if (s == reach) break;
+    }
+  }
+  // Crossings in [-extent[0], extent[1]], one where the segment passes through an edge or a
+  // vertex and both its triangles report it.
+  std::sort(at.begin(), at.end());
+  int within = 0;
+  double previous = -std::numeric_limits<double>::infinity();
+  for (double t : at) {
+    const double s = (2 * t - 1) * reach;
+    if (s < -extent[0] || s > extent[1]) continue;
+    if (s - previous > kSameCrossing * reach) ++within;
+    previous = s;
+  }
+  if (within < 2) return false;
+  // And a neck, not the near side of a surface: the field changes sign within kAcrossReach
+  // radii of the core in the four directions across the axis, as round a tube.
+  const auto changes_sign = [&](const Vec3& dir) {
+    for (int k = 1; k <= kAcrossSamples; ++k)
+      if (!(field.value(c.point + (k * kAcrossReach * c.radius / kAcrossSamples) * dir) * c.value > 0)) return true;
+    return false;
+  };
+  return changes_sign(c.across[0]) && changes_sign(-c.across[0]) && changes_sign(c.across[1]) &&
+         changes_sign(-c.across[1]);
+}
+
+}  // namespace
+
 NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<const CriticalStart> starts) {
   NeckSearch out;
   if (starts.empty() || mesh.triangles.empty()) return out;
@@ -254,48 +305,7 @@ NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<con
       out.missed.push_back({c->point, c->value, 2 * c->radius, c->edge});
       continue;
     }
-    if (c->axis.isZero()) continue;
-    const double reach = kAxisReach * c->edge;
-    sides.crossings(c->point - reach * c->axis, c->point + reach * c->axis, at);
-    if (at.size() < 2) continue;  // the common case, decided without evaluating F
-    // Where the field keeps its sign and |F| grows from the core, on each side: the solid (or the
-    // void) of the neck runs on there, and the surface is a radius away or more.
-    const double step = std::max(c->radius / 2, reach / kAxisSamples);
-    double extent[2] = {0, 0};
-    for (int side = 0; side < 2; ++side) {
-      const Vec3 dir = side == 0 ? Vec3(-c->axis) : c->axis;
-      double last = std::abs(c->value);
-      for (int k = 1; k <= kAxisSamples; ++k) {
-        const double s = std::min(reach, k * step);
-        const double v = field.value(c->point + s * dir);
-        if (!(v * c->value > 0) || std::abs(v) < last) break;
-        last = std::abs(v);
-        extent[side] = s;
-        if (s == reach) break;
-      }
-    }
-    // Crossings in [-extent[0], extent[1]], one where the segment passes through an edge or a
-    // vertex and both its triangles report it.
-    std::sort(at.begin(), at.end());
-    int within = 0;
-    double previous = -std::numeric_limits<double>::infinity();
-    for (double t : at) {
-      const double s = (2 * t - 1) * reach;
-      if (s < -extent[0] || s > extent[1]) continue;
-      if (s - previous > kSameCrossing * reach) ++within;
-      previous = s;
-    }
-    if (within < 2) continue;
-    // And a neck, not the near side of a surface: the field changes sign within kAcrossReach
-    // radii of the core in the four directions across the axis, as round a tube.
-    const auto changes_sign = [&](const Vec3& dir) {
-      for (int k = 1; k <= kAcrossSamples; ++k)
-        if (!(field.value(c->point + (k * kAcrossReach * c->radius / kAcrossSamples) * dir) * c->value > 0)) return true;
-      return false;
-    };
-    if (!changes_sign(c->across[0]) || !changes_sign(-c->across[0]) || !changes_sign(c->across[1]) ||
-        !changes_sign(-c->across[1]))
-      continue;
+    if (!capped_at_waist(field, sides, *c, at)) continue;
     ++out.capped;
     out.missed.push_back({c->point, c->value, 2 * c->radius, c->edge});
   }
