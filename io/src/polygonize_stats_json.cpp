@@ -153,7 +153,8 @@ void add_adaptive(nlohmann::json& j, const AdaptiveReport& r) {
                 {"critical_points", r.necks.critical_points},
                 {"tested", r.necks.tested},
                 {"reruns", r.necks.reruns},
-                {"unwalked", r.necks.unwalked}};
+                {"unwalked", r.necks.unwalked},
+                {"caps", r.necks.caps}};
   add_recoveries(j, r.recoveries);
   nlohmann::json& phases = j["phases"];
   for (std::size_t i = 0; i < kAdaptivePhases.size(); ++i) {

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace cdp::adaptive {
 
@@ -50,6 +51,34 @@ constexpr double kSameCrossing = 1e-9;
 // MPU model's surface: 1-1.5 radii three ways, never the fourth), sampled this many times.
 constexpr double kAcrossReach = 4;
 constexpr int kAcrossSamples = 16;
+// A cap: a triangle whose normal turns more than this from one of its corners' normals, a front
+// closed across a tube narrower than its edges (cdp.sdf's torus with a hole 0.01 wide, whose
+// core is a kink of the distance: closed at factor 2 by 13 such triangles, turned up to 116
+// degrees). The smooth meshes tried (a sphere, a capsule, a rounded box, tori whose hole is 0.02
+// and 0.05 wide, factors 2-8) have none; the tube 0.01 wide meshed right at factor 3 has 19, an
+// edge spanning a quarter of its girth, which the side test then clears.
+constexpr double kCapTurnDegrees = 60;
+// F is sampled this many times on each stretch of a cap's normal between two crossings of the
+// mesh (the stretch on one side of the mesh throughout).
+constexpr int kCapSamples = 8;
+// Steps up the field from a sample the mesh puts on the wrong side to the core it lies near
+// (climb_to_core): halvings included, enough to reach the axis of a tube from its wall within a
+// thousandth of its radius.
+constexpr int kClimbSteps = 16;
+// The widest core a cap is taken to close over, in its longest edges: the tunnels of cdp.sdf's
+// tori that fronts closed were 0.4-0.9 of their caps' edges wide; at factor 1, where a cap's
+// normal passed 0.28-0.37 deep into a tube 1 wide that the coarse mesh cut into, 1.5-2.6.
+constexpr double kCapWidth = 1.2;
+// A tube's solid or void runs on at least this many of its radii from the core both ways along
+// its axis (tube_axis); the wedge cut off a cube's corner, 1.7 one way.
+constexpr double kRunsOn = 2;
+// Steps of its radius a core is walked along its axis each way, looking for the caps or the end of
+// its tube (ends_along_core).
+constexpr int kCoreSteps = 64;
+// Directions across a cap's core in which the surface must ring it (ringed_all_round).
+constexpr int kRoundDirections = 12;
+// The climb stops where the gradient has less than this share of its length across the axis.
+constexpr double kFlatAcross = 1e-3;
 
 struct Critical {
   Vec3 point;
@@ -167,6 +196,84 @@ void MeshSides::crossings(const Vec3& a, const Vec3& b, std::vector<double>& at)
 
 namespace {
 
+// Whether the surface rings a core (F = value there): F changes sign within kAcrossReach radii
+// of it in the four directions across its axis, as round a tube, not on one side only as under
+// the near side of a surface.
+bool ringed(const Field& field, const Vec3& core, double value, double radius, const std::array<Vec3, 2>& across) {
+  const auto changes_sign = [&](const Vec3& dir) {
+    for (int k = 1; k <= kAcrossSamples; ++k)
+      if (!(field.value(core + (k * kAcrossReach * radius / kAcrossSamples) * dir) * value > 0)) return true;
+    return false;
+  };
+  return changes_sign(across[0]) && changes_sign(-across[0]) && changes_sign(across[1]) && changes_sign(-across[1]);
+}
+
+// How far F keeps its sign from a core both ways along `dir` (unit), the lesser of the two, in
+// steps of a kAcrossSamples-th of kAcrossReach radii up to kAcrossReach radii.
+double run_both_ways(const Field& field, const Vec3& core, double value, double radius, const Vec3& dir) {
+  const double step = kAcrossReach * radius / kAcrossSamples;
+  int least = kAcrossSamples;
+  for (const double side : {-1.0, 1.0})
+    for (int k = 1; k <= least; ++k)
+      if (!(field.value(core + (side * k * step) * dir) * value > 0)) {
+        least = k - 1;
+        break;
+      }
+  return least * step;
+}
+
+// The axis of a tube round a core found without a Hessian's word on it (a distance field's kink):
+// of the cap's normal and the 13 directions of a cube's neighbours (no axis more than about 20
+// degrees from one of them), the one along which F keeps its sign farthest both ways; nothing
+// when that is under kRunsOn radii. The solid of a neck and the void of a tunnel run on from
+// the waist both ways; the wedge a chord cuts off a corner of the solid, which the corner's faces
+// ring too, ends at the corner, under 2 radii from its core one way.
+std::optional<Vec3> tube_axis(const Field& field, const Vec3& core, double value, double radius, const Vec3& normal) {
+  Vec3 best = normal;
+  double longest = run_both_ways(field, core, value, radius, normal);
+  for (int i = -1; i <= 1; ++i)
+    for (int j = -1; j <= 1; ++j)
+      for (int k = -1; k <= 1; ++k) {
+        const Vec3 d(i, j, k);
+        // one of each antipodal pair: the first nonzero coordinate positive
+        if (d.isZero() || (i < 0 || (i == 0 && (j < 0 || (j == 0 && k < 0))))) continue;
+        const Vec3 dir = d.normalized();
+        const double run = run_both_ways(field, core, value, radius, dir);
+        if (run > longest) longest = run, best = dir;
+      }
+  if (longest < kRunsOn * radius) return std::nullopt;
+  return best;
+}
+
+// Whether the surface rings a core all round the axis `along` (unit) with no wall of the mesh
+// between: F changes sign within kAcrossReach radii in each of kRoundDirections directions across
+// it, and the segment from the core to where it does crosses no triangle. Four directions suffice
+// where the Hessian says the core is a tube's (one eigenvalue along, two across); a core found
+// without one may lie in a plate (a thin shell's solid, a wedge a chord cut off a crease), whose
+// plane any direction tilted more than 15 degrees from it leaves within 4 radii, but not the
+// one direction in it, which 12 directions 15 degrees apart come within 7.5 degrees of. And a
+// tube narrower than the edges meshed as one can leave its core outside the mesh's own thinner
+// tube (the ellipsoid 5 x 0.05 x 0.05 at tolerance 1e-2, near its tips), whose walls lie between
+// the core and the surface one way or another; a neck cut or a tunnel closed has none there.
+bool ringed_all_round(const Field& field, const MeshSides& sides, const Vec3& core, double value, double radius,
+                      const Vec3& along, std::vector<double>& at) {
+  const Vec3 off = std::abs(along.x()) < 0.6 ? Vec3::UnitX() : Vec3::UnitY();
+  const Vec3 u = along.cross(off).normalized(), w = along.cross(u);
+  for (int d = 0; d < kRoundDirections; ++d) {
+    const double angle = 2 * std::numbers::pi * d / kRoundDirections;
+    const Vec3 dir = std::cos(angle) * u + std::sin(angle) * w;
+    double wall = 0;
+    for (int k = 1; k <= kAcrossSamples && wall == 0; ++k) {
+      const double s = k * kAcrossReach * radius / kAcrossSamples;
+      if (!(field.value(core + s * dir) * value > 0)) wall = s;
+    }
+    if (wall == 0) return false;
+    sides.crossings(core, core + wall * dir, at);
+    if (!at.empty()) return false;
+  }
+  return true;
+}
+
 // Whether a thin core c, its side of the mesh right or undecided, has two sheets of the mesh
 // across its axis where the field says the neck's solid (or the tunnel's void) runs on, and the
 // surface rings it: a neck a front capped at its waist. `at` is scratch for the crossings.
@@ -203,29 +310,147 @@ bool capped_at_waist(const Field& field, const MeshSides& sides, const Critical&
     previous = s;
   }
   if (within < 2) return false;
-  // And a neck, not the near side of a surface: the field changes sign within kAcrossReach
-  // radii of the core in the four directions across the axis, as round a tube.
-  const auto changes_sign = [&](const Vec3& dir) {
-    for (int k = 1; k <= kAcrossSamples; ++k)
-      if (!(field.value(c.point + (k * kAcrossReach * c.radius / kAcrossSamples) * dir) * c.value > 0)) return true;
-    return false;
-  };
-  return changes_sign(c.across[0]) && changes_sign(-c.across[0]) && changes_sign(c.across[1]) &&
-         changes_sign(-c.across[1]);
+  // And a neck, not the near side of a surface.
+  return ringed(field, c.point, c.value, c.radius, c.across);
+}
+
+Vec3 triangle_middle(const Mesh& mesh, std::size_t f) {
+  const auto& t = mesh.triangles[f];
+  return (mesh.positions[static_cast<std::size_t>(t[0])] + mesh.positions[static_cast<std::size_t>(t[1])] +
+          mesh.positions[static_cast<std::size_t>(t[2])]) /
+         3;
+}
+
+// The longest edge and the unit normal of triangle f, and whether the normal turns more than
+// kCapTurnDegrees from one of its corners' normals (the corner normals of a crease's vertex where
+// the mesh has them, so that a crease is no cap; else the vertex normals, which must be there).
+bool is_cap(const Mesh& mesh, std::size_t f, Vec3& normal, double& edge) {
+  static const double cos_turn = std::cos(kCapTurnDegrees * std::numbers::pi / 180);
+  const auto& t = mesh.triangles[f];
+  const Vec3& a = mesh.positions[static_cast<std::size_t>(t[0])];
+  const Vec3& b = mesh.positions[static_cast<std::size_t>(t[1])];
+  const Vec3& c = mesh.positions[static_cast<std::size_t>(t[2])];
+  const Vec3 n = (b - a).cross(c - a);
+  const double length = n.norm();
+  if (!(length > 0) || !std::isfinite(length)) return false;
+  normal = n / length;
+  edge = std::sqrt(std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}));
+  for (int k = 0; k < 3; ++k) {
+    const Vec3& corner = mesh.corner_normals.size() == mesh.triangles.size()
+                             ? mesh.corner_normals[f][static_cast<std::size_t>(k)]
+                             : mesh.normals[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])];
+    if (!corner.isZero() && corner.dot(normal) < cos_turn * corner.norm()) return true;
+  }
+  return false;
+}
+
+// Climbs from p (F = value there, not zero) across the axis `along` (unit) to where |F| peaks in
+// the plane through p normal to it, at most kClimbSteps steps and within `reach` of p, and returns
+// the distance to the surface there, |F| / |grad F|. Across only: along a tunnel's axis |F| grows
+// without bound as the tunnel widens.
+double climb_to_core(const Field& field, const Vec3& along, double reach, Vec3& p, double& value) {
+  const Vec3 start = p;
+  Vec3 g;
+  value = field.value_gradient(p, g);
+  double step = std::abs(value) / g.norm();
+  for (int k = 0; k < kClimbSteps && std::isfinite(step) && step > 0; ++k) {
+    const Vec3 across = g - g.dot(along) * along;
+    if (!(across.norm() > kFlatAcross * g.norm())) break;  // at the core's kink or a smooth core
+    const Vec3 q = p + (value > 0 ? step : -step) * across.normalized();
+    Vec3 gq;
+    const double vq = (q - start).norm() <= reach ? field.value_gradient(q, gq) : 0;
+    if (std::isfinite(vq) && vq * value > 0 && std::abs(vq) > std::abs(value) && gq.allFinite() && gq.norm() > 0) {
+      p = q, value = vq, g = gq;
+      step = std::abs(value) / g.norm();
+    } else {
+      step /= 2;
+    }
+  }
+  return std::abs(value) / g.norm();
+}
+
+// Whether the tube round a core ends before the mesh crosses it, one way or the other along its
+// axis: walked from the core in steps of its radius, each step's end climbed back to the core
+// across the way it went (climb_to_core), at most kCoreSteps steps a way, until F changes sign
+// there (the end) or the step crosses the mesh (a cap). A neck cut or a tunnel closed has caps
+// both ways (or runs on past the walk); a needle's tip that the chords cut off ends one way
+// (the ellipsoid 5 x 0.05 x 0.05 at tolerance 1e-2: 4.4 radii from the core).
+bool ends_along_core(const Field& field, const MeshSides& sides, const Vec3& core, double value, double radius,
+                     const Vec3& axis, std::vector<double>& at) {
+  for (const double side : {-1.0, 1.0}) {
+    Vec3 p = core, dir = side * axis;
+    double r = radius;
+    for (int k = 0; k < kCoreSteps; ++k) {
+      Vec3 q = p + r * dir;
+      double v = field.value(q);
+      if (!(v * value > 0)) return true;
+      const double next = climb_to_core(field, dir, r, q, v);
+      sides.crossings(p, q, at);
+      if (!at.empty()) break;  // a cap this way
+      if (!((q - p).norm() > 0) || !(next > 0) || !std::isfinite(next)) break;
+      dir = (q - p).normalized();
+      p = q, r = next;
+    }
+  }
+  return false;
+}
+
+// Looks along a cap's normal, kAxisReach of its longest edge either way, for a stretch between
+// two crossings of the mesh where F's sign disagrees with the mesh's side (solid the mesh leaves
+// outside, or void it encloses) at a point the surface rings: the core of a neck cut or a tunnel
+// closed there, F's kink or not. `at` is scratch for the crossings.
+std::optional<MissedNeck> along_cap(const Field& field, const MeshSides& sides, const Mesh& mesh, std::size_t f,
+                                    const Vec3& normal, double edge, std::vector<double>& at) {
+  const Vec3 middle = triangle_middle(mesh, f);
+  const double reach = kAxisReach * edge;
+  const Vec3 from = middle - reach * normal, to = middle + reach * normal;
+  sides.crossings(from, to, at);
+  at.push_back(0);
+  at.push_back(1);
+  std::sort(at.begin(), at.end());
+  for (std::size_t i = 0; i + 1 < at.size(); ++i) {
+    const double t0 = at[i], t1 = at[i + 1];
+    if (t1 - t0 <= kSameCrossing) continue;  // an edge both its triangles report
+    const auto inside = sides.inside(from + ((t0 + t1) / 2) * (to - from));
+    if (!inside) continue;
+    // The sample that disagrees most: F of the sign the mesh's side denies, largest in magnitude.
+    Vec3 core = Vec3::Zero();
+    double value = 0;
+    for (int k = 0; k < kCapSamples; ++k) {
+      const Vec3 p = from + (t0 + (k + 0.5) / kCapSamples * (t1 - t0)) * (to - from);
+      const double v = field.value(p);
+      if (std::isfinite(v) && (*inside ? v > 0 : v < 0) && std::abs(v) > std::abs(value)) core = p, value = v;
+    }
+    if (value == 0) continue;
+    // Up the field to the core, across the cap's normal: a sample off the axis of a tube narrower
+    // than the cap's edges lies closer to one wall than to the other, where the ring below would
+    // not see the far wall; the core does.
+    double radius = climb_to_core(field, normal, reach, core, value);
+    // A tube a front can close over is narrower than its edges (a coarse mesh that cuts deep into
+    // a wide one is no neck it stepped over), and its core stays on the side the mesh denies.
+    if (!(radius > 0) || !(2 * radius <= kCapWidth * edge)) continue;
+    if (sides.inside(core) != inside) continue;
+    const auto axis = tube_axis(field, core, value, radius, normal);
+    if (axis && ringed_all_round(field, sides, core, value, radius, *axis, at) &&
+        !ends_along_core(field, sides, core, value, radius, *axis, at))
+      return MissedNeck{core, value, 2 * radius, edge, true};
+  }
+  return std::nullopt;
 }
 
 }  // namespace
 
-NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<const CriticalStart> starts) {
-  NeckSearch out;
-  if (starts.empty() || mesh.triangles.empty()) return out;
+namespace {
+
+// Newton's walks from the starts to the critical points of F (find_missed_necks' first part).
+void walk_to_critical_points(const Field& field, std::span<const CriticalStart> starts, std::size_t max_walks,
+                             NeckSearch& out, std::vector<Critical>& found) {
   double mean_edge = 0;
   for (const CriticalStart& s : starts) mean_edge += s.edge;
   mean_edge /= static_cast<double>(starts.size());
-  if (!(mean_edge > 0) || !std::isfinite(mean_edge)) return out;
+  if (!(mean_edge > 0) || !std::isfinite(mean_edge)) return;
   SpatialHash claimed(mean_edge);
   std::vector<Vec3> targets;
-  std::vector<Critical> found;
   const auto near_claimed = [&](const Vec3& q, double r) {
     bool hit = false;
     claimed.for_each_near(q, r, [&](int id) {
@@ -238,7 +463,6 @@ NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<con
     targets.push_back(q);
   };
 
-  const std::size_t max_walks = std::max(kMinNeckWalks, mesh.positions.size() / kVerticesPerWalk);
   for (const CriticalStart& start : starts) {
     const Vec3 predicted = start.point + start.step;
     if (near_claimed(predicted, kSameTarget * start.step.norm())) continue;
@@ -289,13 +513,34 @@ NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<con
     if (along != 1 || across != 2) c.axis = Vec3::Zero();
     found.push_back(c);
   }
+}
+
+}  // namespace
+
+NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<const CriticalStart> starts) {
+  NeckSearch out;
+  if (mesh.triangles.empty()) return out;
+  const std::size_t max_walks = std::max(kMinNeckWalks, mesh.positions.size() / kVerticesPerWalk);
+  std::vector<Critical> found;
+  if (!starts.empty()) walk_to_critical_points(field, starts, max_walks, out, found);
   out.critical_points = found.size();
 
   std::vector<const Critical*> thin;
   for (const Critical& c : found)
     if (c.radius <= kThinWaist * c.edge) thin.push_back(&c);
   std::stable_sort(thin.begin(), thin.end(), [](const Critical* a, const Critical* b) { return a->radius < b->radius; });
-  if (thin.empty()) return out;
+  struct Cap {
+    std::size_t triangle;
+    Vec3 normal;
+    double edge;
+  };
+  std::vector<Cap> caps;
+  if (mesh.normals.size() == mesh.positions.size() || mesh.corner_normals.size() == mesh.triangles.size())
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+      Cap cap{f, Vec3::Zero(), 0};
+      if (is_cap(mesh, f, cap.normal, cap.edge)) caps.push_back(cap);
+    }
+  if (thin.empty() && caps.empty()) return out;
   const MeshSides sides(mesh);
   std::vector<double> at;
   for (const Critical* c : thin) {
@@ -309,7 +554,26 @@ NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<con
     ++out.capped;
     out.missed.push_back({c->point, c->value, 2 * c->radius, c->edge});
   }
+  // The caps only where no saddle was found missed: one is enough to fail the mesh, and a cap near
+  // a saddle found is the front that stepped over it.
+  if (!out.missed.empty()) return out;
+  for (const Cap& cap : caps) {
+    // A cap within its edge of a core found is one of the front's caps over the same tube.
+    const Vec3 middle = triangle_middle(mesh, cap.triangle);
+    if (std::any_of(out.missed.begin(), out.missed.end(),
+                    [&](const MissedNeck& m) { return (m.point - middle).norm() <= cap.edge + m.width; }))
+      continue;
+    if (out.caps == max_walks) {
+      ++out.unwalked;
+      continue;
+    }
+    ++out.caps;
+    if (const auto neck = along_cap(field, sides, mesh, cap.triangle, cap.normal, cap.edge, at)) out.missed.push_back(*neck);
+  }
+  std::stable_sort(out.missed.begin(), out.missed.end(),
+                   [](const MissedNeck& a, const MissedNeck& b) { return a.width < b.width; });
   return out;
 }
+
 
 }  // namespace cdp::adaptive

@@ -9,7 +9,11 @@
 // neck's radius. A front that capped the neck at its waist leaves the core on the cap, its side
 // decided by rounding; there the mesh crosses the neck's axis twice (a cap on each side) where
 // the field says the solid (or the tunnel's void) runs on, which a correct mesh never does: the
-// axis lies inside the tube its vertices ring.
+// axis lies inside the tube its vertices ring. A distance field's thin neck or tunnel has no
+// saddle: its core lies on the medial axis, where F has a kink and grad F does not vanish, so no
+// walk settles there. A front that capped such a tube left triangles across it, whose normal
+// turns from their corners' normals by nearly a right angle; along them the mesh's side of space
+// disagrees with F's sign over a stretch the surface rings (find_missed_necks, kCapTurn).
 #pragma once
 
 #include <cdp/core/field.h>
@@ -47,7 +51,8 @@ struct MissedNeck {
   Vec3 point;
   double value = 0;  // F there: negative for a neck of solid the mesh cuts, positive for a tunnel it closes
   double width = 0;  // twice the radius at which the quadratic model of F there reaches zero
-  double edge = 0;   // the edge length meant at the vertex that found it
+  double edge = 0;   // the edge length meant at the vertex that found it (a cap's longest edge)
+  bool kinked = false;  // found along a cap (no saddle: a kink of F, a distance field's medial axis)
 };
 
 struct NeckSearch {
@@ -56,6 +61,7 @@ struct NeckSearch {
   std::size_t critical_points = 0;  // distinct critical points they reached
   std::size_t tested = 0;           // thin enough to test against the mesh
   std::size_t capped = 0;           // of missed: the core's side right or undecided, two sheets across its axis
+  std::size_t caps = 0;             // triangles turned past kCapTurn from a corner's normal, looked along
   // Starts left unwalked once the walks reached their bound (their predicted critical point not
   // claimed by a walk before them): necks there, if any, were not looked for.
   std::size_t unwalked = 0;
@@ -67,7 +73,10 @@ struct NeckSearch {
 // quadratic model reaches zero within kThinWaist edges (the thin ones, which fronts can step
 // over), and tests each, thinnest first, for the side of the mesh it lies on (MeshSides) and, when
 // that side is right or undecided, for two sheets of the mesh across its axis (missed_necks.cpp,
-// kAxisReach). The mesh must be closed (the tracker's checks come first).
+// kAxisReach). Then looks along the triangles whose normal turns more than kCapTurn from one of
+// their corners' normals (caps across a tube; at most as many as the walks' bound) for a stretch
+// where the mesh's side disagrees with F's sign and the surface rings it. The mesh must be closed
+// (the tracker's checks come first).
 NeckSearch find_missed_necks(const Field& field, const Mesh& mesh, std::span<const CriticalStart> starts);
 
 // Which side of a closed mesh points lie on: the parity of the triangles a ray from the point

@@ -125,7 +125,7 @@ void Run::write_stats() {
   r.quality = quality;
   r.quality.repair_below_degrees = kRepairBelowDegrees;
   r.necks = {.walks = necks.walks, .critical_points = necks.critical_points, .tested = necks.tested,
-             .reruns = neck_reruns, .unwalked = necks.unwalked};
+             .reruns = neck_reruns, .unwalked = necks.unwalked, .caps = necks.caps};
   r.recoveries.turn_limited = request.max_turn > 0;
   r.recoveries.look_ahead = request.look_ahead;
   r.recoveries.remeshed_with_rollbacks = tracking.remeshed;

@@ -250,8 +250,10 @@ void check_necks(const Field& field, const Mesh& mesh, std::span<const CriticalS
     const MissedNeck& m = necks.missed.front();
     std::ostringstream msg;
     msg << "adaptive: the mesh " << (m.value < 0 ? "cuts a neck of the solid" : "closes a tunnel") << " about "
-        << m.width << " wide near " << describe_point(m.point) << " (F has a saddle there, F = " << m.value
-        << ", and it lies " << (m.value < 0 ? "outside" : "inside") << " the mesh)"
+        << m.width << " wide near " << describe_point(m.point) << " ("
+        << (m.kinked ? "its core is there, a kink of F with no saddle, as on a distance field's medial axis"
+                     : "F has a saddle there")
+        << ", F = " << m.value << ", and it lies " << (m.value < 0 ? "outside" : "inside") << " the mesh)"
         << (m.width < min_edge ? ", narrower than min_edge (a min_edge under its width lets the edges follow it)" : "")
         << ": a front stepped over it";
     throw MissedNeckError(msg.str());

@@ -161,6 +161,9 @@ struct NeckReport {
   // Starts not walked once the walks reached their bound (a quarter of the mesh's vertices, at
   // least 4096): necks near them were not looked for. 0 on every run of the test suites.
   std::size_t unwalked = 0;
+  // Triangles whose normal turns more than 60 degrees from a corner's (caps across a tube), looked
+  // along for the core of a neck or tunnel with no saddle (a distance field's, on its medial axis).
+  std::size_t caps = 0;
 };
 
 // The runs and recoveries behind the mesh kept (polygonizer/README.md, the tables kRuns and

@@ -1,12 +1,15 @@
 // The search for necks a mesh stepped over (polygonizer/src/adaptive/missed_necks.h): its walks
 // are bounded by the mesh's size, not by a constant a crowd of necks outnumbers, and the starts
 // that bound leaves unwalked are counted; a neck capped at its waist is found though its core lies
-// on the right side of the mesh.
+// on the right side of the mesh; a distance field's neck or tunnel, whose core is a kink and no
+// saddle, is found along the caps across it, and a tip cut off is not taken for one.
 #include <gtest/gtest.h>
 
 #include "common/reference_meshes.h"
 #include "common/test_fields.h"
 #include "src/adaptive/missed_necks.h"
+
+#include <Eigen/Geometry>
 
 #include <cmath>
 #include <numbers>
@@ -80,6 +83,81 @@ TEST(MissedNecks, ANeckCappedAtItsWaistIsFoundByTheTwoSheetsAcrossItsAxisAndTheN
   const NeckSearch near_side = find_missed_necks(*beneath, capped, starts);
   EXPECT_EQ(near_side.tested, 1u);
   EXPECT_TRUE(near_side.missed.empty());
+}
+
+// The mesh's vertex normals as the tracker sets them: F's unit gradient.
+void set_field_normals(const Field& field, Mesh& mesh) {
+  mesh.normals.clear();
+  for (const Vec3& p : mesh.positions) {
+    Vec3 g;
+    field.value_gradient(p, g);
+    mesh.normals.push_back(g.normalized());
+  }
+}
+
+// A ball of radius 0.45 about `center` whose triangles are those of icosphere(4), turned so that
+// one of them has its middle on the x axis: a cap across a rod along x, as a front leaves it.
+Mesh ball_capping_x(const Vec3& center) {
+  Mesh m = icosphere(4);
+  Vec3 nearest = Vec3::Zero();
+  for (const auto& t : m.triangles) {
+    const Vec3 c = (m.positions[static_cast<std::size_t>(t[0])] + m.positions[static_cast<std::size_t>(t[1])] +
+                    m.positions[static_cast<std::size_t>(t[2])]).normalized();
+    if (c.x() > nearest.x()) nearest = c;
+  }
+  const Mat3 turn = Eigen::Quaterniond::FromTwoVectors(nearest, Vec3::UnitX()).toRotationMatrix();
+  for (Vec3& p : m.positions) p = center + 0.45 * (turn * p);
+  return m;
+}
+
+Mesh joined(Mesh a, const Mesh& b) {
+  const int n = static_cast<int>(a.positions.size());
+  a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
+  for (const auto& t : b.triangles) a.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
+  return a;
+}
+
+TEST(MissedNecks, ADistanceFieldsNeckOrTunnelIsFoundAlongTheCapsAcrossItAndATipCutOffIsNot) {
+  // A rod of solid 0.02 wide along x from -0.7 to 0.7, as a distance (a capsule): its core is a
+  // kink of F (grad F has length 1 all round it), no saddle, so no walk settles there and there
+  // are no starts.
+  const auto rod = test::field_from_json(R"J({"type": "expression",
+      "value": "hypot(x - clamp(x, -0.7, 0.7), y, z) - 0.01", "bounds": [[-1, -1, -1], [1, 1, 1]]})J");
+  // Two balls that cut it 0.1 apart, a triangle of each across it: their triangles turn about a
+  // right angle from the rod's normals at their corners (caps).
+  Mesh cut = joined(ball_capping_x(Vec3(-0.5, 0, 0)), ball_capping_x(Vec3(0.5, 0, 0)));
+  set_field_normals(*rod, cut);
+  const NeckSearch found = find_missed_necks(*rod, cut, {});
+  EXPECT_EQ(found.walks, 0u);
+  EXPECT_GT(found.caps, 0u);
+  ASSERT_FALSE(found.missed.empty());
+  EXPECT_TRUE(found.missed[0].kinked);
+  EXPECT_LT(found.missed[0].value, 0);  // a neck of solid cut
+  EXPECT_NEAR(found.missed[0].width, 0.02, 1e-3);
+  EXPECT_LT(std::hypot(found.missed[0].point.y(), found.missed[0].point.z()), 1e-3);
+  EXPECT_LT(std::abs(found.missed[0].point.x()), 0.05 + 1e-9);
+
+  // The same as a tunnel of void in the solid (F > 0 inside it), closed by the one ball that
+  // the mesh encloses it in.
+  const auto tunnel = test::field_from_json(R"J({"type": "expression", "value": "0.01 - hypot(y, z)",
+                                                "bounds": [[-1, -1, -1], [1, 1, 1]]})J");
+  Mesh closed = ball_capping_x(Vec3::Zero());
+  set_field_normals(*tunnel, closed);
+  const NeckSearch shut = find_missed_necks(*tunnel, closed, {});
+  ASSERT_FALSE(shut.missed.empty());
+  EXPECT_TRUE(shut.missed[0].kinked);
+  EXPECT_GT(shut.missed[0].value, 0);
+  EXPECT_NEAR(shut.missed[0].width, 0.02, 1e-3);
+
+  // A rod that ends at x = 0, the ball cutting it off 0.05 before its tip:
+  // the solid outside the mesh ends within the walk along its core, a tip and no neck.
+  const auto capsule = test::field_from_json(R"J({"type": "expression",
+      "value": "hypot(x - clamp(x, -0.7, 0), y, z) - 0.01", "bounds": [[-1, -1, -1], [1, 1, 1]]})J");
+  Mesh tip = ball_capping_x(Vec3(-0.5, 0, 0));
+  set_field_normals(*capsule, tip);
+  const NeckSearch tip_search = find_missed_necks(*capsule, tip, {});
+  EXPECT_GT(tip_search.caps, 0u);
+  EXPECT_TRUE(tip_search.missed.empty());
 }
 
 }  // namespace
