@@ -134,6 +134,7 @@ nlohmann::json quality_json(const QualityReport& q) {
 void add_recoveries(nlohmann::json& j, const RecoveryReport& r) {
   j["min_edge_lowered"] = r.min_edge_lowered;
   j["turn_limited"] = r.turn_limited;
+  j["thin_sheets"] = r.thin_sheets;
   j["look_ahead"] = r.look_ahead;
   j["quality_rerun"] = r.quality_rerun;
   j["quality_rerun_kept"] = r.quality_rerun_kept;

@@ -51,12 +51,12 @@ namespace {
 // adaptive::remeshing_allowed (Variant::Improved, no bound of the caller's on triangles, steps
 // or searches), and none after a failure that no run made again mends (adaptive::RunFailure::final:
 // a black box's kink, a sampled volume's noise).
-enum class RunKind { AsGiven, LoweredMinEdge, TurnLimited, LookAhead };
+enum class RunKind { AsGiven, LoweredMinEdge, TurnLimited, ThinSheets, LookAhead };
 struct RunRow {
   RunKind kind;
   const char* name;
 };
-constexpr std::array<RunRow, 4> kRuns{{
+constexpr std::array<RunRow, 5> kRuns{{
     {RunKind::AsGiven, "as_given"},
     // min_edge lowered to kBendEdgeShare of the tightest bend the first run met, where it failed
     // at a bend tighter than min_edge (adaptive::lowered_min_edge, resolve_settings.h); stats
@@ -65,6 +65,12 @@ constexpr std::array<RunRow, 4> kRuns{{
     // Tolerance mode: every edge turning the normal by at most kTurnLimit from the start, at the
     // lowered min_edge where there is one; stats "turn_limited".
     {RunKind::TurnLimited, "turn_limited"},
+    // Where the first run's fronts ran over finished mesh because two sheets of the surface lie
+    // closer than its edges (a shell, a plate: Tracker::sheets_closer_than_edges), max_edge
+    // twice their distance and a seed grid fine enough to see both (adaptive::options_for_sheets,
+    // resolve_settings.h); last, so that what meshed before meshes as before. cdp.sdf's sphere
+    // shells 0.01 and 0.02 thick failed at factors 1-3 in 0.2 s; stats "thin_sheets".
+    {RunKind::ThinSheets, "thin_sheets"},
     // A smooth surface's mesh that misses the quality bounds: meshed again with the front
     // look-ahead, the mesh that misses fewer kept (may_rerun_for_quality); stats "quality_rerun".
     {RunKind::LookAhead, "look_ahead"},
@@ -124,15 +130,19 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   std::optional<FirstError> first_error;
   std::optional<double> lowered;
   std::string lowered_error;
+  std::optional<AdaptiveOptions> for_sheets;
+  std::string sheets_error;
   int missed = 0;
   // A run's NoSurfaceError or LimitExceededError (`limit`): whether it ends polygonize_adaptive.
   // The first run's error stands unless a run made again meshes; the lowered run's is quoted.
   const auto failed = [&](const RunRow& row, const adaptive::RunFailure& failure, bool limit, const std::exception& e) {
     if (row.kind == RunKind::LoweredMinEdge) lowered_error = e.what();
+    if (row.kind == RunKind::ThinSheets) sheets_error = e.what();
     if (row.kind != RunKind::AsGiven) return false;
     if (failure.final) return true;
     lowered = adaptive::lowered_min_edge(field, options, failure.tightest.first);
-    if (!lowered && !may_limit_turn) return true;
+    if (failure.sheets_gap) for_sheets = adaptive::options_for_sheets(field, options, *failure.sheets_gap);
+    if (!lowered && !may_limit_turn && !for_sheets) return true;
     first_error = FirstError{limit, e.what()};
     return false;
   };
@@ -152,10 +162,15 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
         if (lowered) again.min_edge = *lowered;
         request.max_turn = kTurnLimit;
         break;
+      case RunKind::ThinSheets:
+        if (kept || !for_sheets) continue;
+        again = *for_sheets;
+        break;
       case RunKind::LookAhead:
         if (!kept || !may_rerun_for_quality(options, *kept) || (missed = missed_bounds(*kept)) == 0) continue;
-        // The same min_edge as the mesh it may replace (lowered when that was needed).
-        if (kept_from != RunKind::AsGiven && lowered) again.min_edge = *lowered;
+        // The same min_edge (lowered when that was needed) or max_edge as the mesh it may replace.
+        if (kept_from == RunKind::ThinSheets) again = *for_sheets;
+        else if (kept_from != RunKind::AsGiven && lowered) again.min_edge = *lowered;
         request.look_ahead = true;
         break;
     }
@@ -171,7 +186,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
         kept->stats.adaptive->recoveries.quality_rerun = true;
         kept->stats.adaptive->recoveries.quality_rerun_kept = keep;
       } else {
-        r.stats.adaptive->recoveries.min_edge_lowered = row.kind != RunKind::AsGiven && lowered.has_value();
+        r.stats.adaptive->recoveries.min_edge_lowered =
+            row.kind != RunKind::AsGiven && row.kind != RunKind::ThinSheets && lowered.has_value();
+        r.stats.adaptive->recoveries.thin_sheets = row.kind == RunKind::ThinSheets;
         kept = std::move(r);
         kept_from = row.kind;
       }
@@ -192,6 +209,9 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       retries << " (meshed again with min_edge " << *lowered << ", which failed too: " << lowered_error << turn << ")";
     else
       retries << turn;
+    if (for_sheets)
+      retries << " (meshed again with max_edge " << for_sheets->max_edge << " and seed_resolution "
+              << for_sheets->seed_resolution << ", which failed too: " << sheets_error << ")";
     if (first_error->limit) throw LimitExceededError(first_error->message + retries.str());
     throw NoSurfaceError(first_error->message + retries.str());
   }

@@ -125,4 +125,15 @@ std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions
   return std::max(kBendEdgeShare * tightest_radius, lowest);
 }
 
+std::optional<AdaptiveOptions> options_for_sheets(const Field& field, const AdaptiveOptions& o, double gap) {
+  if (!remeshing_allowed(o) || o.max_edge > 0 || o.min_edge > 0 || !(gap > 0) || !std::isfinite(gap)) return std::nullopt;
+  const Settings s = resolve_settings(field, o);
+  if (!(2 * gap >= s.sizing.min_edge) || !(2 * gap < s.sizing.max_edge)) return std::nullopt;
+  AdaptiveOptions again = o;
+  again.max_edge = 2 * gap;
+  const double side = field.bounds().size().maxCoeff();
+  again.seed_resolution = std::max(o.seed_resolution, static_cast<int>(std::ceil(side / (kSheetGridCells * gap))));
+  return again;
+}
+
 }  // namespace cdp::adaptive

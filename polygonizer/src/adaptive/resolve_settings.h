@@ -35,4 +35,11 @@ bool remeshing_allowed(const AdaptiveOptions& options);
 // kLowestBendShare of that lowest edge (a crease or a singular point, not a bend to follow).
 std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions& options, double tightest_radius);
 
+// The options a run that failed where two sheets of the surface lie `gap` apart, closer than its
+// edges (a shell, a plate: Tracker::sheets_closer_than_edges), is meshed again with (kRuns'
+// thin_sheets): max_edge twice the gap, and a seed grid whose cells are at most kSheetGridCells
+// times it, so that its sign changes see both sheets and it measures their area. None where the
+// caller set max_edge or min_edge, or where twice the gap is under min_edge (the caller lowers it).
+std::optional<AdaptiveOptions> options_for_sheets(const Field& field, const AdaptiveOptions& options, double gap);
+
 }  // namespace cdp::adaptive

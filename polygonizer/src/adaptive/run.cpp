@@ -190,7 +190,7 @@ std::size_t Run::repair_and_check() {
   }
   quality = {};
   BandChanges band;
-  quality = repair_mesh(ctx, resolved, seeds, creases, blocks, tracking, mesh(), band);
+  quality = repair_mesh(ctx, resolved, seeds, creases, blocks, tracking, mesh(), band, &sheets_gap);
   if (resolved.curvature_properties) {
     if (ctx.options.variant != Variant::Improved) ctx.phases.enter("quality");
     add_curvature_properties(ctx.field, *tracking.tracker, quality, band, mesh());
@@ -202,11 +202,12 @@ std::size_t Run::repair_and_check() {
   // (check_bends_kept): the run then tracks the surface alone (attempt's fall_back).
   if (blocks.mesh && blocks.report.lockstep_batches > 0) check_bends_kept(ctx.field, mesh(), settings.sizing);
   return check_mesh(mesh(), expected_components(), ctx.options.check_self_intersections, ctx.options.threads,
-                    ctx.options.cancel, &band.sealed);
+                    ctx.options.cancel, &band.sealed, &ctx.field, resolved.sizing.min_edge, &sheets_gap);
 }
 
 void Run::attempt() {
   necks = {};
+  sheets_gap.reset();
   // A crease-aware mesh that fails on the way (a component left to the seeds that then stalls,
   // patches that intersect) is not the end: the surface is meshed again as a smooth one
   // (fall_back), and the stats say why.
@@ -338,10 +339,13 @@ PolygonizeResult Run::mesh_with_recoveries(RunFailure& failure) {
     try {
       attempt();
     } catch (const NoSurfaceError&) {
+      failure.sheets_gap = sheets_gap;  // before the recoveries mesh again
       if (hopeless(false) || needs_shorter_edges() || !recover_all(false)) throw;
     } catch (const UnsearchedCellsError&) {
       throw;
     } catch (const LimitExceededError&) {
+      // Before the recoveries replace the tracker that stopped.
+      if (tracking.tracker) failure.sheets_gap = tracking.tracker->sheets_gap();
       if (hopeless(true) || !recover_all(true)) throw;
     }
   } catch (const NoSurfaceError& e) {

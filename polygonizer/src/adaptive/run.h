@@ -30,6 +30,9 @@ struct RunRequest {
 struct RunFailure {
   Bend tightest = no_bend();
   bool final = false;
+  // Where the first attempt's fronts ran over finished mesh because two sheets of the surface lie
+  // closer than its edges: their distance (Tracker::sheets_gap; kRuns' thin_sheets follows it).
+  std::optional<double> sheets_gap;
 };
 
 // Meshes the surface with `options` as `request` changes them, the recoveries included.

@@ -84,6 +84,9 @@ class Run {
   // The saddles of the necks earlier attempts stepped over, walked from again after every later
   // attempt (repair_and_check): the finer edges a rerun puts round a neck can leave no vertex near
   // enough to predict it, and the neck then went unseen.
+  // Two sheets of the surface closer than the edges where this attempt's mesh intersected itself
+  // (check_mesh): their distance (RunFailure::sheets_gap).
+  std::optional<double> sheets_gap;
   std::vector<CriticalStart> necks_missed_before;
   bool careful = false;  // the careful recovery ran
   bool doomed = false;   // no recovery can mend what failed (needs_shorter_edges)

@@ -30,7 +30,8 @@ std::string describe_point(const Vec3& p) {
 }
 
 std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersections, int threads,
-                       const CancelToken& cancel, const std::vector<char>* sealed) {
+                       const CancelToken& cancel, const std::vector<char>* sealed, const Field* field,
+                       double min_edge, std::optional<double>* sheets_gap) {
   std::vector<char> involved;
   if (sealed && sealed->size() == mesh.triangles.size()) {
     involved.resize(sealed->size());
@@ -68,9 +69,9 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
   } else {
     t = analyze_topology(mesh, cancel);
   }
-  const auto fail = [](const std::string& what, const Vec3& where) {
+  const auto fail = [](const std::string& what, const Vec3& where, const std::string& why = "") {
     throw NoSurfaceError("adaptive: the mesh came out " + what + " near " + describe_point(where) +
-                         "; the surface may have a feature thinner than min_edge there");
+                         (why.empty() ? "; the surface may have a feature thinner than min_edge there" : why));
   };
   if (!t.closed() || !t.edge_manifold() || !t.vertex_manifold() || !t.oriented())
     fail("with " + std::to_string(t.boundary_edges) + " boundary, " + std::to_string(t.nonmanifold_edges) +
@@ -82,9 +83,21 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
          mesh.positions.front());
   if (check_intersections) {
     if (!side_by_side) pairs = intersecting();
-    if (!pairs.empty())
+    if (!pairs.empty()) {
+      const auto& t = mesh.triangles[pairs.front().first];
+      const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+      // Fronts that took one of two close sheets for the other cross there (a thin shell).
+      std::string why;
+      if (field) {
+        const double edge = std::sqrt(std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}));
+        if (const auto gap = sheets_apart(*field, a, edge)) {
+          why = sheets_advice(*field, *gap, edge, min_edge);
+          if (sheets_gap) *sheets_gap = gap;
+        }
+      }
       fail("intersecting itself (" + std::to_string(count_self_intersecting_pairs(mesh, threads)) + " pairs of triangles)",
-           mesh.positions[mesh.triangles[pairs.front().first][0]]);
+           a, why);
+    }
   }
   return t.components;
 }

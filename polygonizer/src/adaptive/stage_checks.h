@@ -40,8 +40,11 @@ std::string describe_point(const Vec3& p);
 // \return the mesh's components (== seeds).
 // \throw NoSurfaceError naming the place of the first failure.
 // \throw CancelledError when `cancel` is set during the intersection test.
+// With `field`, a mesh that intersects itself where two sheets of the surface lie closer than the
+// edges there (sheets_apart) says so, and their distance goes to `sheets_gap`.
 std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersections, int threads,
-                       const CancelToken& cancel, const std::vector<char>* sealed = nullptr);
+                       const CancelToken& cancel, const std::vector<char>* sealed = nullptr, const Field* field = nullptr,
+                       double min_edge = 0, std::optional<double>* sheets_gap = nullptr);
 
 // A neck or tunnel a front stepped over (check_necks). A NoSurfaceError that the crease-aware
 // meshing does not fall back from: the recoveries zone the neck instead (Run::zone_missed_necks).

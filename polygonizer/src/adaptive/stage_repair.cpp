@@ -35,8 +35,9 @@ constexpr double kOverlapArea = 1.25;
 // split into halves of min_edge.
 constexpr double kLastResortEdgeShare = 0.5;
 
-void check_overlap(const RunContext& run, const SeedGridStage& seeds, const CreaseLayout& creases,
-                   const Tracking& tracking, const Mesh& mesh) {
+void check_overlap(const RunContext& run, const Settings& resolved, const SeedGridStage& seeds,
+                   const CreaseLayout& creases, const Tracking& tracking, const Mesh& mesh,
+                   std::optional<double>* sheets_gap) {
   if (creases.mesh || !(seeds.estimated_area > 0) || !(tracking.tracker->area() > kOverlapArea * seeds.estimated_area))
     return;
   double seen = 0;  // the area as the grid sees it
@@ -48,7 +49,7 @@ void check_overlap(const RunContext& run, const SeedGridStage& seeds, const Crea
   if (seen > kOverlapArea * seeds.estimated_area) {
     run.enter("checks");
     check_mesh(mesh, tracking.seeding.seeds + creases.components, run.options.check_self_intersections,
-               run.options.threads, run.options.cancel);
+               run.options.threads, run.options.cancel, nullptr, &run.field, resolved.sizing.min_edge, sheets_gap);
   }
 }
 
@@ -91,10 +92,10 @@ QualityOptions repair_options(const RunContext& run, const Settings& resolved, c
 
 QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const SeedGridStage& seeds,
                           const CreaseLayout& creases, const BlockMeshing& blocks, const Tracking& tracking, Mesh& mesh,
-                          BandChanges& band) {
+                          BandChanges& band, std::optional<double>* sheets_gap) {
   band = {};
   if (run.options.variant != Variant::Improved) return {};
-  check_overlap(run, seeds, creases, tracking, mesh);
+  check_overlap(run, resolved, seeds, creases, tracking, mesh, sheets_gap);
   run.enter("quality", "repairing triangles");
   const QualityOptions qo = repair_options(run, resolved, creases);
   if (!blocks.mesh) return improve_mesh(run.field, mesh, qo);

@@ -47,10 +47,11 @@ struct BandChanges {
 // counted afresh.
 // `resolved`: the run's settings as the options resolve them.
 // \return what the repair did (empty for Variant::Paper).
-// \throw NoSurfaceError from that check; CancelledError.
+// \throw NoSurfaceError from that check (where the mesh intersects itself between two sheets
+//        closer than its edges, their distance goes to `sheets_gap`: check_mesh); CancelledError.
 QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const SeedGridStage& seeds,
                           const CreaseLayout& creases, const BlockMeshing& blocks, const Tracking& tracking, Mesh& mesh,
-                          BandChanges& band);
+                          BandChanges& band, std::optional<double>* sheets_gap = nullptr);
 
 // Repairs, with `qo` and the rest of the mesh kept as it is, the triangles of `mesh` that touch
 // one of its first `seams` vertices (the blocks' seams) or a neighbour of one, and those with a

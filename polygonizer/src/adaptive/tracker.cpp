@@ -502,6 +502,54 @@ void Tracker::crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns,
   }
 }
 
+double Tracker::longest_edge(int a, int b, int c) const {
+  const Vec3 &pa = mesh_.positions[a], &pb = mesh_.positions[b], &pc = mesh_.positions[c];
+  return std::sqrt(std::max({(pb - pa).squaredNorm(), (pc - pb).squaredNorm(), (pa - pc).squaredNorm()}));
+}
+
+std::string Tracker::sheets_closer_than_edges(const Vec3& p, double edge) const {
+  sheets_gap_ = sheets_apart(field_, p, edge);
+  return sheets_gap_ ? sheets_advice(field_, *sheets_gap_, edge, s_.sizing.min_edge) : "";
+}
+
+std::optional<double> sheets_apart(const Field& field, const Vec3& p, double edge) {
+  // The nearest other sheet along the normal at p, within kSheetReach edges either way: the
+  // first sample of the sign p's side of the surface does not have, then halvings to it.
+  Vec3 g;
+  field.value_gradient(p, g);
+  if (!(g.norm() > 0) || !g.allFinite() || !(edge > 0) || !std::isfinite(edge)) return std::nullopt;
+  const Vec3 n = g.normalized();
+  const double h = kSheetReach * edge / kSheetSamples;
+  double gap = std::numeric_limits<double>::infinity();
+  for (const double side : {-1.0, 1.0}) {
+    const auto other_sheet = [&](double s) { return field.value(p + side * s * n) * side < 0; };
+    for (int k = 1; k <= kSheetSamples && k * h < gap; ++k) {
+      if (!other_sheet(k * h)) continue;
+      double lo = (k - 1) * h, hi = k * h;  // the second sheet lies between
+      for (int i = 0; i < kSheetHalvings; ++i) (other_sheet(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+      gap = std::min(gap, hi);
+      break;
+    }
+  }
+  if (!(gap < edge)) return std::nullopt;
+  return gap;
+}
+
+std::string sheets_advice(const Field& field, double gap, double edge, double min_edge) {
+  // A front meets the other sheet's mesh as its own where they are closer than its edges, and the
+  // seed grid misses the sheets' area where they are closer than about a third of its cells: a
+  // sphere's shell 0.02 thick meshes at factor 1 with max_edge 0.04, one 0.01 thick with max_edge
+  // 0.02 once the grid's cells are 0.034 (seed_resolution 64 in a box of 2.2).
+  const double side = field.bounds().size().maxCoeff();
+  const double resolution = std::ceil(side / (kSheetGridCells * gap));
+  std::string advice = "; the surface there has two sheets " + std::to_string(gap) +
+                       " apart (a thin wall or gap), closer than the edges there (" + std::to_string(edge) +
+                       "): max_edge at most " + std::to_string(2 * gap);
+  if (2 * gap < min_edge) advice += " with min_edge below it";
+  if (std::isfinite(resolution)) advice += " and seed_resolution at least " + std::to_string(static_cast<long>(resolution));
+  return advice + " keep each front on its own sheet";
+}
+
 void Tracker::emit_triangle(int a, int b, int c) {
   detail::grow_apart(s_.cancel, "adaptive", 1, mesh_.triangles);
   mesh_.triangles.push_back({a, b, c});
@@ -510,7 +558,7 @@ void Tracker::emit_triangle(int a, int b, int c) {
   if (estimated_area_ > 0 && area_ > kAreaBound * estimated_area_)
     throw LimitExceededError("adaptive: the mesh covers more than " + std::to_string(static_cast<int>(kAreaBound)) +
                              " times the area the seed grid measures; a front is running over finished mesh near " +
-                             format_point(pa));
+                             format_point(pa) + sheets_closer_than_edges(pa, longest_edge(a, b, c)));
   // Triangles made again on vertices already meshed, which the area bound sees late or never
   // (each adds little area; kTrianglesPerVertex says why no manifold mesh gets here).
   if (mesh_.triangles.size() > kTrianglesPerVertex * mesh_.positions.size() + kTriangleSlack)

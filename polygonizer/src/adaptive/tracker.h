@@ -153,6 +153,21 @@ inline constexpr const char* kAlongCreaseAdvice = "a crease this sharp is meshed
 // reach 8 (4.8 million steps), then the careful run meshed it in 0.03 s. 4 keeps a margin of 2
 // over what meshing runs measure and stops such a runaway in less than half the time.
 inline constexpr double kAreaBound = 4;
+// When the area bound stops a run, the other sheet is looked for along the normal within this
+// many of the last triangle's longest edge either way, sampled this many times a side and
+// halved this many times (sheets_closer_than_edges). The grid's cells at most this many times
+// the sheets' distance see both (a sphere's shell 0.01 thick meshed with cells of 0.034).
+inline constexpr double kSheetReach = 2;
+inline constexpr int kSheetSamples = 32;
+inline constexpr int kSheetHalvings = 8;
+inline constexpr double kSheetGridCells = 3;
+
+// The distance from surface point p to another sheet of the surface along its normal, either
+// way, when it is under `edge` (the edges of a mesh whose fronts took one sheet for the other).
+std::optional<double> sheets_apart(const Field& field, const Vec3& p, double edge);
+// What an error says of two sheets `gap` apart where the edges are `edge` long: the max_edge, and
+// the seed_resolution (kSheetGridCells), that keep each front on its own sheet.
+std::string sheets_advice(const Field& field, double gap, double edge, double min_edge);
 
 // Normals whose angle is below arccos of this belong to one side of the surface (see same_side).
 inline constexpr double kSameSideCosine = 0;
@@ -267,6 +282,9 @@ class Tracker {
   std::size_t side_points() const { return side_points_; }  // add_side_points' points in expansions made
   // The vertices placed within kCriticalReach edges of a critical point of F (missed_necks.h).
   const std::vector<CriticalStart>& critical_starts() const { return critical_starts_; }
+  // The distance between the two sheets sheets_closer_than_edges found where this tracker stopped
+  // (polygonize_adaptive meshes them again with max_edge twice it: kRuns' thin_sheets).
+  std::optional<double> sheets_gap() const { return sheets_gap_; }
   // Small stuck fronts closed ear by ear without the expansion's tests.
   std::size_t forced_closures() const { return forced_closures_; }
   // Points placed on a crease, with the mean normal of its two sides.
@@ -371,6 +389,12 @@ class Tracker {
   // Whether x (with its normal, placed at step d) lies on finished mesh (counted).
   bool over_finished_mesh(const Vec3& x, const Vec3& normal, double d) const;
   void emit_triangle(int a, int b, int c);
+  double longest_edge(int a, int b, int c) const;
+  // Why fronts run over finished mesh at p, where the failing triangle's edges are `edge` long:
+  // another sheet of the surface nearer than that along the normal (a shell, a plate), and the
+  // options that resolve it; empty when there is none.
+  std::string sheets_closer_than_edges(const Vec3& p, double edge) const;
+  mutable std::optional<double> sheets_gap_;  // what sheets_closer_than_edges found
   int insert_node(int vertex, int front);
   // fs_.link, and the new front edge a -> b into the record of front edge lengths.
   void link(int a, int b);

@@ -261,6 +261,41 @@ TEST(SdfNecks, ANeckAnEarlierAttemptSteppedOverIsLookedForAgainAfterTheLast) {
   }
 }
 
+TEST(SdfShells, AShellThinnerThanTheEdgesIsMeshedAgainWithMaxEdgeTwiceItsThickness) {
+  // cdp.sdf's sphere(1).shell(0.02): two sheets 0.02 apart, where edges of 0.14-0.39 ran the
+  // fronts of one sheet over the other's mesh (factors 1-3: the area bound, or a mesh that
+  // intersected itself). The run made again for thin sheets meshes it.
+  const auto shell = test::field_from_json(R"J({"type": "expression", "value": "abs(hypot(x, y, z) - 1.0) - 0.01",
+      "bounds": [[-1.212, -1.212, -1.212], [1.212, 1.212, 1.212]]})J");
+  for (const double factor : {1.0, 3.0}) {
+    SCOPED_TRACE(factor);
+    AdaptiveOptions o;
+    o.factor = factor;
+    const PolygonizeResult r = polygonize_adaptive(*shell, o);
+    test::expect_sound(r.mesh, "shell");
+    const MeshTopology t = analyze_topology(r.mesh);
+    EXPECT_EQ(t.components, 2u);
+    EXPECT_EQ(t.genus, 0);
+    EXPECT_TRUE(r.stats.adaptive->recoveries.thin_sheets);
+    EXPECT_NEAR(r.stats.adaptive->settings.max_edge, 0.04, 0.001);
+    EXPECT_GE(r.stats.adaptive->min_angle_degrees, 20.0);
+  }
+  // Sheets 0.004 apart, closer than half min_edge (0.0083): not made again; the error says what
+  // would mesh them.
+  const auto thinner = test::field_from_json(R"J({"type": "expression", "value": "abs(hypot(x, y, z) - 1.0) - 0.002",
+      "bounds": [[-1.2024, -1.2024, -1.2024], [1.2024, 1.2024, 1.2024]]})J");
+  AdaptiveOptions o;
+  o.factor = 1;
+  try {
+    polygonize_adaptive(*thinner, o);
+    ADD_FAILURE() << "meshed";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("two sheets 0.004"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("max_edge at most 0.008"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("with min_edge below it"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SdfNecks, AThinTunnelOfADistanceFieldIsNotClosed) {
   // cdp.sdf's torus(0.5 + w / 2, 0.5): an exact distance whose hole is w wide at its waist, where
   // its core lies on the medial axis (a kink of F, no saddle). Fronts closed it (genus 0, exit 0)

@@ -171,6 +171,7 @@ struct NeckReport {
 struct RecoveryReport {
   bool min_edge_lowered = false;         // run again with a lower min_edge
   bool turn_limited = false;             // run with every edge turning the normal at most a radian
+  bool thin_sheets = false;              // run again with max_edge twice the distance of two sheets closer than its edges
   bool look_ahead = false;               // the fronts looked ahead (the run made for quality)
   bool quality_rerun = false;            // a second run was made for the quality bounds
   bool quality_rerun_kept = false;       // and its mesh was kept
