@@ -1,5 +1,7 @@
 #include "missed_necks.h"
 
+#include <cdp/core/triangle_geometry.h>
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
@@ -104,11 +106,9 @@ namespace {
 // The mean longest edge of the triangles: the hash's cell, so that a cell holds a few triangles.
 double mean_longest_edge(const Mesh& mesh) {
   double sum = 0;
-  for (const auto& t : mesh.triangles) {
-    const Vec3 &a = mesh.positions[static_cast<std::size_t>(t[0])], &b = mesh.positions[static_cast<std::size_t>(t[1])],
-               &c = mesh.positions[static_cast<std::size_t>(t[2])];
-    sum += std::sqrt(std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}));
-  }
+  for (const auto& t : mesh.triangles)
+    sum += longest_edge(mesh.positions[static_cast<std::size_t>(t[0])], mesh.positions[static_cast<std::size_t>(t[1])],
+                        mesh.positions[static_cast<std::size_t>(t[2])]);
   const double mean = mesh.triangles.empty() ? 1 : sum / static_cast<double>(mesh.triangles.size());
   return mean > 0 && std::isfinite(mean) ? mean : 1;
 }
@@ -196,30 +196,35 @@ void MeshSides::crossings(const Vec3& a, const Vec3& b, std::vector<double>& at)
 
 namespace {
 
+// The distance from a core of the k-th sample along `dir` (unit): k kAcrossSamples-ths of
+// kAcrossReach radii.
+double across_sample(double radius, int k) { return k * kAcrossReach * radius / kAcrossSamples; }
+
+// The first k in 1, ..., samples at whose sample along `dir` (unit) F does not keep the sign it
+// has at the core (F = value there); 0 when it keeps it at every one.
+int sign_change_along(const Field& field, const Vec3& core, double value, double radius, const Vec3& dir,
+                      int samples = kAcrossSamples) {
+  for (int k = 1; k <= samples; ++k)
+    if (!(field.value(core + across_sample(radius, k) * dir) * value > 0)) return k;
+  return 0;
+}
+
 // Whether the surface rings a core (F = value there): F changes sign within kAcrossReach radii
 // of it in the four directions across its axis, as round a tube, not on one side only as under
 // the near side of a surface.
 bool ringed(const Field& field, const Vec3& core, double value, double radius, const std::array<Vec3, 2>& across) {
-  const auto changes_sign = [&](const Vec3& dir) {
-    for (int k = 1; k <= kAcrossSamples; ++k)
-      if (!(field.value(core + (k * kAcrossReach * radius / kAcrossSamples) * dir) * value > 0)) return true;
-    return false;
-  };
-  return changes_sign(across[0]) && changes_sign(-across[0]) && changes_sign(across[1]) && changes_sign(-across[1]);
+  for (const Vec3& dir : {across[0], Vec3(-across[0]), across[1], Vec3(-across[1])})
+    if (sign_change_along(field, core, value, radius, dir) == 0) return false;
+  return true;
 }
 
 // How far F keeps its sign from a core both ways along `dir` (unit), the lesser of the two, in
 // steps of a kAcrossSamples-th of kAcrossReach radii up to kAcrossReach radii.
 double run_both_ways(const Field& field, const Vec3& core, double value, double radius, const Vec3& dir) {
-  const double step = kAcrossReach * radius / kAcrossSamples;
-  int least = kAcrossSamples;
-  for (const double side : {-1.0, 1.0})
-    for (int k = 1; k <= least; ++k)
-      if (!(field.value(core + (side * k * step) * dir) * value > 0)) {
-        least = k - 1;
-        break;
-      }
-  return least * step;
+  int least = kAcrossSamples;  // samples kept on the sides looked at so far
+  for (const Vec3& way : {Vec3(-dir), dir})
+    if (const int k = sign_change_along(field, core, value, radius, way, least)) least = k - 1;
+  return across_sample(radius, least);
 }
 
 // The axis of a tube round a core found without a Hessian's word on it (a distance field's kink):
@@ -262,13 +267,9 @@ bool ringed_all_round(const Field& field, const MeshSides& sides, const Vec3& co
   for (int d = 0; d < kRoundDirections; ++d) {
     const double angle = 2 * std::numbers::pi * d / kRoundDirections;
     const Vec3 dir = std::cos(angle) * u + std::sin(angle) * w;
-    double wall = 0;
-    for (int k = 1; k <= kAcrossSamples && wall == 0; ++k) {
-      const double s = k * kAcrossReach * radius / kAcrossSamples;
-      if (!(field.value(core + s * dir) * value > 0)) wall = s;
-    }
+    const int wall = sign_change_along(field, core, value, radius, dir);
     if (wall == 0) return false;
-    sides.crossings(core, core + wall * dir, at);
+    sides.crossings(core, core + across_sample(radius, wall) * dir, at);
     if (!at.empty()) return false;
   }
   return true;
@@ -334,7 +335,7 @@ bool is_cap(const Mesh& mesh, std::size_t f, Vec3& normal, double& edge) {
   const double length = n.norm();
   if (!(length > 0) || !std::isfinite(length)) return false;
   normal = n / length;
-  edge = std::sqrt(std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}));
+  edge = longest_edge(a, b, c);
   for (int k = 0; k < 3; ++k) {
     const Vec3& corner = mesh.corner_normals.size() == mesh.triangles.size()
                              ? mesh.corner_normals[f][static_cast<std::size_t>(k)]
@@ -437,10 +438,6 @@ std::optional<MissedNeck> along_cap(const Field& field, const MeshSides& sides, 
   }
   return std::nullopt;
 }
-
-}  // namespace
-
-namespace {
 
 // Newton's walks from the starts to the critical points of F (find_missed_necks' first part).
 void walk_to_critical_points(const Field& field, std::span<const CriticalStart> starts, std::size_t max_walks,

@@ -6,6 +6,7 @@
 
 #include <cdp/core/errors.h>
 #include <cdp/core/mesh_topology.h>
+#include <cdp/core/triangle_geometry.h>
 #include <cdp/core/triangle_intersection.h>
 
 #include "surface_gaps.h"
@@ -89,7 +90,7 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
       // Fronts that took one of two close sheets for the other cross there (a thin shell).
       std::string why;
       if (field) {
-        const double edge = std::sqrt(std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}));
+        const double edge = longest_edge(a, b, c);
         if (const auto gap = sheets_apart(*field, a, edge)) {
           why = sheets_advice(*field, *gap, edge, min_edge);
           if (sheets_gap) *sheets_gap = gap;

@@ -5,6 +5,7 @@
 
 #include <cdp/core/crease.h>
 #include <cdp/core/errors.h>
+#include <cdp/core/triangle_geometry.h>
 
 #include <algorithm>
 #include <chrono>
@@ -502,31 +503,26 @@ void Tracker::crease_normals(std::span<const Vec3> xs, std::span<const Vec3> ns,
   }
 }
 
-double Tracker::longest_edge(int a, int b, int c) const {
-  const Vec3 &pa = mesh_.positions[a], &pb = mesh_.positions[b], &pc = mesh_.positions[c];
-  return std::sqrt(std::max({(pb - pa).squaredNorm(), (pc - pb).squaredNorm(), (pa - pc).squaredNorm()}));
-}
-
-std::string Tracker::sheets_closer_than_edges(const Vec3& p, double edge) const {
+std::string Tracker::sheets_closer_than_edges(const Vec3& p, double edge) {
   sheets_gap_ = sheets_apart(field_, p, edge);
   return sheets_gap_ ? sheets_advice(field_, *sheets_gap_, edge, s_.sizing.min_edge) : "";
 }
 
 std::optional<double> sheets_apart(const Field& field, const Vec3& p, double edge) {
-  // The nearest other sheet along the normal at p, within kSheetReach edges either way: the
+  // The nearest other sheet along the normal at p, within kOtherSheetReach edges either way: the
   // first sample of the sign p's side of the surface does not have, then halvings to it.
   Vec3 g;
   field.value_gradient(p, g);
   if (!(g.norm() > 0) || !g.allFinite() || !(edge > 0) || !std::isfinite(edge)) return std::nullopt;
   const Vec3 n = g.normalized();
-  const double h = kSheetReach * edge / kSheetSamples;
+  const double h = kOtherSheetReach * edge / kOtherSheetSamples;
   double gap = std::numeric_limits<double>::infinity();
   for (const double side : {-1.0, 1.0}) {
     const auto other_sheet = [&](double s) { return field.value(p + side * s * n) * side < 0; };
-    for (int k = 1; k <= kSheetSamples && k * h < gap; ++k) {
+    for (int k = 1; k <= kOtherSheetSamples && k * h < gap; ++k) {
       if (!other_sheet(k * h)) continue;
       double lo = (k - 1) * h, hi = k * h;  // the second sheet lies between
-      for (int i = 0; i < kSheetHalvings; ++i) (other_sheet(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+      for (int i = 0; i < kOtherSheetHalvings; ++i) (other_sheet(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
       gap = std::min(gap, hi);
       break;
     }
@@ -558,7 +554,7 @@ void Tracker::emit_triangle(int a, int b, int c) {
   if (estimated_area_ > 0 && area_ > kAreaBound * estimated_area_)
     throw LimitExceededError("adaptive: the mesh covers more than " + std::to_string(static_cast<int>(kAreaBound)) +
                              " times the area the seed grid measures; a front is running over finished mesh near " +
-                             format_point(pa) + sheets_closer_than_edges(pa, longest_edge(a, b, c)));
+                             format_point(pa) + sheets_closer_than_edges(pa, longest_edge(pa, mesh_.positions[b], mesh_.positions[c])));
   // Triangles made again on vertices already meshed, which the area bound sees late or never
   // (each adds little area; kTrianglesPerVertex says why no manifold mesh gets here).
   if (mesh_.triangles.size() > kTrianglesPerVertex * mesh_.positions.size() + kTriangleSlack)

@@ -157,9 +157,9 @@ inline constexpr double kAreaBound = 4;
 // many of the last triangle's longest edge either way, sampled this many times a side and
 // halved this many times (sheets_closer_than_edges). The grid's cells at most this many times
 // the sheets' distance see both (a sphere's shell 0.01 thick meshed with cells of 0.034).
-inline constexpr double kSheetReach = 2;
-inline constexpr int kSheetSamples = 32;
-inline constexpr int kSheetHalvings = 8;
+inline constexpr double kOtherSheetReach = 2;
+inline constexpr int kOtherSheetSamples = 32;
+inline constexpr int kOtherSheetHalvings = 8;
 inline constexpr double kSheetGridCells = 3;
 
 // The distance from surface point p to another sheet of the surface along its normal, either
@@ -389,12 +389,11 @@ class Tracker {
   // Whether x (with its normal, placed at step d) lies on finished mesh (counted).
   bool over_finished_mesh(const Vec3& x, const Vec3& normal, double d) const;
   void emit_triangle(int a, int b, int c);
-  double longest_edge(int a, int b, int c) const;
   // Why fronts run over finished mesh at p, where the failing triangle's edges are `edge` long:
   // another sheet of the surface nearer than that along the normal (a shell, a plate), and the
   // options that resolve it; empty when there is none.
-  std::string sheets_closer_than_edges(const Vec3& p, double edge) const;
-  mutable std::optional<double> sheets_gap_;  // what sheets_closer_than_edges found
+  std::string sheets_closer_than_edges(const Vec3& p, double edge);
+  std::optional<double> sheets_gap_;  // what sheets_closer_than_edges found
   int insert_node(int vertex, int front);
   // fs_.link, and the new front edge a -> b into the record of front edge lengths.
   void link(int a, int b);

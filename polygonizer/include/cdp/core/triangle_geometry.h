@@ -14,4 +14,7 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
 // as missing it; degenerate triangles are missed.
 bool segment_meets_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c);
 
+// The length of the longest edge of triangle (a, b, c).
+double longest_edge(const Vec3& a, const Vec3& b, const Vec3& c);
+
 }  // namespace cdp
