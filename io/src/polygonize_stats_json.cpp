@@ -30,6 +30,8 @@ void add_seeding(nlohmann::json& j, const SeedingReport& s) {
   j["non_finite_samples"] = s.non_finite_samples;
   j["covered_nearby"] = s.covered_nearby;
   j["below_resolution"] = s.below_resolution;
+  j["thin_bridges"] = s.thin_bridges;
+  j["seeds_first"] = s.seeds_first;
   j["uncovered_crossings"] = s.uncovered;
   j["refined_cells"] = s.refined_cells;
   j["unresolved_cells"] = s.unresolved_cells;

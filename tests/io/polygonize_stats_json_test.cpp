@@ -33,6 +33,7 @@ TEST(PolygonizeStatsJson, EveryAdaptiveFieldUnderItsKey) {
                 .min_edge = 6, .max_edge = 7, .triangle_count = TriangleCountRule::PaperFloor,
                 .seed_resolution = 8, .grading = true, .quality_repair = false, .tolerance_refinement = true};
   r.seeding = {.sign_changes = 10, .seeds = 11, .failed_seeds = 12, .covered_nearby = 13, .below_resolution = 14,
+               .thin_bridges = 82, .seeds_first = 83,
                .refined_cells = 15, .unresolved_cells = 16, .unsearched_cells = 78, .probes = 17, .probes_outside = 81,
                .band_cells = 79,
                .band_components = 80, .uncovered = 18,
@@ -65,7 +66,7 @@ TEST(PolygonizeStatsJson, EveryAdaptiveFieldUnderItsKey) {
       {"variant", "paper"}, {"sizing", "tolerance"}, {"tolerance", 5.0}, {"edge_length.min", 6.0},
       {"edge_length.max", 7.0}, {"triangle_count_rule", "paper_floor"}, {"seed_resolution", 8}, {"grading", true},
       {"quality_repair", false}, {"tolerance_refinement", true}, {"sign_changes", 10}, {"seeds", 11},
-      {"failed_seeds", 12}, {"covered_nearby", 13}, {"below_resolution", 14}, {"refined_cells", 15},
+      {"failed_seeds", 12}, {"covered_nearby", 13}, {"below_resolution", 14}, {"thin_bridges", 82}, {"seeds_first", 83}, {"refined_cells", 15},
       {"unresolved_cells", 16}, {"unsearched_cells", 78}, {"probes", 17}, {"probes_outside", 81}, {"band_cells", 79},
       {"band_components", 80}, {"uncovered_crossings", 18}, {"non_finite_samples", 19},
       {"steps", 20}, {"search_visits", 21}, {"deferrals", 22}, {"anticipations", 23}, {"side_points", 24},

@@ -35,8 +35,14 @@ class Run {
  private:
   // The stages before the first triangle: settings, seed grid, crease layout, blocks.
   void prepare();
-  // One attempt: tracking, repair, checks (throws their errors).
+  // One attempt: tracking, repair, checks (throws their errors); where it fails after its
+  // seeding found thin bridges not tried before, once more with them seeded first.
   void attempt();
+  // attempt's meshing with the bridges seeded first as tracking.bridges.first says.
+  void attempt_meshing();
+  // The attempt made again with the new thin bridges the failed one found seeded first; true
+  // when it meshed. When it fails too, the failed attempt's necks and sheets stand.
+  bool attempt_bridges_first();
   // Drops a crease layout whose meshing failed with `e` and meshes the surface as smooth;
   // false where there was none.
   bool fall_back(const std::exception& e);
@@ -81,13 +87,15 @@ class Run {
   QualityReport quality;
   std::size_t components = 0;
   NeckSearch necks;  // of the last attempt
-  // The saddles of the necks earlier attempts stepped over, walked from again after every later
-  // attempt (repair_and_check): the finer edges a rerun puts round a neck can leave no vertex near
-  // enough to predict it, and the neck then went unseen.
   // Two sheets of the surface closer than the edges where this attempt's mesh intersected itself
   // (check_mesh): their distance (RunFailure::sheets_gap).
   std::optional<double> sheets_gap;
+  // The saddles of the necks earlier attempts stepped over, walked from again after every later
+  // attempt (repair_and_check): the finer edges a rerun puts round a neck can leave no vertex near
+  // enough to predict it, and the neck then went unseen.
   std::vector<CriticalStart> necks_missed_before;
+  // The thin bridges seeded first so far (attempt_bridges_first): each tried once in the run.
+  std::vector<Vec3> bridges_tried;
   bool careful = false;  // the careful recovery ran
   bool doomed = false;   // no recovery can mend what failed (needs_shorter_edges)
   std::size_t neck_reruns = 0;

@@ -76,6 +76,25 @@ constexpr double kBandCurl = 1.0;
 constexpr double kOutsideBox = 1e-9;
 // Steps of min_edge a surface point may be from the mesh and still belong to a meshed component.
 constexpr int kWalkSteps = 32;
+// A point that walks to the mesh is detail of that component finer than min_edge only if the
+// surface, followed from it the other way, ends (a needle's tip): it turns to face the walk, its
+// normal within acos(kTipFacing) = 60 degrees of the way walked. Where it runs instead onto
+// another component of the mesh within kOtherWaySteps steps, it is a bridge between them
+// thinner than min_edge (Seeder::other_way): cdp.sdf's two balls joined by a capsule 0.005-0.02
+// wide were meshed as two balls, exit 0, the probes on the rod taken for a needle's tip of one
+// ball. The rod's free stretch, 0.4 long, is 57 steps of min_edge at factor 3; a probe nearer
+// one end than kWalkSteps steps has the rest to go, and one farther from both is a seed anyway.
+constexpr double kTipFacing = 0.5;
+constexpr int kOtherWaySteps = 4 * kWalkSteps;
+// A component seeded late whose mesh runs into the earlier mesh is a bridge (Bridges) only where
+// its seed lies apart from that mesh: farther than kApartMinEdges times min_edge and than
+// kApartEdges of the nearest triangle's longest edge. Seeds that coverage missed between two
+// sheets closer than the edges (a hollow cylinder 0.004 thick at factor 8: 1 to 3 min_edges, 0.06
+// to 0.2 edges from the earlier mesh) run into it too, and meshing them first mends nothing (four
+// more failed attempts, +42 s); the rod's seed between two balls lay 16 min_edges and 0.67 edges
+// from them, the late blobs' of the topology sweep 3 to 6 edges.
+constexpr double kApartMinEdges = 4;
+constexpr double kApartEdges = 0.25;
 // The checks between components poll the cancel token every so many sign changes, witnesses or
 // triangles indexed: well under a millisecond of work each.
 constexpr std::size_t kPollEvery = 256;
@@ -131,6 +150,7 @@ class MeshCoverage {
  public:
   MeshCoverage(const Mesh& mesh, double cell, const CancelToken& cancel) : mesh_(mesh), h_(cell), cancel_(cancel) {}
   std::size_t triangles() const { return mesh_.triangles.size(); }
+  const Mesh& mesh() const { return mesh_; }
 
   void update() {
     const auto& P = mesh_.positions;
@@ -164,6 +184,52 @@ class MeshCoverage {
             (p[axis] > hi[axis] && q[axis] > hi[axis] && r[axis] > hi[axis]))
           return false;
       return segment_meets_triangle(a, b, p, q, r);
+    });
+  }
+
+  // Whether an edge of the triangles from `first` on (a component just meshed, not indexed yet)
+  // passes through an indexed triangle that is not its own corner's and faces the same way (the
+  // normals of the two within 90 degrees): two meshes of one sheet, the later grown from a seed
+  // onto the earlier one, which closed over where they join. Triangles facing opposite ways are
+  // two sheets closer than the edges (a shell, a plate), which meeting the later one first does
+  // not mend: a hollow cylinder 0.004 thick at factor 8 was meshed four more times so (+42 s).
+  bool runs_into_indexed(std::size_t first) const {
+    const auto& P = mesh_.positions;
+    const auto normal = [&](const std::array<int, 3>& f) { return (P[f[1]] - P[f[0]]).cross(P[f[2]] - P[f[0]]); };
+    for (std::size_t t = first; t < mesh_.triangles.size(); ++t)
+      for (int e = 0; e < 3; ++e) {
+        const int i = mesh_.triangles[t][e], j = mesh_.triangles[t][(e + 1) % 3];
+        if (i > j) continue;  // each edge of a closed mesh once
+        const Vec3 n = normal(mesh_.triangles[t]);
+        const Vec3 &a = P[i], &b = P[j];
+        const Vec3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
+        const bool meets = any_in([&](const SizeClass&) { return BoxQuery{{lo, hi}}; }, [&](int f) {
+          const auto& g = mesh_.triangles[f];
+          const Vec3 &p = P[g[0]], &q = P[g[1]], &r = P[g[2]];
+          for (int axis = 0; axis < 3; ++axis)  // as in crosses
+            if ((p[axis] < lo[axis] && q[axis] < lo[axis] && r[axis] < lo[axis]) ||
+                (p[axis] > hi[axis] && q[axis] > hi[axis] && r[axis] > hi[axis]))
+              return false;
+          if (std::find(g.begin(), g.end(), i) != g.end() || std::find(g.begin(), g.end(), j) != g.end()) return false;
+          return segment_meets_triangle(a, b, p, q, r) && n.dot(normal(g)) > 0;
+        });
+        if (meets) return true;
+      }
+    return false;
+  }
+
+  // Whether no indexed triangle lies within `floor` of x, nor within kApartEdges of its own
+  // longest edge.
+  bool apart_from_indexed(const Vec3& x, double floor) const {
+    const auto& P = mesh_.positions;
+    const auto around_x = [&](const SizeClass& k) {
+      const double r = std::max(floor, kApartEdges * k.longest);
+      return BoxQuery{{x.array() - r, x.array() + r}};
+    };
+    return !any_in(around_x, [&](int f) {
+      const auto& t = mesh_.triangles[f];
+      const double d = (closest_point_on_triangle(x, P[t[0]], P[t[1]], P[t[2]]) - x).norm();
+      return d <= std::max(floor, kApartEdges * longest_edge(t));
     });
   }
 
@@ -284,14 +350,17 @@ class MeshCoverage {
 
 class Seeder {
  public:
-  Seeder(const Field& field, const SeedGrid& grid, double min_edge, double cell, Tracker& tracker, const Mesh& mesh)
+  Seeder(const Field& field, const SeedGrid& grid, double min_edge, double cell, Tracker& tracker, const Mesh& mesh,
+         Bridges* bridges)
       : field_(field),
         grid_(grid),
         min_edge_(min_edge),
         tracker_(tracker),
-        cover_(mesh, std::max(cell, grid.h), tracker.cancel_token()) {}
+        cover_(mesh, std::max(cell, grid.h), tracker.cancel_token()),
+        bridges_(bridges) {}
 
   SeedingReport run() {
+    if (bridges_) bridges_first();
     grid_sign_changes();
     const std::vector<char> near = near_crossed_cells();
     const bool bounded = field_.lipschitz_bound().has_value(), sampled = field_.sample_spacing().has_value();
@@ -311,21 +380,71 @@ class Seeder {
     std::optional<SurfacePoint> at;
   };
 
+  // The bridges an earlier attempt found (Bridges), each seeded unless one before it meshed it;
+  // never deferred, which would let the components they join close over them again.
+  void bridges_first() {
+    for (const Vec3& p : bridges_->first) {
+      const Vec3 g = field_.gradient(p);
+      if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
+      const SurfacePoint x{p, g.normalized()};
+      cover_.update();
+      if (meshed_at(x)) continue;
+      ++report_.seeds_first;
+      start_from(x);
+    }
+  }
+
+  // The places the tracker refused or moved because they landed on finished mesh or another
+  // sheet: a component that met none ran into no earlier one, and is not tested (the test costs
+  // a query of the triangle hash an edge: a quarter of the onion's run at factor 3.75).
+  std::size_t met_mesh() const {
+    const TrackerReport r = tracker_.report();
+    return r.over_mesh_rejections + r.sheet_jumps;
+  }
+
+  // A component seeded after others that runs into their mesh is surface they closed over (a
+  // rod thinner than their edges where it joins them), a bridge for the attempt made again
+  // (Run::attempt); so is one whose tracking throws after its mesh ran into theirs.
   void start_from(const SurfacePoint& x) {
-    if (tracker_.mesh_from_seed(x.point)) ++report_.seeds;
-    else ++report_.failed_seeds;
+    cover_.update();
+    const std::size_t before = cover_.triangles();
+    const bool late = before > 0 && bridges_ && cover_.apart_from_indexed(x.point, kApartMinEdges * min_edge_);
+    const std::size_t met_before = late ? met_mesh() : 0;
+    bool meshed = false;
+    const auto ran_into_mesh = [&] {
+      if (late && met_mesh() > met_before && cover_.runs_into_indexed(before)) bridges_->found.push_back(x.point);
+    };
+    try {
+      meshed = tracker_.mesh_from_seed(x.point);
+    } catch (const CancelledError&) {
+      throw;
+    } catch (const std::exception&) {
+      ran_into_mesh();  // what the component meshed before it stopped
+      throw;
+    }
+    if (!meshed) {
+      ++report_.failed_seeds;
+      return;
+    }
+    ++report_.seeds;
+    ran_into_mesh();
   }
 
   // Whether the mesh stands for the surface at x (see kFootSlack): x lies about as far from the
   // nearest triangle within reach that faces the way `normal` does as that triangle lies from the
   // surface, or the segment between them stays on the triangle's side. `offset`: x's own
   // distance from the surface (0 for a surface point; where unknown, 0 is the stricter).
-  bool meshed_at(const Vec3& x, const Vec3& normal, double offset) {
+  bool meshed_at(const Vec3& x, const Vec3& normal, double offset) { return meshed_by(x, normal, offset).has_value(); }
+  bool meshed_at(const SurfacePoint& x) { return meshed_at(x.point, x.normal, 0); }
+
+  // meshed_at's triangle: the one that stands for x, if any.
+  std::optional<int> meshed_by(const SurfacePoint& x) { return meshed_by(x.point, x.normal, 0); }
+  std::optional<int> meshed_by(const Vec3& x, const Vec3& normal, double offset) {
     const auto y = cover_.nearest_within_reach(x, normal);
-    if (!y) return false;
+    if (!y) return std::nullopt;
     const Deviation& d = deviation(y->triangle);
-    if (!d.known) return false;
-    if ((x - y->point).norm() <= kFootSlack * (d.distance + offset) + kFootFloor * grid_.h) return true;
+    if (!d.known) return std::nullopt;
+    if ((x - y->point).norm() <= kFootSlack * (d.distance + offset) + kFootFloor * grid_.h) return y->triangle;
     // Farther: a mesh cut across a crease or a corner (creases ignored) lies farther from the
     // tip it cut off than from the faces beside it. It still stands for x when the segment from
     // x to the triangle stays on the triangle's side of the surface; a triangle of another sheet
@@ -334,15 +453,14 @@ class Seeder {
     // segment from a bead beside a box's face runs through air all the way to the face.
     Vec3 gy;
     const double f = field_.value_gradient(y->point, gy);
-    if (!std::isfinite(f)) return false;
-    if (!(std::abs(f) > kFootFloor * grid_.h * gy.norm())) return false;
+    if (!std::isfinite(f)) return std::nullopt;
+    if (!(std::abs(f) > kFootFloor * grid_.h * gy.norm())) return std::nullopt;
     for (int k = 1; k < kSegmentSamples; ++k) {
       const double v = field_.value(x + (static_cast<double>(k) / kSegmentSamples) * (y->point - x));
-      if (!std::isfinite(v) || (v < 0) != (f < 0)) return false;
+      if (!std::isfinite(v) || (v < 0) != (f < 0)) return std::nullopt;
     }
-    return true;
+    return y->triangle;
   }
-  bool meshed_at(const SurfacePoint& x) { return meshed_at(x.point, x.normal, 0); }
 
   // How far triangle t lies from the surface: the first-order distance |F| / |grad F| at its
   // centroid, where a chord of a smoothly curved patch deviates most (about 3/4 of the most for
@@ -368,13 +486,31 @@ class Seeder {
   // off) rather than a new component. Each step moves in the tangent plane towards the nearest
   // triangle of the same orientation and goes back onto the surface by Newton; it fails as soon
   // as the normal turns by 90 degrees or more (another sheet) or the mesh comes no nearer.
+  // A point reached after the first step is detail of the component reached only if the surface
+  // does not run the other way onto another component (other_way, kTipFacing); a point that may
+  // still bridge to a component not meshed yet is `open_walk_`, for the caller to look at again
+  // once every component is meshed.
   bool walks_to_mesh(SurfacePoint x) {
+    open_walk_ = false;
+    const SurfacePoint start = x;
+    Vec3 first_step = Vec3::Zero();
     const double step = min_edge_;
     ProjectionOptions po;
     po.max_travel = step;
     po.max_step = step;
-    for (int it = 0; it < kWalkSteps; ++it) {
-      if (meshed_at(x)) return true;
+    for (int it = 0; it <= kWalkSteps; ++it) {
+      if (const auto t = meshed_by(x)) {
+        if (it == 0) return true;
+        switch (other_way(start, -first_step, *t)) {
+          case OtherWay::Bridge:
+            ++report_.thin_bridges;
+            if (bridges_) bridges_->found.push_back(start.point);
+            return false;
+          case OtherWay::Open: open_walk_ = true; return true;
+          case OtherWay::Ends: return true;
+        }
+      }
+      if (it == kWalkSteps) return false;
       const auto y = cover_.nearest_same_sheet(x.point, x.normal, (kWalkSteps - it) * step);
       if (!y) return false;
       const Vec3 towards = *y - x.point;
@@ -382,6 +518,7 @@ class Seeder {
       // Along the surface; straight at the mesh where the tangent plane faces it (a tip).
       Vec3 d = towards - x.normal * x.normal.dot(towards);
       if (!(d.norm() > 0.1 * before)) d = towards;
+      if (it == 0) first_step = d.normalized();
       const ProjectionResult r = project_to_surface(field_, x.point + std::min(step, before) * d.normalized(), po);
       if (!r.ok()) return false;
       const Vec3 g = field_.gradient(r.point);
@@ -389,7 +526,48 @@ class Seeder {
       if (!((*y - r.point).norm() < before)) return false;
       x = {r.point, g.normalized()};
     }
-    return meshed_at(x);
+    return false;
+  }
+
+  // Where the surface leads from x along `away` (the tangent direction opposite the walk that
+  // reached triangle `reached`), in steps of min_edge, each direction the last one laid into the
+  // new tangent plane: it Ends where it turns to face the walk (a tip) or the way along it
+  // vanishes, is a Bridge where a triangle of another component of the mesh stands for it, and
+  // Open where it reaches the same component (a crease cut off, a thin handle: not decided
+  // here), leaves the surface, or runs on past kOtherWaySteps steps.
+  enum class OtherWay { Ends, Bridge, Open };
+  OtherWay other_way(SurfacePoint x, Vec3 away, int reached) {
+    const double step = min_edge_;
+    ProjectionOptions po;
+    po.max_travel = step;
+    po.max_step = step;
+    const int from = component_of(reached);
+    for (int it = 0; it < kOtherWaySteps; ++it) {
+      Vec3 d = away - x.normal * x.normal.dot(away);
+      if (!(d.norm() > 0.1)) return OtherWay::Ends;
+      d.normalize();
+      const ProjectionResult r = project_to_surface(field_, x.point + step * d, po);
+      if (!r.ok()) return OtherWay::Open;
+      const Vec3 g = field_.gradient(r.point);
+      if (!(g.squaredNorm() > 0) || !g.allFinite()) return OtherWay::Open;
+      x = {r.point, g.normalized()};
+      if (x.normal.dot(d) > kTipFacing) return OtherWay::Ends;
+      if (const auto t = meshed_by(x)) return component_of(*t) == from ? OtherWay::Open : OtherWay::Bridge;
+      away = d;
+    }
+    return OtherWay::Open;
+  }
+
+  // The connected component of the mesh triangle t lies in (by shared vertices), as the lowest
+  // vertex index in it; the labels are made again when the mesh has grown since.
+  int component_of(int t) {
+    const Mesh& mesh = cover_.mesh();
+    if (labelled_ != mesh.triangles.size() || labels_.parent.size() != mesh.positions.size()) {
+      labels_.reset(mesh.positions.size());
+      for (const auto& f : mesh.triangles) labels_.unite(f[0], f[1]), labels_.unite(f[0], f[2]);
+      labelled_ = mesh.triangles.size();
+    }
+    return labels_.find(mesh.triangles[t][0]);
   }
 
   void visit(const SignChange& c) {
@@ -412,7 +590,9 @@ class Seeder {
       return;
     }
     if (walks_to_mesh(*x)) {
-      ++report_.below_resolution;
+      // The component the surface may bridge to from here can still be meshed by a later seed.
+      if (open_walk_ && deferring_) deferred_.push_back(*x);
+      else ++report_.below_resolution;
       return;
     }
     consider_seed(*x);
@@ -893,6 +1073,10 @@ class Seeder {
   std::vector<Witness> unsure_;
   std::vector<SurfacePoint> deferred_;
   bool deferring_ = true;
+  bool open_walk_ = false;  // the last walks_to_mesh's other way was Open
+  Bridges* bridges_;        // the caller's: seeded first, and found
+  UnionFind labels_{0};     // component_of's, over the mesh's vertices
+  std::size_t labelled_ = 0;  // the mesh's triangles when labels_ was made
   SeedingReport report_;
   std::size_t refine_budget_ = kMinRefinedCells;  // search_small_components sets it
 };
@@ -900,8 +1084,8 @@ class Seeder {
 }  // namespace
 
 SeedingReport seed_every_component(const Field& field, const SeedGrid& grid, double min_edge, double cell,
-                                   Tracker& tracker, const Mesh& mesh) {
-  return Seeder(field, grid, min_edge, cell, tracker, mesh).run();
+                                   Tracker& tracker, const Mesh& mesh, Bridges* bridges) {
+  return Seeder(field, grid, min_edge, cell, tracker, mesh, bridges).run();
 }
 
 }  // namespace cdp::adaptive

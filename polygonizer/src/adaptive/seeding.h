@@ -8,9 +8,11 @@
 //     surface point there is about as far from that point as from the surface (the mesh is a
 //     chord of the surface and can pass a grid node on the other side of where the surface does;
 //     a triangle of another sheet is farther from the point than from its own sheet), or when a walk along the surface in steps of
-//     min_edge reaches such a triangle (detail finer than min_edge, a needle's tip, that the
-//     mesh stops short of: `below_resolution`). Anything else starts a new component, from a
-//     point whose curvature min_edge resolves first (seeds in unresolvable detail wait).
+//     min_edge reaches such a triangle and the surface, followed the other way, ends (detail
+//     finer than min_edge, a needle's tip, that the mesh stops short of: `below_resolution`;
+//     where it runs onto another component instead, a thin bridge: `thin_bridges`, Bridges
+//     below). Anything else starts a new component, from a point whose curvature min_edge
+//     resolves first (seeds in unresolvable detail wait).
 //     Opposite orientation is never "the same sheet": the inner sphere of a hollow ball, the
 //     second of two spheres 1e-3 apart.
 //  2. Small and thin components, which no grid edge sees. With a Lipschitz bound L (analytic
@@ -48,9 +50,20 @@
 
 namespace cdp::adaptive {
 
+// Thin bridges: seeds on surface that components meshed before them closed over. A feature
+// thinner than min_edge that runs from one component of the mesh to another (a rod between two
+// balls, seeding.cpp's kTipFacing), and a component seeded late whose mesh runs into theirs (the
+// rod when min_edge resolves it: the balls' long edges stepped over where it joins them). A
+// component grown from there after the others were closed meets their meshes; an attempt made
+// again with them seeded `first` grows from the bridge onto what it joins (Run::attempt).
+struct Bridges {
+  std::vector<Vec3> first;  // seeded before the grid's sign changes, in order
+  std::vector<Vec3> found;  // appended as found (kept when the meshing throws)
+};
+
 // Meshes every component through `tracker` (which appends to `mesh`). `cell` sizes the index of
 // triangles the coverage tests use: about a typical edge (never below the grid's cell). Deterministic.
 SeedingReport seed_every_component(const Field& field, const SeedGrid& grid, double min_edge, double cell,
-                                   Tracker& tracker, const Mesh& mesh);
+                                   Tracker& tracker, const Mesh& mesh, Bridges* bridges = nullptr);
 
 }  // namespace cdp::adaptive

@@ -42,7 +42,8 @@ void mesh_surface(const RunContext& run, const SeedGridStage& seeds, CreaseMesh*
       ~Count() { phases.add_split_evaluations(helper.tasks_run()); }
     } count{run.phases, helper};
     tracking.seeding =
-        seed_every_component(run.field, seeds.grid, settings.sizing.min_edge, settings.hash_cell, tracker, mesh);
+        seed_every_component(run.field, seeds.grid, settings.sizing.min_edge, settings.hash_cell, tracker, mesh,
+                             consume ? nullptr : &tracking.bridges);
   }
   tracker.compact();
 }
@@ -53,6 +54,7 @@ void track_surface(const RunContext& run, const SeedGridStage& seeds, CreaseMesh
                    std::size_t finished_components, Settings& settings, Mesh& mesh, Tracking& tracking) {
   run.enter("tracking", "meshing");
   tracking.remeshed = false;
+  tracking.bridges.found.clear();
   try {
     mesh_surface(run, seeds, finished, consume, settings, settings.anticipate, mesh, tracking);  // careful runs roll back from the start
   } catch (const StalledFrontError& stalled) {

@@ -21,6 +21,8 @@ inline Bend no_bend() { return {std::numeric_limits<double>::infinity(), Vec3::Z
 struct Tracking {
   std::optional<Tracker> tracker;  // of the last meshing (its counters go into the stats)
   SeedingReport seeding;
+  // Thin bridges (seeding.h): seeded first (the run's choice), found by the last meshing.
+  Bridges bridges;
   bool remeshed = false;     // meshed again with the rollbacks on after a stalled front
   bool no_crossing = false;  // the seeding found no sign change at all
   // The tightest bend every tracker of the run met so far (note_tightest): below min_edge the
@@ -46,7 +48,9 @@ struct UnsearchedCellsError : LimitExceededError {
 // then meshed again from the start with the rollbacks on (`remeshed`). With `consume`, the
 // finished mesh's arrays are moved into `mesh` and the tracker rather than copied (the blocks'
 // mesh, adopted once: a copy of the whole mesh was a fifth of a run's peak memory), and a
-// stalled front is not meshed again here (the caller tracks alone).
+// stalled front is not meshed again here (the caller tracks alone). The seeding starts from
+// tracking.bridges.first before anything else and fills tracking.bridges.found (not with
+// `consume`: the finished mesh cannot be adopted again for a meshing with them first).
 // \throw NoSurfaceError when the field has no sign change, when no seed could be meshed, when
 //        sign changes are left uncovered; the first run's StalledFrontError when the second
 //        fails (or with `consume`); UnsearchedCellsError where the small-component search left

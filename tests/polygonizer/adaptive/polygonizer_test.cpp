@@ -448,9 +448,9 @@ using test::Rewrapped;
 // stats "phases.*": each phase's time and field evaluations, summed over every run a
 // polygonization makes, add up to the run's (test::expect_phases_add_up; the hard-surface suite
 // checks every run it makes too). A first run kept (the torus), the paper variant (no quality
-// phase), a crease layout (the cube: the creases phase evaluates), and blobs26 and blobs19 of
-// the topology sweep at factor 1, which take the quality re-run and the careful run (runs whose
-// phases are entered again).
+// phase), a crease layout (the cube: the creases phase evaluates), and blobs26 and blobs29 of
+// the topology sweep at factor 1, which take the attempt made again with a late seed first and
+// the quality re-run, and the careful run (runs whose phases are entered again).
 TEST(AdaptivePolygonizer, PhasesAddUpToTheRun) {
   const Torus torus(Vec3::Zero(), 1.0, 0.4);
   const std::unique_ptr<Field> cube = make_field(
@@ -459,8 +459,8 @@ TEST(AdaptivePolygonizer, PhasesAddUpToTheRun) {
       "cube");
   const std::unique_ptr<Field> blobs26 =
       load_field(std::string(CDP_SOURCE_DIR) + "/results/topology_sweep/fields/blobs26.json");
-  const std::unique_ptr<Field> blobs19 =
-      load_field(std::string(CDP_SOURCE_DIR) + "/results/topology_sweep/fields/blobs19.json");
+  const std::unique_ptr<Field> blobs29 =
+      load_field(std::string(CDP_SOURCE_DIR) + "/results/topology_sweep/fields/blobs29.json");
   struct Case {
     const char* name;
     const Field* field;
@@ -470,7 +470,7 @@ TEST(AdaptivePolygonizer, PhasesAddUpToTheRun) {
   for (const Case& c : {Case{"torus", &torus, 3, Variant::Improved}, Case{"torus paper", &torus, 3, Variant::Paper},
                         Case{"cube", cube.get(), 3, Variant::Improved},
                         Case{"blobs26", blobs26.get(), 1, Variant::Improved},
-                        Case{"blobs19", blobs19.get(), 1, Variant::Improved}}) {
+                        Case{"blobs29", blobs29.get(), 1, Variant::Improved}}) {
     SCOPED_TRACE(c.name);
     AdaptiveOptions o;
     o.factor = c.factor;
@@ -487,11 +487,13 @@ TEST(AdaptivePolygonizer, PhasesAddUpToTheRun) {
     if (!creases) {
       EXPECT_GT(calls("tracking").gradient_hessian, 0u);
     }
-    // A run made again for quality (blobs26), and one meshed again carefully (blobs19).
+    // An attempt made again with a late seed first and a run made again for quality (blobs26),
+    // and one meshed again carefully (blobs29).
     if (std::string(c.name) == "blobs26") {
+      EXPECT_GE(r.stats.adaptive->seeding.seeds_first, 1u);
       EXPECT_TRUE(r.stats.adaptive->recoveries.quality_rerun);
     }
-    if (std::string(c.name) == "blobs19") {
+    if (std::string(c.name) == "blobs29") {
       EXPECT_TRUE(r.stats.adaptive->recoveries.remeshed_carefully);
     }
   }

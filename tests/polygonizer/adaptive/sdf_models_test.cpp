@@ -319,3 +319,46 @@ TEST(SdfNecks, AThinTunnelOfADistanceFieldIsNotClosed) {
 
 }  // namespace
 }  // namespace cdp
+
+namespace cdp {
+namespace {
+
+// Two balls joined by a rod thinner than min_edge: the seeding's probes land on the rod, and the
+// walk from them reaches a ball's mesh; the rod is a needle's tip of that ball only if the
+// surface, followed the other way, ends. It runs onto the other ball instead, so the rod is a
+// bridge (seeding's thin_bridges); seeded after the balls it runs into their meshes, and the
+// attempt is made again with it seeded first (seeds_first), with min_edge lowered where the rod
+// is thinner than min_edge. Both were meshed as two balls, exit 0, at these settings (the rod
+// 0.005 wide, min_edge 0.0072).
+TEST(SdfNecks, ARodThinnerThanMinEdgeBetweenTwoBallsIsMeshedFromTheRod) {
+  const std::string rod = "hypot((-z), y, x - clamp(x, (-0.7), 0.7)) - 0.0025";
+  nlohmann::json sharp = {{"type", "expression"},
+                          {"value", "min(hypot((x + 0.7), y, z) - 0.5, hypot((x - 0.7), y, z) - 0.5, " + rod + ")"},
+                          {"bounds", {{-1.44, -0.74, -0.74}, {1.44, 0.74, 0.74}}}};
+  // cdp.sdf's sphere | capsule.k(0.02) | sphere.k(0.02): a C1 union, no crease.
+  nlohmann::json smooth = {{"type", "expression"},
+                           {"value", "_d3 + (_d2 - _d3)*_h1 - 0.02*_h1*(1 - _h1)"},
+                           {"define",
+                            {{"_d0", "hypot((x + 0.7), y, z) - 0.5"},
+                             {"_d1", rod},
+                             {"_h0", "clamp(0.5 + (_d1 - _d0)*25.0, 0, 1)"},
+                             {"_d2", "_d1 + (_d0 - _d1)*_h0 - 0.02*_h0*(1 - _h0)"},
+                             {"_d3", "hypot((x - 0.7), y, z) - 0.5"},
+                             {"_h1", "clamp(0.5 + (_d3 - _d2)*25.0, 0, 1)"}}},
+                           {"bounds", {{-1.486, -0.786, -0.786}, {1.466, 0.786, 0.786}}}};
+  for (const auto& [json, name] : {std::pair{sharp, "sharp"}, std::pair{smooth, "smooth"}}) {
+    SCOPED_TRACE(name);
+    const auto field = test::field_from_json(json.dump());
+    AdaptiveOptions o;
+    o.factor = 2;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    test::expect_sound(r.mesh, name);
+    const MeshTopology t = analyze_topology(r.mesh);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.genus, 0);
+    EXPECT_GE(r.stats.adaptive->seeding.seeds_first, 1u);
+  }
+}
+
+}  // namespace
+}  // namespace cdp

@@ -35,6 +35,8 @@ struct SeedingReport {
   std::size_t failed_seeds = 0;      // surface points where not even a hexagon fitted
   std::size_t covered_nearby = 0;    // sign changes no triangle crosses, but a triangle of the sheet is near
   std::size_t below_resolution = 0;  // sign changes on meshed components, in detail finer than min_edge
+  std::size_t thin_bridges = 0;      // surface points that walk to one component and run onto another (seeding.cpp, kTipFacing)
+  std::size_t seeds_first = 0;       // seeds started before the grid's: bridges an earlier attempt found (seeding.h)
   std::size_t refined_cells = 0;     // cells split by the small-component search
   std::size_t unresolved_cells = 0;  // cells at min_edge that may still hold surface (thinner than min_edge)
   std::size_t unsearched_cells = 0;  // cells the search's budget left unsplit, which may hold surface (seeding.cpp)
