@@ -108,6 +108,13 @@ struct SurfacePoint {
   Vec3 point, normal;
 };
 
+// p with F's unit normal there, or nothing where the gradient vanishes or is not finite.
+std::optional<SurfacePoint> with_normal(const Field& field, const Vec3& p) {
+  const Vec3 g = field.gradient(p);
+  if (!(g.squaredNorm() > 0) || !g.allFinite()) return std::nullopt;
+  return SurfacePoint{p, g.normalized()};
+}
+
 // The surface point on a sign change: Newton from the linear interpolant; where it wanders off,
 // bisection first keeps the bracket and Newton finishes.
 std::optional<SurfacePoint> surface_point(const Field& field, const SignChange& c) {
@@ -129,9 +136,7 @@ std::optional<SurfacePoint> surface_point(const Field& field, const SignChange& 
     r = project_to_surface(field, 0.5 * (a + b), po);
   }
   if (!r.ok()) return std::nullopt;
-  const Vec3 g = field.gradient(r.point);
-  if (!(g.squaredNorm() > 0) || !g.allFinite()) return std::nullopt;
-  return SurfacePoint{r.point, g.normalized()};
+  return with_normal(field, r.point);
 }
 
 // The mesh tracked so far, for the seeding's questions: does a triangle cross this segment, does
@@ -176,15 +181,19 @@ class MeshCoverage {
     return any_in([&](const SizeClass&) { return BoxQuery{{lo, hi}}; }, [&](int f) {
       const auto& t = mesh_.triangles[f];
       const Vec3 &p = P[t[0]], &q = P[t[1]], &r = P[t[2]];
-      // Most triangles of the cells lie beside the segment's box (a grid edge is as long as a
-      // few triangles): corners all beyond one face of the box settle it with comparisons,
-      // exactly (the triangle's points lie between its corners).
-      for (int axis = 0; axis < 3; ++axis)
-        if ((p[axis] < lo[axis] && q[axis] < lo[axis] && r[axis] < lo[axis]) ||
-            (p[axis] > hi[axis] && q[axis] > hi[axis] && r[axis] > hi[axis]))
-          return false;
-      return segment_meets_triangle(a, b, p, q, r);
+      return !beside_box(p, q, r, lo, hi) && segment_meets_triangle(a, b, p, q, r);
     });
+  }
+
+  // Whether triangle pqr's corners all lie beyond one face of the box lo-hi. Most triangles of
+  // the cells lie beside a segment's box (a grid edge is as long as a few triangles): this
+  // settles them with comparisons, exactly (the triangle's points lie between its corners).
+  static bool beside_box(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& lo, const Vec3& hi) {
+    for (int axis = 0; axis < 3; ++axis)
+      if ((p[axis] < lo[axis] && q[axis] < lo[axis] && r[axis] < lo[axis]) ||
+          (p[axis] > hi[axis] && q[axis] > hi[axis] && r[axis] > hi[axis]))
+        return true;
+    return false;
   }
 
   // Whether an edge of the triangles from `first` on (a component just meshed, not indexed yet)
@@ -196,25 +205,23 @@ class MeshCoverage {
   bool runs_into_indexed(std::size_t first) const {
     const auto& P = mesh_.positions;
     const auto normal = [&](const std::array<int, 3>& f) { return (P[f[1]] - P[f[0]]).cross(P[f[2]] - P[f[0]]); };
-    for (std::size_t t = first; t < mesh_.triangles.size(); ++t)
+    for (std::size_t t = first; t < mesh_.triangles.size(); ++t) {
+      const Vec3 n = normal(mesh_.triangles[t]);
       for (int e = 0; e < 3; ++e) {
         const int i = mesh_.triangles[t][e], j = mesh_.triangles[t][(e + 1) % 3];
         if (i > j) continue;  // each edge of a closed mesh once
-        const Vec3 n = normal(mesh_.triangles[t]);
         const Vec3 &a = P[i], &b = P[j];
         const Vec3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
         const bool meets = any_in([&](const SizeClass&) { return BoxQuery{{lo, hi}}; }, [&](int f) {
           const auto& g = mesh_.triangles[f];
           const Vec3 &p = P[g[0]], &q = P[g[1]], &r = P[g[2]];
-          for (int axis = 0; axis < 3; ++axis)  // as in crosses
-            if ((p[axis] < lo[axis] && q[axis] < lo[axis] && r[axis] < lo[axis]) ||
-                (p[axis] > hi[axis] && q[axis] > hi[axis] && r[axis] > hi[axis]))
-              return false;
+          if (beside_box(p, q, r, lo, hi)) return false;
           if (std::find(g.begin(), g.end(), i) != g.end() || std::find(g.begin(), g.end(), j) != g.end()) return false;
           return segment_meets_triangle(a, b, p, q, r) && n.dot(normal(g)) > 0;
         });
         if (meets) return true;
       }
+    }
     return false;
   }
 
@@ -384,13 +391,12 @@ class Seeder {
   // never deferred, which would let the components they join close over them again.
   void bridges_first() {
     for (const Vec3& p : bridges_->first) {
-      const Vec3 g = field_.gradient(p);
-      if (!(g.squaredNorm() > 0) || !g.allFinite()) continue;
-      const SurfacePoint x{p, g.normalized()};
+      const auto x = with_normal(field_, p);
+      if (!x) continue;
       cover_.update();
-      if (meshed_at(x)) continue;
+      if (meshed_at(*x)) continue;
       ++report_.seeds_first;
-      start_from(x);
+      start_from(*x);
     }
   }
 
@@ -495,9 +501,6 @@ class Seeder {
     const SurfacePoint start = x;
     Vec3 first_step = Vec3::Zero();
     const double step = min_edge_;
-    ProjectionOptions po;
-    po.max_travel = step;
-    po.max_step = step;
     for (int it = 0; it <= kWalkSteps; ++it) {
       if (const auto t = meshed_by(x)) {
         if (it == 0) return true;
@@ -519,14 +522,22 @@ class Seeder {
       Vec3 d = towards - x.normal * x.normal.dot(towards);
       if (!(d.norm() > 0.1 * before)) d = towards;
       if (it == 0) first_step = d.normalized();
-      const ProjectionResult r = project_to_surface(field_, x.point + std::min(step, before) * d.normalized(), po);
-      if (!r.ok()) return false;
-      const Vec3 g = field_.gradient(r.point);
-      if (!(g.squaredNorm() > 0) || !g.allFinite() || !(g.normalized().dot(x.normal) > 0)) return false;
-      if (!((*y - r.point).norm() < before)) return false;
-      x = {r.point, g.normalized()};
+      const auto next = onto_surface(x.point + std::min(step, before) * d.normalized());
+      if (!next || !(next->normal.dot(x.normal) > 0)) return false;
+      if (!((*y - next->point).norm() < before)) return false;
+      x = *next;
     }
     return false;
+  }
+
+  // A walk's step: p taken back onto the surface by Newton within min_edge, with its normal.
+  std::optional<SurfacePoint> onto_surface(const Vec3& p) const {
+    ProjectionOptions po;
+    po.max_travel = min_edge_;
+    po.max_step = min_edge_;
+    const ProjectionResult r = project_to_surface(field_, p, po);
+    if (!r.ok()) return std::nullopt;
+    return with_normal(field_, r.point);
   }
 
   // Where the surface leads from x along `away` (the tangent direction opposite the walk that
@@ -537,20 +548,14 @@ class Seeder {
   // here), leaves the surface, or runs on past kOtherWaySteps steps.
   enum class OtherWay { Ends, Bridge, Open };
   OtherWay other_way(SurfacePoint x, Vec3 away, int reached) {
-    const double step = min_edge_;
-    ProjectionOptions po;
-    po.max_travel = step;
-    po.max_step = step;
     const int from = component_of(reached);
     for (int it = 0; it < kOtherWaySteps; ++it) {
       Vec3 d = away - x.normal * x.normal.dot(away);
       if (!(d.norm() > 0.1)) return OtherWay::Ends;
       d.normalize();
-      const ProjectionResult r = project_to_surface(field_, x.point + step * d, po);
-      if (!r.ok()) return OtherWay::Open;
-      const Vec3 g = field_.gradient(r.point);
-      if (!(g.squaredNorm() > 0) || !g.allFinite()) return OtherWay::Open;
-      x = {r.point, g.normalized()};
+      const auto next = onto_surface(x.point + min_edge_ * d);
+      if (!next) return OtherWay::Open;
+      x = *next;
       if (x.normal.dot(d) > kTipFacing) return OtherWay::Ends;
       if (const auto t = meshed_by(x)) return component_of(*t) == from ? OtherWay::Open : OtherWay::Bridge;
       away = d;

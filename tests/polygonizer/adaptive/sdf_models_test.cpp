@@ -55,6 +55,14 @@ std::vector<SdfModel> sdf_models() {
   return models;
 }
 
+// A sound mesh (test::expect_sound) with these components and genus.
+void expect_sound_with(const Mesh& mesh, const std::string& name, int components, int genus) {
+  test::expect_sound(mesh, name);
+  const MeshTopology t = analyze_topology(mesh);
+  EXPECT_EQ(static_cast<int>(t.components), components) << name;
+  EXPECT_EQ(t.genus, genus) << name;
+}
+
 struct SdfCase {
   std::size_t model;
   double factor;
@@ -177,10 +185,7 @@ TEST(SdfFoglemanFilletedHoles, AtFactorTwoAndAHalfNoCapHangsOverTheCreaseOfTwoHo
   AdaptiveOptions o;
   o.factor = 2.5;
   const PolygonizeResult r = polygonize_adaptive(*field, o);
-  test::expect_sound(r.mesh, m.name);
-  const MeshTopology t = analyze_topology(r.mesh);
-  EXPECT_EQ(static_cast<int>(t.components), m.components);
-  EXPECT_EQ(t.genus, m.genus);
+  expect_sound_with(r.mesh, m.name, m.components, m.genus);
   EXPECT_EQ(r.stats.adaptive->creases.fallback, "");
   EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0);
   const CreaseAngles away = crease_angles(*field, r.mesh);
@@ -229,10 +234,7 @@ TEST(SdfCrowd, TwoHundredBlobsJoinedByANarrowNeckMeshWithMinEdgeLowered) {
   const PolygonizeResult r = polygonize_adaptive(*field, o);
   EXPECT_EQ(meshings, 2);
   EXPECT_EQ(repairs, 1);
-  test::expect_sound(r.mesh, "crowd");
-  const MeshTopology t = analyze_topology(r.mesh);
-  EXPECT_EQ(t.components, 3u);
-  EXPECT_EQ(t.genus, 30);
+  expect_sound_with(r.mesh, "crowd", 3, 30);
   EXPECT_TRUE(r.stats.adaptive->recoveries.min_edge_lowered);
   EXPECT_GE(r.stats.adaptive->min_angle_degrees, 20.0);
 }
@@ -272,10 +274,7 @@ TEST(SdfShells, AShellThinnerThanTheEdgesIsMeshedAgainWithMaxEdgeTwiceItsThickne
     AdaptiveOptions o;
     o.factor = factor;
     const PolygonizeResult r = polygonize_adaptive(*shell, o);
-    test::expect_sound(r.mesh, "shell");
-    const MeshTopology t = analyze_topology(r.mesh);
-    EXPECT_EQ(t.components, 2u);
-    EXPECT_EQ(t.genus, 0);
+    expect_sound_with(r.mesh, "shell", 2, 0);
     EXPECT_TRUE(r.stats.adaptive->recoveries.thin_sheets);
     EXPECT_NEAR(r.stats.adaptive->settings.max_edge, 0.04, 0.001);
     EXPECT_GE(r.stats.adaptive->min_angle_degrees, 20.0);
@@ -310,18 +309,10 @@ TEST(SdfNecks, AThinTunnelOfADistanceFieldIsNotClosed) {
     AdaptiveOptions o;
     o.factor = factor;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
-    test::expect_sound(r.mesh, "torus");
-    const MeshTopology t = analyze_topology(r.mesh);
-    EXPECT_EQ(t.components, 1u);
-    EXPECT_EQ(t.genus, 1);
+    expect_sound_with(r.mesh, "torus", 1, 1);
   }
 }
 
-}  // namespace
-}  // namespace cdp
-
-namespace cdp {
-namespace {
 
 // Two balls joined by a rod thinner than min_edge: the seeding's probes land on the rod, and the
 // walk from them reaches a ball's mesh; the rod is a needle's tip of that ball only if the
@@ -352,10 +343,7 @@ TEST(SdfNecks, ARodThinnerThanMinEdgeBetweenTwoBallsIsMeshedFromTheRod) {
     AdaptiveOptions o;
     o.factor = 2;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
-    test::expect_sound(r.mesh, name);
-    const MeshTopology t = analyze_topology(r.mesh);
-    EXPECT_EQ(t.components, 1u);
-    EXPECT_EQ(t.genus, 0);
+    expect_sound_with(r.mesh, name, 1, 0);
     EXPECT_GE(r.stats.adaptive->seeding.seeds_first, 1u);
   }
 }
