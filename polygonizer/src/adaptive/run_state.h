@@ -59,7 +59,8 @@ class Run {
   void zone_missed_necks();
   // Whether the last attempt failed where no recovery can mend it and a run with a lowered
   // min_edge follows (RunRequest::lowered_min_edge_follows): it stepped over a neck too narrow
-  // for edges of min_edge (kUnmeshableNeck). Sets `doomed`, which ends the recoveries.
+  // for edges of min_edge (kUnmeshableNeck), or stepped over again a narrow neck inside the
+  // zone an earlier attempt put round it (kRezonedNeck). Sets `doomed`, which ends the recoveries.
   bool needs_shorter_edges();
   // Tries one recovery of kRecoveries; true when it meshed.
   bool recover(const Recovery& r, bool after_limit);
