@@ -140,6 +140,8 @@ void add_recoveries(nlohmann::json& j, const RecoveryReport& r) {
   j["look_ahead"] = r.look_ahead;
   j["quality_rerun"] = r.quality_rerun;
   j["quality_rerun_kept"] = r.quality_rerun_kept;
+  j["tolerance_rerun"] = r.tolerance_rerun;
+  j["tolerance_rerun_kept"] = r.tolerance_rerun_kept;
   j["remeshed_with_rollbacks"] = r.remeshed_with_rollbacks;
   j["remeshed_carefully"] = r.remeshed_carefully;
   j["careful_max_turn"] = r.careful_max_turn;

@@ -53,7 +53,8 @@ TEST(PolygonizeStatsJson, EveryAdaptiveFieldUnderItsKey) {
   r.quality.over_tolerance_near = Vec3(55, 56, 57);
   r.necks = {.walks = 60, .critical_points = 61, .tested = 62, .reruns = 63, .unwalked = 64, .caps = 65};
   r.recoveries = {.min_edge_lowered = true, .turn_limited = false, .look_ahead = true, .quality_rerun = false,
-                  .quality_rerun_kept = true, .remeshed_with_rollbacks = false, .remeshed_carefully = true,
+                  .quality_rerun_kept = true, .tolerance_rerun = true, .tolerance_rerun_kept = false,
+                  .remeshed_with_rollbacks = false, .remeshed_carefully = true,
                   .careful_max_turn = 70};
   r.phases[2] = {.seconds = 71, .evaluations = {72, 73, 74}};
   r.split_evaluations = 75;
@@ -82,6 +83,7 @@ TEST(PolygonizeStatsJson, EveryAdaptiveFieldUnderItsKey) {
       {"quality.over_tolerance_near_z", 57.0}, {"necks.walks", 60}, {"necks.critical_points", 61},
       {"necks.tested", 62}, {"necks.reruns", 63}, {"necks.unwalked", 64}, {"necks.caps", 65}, {"min_edge_lowered", true}, {"turn_limited", false},
       {"look_ahead", true}, {"quality_rerun", false}, {"quality_rerun_kept", true},
+      {"tolerance_rerun", true}, {"tolerance_rerun_kept", false},
       {"remeshed_with_rollbacks", false}, {"remeshed_carefully", true}, {"careful_max_turn", 70.0},
       {"phases.tracking.seconds", 71.0}, {"phases.tracking.value", 72}, {"phases.tracking.value_gradient", 73},
       {"phases.tracking.gradient_hessian", 74}, {"phases.seed_grid.value", 0}, {"split_evaluations", 75},

@@ -46,17 +46,17 @@ const PhaseReport& AdaptiveReport::phase(std::string_view name) const {
 namespace {
 
 // The runs polygonize_adaptive makes, in order. The first is the options as given; the next
-// two are made only when every run before them failed (each with its own recoveries, run.cpp),
-// the last only when a mesh misses the quality bounds. Each is made only where
+// three are made only when every run before them failed (each with its own recoveries, run.cpp),
+// the last two only when a mesh misses the tolerance or the quality bounds. Each is made only where
 // adaptive::remeshing_allowed (Variant::Improved, no bound of the caller's on triangles, steps
 // or searches), and none after a failure that no run made again mends (adaptive::RunFailure::final:
 // a black box's kink, a sampled volume's noise).
-enum class RunKind { AsGiven, LoweredMinEdge, TurnLimited, ThinSheets, LookAhead };
+enum class RunKind { AsGiven, LoweredMinEdge, TurnLimited, ThinSheets, ForTolerance, LookAhead };
 struct RunRow {
   RunKind kind;
   const char* name;
 };
-constexpr std::array<RunRow, 5> kRuns{{
+constexpr std::array<RunRow, 6> kRuns{{
     {RunKind::AsGiven, "as_given"},
     // min_edge lowered to kBendEdgeShare of the tightest bend the first run met, where it failed
     // at a bend tighter than min_edge (adaptive::lowered_min_edge, resolve_settings.h); stats
@@ -71,6 +71,14 @@ constexpr std::array<RunRow, 5> kRuns{{
     // resolve_settings.h); last, so that what meshed before meshes as before. cdp.sdf's sphere
     // shells 0.01 and 0.02 thick failed at factors 1-3 in 0.2 s; stats "thin_sheets".
     {RunKind::ThinSheets, "thin_sheets"},
+    // Tolerance mode: a mesh of the run as given with triangles beyond the tolerance, where the
+    // tightest bend its fronts met is under min_edge (left to its default): meshed again with
+    // min_edge lowered as for a failure (adaptive::lowered_min_edge), kept when fewer triangles
+    // lie beyond the tolerance and it misses no more quality bounds. Edges of min_edge round a
+    // bend of radius r lie up to min_edge^2 / 8r from it: cdp.sdf's smooth barbell (two balls
+    // joined by a rod of radius 0.0025, min_edge 0.0038) had 260 triangles beyond a tolerance of
+    // 5e-4 (up to 1.05e-3) and 91 beyond 1e-4, exit 0. Stats "tolerance_rerun".
+    {RunKind::ForTolerance, "for_tolerance"},
     // A smooth surface's mesh that misses the quality bounds: meshed again with the front
     // look-ahead, the mesh that misses fewer kept (may_rerun_for_quality); stats "quality_rerun".
     {RunKind::LookAhead, "look_ahead"},
@@ -133,6 +141,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
   std::optional<AdaptiveOptions> for_sheets;
   std::string sheets_error;
   int missed = 0;
+  std::optional<double> for_tolerance;
   // A run's NoSurfaceError or LimitExceededError (`limit`): whether it ends polygonize_adaptive.
   // The first run's error stands unless a run made again meshes; the lowered run's is quoted.
   const auto failed = [&](const RunRow& row, const adaptive::RunFailure& failure, bool limit, const std::exception& e) {
@@ -166,10 +175,19 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
         if (kept || !for_sheets) continue;
         again = *for_sheets;
         break;
+      case RunKind::ForTolerance:
+        if (!kept || kept_from != RunKind::AsGiven || options.sizing != SizingMode::Tolerance ||
+            kept->stats.adaptive->quality.over_tolerance == 0)
+          continue;
+        for_tolerance = adaptive::lowered_min_edge(field, options, kept->stats.adaptive->tracker.min_curvature_radius);
+        if (!for_tolerance) continue;
+        again.min_edge = *for_tolerance;
+        break;
       case RunKind::LookAhead:
         if (!kept || !may_rerun_for_quality(options, *kept) || (missed = missed_bounds(*kept)) == 0) continue;
         // The same min_edge (lowered when that was needed) or max_edge as the mesh it may replace.
         if (kept_from == RunKind::ThinSheets) again = *for_sheets;
+        else if (kept_from == RunKind::ForTolerance) again.min_edge = *for_tolerance;
         else if (kept_from != RunKind::AsGiven && lowered) again.min_edge = *lowered;
         request.look_ahead = true;
         break;
@@ -185,6 +203,16 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
         }
         kept->stats.adaptive->recoveries.quality_rerun = true;
         kept->stats.adaptive->recoveries.quality_rerun_kept = keep;
+      } else if (row.kind == RunKind::ForTolerance) {
+        const bool keep = r.stats.adaptive->quality.over_tolerance < kept->stats.adaptive->quality.over_tolerance &&
+                          missed_bounds(r) <= missed_bounds(*kept);
+        if (keep) {
+          r.stats.adaptive->recoveries.min_edge_lowered = true;
+          kept = std::move(r);
+          kept_from = RunKind::ForTolerance;
+        }
+        kept->stats.adaptive->recoveries.tolerance_rerun = true;
+        kept->stats.adaptive->recoveries.tolerance_rerun_kept = keep;
       } else {
         r.stats.adaptive->recoveries.min_edge_lowered =
             row.kind != RunKind::AsGiven && row.kind != RunKind::ThinSheets && lowered.has_value();

@@ -177,6 +177,8 @@ struct RecoveryReport {
   bool look_ahead = false;               // the fronts looked ahead (the run made for quality)
   bool quality_rerun = false;            // a second run was made for the quality bounds
   bool quality_rerun_kept = false;       // and its mesh was kept
+  bool tolerance_rerun = false;          // a run again with min_edge lowered for triangles beyond the tolerance
+  bool tolerance_rerun_kept = false;     // and its mesh was kept
   bool remeshed_with_rollbacks = false;  // meshed again with rollbacks after a stalled front
   bool remeshed_carefully = false;       // meshed again with limited turns (the careful recovery)
   double careful_max_turn = 0;           // the careful recovery's turn limit, 0 when it did not run
