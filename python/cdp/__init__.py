@@ -177,7 +177,36 @@ def _names_why_not_traced(function):
     return wrapper
 
 
-polygonize = _returns_mesh(_accepts_models(_names_why_not_traced(_distributes(_cdp.polygonize))))  # noqa: F811
+class ToleranceWarning(UserWarning):
+    """polygonize's mesh has triangles farther from the surface than the tolerance asked for
+    (stats["quality"]["over_tolerance"]): detail the refinement could not split further. The mesh
+    is closed and valid and the rest of it keeps the bound; build/bin/polygonize warns alike."""
+
+
+def _warns_beyond_tolerance(function):
+    """polygonize(...) that warns (ToleranceWarning) where its mesh breaks the tolerance: a promise
+    the program names on stderr, which a caller reading only the mesh would not see."""
+
+    @_functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        mesh = function(*args, **kwargs)
+        stats = mesh.stats
+        quality = stats.get("quality", {})
+        if stats.get("sizing") == "tolerance" and quality.get("over_tolerance", 0) > 0:
+            _warnings.warn("{} triangles lie farther from the surface than the tolerance {:g} (up to {:g}, near "
+                           "({:g}, {:g}, {:g})); the refinement could not split them further (edges too short to "
+                           "halve, or splits that would fold)".format(
+                               quality["over_tolerance"], stats["tolerance"], quality["over_tolerance_worst"],
+                               quality["over_tolerance_near_x"], quality["over_tolerance_near_y"],
+                               quality["over_tolerance_near_z"]), ToleranceWarning, stacklevel=2)
+        return mesh
+
+    wrapper.__module__ = __name__
+    return wrapper
+
+
+polygonize = _warns_beyond_tolerance(  # noqa: F811
+    _returns_mesh(_accepts_models(_names_why_not_traced(_distributes(_cdp.polygonize)))))
 # Its signature line (the compiled function's, which the stubs' test reads) with `client` too.
 _first, _rest = (_cdp.polygonize.__doc__ or "\n").split("\n", 1)
 polygonize.__doc__ = _first.replace("block_runner: object = None", "block_runner: object = None, client: object = None",
@@ -187,7 +216,7 @@ for _name in ("curvature", "project", "trace_creases", "corner_normals", "crease
     globals()[_name] = _accepts_models(getattr(_cdp, _name))
 
 del _name
-__all__ += ["Mesh"]
+__all__ += ["Mesh", "ToleranceWarning"]
 
 from . import sdf  # noqa: E402  (after the names above, which sdf does not use)
 from .trace import TraceError, trace, trace_formula  # noqa: E402

@@ -20,6 +20,8 @@ class _HasField(Protocol):
 _FieldLike = Field | _HasField
 _Bounds = ArrayLike
 
+class ToleranceWarning(UserWarning): ...
+
 class Mesh(NamedTuple):
     vertices: NDArray[np.float64]
     faces: NDArray[np.int32]
