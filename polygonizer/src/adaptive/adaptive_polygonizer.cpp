@@ -72,12 +72,13 @@ constexpr std::array<RunRow, 6> kRuns{{
     // shells 0.01 and 0.02 thick failed at factors 1-3 in 0.2 s; stats "thin_sheets".
     {RunKind::ThinSheets, "thin_sheets"},
     // Tolerance mode: a mesh of the run as given with triangles beyond the tolerance, where the
-    // tightest bend its fronts met is under min_edge (left to its default): meshed again with
-    // min_edge lowered as for a failure (adaptive::lowered_min_edge), kept when fewer triangles
-    // lie beyond the tolerance and it misses no more quality bounds. Edges of min_edge round a
-    // bend of radius r lie up to min_edge^2 / 8r from it: cdp.sdf's smooth barbell (two balls
-    // joined by a rod of radius 0.0025, min_edge 0.0038) had 260 triangles beyond a tolerance of
-    // 5e-4 (up to 1.05e-3) and 91 beyond 1e-4, exit 0. Stats "tolerance_rerun".
+    // chord the sizing allows round the tightest bend its fronts met is under twice min_edge
+    // (left to its default), so that the refinement cannot halve edges that long there: meshed
+    // again with min_edge half that chord (adaptive::min_edge_for_tolerance), kept when fewer
+    // triangles lie beyond the tolerance and it misses no more quality bounds. cdp.sdf's smooth
+    // barbell (two balls joined by a rod of radius 0.0025) had 260 triangles beyond a tolerance
+    // of 5e-4 (up to 1.05e-3, min_edge 0.0038) and 91 beyond 1e-4 (up to 1.8e-4, min_edge
+    // 0.0012), exit 0. Stats "tolerance_rerun".
     {RunKind::ForTolerance, "for_tolerance"},
     // A smooth surface's mesh that misses the quality bounds: meshed again with the front
     // look-ahead, the mesh that misses fewer kept (may_rerun_for_quality); stats "quality_rerun".
@@ -179,7 +180,7 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
         if (!kept || kept_from != RunKind::AsGiven || options.sizing != SizingMode::Tolerance ||
             kept->stats.adaptive->quality.over_tolerance == 0)
           continue;
-        for_tolerance = adaptive::lowered_min_edge(field, options, kept->stats.adaptive->tracker.min_curvature_radius);
+        for_tolerance = adaptive::min_edge_for_tolerance(field, options, kept->stats.adaptive->tracker.min_curvature_radius);
         if (!for_tolerance) continue;
         again.min_edge = *for_tolerance;
         break;
@@ -198,7 +199,13 @@ PolygonizeResult polygonize_adaptive(const Field& field, const AdaptiveOptions& 
       if (row.kind == RunKind::LookAhead) {
         const bool keep = missed_bounds(r) < missed;
         if (keep) {
-          r.stats.adaptive->recoveries.min_edge_lowered = kept->stats.adaptive->recoveries.min_edge_lowered;
+          // Made with the kept mesh's min_edge or thin-sheet options: what changed them stays said.
+          const RecoveryReport& was = kept->stats.adaptive->recoveries;
+          RecoveryReport& is = r.stats.adaptive->recoveries;
+          is.min_edge_lowered = was.min_edge_lowered;
+          is.thin_sheets = was.thin_sheets;
+          is.tolerance_rerun = was.tolerance_rerun;
+          is.tolerance_rerun_kept = was.tolerance_rerun_kept;
           kept = std::move(r);
         }
         kept->stats.adaptive->recoveries.quality_rerun = true;

@@ -1,6 +1,8 @@
 // resolve_settings: the caller's AdaptiveOptions with every default resolved (the first step of a run).
 #include "resolve_settings.h"
 
+#include "edge_length.h"
+
 #include <cdp/core/errors.h>
 
 #include <algorithm>
@@ -123,6 +125,17 @@ std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions
   const double lowest = kLowestMinEdge * s.diagonal;
   if (!(tightest_radius < s.sizing.min_edge) || !(tightest_radius >= kLowestBendShare * lowest)) return std::nullopt;
   return std::max(kBendEdgeShare * tightest_radius, lowest);
+}
+
+std::optional<double> min_edge_for_tolerance(const Field& field, const AdaptiveOptions& o, double tightest_radius) {
+  if (!remeshing_allowed(o) || o.min_edge > 0 || o.sizing != SizingMode::Tolerance) return std::nullopt;
+  const Settings s = resolve_settings(field, o);
+  const double lowest = kLowestMinEdge * s.diagonal;
+  if (!(tightest_radius >= kLowestBendShare * lowest)) return std::nullopt;
+  const double chord = chord_for_deviation(tightest_radius, s.sizing.tolerance);
+  const double lowered = std::max(0.5 * chord, lowest);
+  if (!(chord < 2 * s.sizing.min_edge) || !(lowered < s.sizing.min_edge)) return std::nullopt;
+  return lowered;
 }
 
 std::optional<AdaptiveOptions> options_for_sheets(const Field& field, const AdaptiveOptions& o, double gap) {

@@ -35,6 +35,14 @@ bool remeshing_allowed(const AdaptiveOptions& options);
 // kLowestBendShare of that lowest edge (a crease or a singular point, not a bend to follow).
 std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions& options, double tightest_radius);
 
+// The min_edge a tolerance-mode mesh with triangles beyond the tolerance is meshed again with
+// (kRuns' for_tolerance): where the chord the sizing allows round the tightest bend the run met
+// (chord_for_deviation) is under twice min_edge, the refinement cannot halve edges that long
+// there; half that chord, not below kLowestMinEdge of the diagonal. None where the caller set
+// min_edge, where remeshing_allowed says no, outside tolerance mode, or where the radius is below
+// kLowestBendShare of that lowest edge (a crease or a singular point).
+std::optional<double> min_edge_for_tolerance(const Field& field, const AdaptiveOptions& options, double tightest_radius);
+
 // The options a run that failed where two sheets of the surface lie `gap` apart, closer than its
 // edges (a shell, a plate: Tracker::sheets_closer_than_edges), is meshed again with (kRuns'
 // thin_sheets): max_edge twice the gap, and a seed grid whose cells are at most kSheetGridCells

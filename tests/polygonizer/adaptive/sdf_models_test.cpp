@@ -373,23 +373,27 @@ TEST(SdfNecks, ANarrowNeckSteppedOverAgainInsideItsZoneGoesToMinEdgeLoweredAtOnc
   EXPECT_LE(meshings, 6);
 }
 
-// At tolerance 5e-4 the smooth barbell's rod, of radius 0.0025, asks for edges of at most
-// sqrt(8 * 0.0025 * 5e-4) = 0.0032 round it; min_edge is 0.0038, and 260 triangles lay beyond the
-// tolerance (up to 1.05e-3), exit 0. The run as given is made again with min_edge lowered
-// (kRuns' for_tolerance), and that mesh, with none beyond, is kept.
-TEST(SdfNecks, TrianglesBeyondTheToleranceAtABendUnderMinEdgeAreMeshedAgainWithMinEdgeLowered) {
+// Round the smooth barbell's rod, of radius 0.0025, the sizing allows chords of 0.0022 at
+// tolerance 5e-4 and 0.001 at 1e-4; min_edge is 0.0038 and 0.0012, edges the refinement cannot
+// halve, and 260 and 91 triangles lay beyond the tolerance (up to 1.05e-3 and 1.8e-4), exit 0.
+// The run as given is made again with min_edge half that chord (kRuns' for_tolerance,
+// min_edge_for_tolerance), and that mesh, with none beyond, is kept.
+TEST(SdfNecks, TrianglesBeyondTheToleranceAtATightBendAreMeshedAgainWithMinEdgeLowered) {
   const auto field = test::field_from_json(smooth_barbell().dump());
-  AdaptiveOptions o;
-  o.sizing = SizingMode::Tolerance;
-  o.tolerance = 5e-4;
-  const PolygonizeResult r = polygonize_adaptive(*field, o);
-  expect_sound_with(r.mesh, "smooth barbell", 1, 0);
-  EXPECT_TRUE(r.stats.adaptive->recoveries.tolerance_rerun);
-  EXPECT_TRUE(r.stats.adaptive->recoveries.tolerance_rerun_kept);
-  EXPECT_TRUE(r.stats.adaptive->recoveries.min_edge_lowered);
-  EXPECT_EQ(r.stats.adaptive->quality.over_tolerance, 0u);
-  EXPECT_LT(r.stats.adaptive->settings.min_edge, 0.001);
-  EXPECT_GE(r.stats.adaptive->min_angle_degrees, 20.0);
+  for (const auto& [tolerance, min_edge] : {std::pair{5e-4, 0.0038}, std::pair{1e-4, 0.0012}}) {
+    SCOPED_TRACE(tolerance);
+    AdaptiveOptions o;
+    o.sizing = SizingMode::Tolerance;
+    o.tolerance = tolerance;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    expect_sound_with(r.mesh, "smooth barbell", 1, 0);
+    EXPECT_TRUE(r.stats.adaptive->recoveries.tolerance_rerun);
+    EXPECT_TRUE(r.stats.adaptive->recoveries.tolerance_rerun_kept);
+    EXPECT_TRUE(r.stats.adaptive->recoveries.min_edge_lowered);
+    EXPECT_EQ(r.stats.adaptive->quality.over_tolerance, 0u);
+    EXPECT_LT(r.stats.adaptive->settings.min_edge, 0.7 * min_edge);  // 0.0012 and 0.00074 (the lowest)
+    EXPECT_GE(r.stats.adaptive->min_angle_degrees, 20.0);
+  }
 }
 
 }  // namespace
