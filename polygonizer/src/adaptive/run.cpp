@@ -302,7 +302,7 @@ constexpr double kUnmeshableNeck = 0.5;
 // with min_edge 0.0038, in all ten attempts of the run as given (23 s, one of them 20 s and
 // 1.8 million triangles) before the run with min_edge lowered meshed it in 0.3 s. Over the
 // topology sweep (480 runs) and the SDF sweep (646) nothing changes; of the 105 thin-feature
-// runs, 9 barbells with rods 0.01 wide mesh 2-20 times faster, the same topology.
+// runs, 9 barbells with rods 0.01 wide mesh 2-24 times faster, the same topology.
 constexpr double kRezonedNeck = 2;
 
 }  // namespace

@@ -320,30 +320,17 @@ TEST(SdfNecks, AThinTunnelOfADistanceFieldIsNotClosed) {
 // bridge (seeding's thin_bridges); seeded after the balls it runs into their meshes, and the
 // attempt is made again with it seeded first (seeds_first), with min_edge lowered where the rod
 // is thinner than min_edge. Both were meshed as two balls, exit 0, at these settings (the rod
-// 0.005 wide, min_edge 0.0072).
-const std::string kBarbellRod = "hypot((-z), y, x - clamp(x, (-0.7), 0.7)) - 0.0025";
-
-// cdp.sdf's sphere | capsule.k(0.02) | sphere.k(0.02), the capsule 0.005 wide: a C1 union, no crease.
-nlohmann::json smooth_barbell() {
-  return {{"type", "expression"},
-          {"value", "_d3 + (_d2 - _d3)*_h1 - 0.02*_h1*(1 - _h1)"},
-          {"define",
-           {{"_d0", "hypot((x + 0.7), y, z) - 0.5"},
-            {"_d1", kBarbellRod},
-            {"_h0", "clamp(0.5 + (_d1 - _d0)*25.0, 0, 1)"},
-            {"_d2", "_d1 + (_d0 - _d1)*_h0 - 0.02*_h0*(1 - _h0)"},
-            {"_d3", "hypot((x - 0.7), y, z) - 0.5"},
-            {"_h1", "clamp(0.5 + (_d3 - _d2)*25.0, 0, 1)"}}},
-          {"bounds", {{-1.486, -0.786, -0.786}, {1.466, 0.786, 0.786}}}};
-}
-
+// 0.005 wide, min_edge 0.0072). The smooth one is the suite's smooth_barbell.
 TEST(SdfNecks, ARodThinnerThanMinEdgeBetweenTwoBallsIsMeshedFromTheRod) {
-  nlohmann::json sharp = {{"type", "expression"},
-                          {"value", "min(hypot((x + 0.7), y, z) - 0.5, hypot((x - 0.7), y, z) - 0.5, " + kBarbellRod + ")"},
-                          {"bounds", {{-1.44, -0.74, -0.74}, {1.44, 0.74, 0.74}}}};
-  for (const auto& [json, name] : {std::pair{sharp, "sharp"}, std::pair{smooth_barbell(), "smooth"}}) {
+  const nlohmann::json sharp = {
+      {"type", "expression"},
+      {"value", "min(hypot((x + 0.7), y, z) - 0.5, hypot((x - 0.7), y, z) - 0.5, "
+                "hypot((-z), y, x - clamp(x, (-0.7), 0.7)) - 0.0025)"},
+      {"bounds", {{-1.44, -0.74, -0.74}, {1.44, 0.74, 0.74}}}};
+  for (const auto& [json, name] :
+       {std::pair{sharp.dump(), "sharp"}, std::pair{sdf_model("smooth_barbell").json, "smooth"}}) {
     SCOPED_TRACE(name);
-    const auto field = test::field_from_json(json.dump());
+    const auto field = test::field_from_json(json);
     AdaptiveOptions o;
     o.factor = 2;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
@@ -358,7 +345,7 @@ TEST(SdfNecks, ARodThinnerThanMinEdgeBetweenTwoBallsIsMeshedFromTheRod) {
 // lowered follows at once. Before, all ten attempts of the run as given were made (23 s, one of
 // them 1.8 million triangles), then the lowered run meshed it as now.
 TEST(SdfNecks, ANarrowNeckSteppedOverAgainInsideItsZoneGoesToMinEdgeLoweredAtOnce) {
-  const auto field = test::field_from_json(smooth_barbell().dump());
+  const auto field = test::field_from_json(sdf_model("smooth_barbell").json);
   AdaptiveOptions o;
   o.sizing = SizingMode::Tolerance;
   o.tolerance = 1e-3;
@@ -379,7 +366,7 @@ TEST(SdfNecks, ANarrowNeckSteppedOverAgainInsideItsZoneGoesToMinEdgeLoweredAtOnc
 // The run as given is made again with min_edge half that chord (kRuns' for_tolerance,
 // min_edge_for_tolerance), and that mesh, with none beyond, is kept.
 TEST(SdfNecks, TrianglesBeyondTheToleranceAtATightBendAreMeshedAgainWithMinEdgeLowered) {
-  const auto field = test::field_from_json(smooth_barbell().dump());
+  const auto field = test::field_from_json(sdf_model("smooth_barbell").json);
   for (const auto& [tolerance, min_edge] : {std::pair{5e-4, 0.0038}, std::pair{1e-4, 0.0012}}) {
     SCOPED_TRACE(tolerance);
     AdaptiveOptions o;
