@@ -226,7 +226,7 @@ struct Tracer {
     Vec3 t = dir * tangent(p, a, b);
     double step = max_spacing;
     double travelled = 0;
-    bool seam = false, hidden = false;
+    bool seam = false, hidden = false, left_start = false;
     std::size_t seam_begin = 0;
     Vec3 seam_from = p;
     // The end of a seam: kept where the pieces were one function on it, else a stop where the seam began.
@@ -265,13 +265,23 @@ struct Tracer {
       }
       if (!moved) return end_seam(End::Stop);
       if (seam && !hidden && one_function(p, a, b)) hidden = on_seam = true;
-      travelled += (p - from).norm();
+      const double stepped = (p - from).norm();
+      travelled += stepped;
       step = std::min(max_spacing, 2 * step);
-      // Back within a step of the start: the segment from p closes the loop.
-      if (loop_to && travelled > 2 * max_spacing && (p - *loop_to).norm() < step) {
-        if (end_seam(End::Loop) == End::Stop) return End::Stop;
-        if ((p - *loop_to).norm() > min_spacing) out.push_back(p);
-        return End::Loop;
+      // Back within a step of the start, once the walk has been more than two steps away from
+      // it: the segment from p closes the loop. Closing only after travelling two max_spacing
+      // took a loop shorter than that round twice: a rod of radius 0.02 through a ball has a rim
+      // 0.13 long, max_spacing was 0.1, and the rim laid out doubly wound tangled its patches'
+      // fronts, so the shape was meshed as smooth. The distance travelled still closes a loop
+      // too tight for its steps to leave its start.
+      if (loop_to) {
+        const double to_start = (p - *loop_to).norm();
+        left_start = left_start || to_start > 2 * stepped;
+        if ((left_start || travelled > 2 * max_spacing) && to_start < step) {
+          if (end_seam(End::Loop) == End::Stop) return End::Stop;
+          if (to_start > min_spacing) out.push_back(p);
+          return End::Loop;
+        }
       }
       out.push_back(p);
     }

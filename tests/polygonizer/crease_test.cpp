@@ -423,6 +423,35 @@ TEST(CreaseCurves, LoopsOfACylindersRimsTwoSpheresAndABoxMinusASphere) {
   EXPECT_EQ(holes.corners.size(), 8u);
 }
 
+// A rod of radius r through a ball of radius 1 (cdp.sdf's sphere(1) | capsule, a pin): its two
+// rims are circles of radius r at |z| = sqrt(1 - r^2), each traced once round, however much
+// shorter than two max_spacing (0.02 of the diagonal, 0.28 here) it is. The walk closed a loop
+// only after travelling two max_spacing, so a rim shorter than that went round more than once
+// (in polygonize, r = 0.02 in a box of diagonal 5.2: a rim 0.126 long traced as 0.251), and the
+// patches meshed from it tangled. r = 0.1 is longer than that.
+TEST(CreaseCurves, ARimShorterThanTwoStepsIsTracedOnceRound) {
+  for (const double r : {0.1, 0.02, 0.01}) {
+    SCOPED_TRACE(r);
+    const Expression pin = crease_expression(
+        "min(sqrt(x^2+y^2+z^2)-1, sqrt(x^2+y^2+(z-clamp(z,-1.5,1.5))^2)-" + std::to_string(r) + ")");
+    const CreaseTracingResult rims = trace_creases(pin);
+    ASSERT_EQ(rims.curves.size(), 2u);
+    for (const CreaseCurve& c : rims.curves) {
+      EXPECT_TRUE(c.closed);
+      double length = 0;
+      for (std::size_t i = 0; i < c.points.size(); ++i) {
+        const Vec3& p = c.points[i];
+        EXPECT_NEAR(std::hypot(p.x(), p.y()), r, 1e-9);
+        EXPECT_NEAR(std::abs(p.z()), std::sqrt(1 - r * r), 1e-9);
+        length += (c.points[(i + 1) % c.points.size()] - p).norm();
+      }
+      // Chords of a circle: up to 1 % short of it at r = 0.01 (steps of min_spacing); a rim traced
+      // twice would be twice as long.
+      EXPECT_NEAR(length, 2 * std::numbers::pi * r, 0.02 * 2 * std::numbers::pi * r);
+    }
+  }
+}
+
 // Two overlapping spheres on a bar (radius 0.85 at x = -0.5 and 0.5; the bar |x| <= 1.2,
 // -1.15 <= y <= -0.65, |z| <= 0.25). Where the spheres' seam meets the bar's top face, a face
 // 0.025 wide is left between three corners on each side: the seam's (0, -0.65, +-sqrt(0.05))
