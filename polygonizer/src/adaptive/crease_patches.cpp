@@ -810,6 +810,7 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
     out.merges += tracker.merges();
     out.forced_closures += tracker.forced_closures();
     out.patch_refusals += tracker.patch_refusals();
+    if (tracker.tightest_bend().first < out.tightest.first) out.tightest = tracker.tightest_bend();
   }
   finish_shared(out, nc, "a crease vertex no patch reached");
   out.crease_vertices = nc;

@@ -27,9 +27,11 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace cdp::adaptive {
@@ -57,6 +59,9 @@ struct CreaseMesh {
   std::size_t forced_closures = 0;
   // Bridges, closures and placements the patch tests refused (Tracker::patch_refusals).
   std::size_t patch_refusals = 0;
+  // The tightest bend the patches' trackers met (Tracker::tightest_bend), for the run's: the
+  // reruns that lower min_edge for a bend read it (lowered_min_edge, min_edge_for_tolerance).
+  std::pair<double, Vec3> tightest{std::numeric_limits<double>::infinity(), Vec3::Zero()};
 };
 
 // A mesh whose first vertices are `shared` (on creases, or on the blocks' seams), to be joined by

@@ -104,6 +104,9 @@ void Run::prepare() {
   if (follows_creases(ctx.options)) {
     ctx.enter("creases");  // the tracing too; AdaptiveOptions::phase hears of it where it finds creases
     creases = lay_out_creases(ctx.field, ctx.options, settings, seeds.estimated_area, &seeds.grid);
+    // A bend the patches' trackers met is one the run met: a surface meshed wholly in patches
+    // left the run none, and no rerun for the tolerance or a thin feature followed.
+    if (creases.mesh && creases.mesh->tightest.first < tracking.tightest.first) tracking.tightest = creases.mesh->tightest;
   }
   // Blocks where no crease patches were meshed: the patches' fronts run serially for now.
   if (uses_blocks(ctx.options) && ctx.options.variant == Variant::Improved && !creases.mesh) {

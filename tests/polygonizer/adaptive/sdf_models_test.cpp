@@ -136,6 +136,8 @@ TEST_P(SdfModels, MeshWithTheirCreasesAndGoodTriangles) {
   const CreaseAngles away = crease_angles(*field, r.mesh);
   EXPECT_GE(min_angle, m.creased ? 5.0 : 20.0) << m.name;
   EXPECT_GE(away.min_degrees_away, 20.0) << m.name << ": away from creases, near " << away.worst_away.transpose();
+  // Within the tolerance asked for: the stats name the triangles beyond it (the warning's count).
+  if (GetParam().tolerance > 0) EXPECT_EQ(r.stats.adaptive->quality.over_tolerance, 0u) << m.name;
   std::cout << "sdf-model " << m.name << " " << sdf_case_name({GetParam(), 0}) << ": " << t.triangles << " triangles, "
             << r.stats.seconds << " s, min angle " << min_angle << ", away from creases " << away.min_degrees_away
             << "\n";
