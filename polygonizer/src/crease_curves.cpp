@@ -75,6 +75,7 @@ struct Tracer {
   const Field& field;
   const CreaseTracingOptions& o;
   double max_spacing, min_spacing, tol;
+  double min_step = o.min_step > 0 ? std::min(o.min_step, min_spacing) : min_spacing;
   std::size_t points = 0;
 
   // The pieces taken on the surface right at p: those whose switch lies within a radius of
@@ -166,14 +167,14 @@ struct Tracer {
     return piece(p, a).gradient.normalized().dot(piece(p, b).gradient.normalized()) > kSamePieceCosine;
   }
 
-  // One step from p along t: the longest of step, step / 2, ... (down to min_spacing) whose
+  // One step from p along t: the longest of step, step / 2, ... (down to min_step) whose
   // projection lies ahead and turns the tangent by less than max_turn (by less than a right
   // angle at the last). On the crease of a and b, its tangent dir * ga x gb; or (seam) on the
   // switch of branch point k where a and b are one function, its tangent along t. On success
   // moves p, t and step there.
   bool advance(Vec3& p, Vec3& t, double& step, double& dir, const Branch& a, const Branch& b, int k, bool seam) {
     double s = step;
-    for (int h = 0; h <= kMaxHalvings && s >= min_spacing; ++h, s *= 0.5) {
+    for (int h = 0; h <= kMaxHalvings && s >= min_step; ++h, s *= 0.5) {
       const std::vector<Branch> two{a, b};
       const CreaseProjection c = seam ? project_to_seam(field, p + s * t, a, static_cast<std::size_t>(k), o.newton)
                                       : project_to_crease(field, p + s * t, two, o.newton);
@@ -193,9 +194,9 @@ struct Tracer {
         new_dir = tn.dot(t) < 0 ? -1.0 : 1.0;
         tn = new_dir * ga.cross(gb).normalized();
       }
-      // The turn bound sets the spacing, down to min_spacing: a crease that turns faster still
-      // is followed at min_spacing (less than a right angle a step).
-      const bool last = h == kMaxHalvings || 0.5 * s < min_spacing;
+      // The turn bound sets the spacing, down to min_step: a crease that turns faster still
+      // is followed at min_step (less than a right angle a step).
+      const bool last = h == kMaxHalvings || 0.5 * s < min_step;
       const double turn = last ? 0.0 : std::cos(o.max_turn);
       if (!tn.allFinite() || tn.dot(t) <= turn || (c.point - p).dot(t) <= 0) continue;
       if (!both_active(c.point, ga, gb)) continue;

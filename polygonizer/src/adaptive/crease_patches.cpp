@@ -251,7 +251,7 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
     }
     const CreaseProjection c = project(guess);
     if (!c.ok() || (c.point - guess).norm() > 0.5 * std::max(h[j], h[(j + 1) % n]))
-      throw CreaseLayoutError("adaptive: a crease vertex could not be put on its crease near " + format_point(guess) +
+      throw CreaseVertexError("adaptive: a crease vertex could not be put on its crease near " + format_point(guess) +
                               " (" + to_string(c.status) + ")");
     out.vertices.push_back(cv.add(c.point));
   }

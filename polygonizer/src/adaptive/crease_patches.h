@@ -48,6 +48,12 @@ class CreaseLayoutError : public NoSurfaceError {
  public:
   using NoSurfaceError::NoSurfaceError;
 };
+// resample_curve's: a vertex projected onto its crease landed more than half an edge from where
+// it was placed along the traced polyline.
+class CreaseVertexError : public CreaseLayoutError {
+ public:
+  using CreaseLayoutError::CreaseLayoutError;
+};
 
 struct CreaseMesh {
   Mesh mesh;  // closed where every patch closed; its first `crease_vertices` vertices lie on creases

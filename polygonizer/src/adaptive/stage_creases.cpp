@@ -38,6 +38,15 @@ CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options,
         out.fallback.clear();
       }
       break;
+    } catch (const CreaseVertexError& e) {
+      // A crease turning faster than the tracer's max_turn allows at its shortest step is
+      // followed by chords of that step (a rim of radius 0.0025 by three or four, up to 0.0012
+      // inside it), and laying it out on the edges of a lowered min_edge (0.00083) projects
+      // vertices from points on those chords that land more than half an edge away. Traced
+      // again in steps down to min_edge. (Down to min_edge from the start, the Barth ball's
+      // lowered run laid out a network whose patches ran out of the box.)
+      out.fallback = e.what();
+      co.min_step = settings.sizing.min_edge;
     } catch (const CreaseLayoutError& e) {
       out.fallback = e.what();  // a crease the grid missed? A finer one may find it
     } catch (const NoSurfaceError& e) {

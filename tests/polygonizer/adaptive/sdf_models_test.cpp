@@ -322,7 +322,10 @@ TEST(SdfNecks, AThinTunnelOfADistanceFieldIsNotClosed) {
 // bridge (seeding's thin_bridges); seeded after the balls it runs into their meshes, and the
 // attempt is made again with it seeded first (seeds_first), with min_edge lowered where the rod
 // is thinner than min_edge. Both were meshed as two balls, exit 0, at these settings (the rod
-// 0.005 wide, min_edge 0.0072). The smooth one is the suite's smooth_barbell.
+// 0.005 wide, min_edge 0.0072). The smooth one is the suite's smooth_barbell. The sharp one is
+// now meshed along its creases, the rod's rims (0.016 long), in the run with min_edge lowered:
+// its rims were traced twice round and in chords too coarse for that run's edges, the layout
+// failed, and it was meshed as smooth, seeded from the rod.
 TEST(SdfNecks, ARodThinnerThanMinEdgeBetweenTwoBallsIsMeshedFromTheRod) {
   const nlohmann::json sharp = {
       {"type", "expression"},
@@ -337,7 +340,12 @@ TEST(SdfNecks, ARodThinnerThanMinEdgeBetweenTwoBallsIsMeshedFromTheRod) {
     o.factor = 2;
     const PolygonizeResult r = polygonize_adaptive(*field, o);
     expect_sound_with(r.mesh, name, 1, 0);
-    EXPECT_GE(r.stats.adaptive->seeding.seeds_first, 1u);
+    if (std::string(name) == "smooth") {
+      EXPECT_GE(r.stats.adaptive->seeding.seeds_first, 1u);
+    } else {
+      EXPECT_EQ(r.stats.adaptive->creases.fallback, "");
+      EXPECT_TRUE(r.stats.adaptive->recoveries.min_edge_lowered);
+    }
   }
 }
 
@@ -383,6 +391,26 @@ TEST(SdfNecks, TrianglesBeyondTheToleranceAtATightBendAreMeshedAgainWithMinEdgeL
     EXPECT_LT(r.stats.adaptive->settings.min_edge, 0.7 * min_edge);  // 0.0012 and 0.00074 (the lowest)
     EXPECT_GE(r.stats.adaptive->min_angle_degrees, 20.0);
   }
+}
+
+// A ball drilled by a hole of radius 0.0025 (cdp.sdf's sphere(1) - cylinder(0.0025)), narrower
+// than the default min_edge (0.0083): the run with min_edge lowered (0.00083) lays its rims out
+// with vertices every 0.0008 or so. Traced in steps of the tracer's default shortest (0.0021),
+// each rim was three or four chords, up to 0.0012 inside it, and vertices projected from them
+// landed farther than half an edge away and were refused: the layout failed, and the shape
+// meshed as smooth failed at factors 1, 2 and 8 (5-10 s) and took 16-24 s at 3 and 5. Such a
+// layout is now traced again in steps down to min_edge (CreaseVertexError, lay_out_creases).
+TEST(SdfThinHoles, AHoleNarrowerThanMinEdgeIsMeshedAlongItsRimsWithMinEdgeLowered) {
+  const auto field = test::field_from_json(
+      R"json({"type": "expression", "value": "max(hypot(x, y, z) - 1.0, -(hypot(x, y) - 0.0025))",
+          "bounds": [[-1.2, -1.2, -1.2], [1.2, 1.2, 1.2]]})json");
+  AdaptiveOptions o;
+  o.factor = 1;
+  const PolygonizeResult r = polygonize_adaptive(*field, o);
+  expect_sound_with(r.mesh, "drilled ball", 1, 1);
+  EXPECT_TRUE(r.stats.adaptive->recoveries.min_edge_lowered);
+  EXPECT_EQ(r.stats.adaptive->creases.fallback, "");
+  EXPECT_GE(r.stats.adaptive->min_angle_degrees, 5.0);
 }
 
 }  // namespace

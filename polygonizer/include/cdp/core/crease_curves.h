@@ -24,6 +24,10 @@ struct CreaseTracingOptions {
   // 0.0005 of the box diagonal.
   double max_spacing = 0;
   double min_spacing = 0;
+  // The shortest step, where shorter than min_spacing (which also sets how near corners and
+  // crossings are taken for one): a crease turning faster than max_turn allows at min_spacing is
+  // followed by chords of that step. Non-positive: min_spacing.
+  double min_step = 0;
   double max_turn = 0.1;
   // The largest number of points of all polylines together (a bound on the work).
   std::size_t max_points = 1'000'000;
