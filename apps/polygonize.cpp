@@ -201,6 +201,14 @@ int main(int argc, char** argv) {
                      q.over_tolerance_near.x(), q.over_tolerance_near.y(), q.over_tolerance_near.z());
       }
     }
+    // So are creases asked for and not followed: the surface was meshed across them as smooth,
+    // its sharp edges cut by chords, where the layout or a patch failed (creases.fallback says why).
+    if (adaptive) {
+      const cdp::CreaseReport& c = result.stats.adaptive->creases;
+      if (c.handling == cdp::CreaseHandling::Follow && !c.followed && !c.fallback.empty())
+        std::fprintf(stderr, "polygonize: %s: warning: the creases are not followed, the surface is meshed across them as smooth (%s)\n",
+                     field_path.c_str(), c.fallback.c_str());
+    }
     return 0;
   } catch (const cdp::CancelledError& e) {
     cdp::app::end_if_interrupted();

@@ -205,8 +205,30 @@ def _warns_beyond_tolerance(function):
     return wrapper
 
 
-polygonize = _warns_beyond_tolerance(  # noqa: F811
-    _returns_mesh(_accepts_models(_names_why_not_traced(_distributes(_cdp.polygonize)))))
+class CreaseWarning(UserWarning):
+    """polygonize was asked to follow the field's creases (creases="follow", the default) and
+    could not (stats["creases"]["fallback"] says why): the surface is meshed across them as smooth,
+    its sharp edges cut by chords. The mesh is closed and valid; build/bin/polygonize warns alike."""
+
+
+def _warns_creases_not_followed(function):
+    """polygonize(...) that warns (CreaseWarning) where the creases asked for were not followed."""
+
+    @_functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        mesh = function(*args, **kwargs)
+        creases = mesh.stats.get("creases", {})
+        if creases.get("handling") == "follow" and not creases.get("followed") and creases.get("fallback"):
+            _warnings.warn("the creases are not followed, the surface is meshed across them as smooth ({})".format(
+                creases["fallback"]), CreaseWarning, stacklevel=2)
+        return mesh
+
+    wrapper.__module__ = __name__
+    return wrapper
+
+
+polygonize = _warns_creases_not_followed(_warns_beyond_tolerance(  # noqa: F811
+    _returns_mesh(_accepts_models(_names_why_not_traced(_distributes(_cdp.polygonize))))))
 # Its signature line (the compiled function's, which the stubs' test reads) with `client` too.
 _first, _rest = (_cdp.polygonize.__doc__ or "\n").split("\n", 1)
 polygonize.__doc__ = _first.replace("block_runner: object = None", "block_runner: object = None, client: object = None",
@@ -216,7 +238,7 @@ for _name in ("curvature", "project", "trace_creases", "corner_normals", "crease
     globals()[_name] = _accepts_models(getattr(_cdp, _name))
 
 del _name
-__all__ += ["Mesh", "ToleranceWarning"]
+__all__ += ["Mesh", "ToleranceWarning", "CreaseWarning"]
 
 from . import sdf  # noqa: E402  (after the names above, which sdf does not use)
 from .trace import TraceError, trace, trace_formula  # noqa: E402

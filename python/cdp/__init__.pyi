@@ -21,6 +21,7 @@ _FieldLike = Field | _HasField
 _Bounds = ArrayLike
 
 class ToleranceWarning(UserWarning): ...
+class CreaseWarning(UserWarning): ...
 
 class Mesh(NamedTuple):
     vertices: NDArray[np.float64]

@@ -129,6 +129,35 @@ TEST(PolygonizeApp, AToleranceTheMeshCannotKeepIsAOneLineWarningNamingWhere) {
   EXPECT_EQ(kept.err, "");
 }
 
+TEST(PolygonizeApp, CreasesItCouldNotFollowAreAOneLineWarningSayingWhy) {
+  // A ball capped by a sheet whose crease fades out where its pieces become tangent (the model of
+  // AdaptiveCreases.ALayoutThatFailsFallsBackToSmoothMeshingAndSaysWhy): the layout fails, the
+  // surface is meshed across the crease as smooth and written, and that is said on one line with
+  // the reason STATS.json gives; with --creases ignore, asked for, nothing is said.
+  test::TempDir dir("polygonize_app_creases_not_followed");
+  const auto field = dir.write(
+      "ball_sheet.json",
+      R"json({"type": "expression", "value": "max(max(z, z+x*abs(y)), sqrt(x^2+y^2+z^2)-1)",
+              "bounds": [[-1.5, -1.5, -1.5], [1.5, 1.5, 1.5]]})json");
+  const auto out = dir.path / "out.ply", stats = dir.path / "stats.json";
+  const auto r = test::run_app("polygonize", field.string() + " -o " + out.string() + " --quiet --factor 1 --stats " +
+                                                 stats.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(analyze_topology(read_mesh(out)).watertight());
+  const auto s = read_json(stats);
+  ASSERT_FALSE(s["creases"]["followed"].get<bool>());
+  const std::string why = s["creases"]["fallback"].get<std::string>();
+  ASSERT_NE(why, "");
+  EXPECT_EQ(r.err, "polygonize: " + field.string() +
+                       ": warning: the creases are not followed, the surface is meshed across them as smooth (" + why +
+                       ")\n");
+
+  const auto ignored =
+      test::run_app("polygonize", field.string() + " -o " + out.string() + " --quiet --factor 1 --creases ignore");
+  ASSERT_EQ(ignored.exit_code, 0) << ignored.err;
+  EXPECT_EQ(ignored.err, "");
+}
+
 TEST(PolygonizeApp, AChordDeviationIsASizingNotAPromise) {
   // --chord sizes as --tolerance does and measures nothing: the run that --tolerance warns about
   // above writes its mesh silently, with the sizing named in the statistics and no triangle

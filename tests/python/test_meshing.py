@@ -358,6 +358,33 @@ def test_a_block_edge_the_surface_crosses_twice_between_its_samples_keeps_its_la
     assert np.abs(rounded_cylinder(V[F].mean(axis=1))).max() < 0.004
 
 
+def test_creases_not_followed_come_with_a_crease_warning():
+    # The warning as cdp.polygonize wraps the compiled function: stats whose crease layout failed
+    # (creases.fallback) warn once, naming why; followed creases, creases ignored by request and a
+    # smooth field do not.
+    def meshed_with(creases):
+        return cdp._warns_creases_not_followed(lambda: cdp.Mesh(None, None, None, {"creases": creases}))
+
+    failed = {"handling": "follow", "followed": False, "fallback": "adaptive: a crease ends without a corner"}
+    with pytest.warns(cdp.CreaseWarning, match=r"creases are not followed.*a crease ends without a corner"):
+        meshed_with(failed)()
+    # A ball capped by a sheet whose crease fades out where its pieces become tangent: its layout
+    # fails (the C++ test AdaptiveCreases.ALayoutThatFailsFallsBackToSmoothMeshingAndSaysWhy).
+    capped = cdp.expression("max(max(z, z+x*abs(y)), sqrt(x^2+y^2+z^2)-1)", ((-1.5, -1.5, -1.5), (1.5, 1.5, 1.5)))
+    with pytest.warns(cdp.CreaseWarning, match=r"the surface is meshed across them as smooth \(adaptive: "):
+        mesh = cdp.polygonize(capped, factor=1)
+    assert not mesh.stats["creases"]["followed"] and mesh.stats["creases"]["fallback"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", cdp.CreaseWarning)
+        meshed_with({"handling": "follow", "followed": True, "fallback": ""})()
+        meshed_with({"handling": "ignore", "followed": False, "fallback": ""})()
+        meshed_with({"handling": "follow", "followed": False, "fallback": ""})()  # no crease at all
+        cdp.polygonize(cdp.sphere(1), factor=1)
+        # The pin (a ball pierced by a rod of radius 0.02) follows its creases.
+        pin = cdp.sdf.sphere(1) | cdp.sdf.capsule((0, 0, -1.5), (0, 0, 1.5), 0.02)
+        assert cdp.polygonize(pin, factor=2).stats["creases"]["followed"]
+
+
 def test_a_mesh_beyond_the_tolerance_comes_with_a_tolerance_warning():
     # The unit sphere with edges of at least 0.05 lies about 4.2e-4 from its chords: at a tolerance
     # of 4e-4 the refinement cannot split, and some triangles stay beyond it (the C++ test
