@@ -8,6 +8,16 @@
 
 namespace cdp {
 
+bool triangle_is_zero_area(const Mesh& mesh, std::size_t f) {
+  const auto& tri = mesh.triangles[f];
+  if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) return true;
+  const Vec3& a = mesh.positions[tri[0]];
+  const Vec3& b = mesh.positions[tri[1]];
+  const Vec3& c = mesh.positions[tri[2]];
+  const double e2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+  return (b - a).cross(c - a).squaredNorm() <= 1e-24 * e2 * e2;
+}
+
 namespace {
 
 // Triangles or vertices between two polls of the cancel token: a few hundred microseconds.
@@ -34,12 +44,10 @@ MeshTopology analyze(const Mesh& mesh, const CancelToken* cancel) {
     const Vec3& a = mesh.positions[tri[0]];
     const Vec3& b = mesh.positions[tri[1]];
     const Vec3& c = mesh.positions[tri[2]];
-    const Vec3 cr = (b - a).cross(c - a);
     t.signed_volume += a.dot(b.cross(c)) / 6.0;
-    t.area += 0.5 * cr.norm();
-    const double e2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+    t.area += 0.5 * (b - a).cross(c - a).norm();
     repeated[f] = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];
-    if (repeated[f] || cr.squaredNorm() <= 1e-24 * e2 * e2) ++t.degenerate_triangles;
+    if (triangle_is_zero_area(mesh, f)) ++t.degenerate_triangles;
   }
   // The triangles around each vertex, in increasing order (a triangle with a repeated index
   // once per occurrence, consecutively).

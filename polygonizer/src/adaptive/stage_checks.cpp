@@ -79,6 +79,15 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
              " non-manifold and " + std::to_string(t.misoriented_edges) + " misoriented edges, " +
              std::to_string(t.nonmanifold_vertices) + " non-manifold vertices",
          mesh.positions.empty() ? Vec3::Zero() : mesh.positions.front());
+  // A mesh of the surface has no zero-area triangle. Crease patches meeting at a corner where the
+  // two surfaces are tangent (a ball cut by a cylinder touching it inside, whose crease crosses
+  // itself at (1, 0, 0)) closed their wedges with two, split into three components, exit 0.
+  if (t.degenerate_triangles > 0) {
+    std::size_t f = 0;
+    while (!triangle_is_zero_area(mesh, f)) ++f;
+    fail("with " + std::to_string(t.degenerate_triangles) + " zero-area triangles",
+         mesh.positions[static_cast<std::size_t>(mesh.triangles[f][0])]);
+  }
   if (t.components != seeds)
     fail("with " + std::to_string(t.components) + " components from " + std::to_string(seeds) + " seeds",
          mesh.positions.front());

@@ -35,6 +35,10 @@ struct MeshTopology {
   }
 };
 
+// Whether triangle f is one MeshTopology::degenerate_triangles counts.
+// \pre f < mesh.triangles.size() and its indices are in [0, mesh.num_vertices()).
+bool triangle_is_zero_area(const Mesh& mesh, std::size_t f);
+
 // \pre every triangle index is in [0, mesh.num_vertices()).
 // \return the counts above; genus -1 unless the mesh has triangles and is closed, oriented and
 //         manifold.

@@ -245,6 +245,28 @@ TEST(AdaptiveCreases, ALayoutThatFailsFallsBackToSmoothMeshingAndSaysWhy) {
   EXPECT_TRUE(analyze_topology(r.mesh).watertight());
 }
 
+TEST(AdaptiveCreases, ZeroAreaTrianglesAtATangentCornerAreRefusedNotWritten) {
+  // A ball cut by a cylinder that touches it inside (Viviani's curve, crossing itself at
+  // (1, 0, 0) where the ball and the cylinder are tangent). At factors 1 and 2 the patches met at
+  // that corner closed their wedges with two zero-area triangles, and the mesh was written with
+  // three components and genus 1, exit 0. The final check now refuses zero-area triangles: the
+  // surface is meshed as smooth, one component of genus 0, and the stats say why.
+  const auto field = test::field_from_json(expression("max(hypot(x,y,z)-1, hypot(x-0.5,y)-0.5)", -1.3, 1.3));
+  for (const double factor : {1.0, 2.0}) {
+    SCOPED_TRACE(factor);
+    AdaptiveOptions o;
+    o.factor = factor;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    const MeshTopology t = analyze_topology(r.mesh);
+    EXPECT_TRUE(t.watertight());
+    EXPECT_EQ(t.degenerate_triangles, 0u);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.genus, 0);
+    EXPECT_NE(r.stats.adaptive->creases.fallback.find("zero-area triangles"), std::string::npos)
+        << r.stats.adaptive->creases.fallback;
+  }
+}
+
 TEST(AdaptiveCreases, CreasesCrossingWhereTheirPiecesAreTangentAreFollowed) {
   // The sheet z = -max(0, xy) capping a ball: its creases along the x and y axes fade out at the
   // origin from four sides, a crossing of the creases of z and z + xy where the two are
