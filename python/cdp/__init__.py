@@ -183,9 +183,16 @@ class ToleranceWarning(UserWarning):
     is closed and valid and the rest of it keeps the bound; build/bin/polygonize warns alike."""
 
 
-def _warns_beyond_tolerance(function):
-    """polygonize(...) that warns (ToleranceWarning) where its mesh breaks the tolerance: a promise
-    the program names on stderr, which a caller reading only the mesh would not see."""
+class CreaseWarning(UserWarning):
+    """polygonize was asked to follow the field's creases (creases="follow", the default) and
+    could not (stats["creases"]["fallback"] says why): the surface is meshed across them as smooth,
+    its sharp edges cut by chords. The mesh is closed and valid; build/bin/polygonize warns alike."""
+
+
+def _warns_where_the_mesh_falls_short(function):
+    """polygonize(...) that warns where its mesh breaks a promise the program names on stderr,
+    which a caller reading only the mesh would not see: triangles beyond the tolerance
+    (ToleranceWarning), creases asked for and not followed (CreaseWarning)."""
 
     @_functools.wraps(function)
     def wrapper(*args, **kwargs):
@@ -199,25 +206,7 @@ def _warns_beyond_tolerance(function):
                                quality["over_tolerance"], stats["tolerance"], quality["over_tolerance_worst"],
                                quality["over_tolerance_near_x"], quality["over_tolerance_near_y"],
                                quality["over_tolerance_near_z"]), ToleranceWarning, stacklevel=2)
-        return mesh
-
-    wrapper.__module__ = __name__
-    return wrapper
-
-
-class CreaseWarning(UserWarning):
-    """polygonize was asked to follow the field's creases (creases="follow", the default) and
-    could not (stats["creases"]["fallback"] says why): the surface is meshed across them as smooth,
-    its sharp edges cut by chords. The mesh is closed and valid; build/bin/polygonize warns alike."""
-
-
-def _warns_creases_not_followed(function):
-    """polygonize(...) that warns (CreaseWarning) where the creases asked for were not followed."""
-
-    @_functools.wraps(function)
-    def wrapper(*args, **kwargs):
-        mesh = function(*args, **kwargs)
-        creases = mesh.stats.get("creases", {})
+        creases = stats.get("creases", {})
         if creases.get("handling") == "follow" and not creases.get("followed") and creases.get("fallback"):
             _warnings.warn("the creases are not followed, the surface is meshed across them as smooth ({})".format(
                 creases["fallback"]), CreaseWarning, stacklevel=2)
@@ -227,8 +216,8 @@ def _warns_creases_not_followed(function):
     return wrapper
 
 
-polygonize = _warns_creases_not_followed(_warns_beyond_tolerance(  # noqa: F811
-    _returns_mesh(_accepts_models(_names_why_not_traced(_distributes(_cdp.polygonize))))))
+polygonize = _warns_where_the_mesh_falls_short(  # noqa: F811
+    _returns_mesh(_accepts_models(_names_why_not_traced(_distributes(_cdp.polygonize)))))
 # Its signature line (the compiled function's, which the stubs' test reads) with `client` too.
 _first, _rest = (_cdp.polygonize.__doc__ or "\n").split("\n", 1)
 polygonize.__doc__ = _first.replace("block_runner: object = None", "block_runner: object = None, client: object = None",

@@ -363,7 +363,7 @@ def test_creases_not_followed_come_with_a_crease_warning():
     # (creases.fallback) warn once, naming why; followed creases, creases ignored by request and a
     # smooth field do not.
     def meshed_with(creases):
-        return cdp._warns_creases_not_followed(lambda: cdp.Mesh(None, None, None, {"creases": creases}))
+        return cdp._warns_where_the_mesh_falls_short(lambda: cdp.Mesh(None, None, None, {"creases": creases}))
 
     failed = {"handling": "follow", "followed": False, "fallback": "adaptive: a crease ends without a corner"}
     with pytest.warns(cdp.CreaseWarning, match=r"creases are not followed.*a crease ends without a corner"):
@@ -371,9 +371,10 @@ def test_creases_not_followed_come_with_a_crease_warning():
     # A ball capped by a sheet whose crease fades out where its pieces become tangent: its layout
     # fails (the C++ test AdaptiveCreases.ALayoutThatFailsFallsBackToSmoothMeshingAndSaysWhy).
     capped = cdp.expression("max(max(z, z+x*abs(y)), sqrt(x^2+y^2+z^2)-1)", ((-1.5, -1.5, -1.5), (1.5, 1.5, 1.5)))
-    with pytest.warns(cdp.CreaseWarning, match=r"the surface is meshed across them as smooth \(adaptive: "):
+    with pytest.warns(cdp.CreaseWarning, match=r"the surface is meshed across them as smooth \(adaptive: ") as said:
         mesh = cdp.polygonize(capped, factor=1)
     assert not mesh.stats["creases"]["followed"] and mesh.stats["creases"]["fallback"]
+    assert said[0].filename == __file__  # the caller's line, not the package's
     with warnings.catch_warnings():
         warnings.simplefilter("error", cdp.CreaseWarning)
         meshed_with({"handling": "follow", "followed": True, "fallback": ""})()
@@ -391,8 +392,9 @@ def test_a_mesh_beyond_the_tolerance_comes_with_a_tolerance_warning():
     # AdaptiveTolerance.ReportsTheTrianglesFartherThanEpsMeasuredDensely counts them). The program
     # names them on stderr; Python callers get a warning, not only a number in the stats.
     sphere = cdp.sphere(1)
-    with pytest.warns(cdp.ToleranceWarning, match=r"triangles lie farther from the surface than the tolerance 0.0004"):
+    with pytest.warns(cdp.ToleranceWarning, match=r"triangles lie farther from the surface than the tolerance 0.0004") as said:
         mesh = cdp.polygonize(sphere, tolerance=4e-4, min_edge=0.05)
+    assert said[0].filename == __file__  # the caller's line, not the package's
     assert mesh.stats["quality"]["over_tolerance"] > 0
     # Within the tolerance, and in factor mode (no distance promised), no warning.
     with warnings.catch_warnings():

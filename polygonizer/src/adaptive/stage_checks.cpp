@@ -86,7 +86,9 @@ std::size_t check_mesh(const Mesh& mesh, std::size_t seeds, bool check_intersect
     std::size_t f = 0;
     while (!triangle_is_zero_area(mesh, f)) ++f;
     fail("with " + std::to_string(t.degenerate_triangles) + " zero-area triangles",
-         mesh.positions[static_cast<std::size_t>(mesh.triangles[f][0])]);
+         mesh.positions[static_cast<std::size_t>(mesh.triangles[f][0])],
+         "; the surface may pinch to a point there (crease patches meeting where two faces are tangent), or have a "
+         "feature thinner than min_edge");
   }
   if (t.components != seeds)
     fail("with " + std::to_string(t.components) + " components from " + std::to_string(seeds) + " seeds",
