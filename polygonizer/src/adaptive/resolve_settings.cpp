@@ -117,24 +117,37 @@ constexpr double kBendEdgeShare = 0.25;
 constexpr double kLowestMinEdge = 2e-4;
 constexpr double kLowestBendShare = 0.5;
 
+// What both ways of lowering min_edge for a bend start from: the run's settings and the lowest
+// min_edge they may go to. None where the caller set min_edge, where remeshing_allowed says no, or
+// where the radius is below kLowestBendShare of that lowest edge.
+struct BendLowering {
+  Settings settings;
+  double lowest;
+};
+std::optional<BendLowering> bend_lowering(const Field& field, const AdaptiveOptions& o, double tightest_radius) {
+  if (!remeshing_allowed(o) || o.min_edge > 0) return std::nullopt;
+  BendLowering b{resolve_settings(field, o), 0};
+  b.lowest = kLowestMinEdge * b.settings.diagonal;
+  if (!(tightest_radius >= kLowestBendShare * b.lowest)) return std::nullopt;
+  return b;
+}
+
 }  // namespace
 
 std::optional<double> lowered_min_edge(const Field& field, const AdaptiveOptions& o, double tightest_radius) {
-  if (!remeshing_allowed(o) || o.min_edge > 0) return std::nullopt;
-  const Settings s = resolve_settings(field, o);
-  const double lowest = kLowestMinEdge * s.diagonal;
-  if (!(tightest_radius < s.sizing.min_edge) || !(tightest_radius >= kLowestBendShare * lowest)) return std::nullopt;
-  return std::max(kBendEdgeShare * tightest_radius, lowest);
+  const std::optional<BendLowering> b = bend_lowering(field, o, tightest_radius);
+  if (!b || !(tightest_radius < b->settings.sizing.min_edge)) return std::nullopt;
+  return std::max(kBendEdgeShare * tightest_radius, b->lowest);
 }
 
 std::optional<double> min_edge_for_tolerance(const Field& field, const AdaptiveOptions& o, double tightest_radius) {
-  if (!remeshing_allowed(o) || o.min_edge > 0 || o.sizing != SizingMode::Tolerance) return std::nullopt;
-  const Settings s = resolve_settings(field, o);
-  const double lowest = kLowestMinEdge * s.diagonal;
-  if (!(tightest_radius >= kLowestBendShare * lowest)) return std::nullopt;
-  const double chord = chord_for_deviation(tightest_radius, s.sizing.tolerance);
-  const double lowered = std::max(0.5 * chord, lowest);
-  if (!(chord < 2 * s.sizing.min_edge) || !(lowered < s.sizing.min_edge)) return std::nullopt;
+  if (o.sizing != SizingMode::Tolerance) return std::nullopt;
+  const std::optional<BendLowering> b = bend_lowering(field, o, tightest_radius);
+  if (!b) return std::nullopt;
+  const Sizing& sizing = b->settings.sizing;
+  const double chord = chord_for_deviation(tightest_radius, sizing.tolerance);
+  const double lowered = std::max(0.5 * chord, b->lowest);
+  if (!(chord < 2 * sizing.min_edge) || !(lowered < sizing.min_edge)) return std::nullopt;
   return lowered;
 }
 
