@@ -28,6 +28,8 @@ void add_seeding(nlohmann::json& j, const SeedingReport& s) {
   j["failed_seeds"] = s.failed_seeds;
   j["sign_changes"] = s.sign_changes;
   j["non_finite_samples"] = s.non_finite_samples;
+  j["touching_samples"] = s.touching_samples;
+  j["touching_crossings"] = s.touching_crossings;
   j["covered_nearby"] = s.covered_nearby;
   j["below_resolution"] = s.below_resolution;
   j["thin_bridges"] = s.thin_bridges;

@@ -71,6 +71,25 @@ double segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
 // passing close by (two of the gyroid ball's loops come within 0.18) is farther.
 constexpr double kOnTracedCurve = 0.05;
 
+// Whether two pieces' unit normals are opposite (to kSamePieceCosine): the faces of two solids
+// that touch, a box standing on another or a leg flush with a table top. Where both are zero the
+// union's field only touches zero (it is negative on either side) and the intersection's is
+// positive on either side: no surface, no crease, however the branches are taken there.
+bool touching_faces(const Vec3& g0, const Vec3& g1) { return g0.dot(g1) < -kSamePieceCosine; }
+
+// trace_creases' test of a crease's faces: each face's point this many min_spacing from the crease
+// (across it, on the side where F is that piece), and F this many min_spacing either way along
+// the face's normal there, must differ in sign. A depth far below the reach: two faces meeting at
+// a small angle leave a wedge of solid or air only the reach times the angle thick there (the
+// gyroid ball's sheets cut its sphere at a few degrees), and far above the Newton tolerance.
+constexpr double kFaceReach = 2;
+constexpr double kFaceDepth = 1e-3;
+// ... the point found by this many Newton steps on the face's piece (a plane's in one, a curved
+// face's to rounding in three), the piece taken there if its switch lies within this share of
+// the step.
+constexpr int kFaceNewtonSteps = 3;
+constexpr double kFaceTakenShare = 0.1;
+
 struct Tracer {
   const Field& field;
   const CreaseTracingOptions& o;
@@ -92,6 +111,46 @@ struct Tracer {
       f2 = f2 || g.dot(g2.normalized()) > kSamePieceCosine;
     }
     return f1 && f2;
+  }
+
+  // Whether both faces of the crease of a and b at c (on both; gradients ga, gb there) bound
+  // the solid: false where one is a face only where two solids touch, the field of one sign on
+  // either side of it (a leg flush under a table top: the edge where the leg's side meets its
+  // top face, which lies on the table's underside, is no crease; the leg's side meets the
+  // underside along the same line, and that is one). Each face is looked at a step across the
+  // crease either way (kFaceReach min_spacing), where its piece is among those taken: it bounds
+  // the solid if F changes sign across it at one of them, or where it is taken at neither.
+  bool faces_bound_solid(const Vec3& c, const Branch& a, const Branch& b, const Vec3& ga, const Vec3& gb) const {
+    const double reach = kFaceReach * min_spacing, depth = kFaceDepth * min_spacing;
+    const std::array<std::pair<const Branch*, Vec3>, 2> faces{std::pair{&a, ga}, std::pair{&b, gb}};
+    for (int k = 0; k < 2; ++k) {
+      const Branch& mine = *faces[static_cast<std::size_t>(k)].first;
+      const Vec3 n = faces[static_cast<std::size_t>(k)].second.normalized();
+      const Vec3 other = faces[static_cast<std::size_t>(1 - k)].second;
+      const Vec3 across = (other - other.dot(n) * n).normalized();
+      if (!across.allFinite()) continue;
+      bool bounds = false, touches = false;
+      for (const double side : {1.0, -1.0}) {
+        Vec3 q = c + side * reach * across;
+        for (int it = 0; it < kFaceNewtonSteps; ++it) {  // onto the piece's zero set
+          const FirstOrder f = piece(q, mine);
+          if (!(f.gradient.squaredNorm() > 0)) break;
+          q -= f.value / f.gradient.squaredNorm() * f.gradient;
+        }
+        const FirstOrder f = piece(q, mine);
+        if (!q.allFinite() || !(f.gradient.squaredNorm() > 0) || (q - c).norm() > 2 * reach) continue;
+        const Vec3 m = f.gradient.normalized();
+        if (!(std::abs(field.value(q)) <= kActiveRadius * tol * f.gradient.norm())) continue;
+        bool taken = false;
+        for (const FieldPiece& p : field.pieces_first_order(q, kFaceTakenShare * reach))
+          taken = taken || p.gradient.normalized().dot(m) > kSamePieceCosine;
+        if (!taken) continue;
+        const double above = field.value(q + depth * m), below = field.value(q - depth * m);
+        ((above > 0) != (below > 0) ? bounds : touches) = true;
+      }
+      if (touches && !bounds) return false;
+    }
+    return true;
   }
 
   // A piece's value and gradient: the walk needs no Hessian.
@@ -126,6 +185,9 @@ struct Tracer {
     for (const FieldPiece& q : field.pieces_first_order(p, reach)) {
       const Vec3 g = q.gradient.normalized();
       if (g.dot(ga) > kSamePieceCosine || g.dot(gb) > kSamePieceCosine) continue;
+      // A piece facing one of the two the opposite way is the face of a solid touching that one
+      // (touching_faces): the three meet along the whole crease, at no corner.
+      if (touching_faces(g, ga) || touching_faces(g, gb)) continue;
       if (!(std::abs(q.value) <= reach * q.gradient.norm())) continue;
       const std::vector<Branch> three{a, b, q.branch};
       const CreaseProjection c = project_to_crease(field, p, three, o.newton);
@@ -301,6 +363,13 @@ struct Tracer {
 namespace {
 
 constexpr double kCrossingReach = 4;
+// trace_creases' pass over the corners: the pieces within this many min_spacing of a corner are
+// those meeting there (a corner is found to the Newton tolerance, so a little reach does), and a
+// crease leaving it is started this many min_spacing along its tangent: far enough from the
+// corner that the third piece is not taken there, near enough to fit on a crease a few
+// min_spacing long.
+constexpr double kCornerReach = 1;
+constexpr double kCornerStep = 2;
 constexpr std::size_t kCrossingStops = 3;
 
 void join_crossings(const Field& field, double min_spacing, CreaseTracingResult& result, std::vector<Vec3>& corners) {
@@ -367,6 +436,67 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
   // h, a little smaller, made it 125, the tracing's largest cost on a Menger sponge.)
   PointGrid traced(tr.max_spacing);
   std::vector<Vec3> corners;
+  // The crease of the pieces `two` through c (on both, project_to_crease), traced both ways
+  // unless a traced polyline passes through c already or c is not on the surface's crease;
+  // true where it was traced (or found to meet the surface only at a corner).
+  const auto start_curve = [&](const CreaseProjection& c, const std::vector<Branch>& two, bool check_traced) {
+    const Vec3 g0 = c.gradients[0].normalized(), g1 = c.gradients[1].normalized();
+    // Traced already: c lies on a traced polyline (a crossing is only skipped for the crease it
+    // projects onto, so that a short crease right next to another, a sliver of a face between
+    // two spheres 0.03 long, is not taken for it).
+    const auto on_traced = [&](std::size_t k, std::size_t i) {
+      const std::vector<Vec3>& P = result.curves[k].points;
+      const double tol = kOnTracedCurve * tr.max_spacing;
+      const bool closed = result.curves[k].closed;
+      const std::size_t n = P.size();
+      if (i + 1 < n || closed) {
+        if (segment_distance(c.point, P[i], P[(i + 1) % n]) <= tol) return true;
+      }
+      if (i > 0 || closed) {
+        if (segment_distance(c.point, P[(i + n - 1) % n], P[i]) <= tol) return true;
+      }
+      return n == 1 && (P[0] - c.point).norm() <= tol;
+    };
+    if (check_traced && traced.any_within(c.point, tr.max_spacing, on_traced)) return false;
+    // On the surface: both_active compares normals only, and inside a table top under whose
+    // corner a leg stands flush, the top's own two faces are taken where the leg's edge runs on
+    // (their normals the leg's), the edge traced up through the top.
+    if (!(std::abs(field.value(c.point)) <= kActiveRadius * tr.tol * c.gradients[0].norm())) return false;
+    if (!tr.both_active(c.point, g0, g1)) return false;
+    if (!tr.faces_bound_solid(c.point, two[0], two[1], c.gradients[0], c.gradients[1])) return false;
+    // Trace both ways from c: a loop comes back to c; otherwise the curve runs from one
+    // end to the other.
+    CreaseCurve curve;
+    curve.pieces = {two[0], two[1]};
+    std::vector<Vec3> forward, backward;
+    bool on_seam = false;
+    const auto fe = tr.walk(c.point, two[0], two[1], 1, &c.point, forward, on_seam);
+    if (fe == Tracer::End::Loop) {
+      curve.closed = true;
+      curve.points.push_back(c.point);
+      curve.points.insert(curve.points.end(), forward.begin(), forward.end());
+    } else {
+      const auto be = tr.walk(c.point, two[0], two[1], -1, nullptr, backward, on_seam);
+      curve.points.assign(backward.rbegin(), backward.rend());
+      curve.points.push_back(c.point);
+      curve.points.insert(curve.points.end(), forward.begin(), forward.end());
+      curve.starts_at_corner = be == Tracer::End::Corner;
+      curve.ends_at_corner = fe == Tracer::End::Corner;
+      result.stops += (be == Tracer::End::Stop) + (fe == Tracer::End::Stop);
+      // Two pieces that meet on the surface only at a corner: no crease between them. Where
+      // a box's square hole meets its face, the hole's wall and the face of a crossing hole
+      // are the same plane from two branches, and a crossing beside the corner projects
+      // onto it (a Menger sponge of level 1: 5 such points among its 72 creases, which the
+      // layout refused). Another pair at this crossing may still start a crease.
+      if (curve.points.size() == 1 && curve.starts_at_corner && curve.ends_at_corner) return false;
+      if (curve.starts_at_corner) corners.push_back(curve.points.front());
+      if (curve.ends_at_corner) corners.push_back(curve.points.back());
+    }
+    if (on_seam) curve.seam_branch = Tracer::differing_branch(two[0], two[1]);
+    for (std::size_t i = 0; i < curve.points.size(); ++i) traced.insert(curve.points[i], result.curves.size(), i);
+    result.curves.push_back(std::move(curve));
+    return true;
+  };
   grid.for_each_sign_change([&](const std::array<int, 3>& ia, const std::array<int, 3>& ib) {
     const Vec3 pa = grid.point(ia[0], ia[1], ia[2]), pb = grid.point(ib[0], ib[1], ib[2]);
     const double fa = grid.value(ia[0], ia[1], ia[2]), fb = grid.value(ib[0], ib[1], ib[2]);
@@ -387,60 +517,61 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
         // differ only by rounding do (a smooth difference's blend, d0 - (d1 + d0) h at h = 1,
         // leaves the two sides of d0's max in its last bits: on fogleman/sdf's model with
         // smoothed holes, 227 crease curves of 1 to 21 points inside the holes' walls).
-        if (g0.dot(g1) > kSamePieceCosine) continue;
-        // Traced already: c lies on a traced polyline (a crossing is only skipped for the crease it
-        // projects onto, so that a short crease right next to another, a sliver of a face between
-        // two spheres 0.03 long, is not taken for it).
-        const auto on_traced = [&](std::size_t k, std::size_t i) {
-          const std::vector<Vec3>& P = result.curves[k].points;
-          const double tol = kOnTracedCurve * tr.max_spacing;
-          const bool closed = result.curves[k].closed;
-          const std::size_t n = P.size();
-          if (i + 1 < n || closed) {
-            if (segment_distance(c.point, P[i], P[(i + 1) % n]) <= tol) return true;
-          }
-          if (i > 0 || closed) {
-            if (segment_distance(c.point, P[(i + n - 1) % n], P[i]) <= tol) return true;
-          }
-          return n == 1 && (P[0] - c.point).norm() <= tol;
-        };
-        if (traced.any_within(c.point, tr.max_spacing, on_traced)) continue;
-        if (!tr.both_active(c.point, g0, g1)) continue;
-        // Trace both ways from c: a loop comes back to c; otherwise the curve runs from one
-        // end to the other.
-        CreaseCurve curve;
-        curve.pieces = {two[0], two[1]};
-        std::vector<Vec3> forward, backward;
-        bool on_seam = false;
-        const auto fe = tr.walk(c.point, two[0], two[1], 1, &c.point, forward, on_seam);
-        if (fe == Tracer::End::Loop) {
-          curve.closed = true;
-          curve.points.push_back(c.point);
-          curve.points.insert(curve.points.end(), forward.begin(), forward.end());
-        } else {
-          const auto be = tr.walk(c.point, two[0], two[1], -1, nullptr, backward, on_seam);
-          curve.points.assign(backward.rbegin(), backward.rend());
-          curve.points.push_back(c.point);
-          curve.points.insert(curve.points.end(), forward.begin(), forward.end());
-          curve.starts_at_corner = be == Tracer::End::Corner;
-          curve.ends_at_corner = fe == Tracer::End::Corner;
-          result.stops += (be == Tracer::End::Stop) + (fe == Tracer::End::Stop);
-          // Two pieces that meet on the surface only at a corner: no crease between them. Where
-          // a box's square hole meets its face, the hole's wall and the face of a crossing hole
-          // are the same plane from two branches, and a crossing beside the corner projects
-          // onto it (a Menger sponge of level 1: 5 such points among its 72 creases, which the
-          // layout refused). Another pair at this crossing may still start a crease.
-          if (curve.points.size() == 1 && curve.starts_at_corner && curve.ends_at_corner) continue;
-          if (curve.starts_at_corner) corners.push_back(curve.points.front());
-          if (curve.ends_at_corner) corners.push_back(curve.points.back());
-        }
-        if (on_seam) curve.seam_branch = Tracer::differing_branch(two[0], two[1]);
-        for (std::size_t i = 0; i < curve.points.size(); ++i) traced.insert(curve.points[i], result.curves.size(), i);
-        result.curves.push_back(std::move(curve));
-        return;
+        if (g0.dot(g1) > kSamePieceCosine || touching_faces(g0, g1)) continue;
+        if (start_curve(c, two, true)) return;
       }
   });
   join_crossings(field, tr.min_spacing, result, corners);
+  // Every crease that leaves a corner, traced from it where no curve ends there along it: a
+  // crease shorter than about a grid cell between two corners may pass no crossed grid edge
+  // near enough to be found from the crossings (a table top 0.05 thick with a leg under it: two
+  // of its four vertical edges were missed, and the patch boundary broke off at their corners).
+  // The corners found so grow the list, each taken once.
+  std::vector<Vec3> visited;
+  for (std::size_t next = 0; next < corners.size(); ++next) {
+    const Vec3 corner = corners[next];
+    if (std::any_of(visited.begin(), visited.end(), [&](const Vec3& q) { return (q - corner).norm() <= tr.min_spacing; }))
+      continue;
+    visited.push_back(corner);
+    // The directions the curves ending here leave along, with their pieces' normals.
+    struct Leaving {
+      Vec3 direction, n0, n1;
+    };
+    std::vector<Leaving> leaving;
+    for (const CreaseCurve& curve : result.curves) {
+      const std::size_t n = curve.points.size();
+      if (curve.closed || n < 2) continue;
+      for (const bool back : {false, true}) {
+        if (!(back ? curve.ends_at_corner : curve.starts_at_corner)) continue;
+        const Vec3& end = back ? curve.points[n - 1] : curve.points[0];
+        if ((end - corner).norm() > tr.min_spacing) continue;
+        const Vec3& inner = back ? curve.points[n - 2] : curve.points[1];
+        leaving.push_back({(inner - end).normalized(), field.piece_first_order(corner, curve.pieces[0]).second.normalized(),
+                           field.piece_first_order(corner, curve.pieces[1]).second.normalized()});
+      }
+    }
+    const std::vector<FieldPiece> at = field.pieces_first_order(corner, kCornerReach * tr.min_spacing);
+    for (std::size_t i = 0; i < at.size(); ++i)
+      for (std::size_t j = i + 1; j < at.size(); ++j) {
+        const Vec3 g0 = at[i].gradient.normalized(), g1 = at[j].gradient.normalized();
+        if (!(g0.dot(g1) <= kSamePieceCosine) || touching_faces(g0, g1)) continue;
+        const Vec3 t = g0.cross(g1).normalized();
+        const std::vector<Branch> two{at[i].branch, at[j].branch};
+        for (const double dir : {1.0, -1.0}) {
+          const bool known = std::any_of(leaving.begin(), leaving.end(), [&](const Leaving& l) {
+            const bool same = (l.n0.dot(g0) > kSamePieceCosine && l.n1.dot(g1) > kSamePieceCosine) ||
+                              (l.n0.dot(g1) > kSamePieceCosine && l.n1.dot(g0) > kSamePieceCosine);
+            return same && l.direction.dot(dir * t) > 0;
+          });
+          if (known) continue;
+          const double step = kCornerStep * tr.min_spacing;
+          const CreaseProjection c = project_to_crease(field, corner + dir * step * t, two, options.newton);
+          if (!c.ok() || (c.point - corner).norm() > 2 * step || (c.point - corner).dot(dir * t) <= 0) continue;
+          if (start_curve(c, two, false))
+            leaving.push_back({dir * t, g0, g1});
+        }
+      }
+  }
   // Corners once: the ends of several curves meet at each, each found to the Newton tolerance.
   for (const Vec3& c : corners) {
     const bool seen = std::any_of(result.corners.begin(), result.corners.end(),

@@ -23,6 +23,39 @@ std::string format_point(const Vec3& p) {
 
 }  // namespace
 
+// Nodes where F is zero, to rounding, between two inside nodes along an axis lie where the
+// surface only touches the inside: F has a ridge at zero there, as where two solids touch (a box
+// standing flush on another: the union's field is -|x - x0| across their common face, exactly 0
+// on it). No surface passes there, but counted as outside (F >= 0) each such node made sign
+// changes with its neighbours, and a seed there meshed the solids' common face. They count as
+// inside; the grid records how many (SeedGrid::touching). A node on the surface proper is never
+// so (its neighbours across the surface lie on either side), but where the surface is tangent to
+// the axis through the node from inside (a cavity's wall), and there inside is as good as outside:
+// the surface passes through the node either way. Decided on the values as sampled, so that the
+// order of the nodes does not matter.
+static void mark_touching(SeedGrid& g) {
+  const double zero = kTouchingZero * g.h;
+  std::vector<std::size_t> touching;
+  for (int k = 0; k <= g.n[2]; ++k)
+    for (int j = 0; j <= g.n[1]; ++j)
+      for (int i = 0; i <= g.n[0]; ++i) {
+        const double v = g.value(i, j, k);
+        if (!(v >= 0 && v <= zero)) continue;
+        const std::array<int, 3> at{i, j, k};
+        bool ridge = false;
+        for (int axis = 0; axis < 3 && !ridge; ++axis) {
+          if (at[axis] == 0 || at[axis] == g.n[axis]) continue;
+          std::array<int, 3> lo = at, hi = at;
+          --lo[axis];
+          ++hi[axis];
+          ridge = g.value(lo[0], lo[1], lo[2]) < 0 && g.value(hi[0], hi[1], hi[2]) < 0;
+        }
+        if (ridge) touching.push_back(g.index(i, j, k));
+      }
+  for (const std::size_t i : touching) g.values[i] = -std::numeric_limits<double>::min();
+  g.touching = touching.size();
+}
+
 SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options) {
   if (options.resolution < 2) throw InvalidInputError("seeding: resolution must be at least 2");
   const Box& box = field.bounds();
@@ -87,6 +120,7 @@ SeedGrid sample_seed_grid(const Field& field, const SeedOptions& options) {
                                    "\"bounds\" that leave it out (NaN away from the surface counts as outside)");
             }
         }
+  mark_touching(g);
   if (options.require_closed_in_box) {
     std::size_t boundary_nodes = 0, negative = 0;
     std::array<int, 3> first_negative{};

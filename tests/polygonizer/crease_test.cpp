@@ -452,6 +452,49 @@ TEST(CreaseCurves, ARimShorterThanTwoStepsIsTracedOnceRound) {
   }
 }
 
+// A table top 0.05 thick (|x| <= 1, |y| <= 0.5, 0.695 <= z <= 0.745) with a leg under its middle
+// reaching 0.005 into it. The top's four vertical edges are 0.05 long, under a cell of the grid
+// the leg's box makes (0.075): two of them crossed no grid edge near enough and were not traced,
+// and the patch boundaries broke off at their corners. Every crease leaving a corner is traced
+// from it: the top's 12 edges, the leg's 8 and the 4 where its sides meet the top's underside.
+TEST(CreaseCurves, AnEdgeShorterThanAGridCellBetweenTwoCornersIsTracedFromThem) {
+  const Expression table("min(max(abs(x)-1, abs(y)-0.5, abs(z-0.72)-0.025), max(abs(x)-0.05, abs(y)-0.05, abs(z-0.35)-0.35))",
+                         Box{Vec3(-1.2, -0.7, -0.2), Vec3(1.2, 0.7, 0.945)});
+  const CreaseTracingResult r = trace_creases(table);
+  EXPECT_EQ(r.curves.size(), 24u);
+  EXPECT_EQ(r.corners.size(), 16u);
+  EXPECT_EQ(r.stops, 0u);
+  int vertical_top_edges = 0;
+  for (const CreaseCurve& c : r.curves) {
+    const Vec3 &a = c.points.front(), &b = c.points.back();
+    if (std::abs(std::abs(a.x()) - 1) < 1e-9 && std::abs(std::abs(a.y()) - 0.5) < 1e-9 && (a - b).norm() > 0.049 &&
+        std::abs(a.z() - b.z()) > 0.049)
+      ++vertical_top_edges;
+  }
+  EXPECT_EQ(vertical_top_edges, 4);
+}
+
+// Two unit boxes sharing a face (x = 0.5, |y|, |z| <= 0.5): their union's field is -|x - 0.5|
+// across it, zero on it, and the pieces there face opposite ways. That face is no surface: no
+// crease lies on it or along its rim (where each box's edge runs on, the union's faces are
+// flat). The union's creases are the 2 x 1 x 1 box's twelve edges, the four long ones each in two
+// pieces (one box's, then the other's) meeting at x = 0.5. A crease was traced as a single point
+// on the common face, and the layout failed.
+TEST(CreaseCurves, TwoSolidsTouchingAlongAFaceHaveNoCreaseOnIt) {
+  const Expression boxes("min(max(abs(x)-0.5, abs(y)-0.5, abs(z)-0.5), max(abs(x-1)-0.5, abs(y)-0.5, abs(z)-0.5))",
+                         Box{Vec3(-0.7, -0.7, -0.7), Vec3(1.7, 0.7, 0.7)});
+  const CreaseTracingResult r = trace_creases(boxes);
+  EXPECT_EQ(r.curves.size(), 16u);
+  EXPECT_EQ(r.stops, 0u);
+  for (const CreaseCurve& c : r.curves)
+    for (const Vec3& p : c.points) {
+      // On an edge of the long box: two of its coordinates on its faces.
+      const int on = (std::abs(p.x() + 0.5) < 1e-9 || std::abs(p.x() - 1.5) < 1e-9) +
+                     (std::abs(std::abs(p.y()) - 0.5) < 1e-9) + (std::abs(std::abs(p.z()) - 0.5) < 1e-9);
+      EXPECT_GE(on, 2) << p.transpose();
+    }
+}
+
 // Two overlapping spheres on a bar (radius 0.85 at x = -0.5 and 0.5; the bar |x| <= 1.2,
 // -1.15 <= y <= -0.65, |z| <= 0.25). Where the spheres' seam meets the bar's top face, a face
 // 0.025 wide is left between three corners on each side: the seam's (0, -0.65, +-sqrt(0.05))

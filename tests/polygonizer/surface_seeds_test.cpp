@@ -5,6 +5,7 @@
 #include <cdp/core/surface_seeds.h>
 
 #include <cdp/core/models/analytic.h>
+#include <cdp/core/models/expression.h>
 
 #include <mutex>
 #include <set>
@@ -144,6 +145,29 @@ TEST(SurfaceSeeds, TripleRootWithVanishingGradientStillGivesSeedsOnTheSurface) {
   const auto seeds = find_surface_seeds(*f);
   ASSERT_EQ(seeds.size(), 1u);
   EXPECT_NEAR(seeds[0].point.norm(), 1.0, 1e-6);
+}
+
+// Two unit boxes sharing the face x = 0.5, where the grid (h = 0.075 from x = -0.7) has a layer
+// of nodes: their union's field is exactly 0 there and negative on either side. Counted as
+// outside, each node of that face made sign changes with its neighbours, and a seed there meshed
+// the face inside the solid. They count as inside: the grid's sign changes are those of the
+// 2 x 1 x 1 box.
+TEST(SurfaceSeeds, NodesWhereTwoSolidsTouchCountAsInside) {
+  const Expression boxes("min(max(abs(x)-0.5, abs(y)-0.5, abs(z)-0.5), max(abs(x-1)-0.5, abs(y)-0.5, abs(z)-0.5))",
+                         Box{Vec3(-0.7, -0.7, -0.7), Vec3(1.7, 0.7, 0.7)});
+  SeedOptions o;
+  o.resolution = 32;
+  const SeedGrid g = sample_seed_grid(boxes, o);
+  ASSERT_DOUBLE_EQ(g.point(16, 0, 0).x(), 0.5);
+  // The face's nodes strictly inside its rim: |y|, |z| < 0.5, 13 x 13 of them.
+  EXPECT_EQ(g.touching, 169u);
+  std::size_t on_face = 0;
+  g.for_each_sign_change([&](const std::array<int, 3>& a, const std::array<int, 3>& b) {
+    const Vec3 pa = g.point(a[0], a[1], a[2]), pb = g.point(b[0], b[1], b[2]);
+    const Vec3 mid = 0.5 * (pa + pb);
+    if (std::abs(mid.x() - 0.5) < 0.04 && std::abs(mid.y()) < 0.45 && std::abs(mid.z()) < 0.45) ++on_face;
+  });
+  EXPECT_EQ(on_face, 0u);
 }
 
 }  // namespace

@@ -28,6 +28,10 @@ constexpr double kCornerMatch = 5e-4;
 // The side test of orient_darts steps this share of min_edge off the crease: far beyond the
 // Newton tolerance, far inside the patch next to a crease sample.
 constexpr double kSideProbe = 0.05;
+// ... and looks this share of that step either way along the piece's normal for the field's
+// sign change that shows the surface passes there: far less than the step, where the gyroid
+// ball's sheets meet its sphere at a few degrees and leave a wedge thinner than a tenth of it.
+constexpr double kSideDepth = 1e-3;
 
 // A piece as a field of its own: the smooth function with the piece's branches fixed. Its zero
 // set continues past the crease (where the CSG field takes another piece), so the fronts of its
@@ -302,8 +306,15 @@ std::array<Dart, 2> orient_darts(const Field& field, const LaidCurve& c, int ind
       q -= f.value / f.gradient.squaredNorm() * f.gradient;
     }
     const double F = field.value(q);
-    const double mine_value = field.piece(q, mine).value, other_value = field.piece(q, other).value;
-    const bool on_left = std::abs(F - mine_value) < std::abs(F - other_value);
+    const FieldPiece at_q = field.piece(q, mine);
+    const double mine_value = at_q.value, other_value = field.piece(q, other).value;
+    // Where the field takes the piece, unless it takes it only where two solids touch, on
+    // either side of it the same sign (a box standing flush on a longer one: beside the step's
+    // crease, the longer box's top face under the other box's bottom face, both zero there).
+    const Vec3 m = at_q.gradient.normalized();
+    const double depth = kSideDepth * kSideProbe * min_edge;
+    const bool touching = (field.value(q + depth * m) > 0) == (field.value(q - depth * m) > 0);
+    const bool on_left = std::abs(F - mine_value) < std::abs(F - other_value) && !touching;
     Dart& d = out[static_cast<std::size_t>(side)];
     d.curve = index;
     d.side = side;

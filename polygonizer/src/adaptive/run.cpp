@@ -107,6 +107,8 @@ void Run::prepare() {
     // A bend the patches' trackers met is one the run met: a surface meshed wholly in patches
     // left the run none, and no rerun for the tolerance or a thin feature followed.
     if (creases.mesh && creases.mesh->tightest.first < tracking.tightest.first) tracking.tightest = creases.mesh->tightest;
+    // A finer tracing grid that measured more surface than the seed grid bounds the seeds' fronts too.
+    seeds.estimated_area = std::max(seeds.estimated_area, creases.estimated_area);
   }
   // Blocks where no crease patches were meshed: the patches' fronts run serially for now.
   if (uses_blocks(ctx.options) && ctx.options.variant == Variant::Improved && !creases.mesh) {

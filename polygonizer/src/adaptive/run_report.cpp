@@ -79,6 +79,7 @@ void Run::write_stats() {
 
   r.seeding = tracking.seeding;
   r.seeding.non_finite_samples = seeds.grid.non_finite;
+  r.seeding.touching_samples = seeds.grid.touching;
   r.seed_grid_seconds = seed_grid_seconds;
 
   // The seeding tracker's counters, and the blocks' trackers' for a mesh made of blocks (their

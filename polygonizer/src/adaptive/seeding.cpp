@@ -22,6 +22,15 @@ namespace {
 // Bisection halvings before Newton takes a sign change's point onto the surface: 2^-16 of the
 // segment is well inside Newton's basin on any segment the grid resolves.
 constexpr int kBisections = 16;
+
+// A sign change's surface point is where the surface passes only if F changes sign across it
+// within this share of min_edge along its normal: where two solids touch (a table's leg flush
+// under a top thinner than a seed cell, a seed grid node on their common face with the leg's
+// inside below it and the air above the top) F is zero on their common face and of one sign on
+// either side, and a seed there meshed that face inside the solid. Far less than any feature
+// the edges resolve (a seed beside a sharp crease has a thin wedge on one side), far more than
+// the Newton tolerance.
+constexpr double kTouchingDepth = 1e-4;
 // How near a triangle of the same orientation a point of the surface must lie to count as meshed,
 // in units of the triangle's longest edge. The mesh is a chord of the surface and deviates by
 // about l / (8 k) for an edge l at factor k where the curvature is resolved; where it is not (a
@@ -588,6 +597,10 @@ class Seeder {
       return;
     }
     const auto x = surface_point(field_, c);
+    if (x && to_zero_node(c) && touching(*x)) {
+      ++report_.touching_crossings;
+      return;
+    }
     unsure_.push_back({c, true, x});
     if (!x) return;
     if (meshed_at(*x)) {
@@ -1061,6 +1074,22 @@ class Seeder {
       if (w.at && walks_to_mesh(*w.at)) continue;  // its first test is meshed_at
       if (report_.uncovered++ == 0) report_.first_uncovered = w.at ? w.at->point : 0.5 * (w.change.a + w.change.b);
     }
+  }
+
+  // Whether c ends at a node where F is zero to rounding (kTouchingZero), its other end inside: a
+  // sign change to a node on a face where two solids touch, which sample_seed_grid counts as
+  // inside only where it lies between inside nodes (not where the other side is a table top
+  // thinner than a cell, with air beyond). Where the node is outside, the surface the sign change
+  // crosses is there, and its point is seeded (or, not meshed, an error) as any other.
+  bool to_zero_node(const SignChange& c) const {
+    const double outside = c.fa < 0 ? c.fb : c.fa;
+    return outside >= 0 && outside <= kTouchingZero * grid_.h;
+  }
+
+  // Whether F has one sign on either side of x (kTouchingDepth): no surface passes there.
+  bool touching(const SurfacePoint& x) const {
+    const double depth = kTouchingDepth * min_edge_;
+    return (field_.value(x.point + depth * x.normal) > 0) == (field_.value(x.point - depth * x.normal) > 0);
   }
 
   // The cancel poll of the checks between components (the tracker polls its own loop).

@@ -1,5 +1,7 @@
 #include "stage_creases.h"
 
+#include "stage_seed_grid.h"
+
 #include <cdp/core/mesh_topology.h>
 
 namespace cdp::adaptive {
@@ -29,11 +31,25 @@ CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options,
   for (int attempt = 0; attempt < kCreaseTracings; ++attempt, co.resolution *= 2) {
     try {
       out.tracing_resolution = co.resolution;
-      co.grid = attempt == 0 ? seed_grid : nullptr;
+      out.estimated_area = estimated_area;
+      SeedGrid finer;
+      co.grid = seed_grid;
+      if (attempt > 0 || !seed_grid) {
+        co.grid = nullptr;
+        if (field.has_pieces()) {
+          SeedOptions so;
+          so.resolution = co.resolution;
+          so.require_closed_in_box = false;
+          so.threads = options.threads;
+          finer = sample_seed_grid(field, so);
+          co.grid = &finer;
+          out.estimated_area = std::max(estimated_area, measured_area(finer));
+        }
+      }
       out.traced = trace_creases(field, co);  // no work for a field without pieces
       if (!out.traced.curves.empty()) {
         if (attempt == 0 && options.phase) options.phase("meshing along creases");
-        out.mesh = mesh_patches(field, out.traced, settings, estimated_area);
+        out.mesh = mesh_patches(field, out.traced, settings, out.estimated_area);
         out.components = analyze_topology(out.mesh->mesh).components;
         out.fallback.clear();
       }
@@ -51,10 +67,13 @@ CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options,
       out.fallback = e.what();  // a crease the grid missed? A finer one may find it
     } catch (const NoSurfaceError& e) {
       out.fallback = e.what();
-      break;
+      if (out.traced.curves.empty()) break;
     } catch (const LimitExceededError& e) {
+      // The patches' fronts stalled or ran on: a patch the grid missed a crease of (a table top
+      // thinner than a seed cell, flush on a leg: only the leg's creases were found, and the
+      // underside's patch round the leg had no outer edge) is bounded on a finer grid.
       out.fallback = e.what();
-      break;
+      if (out.traced.curves.empty()) break;
     }
   }
   return out;

@@ -17,8 +17,9 @@ namespace cdp::adaptive {
 
 // Creases are traced on the seed grid first and, when they cannot be laid out as patch boundaries
 // (a corner whose boundary breaks off: a short crease between crossings of the grid was
-// missed), once more on a grid twice as fine (eight times the values, on a field cheap enough
-// to have min/max/abs branches: an expression).
+// missed) or their patches' fronts stall or run on (a patch with a crease the grid missed, so
+// unbounded there), once more on a grid twice as fine (eight times the values, on a field cheap
+// enough to have min/max/abs branches: an expression).
 inline constexpr int kCreaseTracings = 2;
 
 // The patches' fronts look ahead (Settings::look_ahead) with a gentler gradation than a smooth
@@ -50,6 +51,10 @@ struct CreaseLayout {
   // Why the creases are not followed (the layout's or the patches' error), or empty.
   std::string fallback;
   int tracing_resolution = 0;       // of the last tracing made; 0 when none was
+  // The surface's area the patches were bounded by (Tracker::set_estimated_area): the caller's,
+  // or where the last tracing sampled a finer grid than the seed grid and that grid measures
+  // more (measured_area: a table top thinner than a seed cell, missed by it), that grid's.
+  double estimated_area = 0;
 };
 
 // Traces the field's creases and meshes the patches they bound with `settings`;

@@ -10,6 +10,21 @@
 
 namespace cdp::adaptive {
 
+namespace {
+
+double area_of_crossings(std::size_t crossings, double h) {
+  return crossings >= kMeasuredCrossings ? static_cast<double>(crossings) * h * h / kMeanCrossings : 0.0;
+}
+
+}  // namespace
+
+double measured_area(const SeedGrid& grid, std::size_t* crossings) {
+  std::size_t n = 0;
+  grid.for_each_sign_change([&](const std::array<int, 3>&, const std::array<int, 3>&) { ++n; });
+  if (crossings) *crossings = n;
+  return area_of_crossings(n, grid.h);
+}
+
 SeedGridStage sample_seed_grid_stage(const Field& field, const AdaptiveOptions& options, const Settings& settings) {
   SeedOptions seed_options;
   seed_options.resolution = options.seed_resolution;
@@ -23,7 +38,7 @@ SeedGridStage sample_seed_grid_stage(const Field& field, const AdaptiveOptions& 
     points.push_back(pa + fa / (fa - fb) * (grid.point(b[0], b[1], b[2]) - pa));
   });
   out.crossings = points.size();
-  out.estimated_area = out.crossings >= kMeasuredCrossings ? out.crossings * grid.h * grid.h / kMeanCrossings : 0.0;
+  out.estimated_area = area_of_crossings(out.crossings, grid.h);
   std::vector<double> lengths;
   const std::size_t stride = std::max<std::size_t>(1, points.size() / 64);
   for (std::size_t i = 0; i < points.size(); i += stride) {

@@ -48,6 +48,11 @@ struct SeedingReport {
   std::size_t uncovered = 0;         // sign changes not meshed after the run: 0 on success (STATS "uncovered_crossings")
   Vec3 first_uncovered = Vec3::Zero();
   std::size_t non_finite_samples = 0;  // seed-grid samples where F was NaN or infinite
+  // Where two solids touch, F is zero on their common face and of one sign on either side: no
+  // surface passes there. Seed-grid samples on such a face counted as inside (SeedGrid::touching),
+  // and sign changes whose surface point lay on one, not seeded (seeding.cpp, kTouchingDepth).
+  std::size_t touching_samples = 0;
+  std::size_t touching_crossings = 0;
 };
 
 // The fronts' counters over the tracking stage of the run kept.

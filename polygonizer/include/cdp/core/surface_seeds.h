@@ -25,6 +25,11 @@ struct SurfaceSeed {
   int cluster;  // crossings of one 26-connected group of crossed grid cells share a cluster id
 };
 
+// A seed grid node where |F| is under this share of the grid's spacing has F zero to rounding (a
+// node on the common face of two boxes that touch is exactly 0; rotated, a few units in the last
+// place): see sample_seed_grid's touching nodes.
+inline constexpr double kTouchingZero = 1e-12;
+
 // F sampled at the nodes of the seed grid: cubic cells of side h from the box's min corner, n
 // cells per axis (the last layer may reach past the box's max corner).
 struct SeedGrid {
@@ -33,6 +38,9 @@ struct SeedGrid {
   std::array<int, 3> n{1, 1, 1};
   std::vector<double> values;  // node (i, j, k) at index(i, j, k)
   std::size_t non_finite = 0;  // nodes where F was NaN or infinite (sample_seed_grid's rule)
+  // Nodes where F is 0 (to rounding) between inside ones and next to no outside one, counted as
+  // inside: the surface only touches them (two solids touching there; sample_seed_grid's rule).
+  std::size_t touching = 0;
   std::size_t index(int i, int j, int k) const {
     return (static_cast<std::size_t>(k) * (n[1] + 1) + j) * (n[0] + 1) + i;
   }
@@ -56,8 +64,12 @@ struct SeedGrid {
 
 // Samples the grid (one batched evaluation). A node where F is NaN or +infinity counts as
 // outside (its value becomes the largest double), one at -infinity as inside (the lowest), so
-// that a function undefined away from its surface (a NaN far out in the box) is meshed.
-// \return the grid; the count of non-finite nodes in SeedGrid::non_finite.
+// that a function undefined away from its surface (a NaN far out in the box) is meshed. A node
+// where F is 0 to rounding, with a neighbour inside and none outside, counts as inside (its
+// value becomes the smallest negative normal double): no surface passes there (the common face
+// of two solids that touch).
+// \return the grid; the count of non-finite nodes in SeedGrid::non_finite, of the touching ones
+//         in SeedGrid::touching.
 // \throw InvalidInputError for a resolution below 2 or a grid of more than 2^26 nodes.
 // \throw NoSurfaceError for a field whose box is not valid, where a NaN node lies next to an inside
 //        node (the surface may pass where F is undefined) or (with require_closed_in_box) F is
