@@ -73,6 +73,7 @@ nlohmann::json creases_json(const CreaseReport& c) {
           {"steps", c.steps},
           {"tracing_resolution", c.tracing_resolution},
           {"patch_refusals", c.patch_refusals},
+          {"landed_vertices", c.landed_vertices},
           {"across_black_box", c.across_black_box}};
 }
 

@@ -705,6 +705,41 @@ bool in_patch(const Field& field, const Branch& branch, const Vec3& x, double d,
   return std::abs(field.value(x) - value) <= (kOutsidePatch * d + 2 * sagitta) * gradient.norm();
 }
 
+// Patch vertices off the field's surface by more than this share of the diagonal (10^4 times
+// the Newton tolerance the trackers place them to) lie where the field is not their piece.
+constexpr double kOffPiece = 1e-6;
+// ... and are moved onto the field's surface by Newton (at its tolerance) if that moves them by at
+// most this share of the edge length they were placed with; else the layout fails.
+constexpr double kOffPieceTravel = 0.25;
+
+// The vertices from `first` on that a patch's tracker placed on its piece where the field is
+// another function: moved onto the field's surface (land_on_field, crease_patches.h).
+void land_on_field(const Field& field, CreaseMesh& out, std::size_t first, double diagonal) {
+  std::vector<Vec3>& points = out.mesh.positions;
+  if (points.size() <= first) return;
+  const std::size_t n = points.size() - first;
+  std::vector<double> values(n);
+  std::vector<Vec3> gradients(n);
+  field.values_gradients(points.data() + first, values.data(), gradients.data(), n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double g = gradients[i].norm();
+    if (!(g > 0) || !(std::abs(values[i]) > kOffPiece * diagonal * g)) continue;
+    const std::size_t v = first + i;
+    ProjectionOptions po;
+    po.tolerance = 1e-10 * diagonal;
+    const double reach = kOffPieceTravel * out.target[v];
+    po.max_step = po.max_travel = std::isfinite(reach) && reach > 0 ? reach : kOffPiece * diagonal;
+    const ProjectionResult r = project_to_surface(field, points[v], po);
+    if (!r.ok() || !(r.gradient.squaredNorm() > 0))
+      throw CreaseLayoutError("adaptive: a patch vertex near " + format_point(points[v]) + " lies " +
+                              std::to_string(std::abs(values[i]) / g) +
+                              " off the surface, where the field is not its patch's piece");
+    points[v] = r.point;
+    out.mesh.normals[v] = r.gradient.normalized();
+    ++out.landed;
+  }
+}
+
 }  // namespace
 
 CreaseMesh start_shared(const std::vector<Vec3>& shared) {
@@ -826,6 +861,7 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
   finish_shared(out, nc, "a crease vertex no patch reached");
   out.crease_vertices = nc;
   out.pieces = groups.size();
+  land_on_field(field, out, nc, diagonal);
   return out;
 }
 

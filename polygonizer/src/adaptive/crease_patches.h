@@ -68,6 +68,13 @@ struct CreaseMesh {
   // The tightest bend the patches' trackers met (Tracker::tightest_bend), for the run's: the
   // reruns that lower min_edge for a bend read it (lowered_min_edge, min_edge_for_tolerance).
   std::pair<double, Vec3> tightest{std::numeric_limits<double>::infinity(), Vec3::Zero()};
+  // Patch vertices moved onto the field's surface after their patch was meshed: a patch's piece
+  // fixes the branches of its creases everywhere, and where the field's value does not depend on
+  // one of them as its values choose it (a pawn's head, a ball smoothly united with a capped cone:
+  // over the ball the blend's clamp hides which of the cone's faces is taken, but with the
+  // branch of its side fixed the clamp no longer saturates), the piece is another function. The
+  // tracker placed its vertices on the piece, up to 0.012 off the surface, and nothing said so.
+  std::size_t landed = 0;
 };
 
 // A mesh whose first vertices are `shared` (on creases, or on the blocks' seams), to be joined by

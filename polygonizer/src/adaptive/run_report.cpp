@@ -105,6 +105,7 @@ void Run::write_stats() {
     c.pieces = creases.mesh->pieces;
     c.steps = creases.mesh->steps;
     c.patch_refusals = creases.mesh->patch_refusals;
+    c.landed_vertices = creases.mesh->landed;
   }
   c.components = creases.components;
   c.fallback = creases.fallback;

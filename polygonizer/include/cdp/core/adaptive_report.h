@@ -79,6 +79,9 @@ struct CreaseReport {
   bool followed = false;  // the mesh's edges run along the creases
   std::size_t curves = 0, corners = 0;  // traced
   std::size_t vertices = 0, pieces = 0, components = 0, steps = 0, patch_refusals = 0;  // of the patches
+  // Patch vertices placed on their piece where the field is another function, moved onto the
+  // field's surface (crease_patches.h, CreaseMesh::landed).
+  std::size_t landed_vertices = 0;
   std::string fallback;   // why the creases are not followed, or empty
   int tracing_resolution = 0;  // of the last tracing; 0 when none was made
   // A black box (no pieces) meshed across a kink that held together (CreaseHandling::Ignore;

@@ -267,6 +267,65 @@ TEST(AdaptiveCreases, ZeroAreaTrianglesAtATangentCornerAreRefusedNotWritten) {
   }
 }
 
+TEST(AdaptiveCreases, PatchVerticesLieOnTheSurfaceWhereTheirPieceIsAnotherFunction) {
+  // A pawn's body and head: a ball smoothly united with a capped cone (cdp.sdf's sphere(0.3,
+  // center=(0, 0, 1.1)) | capped_cone((0, 0, 0.2), (0, 0, 0.95), 0.35, 0.12).k(0.1)). The cone's
+  // bottom rim is its one crease, and the patch above it fixes the cone's max to its side's
+  // branch. Over the ball the field is the ball alone, the blend's clamp saturated with the cap's
+  // branch taken; with the side's branch fixed the clamp does not saturate, and the piece is
+  // another function there. At factor 1 a vertex at the top of the head was written 0.0047 off
+  // the surface, with nothing said. Now every vertex lies on it to the Newton tolerance, and the
+  // stats count those moved onto it.
+  const std::string pawn =
+      R"J({"type": "expression", "value": "_d1 + (_d0 - _d1)*_h0 - 0.1*_h0*(1 - _h0)", "define": {)J"
+      R"J("_d0": "hypot(x, y, (z - 1.1)) - 0.3", )J"
+      R"J("_d1": "max(0.9560542081957355*(hypot(x, y) - (-(0.30666666666666664*(z - 0.575)) + 0.235)), abs((z - 0.575)) - 0.375)", )J"
+      R"J("_h0": "clamp(0.5 + (_d1 - _d0)*5.0, 0, 1)"}, "bounds": [[-0.45, -0.45, 0.05], [0.45, 0.45, 1.55]]})J";
+  const auto field = test::field_from_json(pawn);
+  AdaptiveOptions o;
+  o.factor = 1;
+  const PolygonizeResult r = polygonize_adaptive(*field, o);
+  EXPECT_TRUE(r.stats.adaptive->creases.followed) << r.stats.adaptive->creases.fallback;
+  EXPECT_GT(r.stats.adaptive->creases.landed_vertices, 0u);
+  const double diagonal = field->bounds().diagonal();
+  double worst = 0;
+  for (const Vec3& p : r.mesh.positions) {
+    Vec3 gradient;
+    const double value = field->value_gradient(p, gradient);
+    worst = std::max(worst, std::abs(value) / gradient.norm());
+  }
+  EXPECT_LE(worst, 1e-9 * diagonal);
+  EXPECT_TRUE(analyze_topology(r.mesh).watertight());
+}
+
+TEST(AdaptiveCreases, AnEdgeRunningOnInsideAFlushFaceIsNoCrease) {
+  // The letter H of three boxes: two posts (0.2 x 1 x 0.2 at x = -0.4 and 0.4) and a crossbar
+  // (1 x 0.2 x 0.2) ending flush with their outer faces, its front and back flush with theirs.
+  // Where the crossbar runs on inside a post, its edges lie in the post's faces, flat there: the
+  // faces' points a step either side of such an edge lie off the surface. Taken for creases, their
+  // patch boundaries crossed at the post's face, and the H was meshed as smooth, its volume 29 %
+  // short. Now every crease is followed and the mesh is the H.
+  const auto field = test::field_from_json(
+      expression("min(max(abs(x+0.4)-0.1, abs(y)-0.5, abs(z)-0.1), max(abs(x-0.4)-0.1, abs(y)-0.5, abs(z)-0.1), "
+                 "max(abs(x)-0.5, abs(y)-0.1, abs(z)-0.1))",
+                 -0.7, 0.7));
+  for (const double factor : {1.0, 3.0}) {
+    SCOPED_TRACE(factor);
+    AdaptiveOptions o;
+    o.factor = factor;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    EXPECT_TRUE(r.stats.adaptive->creases.followed) << r.stats.adaptive->creases.fallback;
+    const MeshTopology t = analyze_topology(r.mesh);
+    EXPECT_TRUE(t.watertight());
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.genus, 0);
+    double volume = 0;
+    for (const auto& f : r.mesh.triangles)
+      volume += r.mesh.positions[f[0]].dot(r.mesh.positions[f[1]].cross(r.mesh.positions[f[2]])) / 6;
+    EXPECT_NEAR(volume, 2 * 0.2 * 1 * 0.2 + 0.6 * 0.2 * 0.2, 1e-9);
+  }
+}
+
 TEST(AdaptiveCreases, CreasesCrossingWhereTheirPiecesAreTangentAreFollowed) {
   // The sheet z = -max(0, xy) capping a ball: its creases along the x and y axes fade out at the
   // origin from four sides, a crossing of the creases of z and z + xy where the two are
