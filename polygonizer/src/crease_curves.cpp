@@ -119,8 +119,8 @@ struct Tracer {
   // top face, which lies on the table's underside, is no crease; the leg's side meets the
   // underside along the same line, and that is one). Each face is looked at a step across the
   // crease either way (kFaceReach min_spacing), where its piece is among those taken: it bounds
-  // the solid if F changes sign across it at one of them, or where it is taken at neither but
-  // for want of a point (not where the face's points on either side lie off the surface).
+  // the solid if F changes sign across it at one of them, or where no point of it was found on
+  // one side (not where the points found on both sides are not the surface's).
   bool faces_bound_solid(const Vec3& c, const Branch& a, const Branch& b, const Vec3& ga, const Vec3& gb) const {
     const double reach = kFaceReach * min_spacing, depth = kFaceDepth * min_spacing;
     const std::array<std::pair<const Branch*, Vec3>, 2> faces{std::pair{&a, ga}, std::pair{&b, gb}};
@@ -131,7 +131,7 @@ struct Tracer {
       const Vec3 across = (other - other.dot(n) * n).normalized();
       if (!across.allFinite()) continue;
       bool bounds = false, touches = false;
-      int off_surface = 0;
+      int absent = 0;  // sides where the face's point is found and the face is not the surface's there
       for (const double side : {1.0, -1.0}) {
         Vec3 q = c + side * reach * across;
         for (int it = 0; it < kFaceNewtonSteps; ++it) {  // onto the piece's zero set
@@ -140,22 +140,27 @@ struct Tracer {
           q -= f.value / f.gradient.squaredNorm() * f.gradient;
         }
         const FirstOrder f = piece(q, mine);
-        if (!q.allFinite() || !(f.gradient.squaredNorm() > 0) || (q - c).norm() > 2 * reach) continue;
+        if (!q.allFinite() || !(f.gradient.squaredNorm() > 0) || (q - c).norm() > 2 * reach ||
+            !(std::abs(f.value) <= kActiveRadius * tol * f.gradient.norm()))
+          continue;
         const Vec3 m = f.gradient.normalized();
-        const double F = std::abs(field.value(q));
-        if (F > kFaceTakenShare * reach * f.gradient.norm() && std::abs(f.value) <= kActiveRadius * tol * f.gradient.norm())
-          ++off_surface;
-        if (!(F <= kActiveRadius * tol * f.gradient.norm())) continue;
-        bool taken = false;
-        for (const FieldPiece& p : field.pieces_first_order(q, kFaceTakenShare * reach))
-          taken = taken || p.gradient.normalized().dot(m) > kSamePieceCosine;
-        if (!taken) continue;
+        bool taken = std::abs(field.value(q)) <= kActiveRadius * tol * f.gradient.norm();
+        if (taken) {
+          taken = false;
+          for (const FieldPiece& p : field.pieces_first_order(q, kFaceTakenShare * reach))
+            taken = taken || p.gradient.normalized().dot(m) > kSamePieceCosine;
+        }
+        if (!taken) {
+          ++absent;
+          continue;
+        }
         const double above = field.value(q + depth * m), below = field.value(q - depth * m);
         ((above > 0) != (below > 0) ? bounds : touches) = true;
       }
-      // Off the surface on both sides: the face is not the surface's there (the crossbar of an H
-      // whose faces are flush with its posts' runs on inside a post's face, its edges no crease).
-      if (!bounds && (touches || off_surface == 2)) return false;
+      // Not the surface's on either side: the face is not there (the crossbar of an H whose faces
+      // are flush with its posts' runs on inside a post's face, its edges no crease; a cutter
+      // flush with a box's face leaves its own side faces off the box).
+      if (!bounds && (touches || absent == 2)) return false;
     }
     return true;
   }

@@ -495,6 +495,19 @@ TEST(CreaseCurves, TwoSolidsTouchingAlongAFaceHaveNoCreaseOnIt) {
     }
 }
 
+// A unit box minus a unit box touching its face x = 0.5 from outside (a cutter placed flush):
+// the difference is the first box. The cutter's side faces, negated, meet the box's edges on that
+// face, but lie off the box's surface on either side of them: each of those four edges was traced
+// twice (its pieces the box's, then the cutter's), and the layout failed.
+TEST(CreaseCurves, ACutterFlushWithAFaceLeavesEachEdgeOnce) {
+  const Expression cut("max(max(abs(x)-0.5, abs(y)-0.5, abs(z)-0.5), -max(abs(x-1)-0.5, abs(y)-0.5, abs(z)-0.5))",
+                       Box{Vec3(-0.7, -0.7, -0.7), Vec3(0.7, 0.7, 0.7)});
+  const CreaseTracingResult r = trace_creases(cut);
+  EXPECT_EQ(r.curves.size(), 12u);
+  EXPECT_EQ(r.corners.size(), 8u);
+  EXPECT_EQ(r.stops, 0u);
+}
+
 // Two overlapping spheres on a bar (radius 0.85 at x = -0.5 and 0.5; the bar |x| <= 1.2,
 // -1.15 <= y <= -0.65, |z| <= 0.25). Where the spheres' seam meets the bar's top face, a face
 // 0.025 wide is left between three corners on each side: the seam's (0, -0.65, +-sqrt(0.05))
