@@ -1,3 +1,5 @@
+#include "surface_passes.h"
+
 #include <cdp/core/crease_curves.h>
 #include <cdp/core/errors.h>
 #include <cdp/core/grid_cell.h>
@@ -154,8 +156,7 @@ struct Tracer {
           ++absent;
           continue;
         }
-        const double above = field.value(q + depth * m), below = field.value(q - depth * m);
-        ((above > 0) != (below > 0) ? bounds : touches) = true;
+        (surface_passes(field, q, m, depth) ? bounds : touches) = true;
       }
       // Not the surface's on either side: the face is not there (the crossbar of an H whose faces
       // are flush with its posts' runs on inside a post's face, its edges no crease; a cutter

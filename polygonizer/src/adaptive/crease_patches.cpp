@@ -1,5 +1,6 @@
 #include "crease_patches.h"
 #include "spatial_hash.h"
+#include "../surface_passes.h"
 #include "../union_find.h"
 
 #include <cdp/core/crease.h>
@@ -313,8 +314,7 @@ std::array<Dart, 2> orient_darts(const Field& field, const LaidCurve& c, int ind
     // crease, the longer box's top face under the other box's bottom face, both zero there).
     const Vec3 m = at_q.gradient.normalized();
     const double depth = kSideDepth * kSideProbe * min_edge;
-    const bool touching = (field.value(q + depth * m) > 0) == (field.value(q - depth * m) > 0);
-    const bool on_left = std::abs(F - mine_value) < std::abs(F - other_value) && !touching;
+    const bool on_left = std::abs(F - mine_value) < std::abs(F - other_value) && surface_passes(field, q, m, depth);
     Dart& d = out[static_cast<std::size_t>(side)];
     d.curve = index;
     d.side = side;

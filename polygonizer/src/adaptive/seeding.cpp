@@ -1,5 +1,6 @@
 #include "seeding.h"
 #include "spatial_hash.h"
+#include "../surface_passes.h"
 #include "../union_find.h"
 
 #include <cdp/core/curvature.h>
@@ -597,7 +598,7 @@ class Seeder {
       return;
     }
     const auto x = surface_point(field_, c);
-    if (x && to_zero_node(c) && touching(*x)) {
+    if (x && to_zero_node(c) && !surface_passes(field_, x->point, x->normal, kTouchingDepth * min_edge_)) {
       ++report_.touching_crossings;
       return;
     }
@@ -1084,12 +1085,6 @@ class Seeder {
   bool to_zero_node(const SignChange& c) const {
     const double outside = c.fa < 0 ? c.fb : c.fa;
     return outside >= 0 && outside <= kTouchingZero * grid_.h;
-  }
-
-  // Whether F has one sign on either side of x (kTouchingDepth): no surface passes there.
-  bool touching(const SurfacePoint& x) const {
-    const double depth = kTouchingDepth * min_edge_;
-    return (field_.value(x.point + depth * x.normal) > 0) == (field_.value(x.point - depth * x.normal) > 0);
   }
 
   // The cancel poll of the checks between components (the tracker polls its own loop).

@@ -32,19 +32,18 @@ CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options,
     try {
       out.tracing_resolution = co.resolution;
       out.estimated_area = estimated_area;
+      // A grid of its own past the seed grid, sampled here so that its measure of the surface
+      // bounds the patches (a field without pieces has no creases: no grid).
       SeedGrid finer;
-      co.grid = seed_grid;
-      if (attempt > 0 || !seed_grid) {
-        co.grid = nullptr;
-        if (field.has_pieces()) {
-          SeedOptions so;
-          so.resolution = co.resolution;
-          so.require_closed_in_box = false;
-          so.threads = options.threads;
-          finer = sample_seed_grid(field, so);
-          co.grid = &finer;
-          out.estimated_area = std::max(estimated_area, measured_area(finer));
-        }
+      co.grid = attempt == 0 ? seed_grid : nullptr;
+      if (!co.grid && field.has_pieces()) {
+        SeedOptions so;
+        so.resolution = co.resolution;
+        so.require_closed_in_box = false;
+        so.threads = options.threads;
+        finer = sample_seed_grid(field, so);
+        co.grid = &finer;
+        out.estimated_area = std::max(estimated_area, measured_area(finer));
       }
       out.traced = trace_creases(field, co);  // no work for a field without pieces
       if (!out.traced.curves.empty()) {

@@ -18,10 +18,9 @@ double area_of_crossings(std::size_t crossings, double h) {
 
 }  // namespace
 
-double measured_area(const SeedGrid& grid, std::size_t* crossings) {
+double measured_area(const SeedGrid& grid) {
   std::size_t n = 0;
   grid.for_each_sign_change([&](const std::array<int, 3>&, const std::array<int, 3>&) { ++n; });
-  if (crossings) *crossings = n;
   return area_of_crossings(n, grid.h);
 }
 

@@ -37,7 +37,7 @@ struct SeedGridStage {
 SeedGridStage sample_seed_grid_stage(const Field& field, const AdaptiveOptions& options, const Settings& settings);
 
 // The surface's area as the grid's crossings measure it (kMeanCrossings); 0 below
-// kMeasuredCrossings crossings. `crossings` receives their count.
-double measured_area(const SeedGrid& grid, std::size_t* crossings = nullptr);
+// kMeasuredCrossings crossings.
+double measured_area(const SeedGrid& grid);
 
 }  // namespace cdp::adaptive
