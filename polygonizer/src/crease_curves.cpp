@@ -340,6 +340,11 @@ struct Tracer {
         moved = advance(p, t, step, dir, a, b, k, seam);
       }
       if (!moved) return end_seam(End::Stop);
+      // A step back to where the walk was two steps before goes nowhere: where two pieces are
+      // tangent their switch's direction (ga x gb) is lost, and the tee of two equal pipes
+      // walked to and fro there until max_points.
+      const Vec3& before = out.size() >= 2 ? out[out.size() - 2] : start;
+      if (!out.empty() && (p - before).norm() < 0.5 * (p - from).norm()) return end_seam(End::Stop);
       if (seam && !hidden && one_function(p, a, b)) hidden = on_seam = true;
       const double stepped = (p - from).norm();
       travelled += stepped;
@@ -370,9 +375,11 @@ struct Tracer {
 // crossing at right angles: the two ellipses where they meet cross at the top and bottom of
 // both), and each walk towards the crossing stops a little short of it, where the crease's
 // direction is lost (the four arcs of the cylinders stopped 0.0007-0.0025 from it, min_spacing
-// 0.002). Three or more stops within kCrossingReach min_spacing of each other are such a
-// crossing: a corner on the surface at their mean, each of those curves ending there. Fewer
-// stops stay stops (a crease that fades out where its pieces become tangent).
+// 0.002). Two or more stops within kCrossingReach min_spacing of each other are such a
+// crossing: a corner on the surface at their mean, each of those curves ending there. Where a
+// tee of two equal pipes has them tangent, two arcs end, one stop each (with three required,
+// the tee was meshed as smooth with the crease warning). A stop alone stays a stop (a crease
+// that fades out where its pieces become tangent).
 namespace {
 
 constexpr double kCrossingReach = 4;
@@ -383,7 +390,7 @@ constexpr double kCrossingReach = 4;
 // min_spacing long.
 constexpr double kCornerReach = 1;
 constexpr double kCornerStep = 2;
-constexpr std::size_t kCrossingStops = 3;
+constexpr std::size_t kCrossingStops = 2;
 
 void join_crossings(const Field& field, double min_spacing, CreaseTracingResult& result, std::vector<Vec3>& corners) {
   struct End {

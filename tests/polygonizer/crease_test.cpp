@@ -382,6 +382,27 @@ TEST(CreaseCurves, CreasesThatCrossWhereTheirPiecesAreTangentMeetAtACorner) {
   EXPECT_EQ(arcs, 4u);
 }
 
+TEST(CreaseCurves, TwoCreasesEndingWhereTheirPiecesAreTangentMeetAtACorner) {
+  // A tee of two equal pipes: the z pipe, from z = 0 up, meets the x pipe along two half
+  // ellipses (in the planes x = z and x = -z) that end at (0, +-0.5, 0), where the pipes are
+  // tangent. Two stops there, one of each arc: a corner, as where four arcs cross.
+  const Expression tee = crease_expression("min(hypot(y, z) - 0.5, max(hypot(x, y) - 0.5, -z))", 1);
+  const CreaseTracingResult r = trace_creases(tee);
+  EXPECT_EQ(r.stops, 0u);
+  ASSERT_EQ(r.corners.size(), 2u);
+  // The corner is the mean of the two stops, each short of it by up to a min_spacing (0.0017
+  // here), from two directions at right angles.
+  for (const Vec3& c : r.corners) EXPECT_LT((c.cwiseAbs() - Vec3(0, 0.5, 0)).norm(), 2e-3) << c.transpose();
+  std::size_t arcs = 0;
+  for (const CreaseCurve& c : r.curves) {
+    if (c.closed) continue;  // the rims on the box's faces
+    ++arcs;
+    EXPECT_TRUE(c.starts_at_corner && c.ends_at_corner);
+    EXPECT_NEAR(std::abs(c.points.front().y() - c.points.back().y()), 1.0, 1e-3);
+  }
+  EXPECT_EQ(arcs, 2u);
+}
+
 TEST(CreaseCurves, LoopsOfACylindersRimsTwoSpheresAndABoxMinusASphere) {
   const Expression cylinder = crease_expression("max(sqrt(x^2+y^2)-1, abs(z)-1)");
   const CreaseTracingResult rims = trace_creases(cylinder);
