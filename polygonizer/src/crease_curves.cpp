@@ -91,6 +91,9 @@ constexpr double kFaceDepth = 1e-3;
 // the step.
 constexpr int kFaceNewtonSteps = 3;
 constexpr double kFaceTakenShare = 0.1;
+// Bisections that put a corner on a hidden seam (Tracer::seam_corner) to the Newton tolerance:
+// from a step of max_spacing, 0.02 of the diagonal, to 1e-10 of it takes 28.
+constexpr int kSeamCornerBisections = 40;
 
 struct Tracer {
   const Field& field;
@@ -230,6 +233,51 @@ struct Tracer {
     return k;
   }
 
+  // Whether the seam of a and b (the switch of branch point k, where they are one function)
+  // crosses, between two of its points, the switch of another branch point that shapes the
+  // pieces beside it: a corner of the patches, hidden as the seam is. A box smoothly intersected
+  // with a ball whose edges stick out of it: each edge's crease fades into the ball, and its
+  // seam (the box's switch between two faces) goes on over the ball to where three faces' switches
+  // meet, and on along another's; the patch of a face is bounded there. Such a switch is one
+  // of a Creased branch point (a Smooth one, the blend's clamp, shapes no patch) that the field
+  // takes the other way at either point, and that the value depends on with either side's choice
+  // at k (not a box's abs(x) where x is not the box's largest). Found to the Newton tolerance by
+  // bisection along the seam; the corner is put in `corner`.
+  bool seam_corner(const Vec3& from, const Vec3& to, const Branch& a, const Branch& b, int k, Vec3& corner) const {
+    Field::BranchRecord r0, r1;
+    if (!field.branch_record(from, r0) || !field.branch_record(to, r1) || r0.taken.size() != r1.taken.size()) return false;
+    const std::vector<Field::BranchKind>& kinds = field.branch_kinds();
+    const auto kk = static_cast<std::size_t>(k);
+    const auto live_at = [&](const Vec3& q, std::vector<std::uint8_t> code, std::size_t j) {
+      for (const Branch* side : {&a, &b}) {
+        code[kk] = (*side)[kk];
+        const std::optional<std::uint64_t> live = field.live_branches(q, code);
+        if (live && (*live >> j & 1u)) return true;
+      }
+      return false;
+    };
+    std::size_t j = r0.taken.size();
+    for (std::size_t i = 0; i < r0.taken.size() && i < kinds.size() && i < 64; ++i) {
+      if (i == kk || kinds[i] != Field::BranchKind::Creased || r0.taken[i] == r1.taken[i]) continue;
+      if (live_at(from, r0.taken, i) || live_at(to, r1.taken, i)) {
+        j = i;
+        break;
+      }
+    }
+    if (j == r0.taken.size()) return false;
+    Vec3 lo = from, hi = to;
+    const std::uint8_t taken_lo = r0.taken[j];
+    for (int it = 0; it < kSeamCornerBisections && (hi - lo).norm() > tol; ++it) {
+      const CreaseProjection c = project_to_seam(field, 0.5 * (lo + hi), a, kk, o.newton);
+      Field::BranchRecord r;
+      if (!c.ok() || !field.branch_record(c.point, r) || j >= r.taken.size()) break;
+      (r.taken[j] == taken_lo ? lo : hi) = c.point;
+    }
+    const CreaseProjection c = project_to_seam(field, 0.5 * (lo + hi), a, kk, o.newton);
+    corner = c.ok() ? c.point : 0.5 * (lo + hi);
+    return true;
+  }
+
   // Whether a and b are one function at p, to rounding: their switch is hidden there by another
   // branch (a box's edge where a smooth union's blend has left the box: its clamp at 0 multiplies
   // the box's difference from the ball by 0).
@@ -346,6 +394,13 @@ struct Tracer {
       const Vec3& before = out.size() >= 2 ? out[out.size() - 2] : start;
       if (!out.empty() && (p - before).norm() < 0.5 * (p - from).norm()) return end_seam(End::Stop);
       if (seam && !hidden && one_function(p, a, b)) hidden = on_seam = true;
+      if (seam && hidden) {
+        Vec3 corner;
+        if (seam_corner(from, p, a, b, k, corner)) {
+          if ((corner - from).norm() > kActiveRadius * tol) out.push_back(corner);
+          return End::Corner;
+        }
+      }
       const double stepped = (p - from).norm();
       travelled += stepped;
       step = std::min(max_spacing, 2 * step);

@@ -69,6 +69,16 @@ std::optional<Field::BranchSwitch> Field::branch_switch(const Vec3& p, std::size
   return BranchSwitch{-record.seam_step[k].dot(n), n};
 }
 
+std::optional<std::uint64_t> Field::live_branches(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+  n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+  std::vector<std::int8_t> bits(branch.size(), -1);
+  for (std::size_t k = 0; k < branch.size() && k < 64; ++k) bits[k] = static_cast<std::int8_t>(k);
+  FieldPiece piece;
+  std::uint64_t live = 0;
+  if (!has_branch_points() || !eval_piece_live(p, branch, bits.data(), false, piece, live)) return std::nullopt;
+  return live;
+}
+
 std::vector<Field::SmoothSide> Field::eval_smooth_sides(const Vec3& p, double radius,
                                                        const std::vector<std::uint8_t>& branch, SeamSideAt at) const {
   std::vector<SmoothSide> out;

@@ -885,6 +885,29 @@ TEST(CreaseCurves, ACreaseThatFadesIntoASmoothBlendGoesOnAlongItsSwitchAsASeam) 
   EXPECT_EQ(seams, 1u);
 }
 
+TEST(CreaseCurves, SeamsThatMeetWhereTheBlendHidesTheirSwitchesEndAtTheCornerThere) {
+  // fogleman/sdf's sphere(1) & box(1.5).k(0.1): the box's edges stick out of the ball, so each
+  // edge's crease lies in the blend, fading into the ball at both ends. Its seam goes on over
+  // the ball to where three faces' switches meet (|x| = |y| = |z| on the ball), and ends there:
+  // twelve curves between eight corners, as on a cube. Without the corners the seams ran on
+  // along the next edge's switch and stopped there.
+  const Expression field("b + (a - b)*h + 0.1*h*(1 - h)", {}, Box{Vec3::Constant(-0.9), Vec3::Constant(0.9)},
+                         {{"a", "hypot(x, y, z) - 1"},
+                          {"b", "max(abs(x) - 0.75, abs(y) - 0.75, abs(z) - 0.75)"},
+                          {"h", "clamp(0.5 - (b - a)*5, 0, 1)"}});
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.curves.size(), 12u);
+  EXPECT_EQ(r.stops, 0u);
+  ASSERT_EQ(r.corners.size(), 8u);
+  const double third = 1 / std::sqrt(3.0);
+  for (const Vec3& c : r.corners) EXPECT_LE((c.cwiseAbs() - Vec3::Constant(third)).norm(), 1e-8) << c.transpose();
+  for (const CreaseCurve& c : r.curves) {
+    EXPECT_TRUE(c.starts_at_corner && c.ends_at_corner);
+    EXPECT_GE(c.seam_branch, 0);
+    for (const Vec3& p : c.points) EXPECT_LE(std::abs(field.value(p)), 1e-9) << p.transpose();
+  }
+}
+
 TEST(CreaseProjection, ProjectToSeamLandsOnTheSwitchWhereThePiecesAreOneFunction) {
   const Expression field = box_blended_ball();
   const CreaseTracingResult r = trace_creases(field);

@@ -8,8 +8,10 @@
 #include <cdp/core/models/mpu.h>
 #include <cdp/core/models/vis.h>
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -161,6 +163,31 @@ TEST(FieldSmooth, ClaimedOnlyWhereNoCreaseCanHide) {
   for (const char* v : {"max(abs(x),max(abs(y),abs(z)))-1", "min(x,y)", "sqrt(x^2)-0.5", "x^0.5+y-1",
                         "x^2+y^2-z^2", "exp(-x^2)*sin(y)+cos(z)-0.5"})
     EXPECT_FALSE(expression_field(v)->smooth()) << v;
+}
+
+TEST(FieldLiveBranches, NameTheChoicesTheValueDependsOn) {
+  // At (0.5, 0.1, 0) the max takes abs(x) - 1: the value depends on the max and abs(x), not on
+  // abs(y), whose argument the max discards. The branch points told apart by how far their
+  // switches lie: abs(x)'s 0.5, abs(y)'s 0.1, the max's (0.5 - 0.1) / sqrt(2).
+  const auto field = expression_field("max(abs(x) - 1, abs(y) - 1)");
+  const Vec3 p(0.5, 0.1, 0);
+  Field::BranchRecord record;
+  ASSERT_TRUE(field->branch_record(p, record));
+  ASSERT_EQ(record.taken.size(), 3u);
+  const auto which = [&](double distance) {
+    for (std::size_t k = 0; k < 3; ++k)
+      if (std::abs(record.distance[k] - distance) < 1e-12) return k;
+    ADD_FAILURE() << "no branch point whose switch lies " << distance << " away";
+    return std::size_t{0};
+  };
+  const std::size_t abs_x = which(0.5), abs_y = which(0.1), max = which(0.4 / std::sqrt(2.0));
+  const std::optional<std::uint64_t> live = field->live_branches(p, record.taken);
+  ASSERT_TRUE(live.has_value());
+  EXPECT_TRUE(*live >> abs_x & 1u);
+  EXPECT_TRUE(*live >> max & 1u);
+  EXPECT_FALSE(*live >> abs_y & 1u);
+  // A model without branch points cannot tell.
+  EXPECT_FALSE(Torus(Vec3::Zero(), 1.0, 0.3).live_branches(p, {}).has_value());
 }
 
 }  // namespace

@@ -289,6 +289,14 @@ class Field {
     Vec3 normal = Vec3::Zero();
   };
   std::optional<BranchSwitch> branch_switch(const Vec3& p, std::size_t k) const;
+  // Which branch points the value of the piece with `branch` depends on at p: bit k for branch
+  // point k < 64 whose chosen argument reaches the value, not discarded by a later min or max
+  // (a blend's clamp that multiplies it by 0 does not discard it). Crease tracing tells so where
+  // a seam crosses a switch that shapes the pieces beside it (trace_creases). Nothing for a
+  // model that cannot tell. Counted as one value_gradient.
+  // \pre no kFreeBranch in `branch`.
+  // \throw as value().
+  std::optional<std::uint64_t> live_branches(const Vec3& p, const std::vector<std::uint8_t>& branch) const;
   // The far side of each C1 seam near p: for every Smooth branch point (branch_kinds) whose
   // switch lies within `radius` of p (to first order), that distance and the piece with its
   // branch flipped (the others as taken at p), evaluated at p: the surface beyond the seam,
