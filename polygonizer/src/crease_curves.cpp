@@ -314,8 +314,11 @@ struct Tracer {
         tn = ga.cross(sw->normal).normalized();
         if (tn.dot(t) < 0) tn = -tn;
       } else if (dir == 0) {  // back on the crease after a seam: the way the walk goes
-        new_dir = tn.dot(t) < 0 ? -1.0 : 1.0;
-        tn = new_dir * ga.cross(gb).normalized();
+        // (From the crease's own tangent: tn, dir times it, is zero here; taken for the way,
+        // it made every return +1, half of them backwards, and the walk stopped there.)
+        const Vec3 tangent = ga.cross(gb).normalized();
+        new_dir = tangent.dot(t) < 0 ? -1.0 : 1.0;
+        tn = new_dir * tangent;
       }
       // The turn bound sets the spacing, down to min_step: a crease that turns faster still
       // is followed at min_step (less than a right angle a step).

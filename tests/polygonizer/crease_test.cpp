@@ -908,6 +908,37 @@ TEST(CreaseCurves, SeamsThatMeetWhereTheBlendHidesTheirSwitchesEndAtTheCornerThe
   }
 }
 
+TEST(CreaseCurves, ACreaseComesBackFromItsSeamWhicheverWayItRuns) {
+  // fogleman/sdf's box(1) | sphere(0.5).translate((0.5, 0, 0.5)).k(0.2): the ball swallows the
+  // middle of one of the box's edges and blends its two ends' corners. That edge's crease
+  // fades into the blend, runs on over the ball as a seam (the box's switch, x = z) and comes
+  // back as a crease beyond: one curve between the two blended corners, which lie where the
+  // box's three switches meet (|x| = |y| = |z|). The walk back onto the crease took its
+  // direction as +1 whatever the way it went, and stopped there when the crease's tangent
+  // pointed the other way.
+  const Expression field("b + (a - b)*h - 0.2*h*(1 - h)", {}, Box{Vec3::Constant(-0.8), Vec3::Constant(1.1)},
+                         {{"a", "max(abs(x) - 0.5, abs(y) - 0.5, abs(z) - 0.5)"},
+                          {"b", "hypot(x - 0.5, y, z - 0.5) - 0.5"},
+                          {"h", "clamp(0.5 + (b - a)*2.5, 0, 1)"}});
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.curves.size(), 12u);
+  EXPECT_EQ(r.corners.size(), 8u);
+  EXPECT_EQ(r.stops, 0u);
+  const auto blended = [](const Vec3& p) {
+    return p.x() > 0.5 && p.z() > 0.5 && std::abs(p.x() - p.z()) < 1e-8 && std::abs(std::abs(p.y()) - p.x()) < 1e-8;
+  };
+  std::size_t swallowed = 0;
+  for (const CreaseCurve& c : r.curves) {
+    EXPECT_TRUE(c.starts_at_corner && c.ends_at_corner);
+    if (!blended(c.points.front()) || !blended(c.points.back())) continue;
+    ++swallowed;
+    EXPECT_GE(c.seam_branch, 0);
+    EXPECT_NEAR(c.points.front().y(), -c.points.back().y(), 1e-8);
+    for (const Vec3& p : c.points) EXPECT_LE(std::abs(p.x() - p.z()), 1e-9) << p.transpose();
+  }
+  EXPECT_EQ(swallowed, 1u);
+}
+
 TEST(CreaseProjection, ProjectToSeamLandsOnTheSwitchWhereThePiecesAreOneFunction) {
   const Expression field = box_blended_ball();
   const CreaseTracingResult r = trace_creases(field);

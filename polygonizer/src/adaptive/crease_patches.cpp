@@ -276,22 +276,28 @@ LaidCurve resample_curve(const Field& field, const CreaseCurve& curve, std::span
 // of the crease's direction seen from the piece's outside, is in the piece's patch when the CSG
 // field takes that piece there.
 std::array<Dart, 2> orient_darts(const Field& field, const LaidCurve& c, int index, const CreaseVertices& cv,
-                                 double min_edge) {
+                                 std::span<const Vec3> traced, double min_edge) {
   std::array<Dart, 2> out;
-  std::size_t m = c.vertices.size() / 2;  // interior for open curves (at least three vertices)
-  // On a seam the two pieces are one function and either side could be either's: the interior
-  // vertex where they differ most instead.
-  if (c.seam_branch >= 0) {
+  const std::size_t m = c.vertices.size() / 2;  // interior for open curves (at least three vertices)
+  Vec3 p = cv.points[static_cast<std::size_t>(c.vertices[m])];
+  Vec3 along = cv.points[static_cast<std::size_t>(c.vertices[(m + 1) % c.vertices.size()])] -
+               cv.points[static_cast<std::size_t>(c.vertices[m - (m > 0 ? 1 : 0)])];
+  // On a seam the two pieces are one function and either side could be either's: the traced
+  // point where they differ most instead. (The laid vertices may all lie on the seam: a box's
+  // edge swallowed in its middle by a ball smoothly united with it, at factor 1, had its only
+  // interior vertices there, and the sides came out the same.)
+  if (c.seam_branch >= 0 && traced.size() >= 3) {
+    const std::size_t n = traced.size();
     double widest = -1;
-    for (std::size_t i = c.closed ? 0 : 1; i + (c.closed ? 0 : 1) < c.vertices.size(); ++i) {
-      const Vec3& q = cv.points[static_cast<std::size_t>(c.vertices[i])];
+    std::size_t w = 0;
+    for (std::size_t i = c.closed ? 0 : 1; i + (c.closed ? 0 : 1) < n; ++i) {
+      const Vec3& q = traced[i];
       const double sine = field.piece(q, c.pieces[0]).gradient.normalized().cross(field.piece(q, c.pieces[1]).gradient.normalized()).norm();
-      if (sine > widest) widest = sine, m = i;
+      if (sine > widest) widest = sine, w = i;
     }
+    p = traced[w];
+    along = traced[(w + 1) % n] - traced[(w + n - 1) % n];
   }
-  const Vec3& p = cv.points[static_cast<std::size_t>(c.vertices[m])];
-  const Vec3 along = cv.points[static_cast<std::size_t>(c.vertices[(m + 1) % c.vertices.size()])] -
-                     cv.points[static_cast<std::size_t>(c.vertices[m - (m > 0 ? 1 : 0)])];
   for (int side = 0; side < 2; ++side) {
     const Branch& mine = c.pieces[static_cast<std::size_t>(side)];
     const Branch& other = c.pieces[static_cast<std::size_t>(1 - side)];
@@ -816,7 +822,7 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
                                     diagonal, cv));
   std::vector<Dart> darts;
   for (std::size_t i = 0; i < curves.size(); ++i)
-    for (Dart& d : orient_darts(field, curves[i], static_cast<int>(i), cv, settings.sizing.min_edge))
+    for (Dart& d : orient_darts(field, curves[i], static_cast<int>(i), cv, creases.curves[i].points, settings.sizing.min_edge))
       darts.push_back(std::move(d));
   const std::vector<Cycle> cycles = trace_cycles(field, curves, darts, creases.corners, cv.points);
 
