@@ -90,6 +90,10 @@ constexpr double kFaceDepth = 1e-3;
 // face's to rounding in three), the piece taken there if its switch lies within this share of
 // the step.
 constexpr int kFaceNewtonSteps = 3;
+// How far from the last point of a hidden seam a crease of other pieces is looked for
+// (Tracer::seam_meets_crease), in min_spacing: the seam's last step is at least min_step
+// (at most min_spacing) short of where it stops.
+constexpr double kSeamCreaseReach = 4;
 constexpr double kFaceTakenShare = 0.1;
 // Bisections that put a corner on a hidden seam (Tracer::seam_corner) to the Newton tolerance:
 // from a step of max_spacing, 0.02 of the diagonal, to 1e-10 of it takes 28.
@@ -278,6 +282,30 @@ struct Tracer {
     return true;
   }
 
+  // Whether the field has a crease within a few min_spacing of p, the last point of a hidden
+  // seam that can go no further: the seam has run into a crease of other pieces, which it
+  // meets at a corner there (a tetrahedron smoothly united with an octahedron: the
+  // tetrahedron's switch between two faces, hidden under the octahedron, runs into the
+  // octahedron's edge). The corner is put on that crease, nearest p.
+  bool seam_meets_crease(const Vec3& p, Vec3& corner) const {
+    const double reach = kSeamCreaseReach * min_spacing;
+    const std::vector<FieldPiece> near = field.pieces_first_order(p, reach);
+    double nearest = reach;
+    bool found = false;
+    for (std::size_t i = 0; i < near.size(); ++i)
+      for (std::size_t j = i + 1; j < near.size(); ++j) {
+        const Vec3 gi = near[i].gradient.normalized(), gj = near[j].gradient.normalized();
+        if (!(gi.dot(gj) <= kSamePieceCosine) || touching_faces(gi, gj)) continue;
+        const std::vector<Branch> two{near[i].branch, near[j].branch};
+        const CreaseProjection c = project_to_crease(field, p, two, o.newton);
+        if (!c.ok() || !((c.point - p).norm() <= nearest) || !both_active(c.point, c.gradients[0], c.gradients[1])) continue;
+        nearest = (c.point - p).norm();
+        corner = c.point;
+        found = true;
+      }
+    return found;
+  }
+
   // Whether a and b are one function at p, to rounding: their switch is hidden there by another
   // branch (a box's edge where a smooth union's blend has left the box: its clamp at 0 multiplies
   // the box's difference from the ball by 0).
@@ -390,7 +418,14 @@ struct Tracer {
         }
         moved = advance(p, t, step, dir, a, b, k, seam);
       }
-      if (!moved) return end_seam(End::Stop);
+      if (!moved) {
+        Vec3 corner;
+        if (hidden && seam_meets_crease(p, corner)) {
+          if ((corner - p).norm() > kActiveRadius * tol) out.push_back(corner);
+          return End::Corner;
+        }
+        return end_seam(End::Stop);
+      }
       // A step back to where the walk was two steps before goes nowhere: where two pieces are
       // tangent their switch's direction (ga x gb) is lost, and the tee of two equal pipes
       // walked to and fro there until max_points.
@@ -491,6 +526,56 @@ void join_crossings(const Field& field, double min_spacing, CreaseTracingResult&
     }
     corners.push_back(at.point);
   }
+}
+
+// Where a corner lies on a curve other than at its ends, the curve is cut there: a seam that
+// runs into another crease (Tracer::seam_meets_crease) ends at a corner on it, and the
+// crease it meets, traced through that point, must end there too, so that the patch beside
+// it is bounded on both sides of the seam. A loop is opened there, starting and ending at
+// the corner.
+void split_at_corners(double min_spacing, CreaseTracingResult& result, const std::vector<Vec3>& corners) {
+  for (const Vec3& corner : corners)
+    for (std::size_t c = 0; c < result.curves.size(); ++c) {
+      CreaseCurve& curve = result.curves[c];
+      const std::vector<Vec3>& P = curve.points;
+      const std::size_t n = P.size();
+      if (n < 2) continue;
+      const auto near = [&](const Vec3& q) { return (q - corner).norm() <= min_spacing; };
+      if (!curve.closed && (near(P.front()) || near(P.back()))) continue;
+      const std::size_t segments = curve.closed ? n : n - 1;
+      std::size_t best = segments;
+      double distance = min_spacing;
+      for (std::size_t i = 0; i < segments; ++i) {
+        const double d = segment_distance(corner, P[i], P[(i + 1) % n]);
+        if (d <= distance) distance = d, best = i;
+      }
+      if (best == segments) continue;
+      // The points before the cut and after it, without one at the corner itself.
+      std::vector<Vec3> before, after;
+      for (std::size_t i = 0; i <= best; ++i)
+        if (!near(P[i])) before.push_back(P[i]);
+      for (std::size_t i = best + 1; i < n; ++i)
+        if (!near(P[i])) after.push_back(P[i]);
+      if (curve.closed) {
+        CreaseCurve opened = curve;
+        opened.closed = false;
+        opened.starts_at_corner = opened.ends_at_corner = true;
+        opened.points.assign(1, corner);
+        opened.points.insert(opened.points.end(), after.begin(), after.end());
+        opened.points.insert(opened.points.end(), before.begin(), before.end());
+        opened.points.push_back(corner);
+        curve = std::move(opened);
+        continue;
+      }
+      CreaseCurve second = curve;
+      second.starts_at_corner = true;
+      second.points.assign(1, corner);
+      second.points.insert(second.points.end(), after.begin(), after.end());
+      curve.ends_at_corner = true;
+      curve.points = std::move(before);
+      curve.points.push_back(corner);
+      result.curves.push_back(std::move(second));
+    }
 }
 
 }  // namespace
@@ -600,6 +685,7 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
       }
   });
   join_crossings(field, tr.min_spacing, result, corners);
+  split_at_corners(tr.min_spacing, result, corners);
   // Every crease that leaves a corner, traced from it where no curve ends there along it: a
   // crease shorter than about a grid cell between two corners may pass no crossed grid edge
   // near enough to be found from the crossings (a table top 0.05 thick with a leg under it: two

@@ -939,6 +939,33 @@ TEST(CreaseCurves, ACreaseComesBackFromItsSeamWhicheverWayItRuns) {
   EXPECT_EQ(swallowed, 1u);
 }
 
+TEST(CreaseCurves, ASeamThatRunsIntoACreaseEndsAtACornerThatCutsTheCrease) {
+  // fogleman/sdf's box(1) - box(0.5).translate((0.5, 0.5, 0)).k(0.1): the cutter's switches
+  // between its faces, hidden under the box's faces beyond the blend, run on as seams into
+  // the box's edges, at (0.5, 0, +-0.5) and (0, 0.5, +-0.5). Each seam ends at a corner on the
+  // edge, and the edge is cut there: three curves end at each such corner (the two halves of
+  // the edge and the seam). Without it the seams stopped short of the edges.
+  const Expression field("b - (c + b)*h + 0.1*h*(1 - h)", {}, Box{Vec3::Constant(-0.6), Vec3::Constant(0.6)},
+                         {{"b", "max(abs(x) - 0.5, abs(y) - 0.5, abs(z) - 0.5)"},
+                          {"c", "max(abs(x - 0.5) - 0.25, abs(y - 0.5) - 0.25, abs(z) - 0.25)"},
+                          {"h", "clamp(0.5 - (c + b)*5, 0, 1)"}});
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.stops, 0u);
+  for (const Vec3& t : {Vec3(0.5, 0, 0.5), Vec3(0.5, 0, -0.5), Vec3(0, 0.5, 0.5), Vec3(0, 0.5, -0.5)}) {
+    const auto corner = std::find_if(r.corners.begin(), r.corners.end(), [&](const Vec3& c) { return (c - t).norm() < 1e-3; });
+    ASSERT_NE(corner, r.corners.end()) << t.transpose();
+    std::size_t ending = 0, seams = 0;
+    for (const CreaseCurve& c : r.curves) {
+      const bool ends = (c.starts_at_corner && (c.points.front() - *corner).norm() < 1e-9) ||
+                        (c.ends_at_corner && (c.points.back() - *corner).norm() < 1e-9);
+      ending += ends;
+      seams += ends && c.seam_branch >= 0;
+    }
+    EXPECT_EQ(ending, 3u) << t.transpose();
+    EXPECT_EQ(seams, 1u) << t.transpose();
+  }
+}
+
 TEST(CreaseProjection, ProjectToSeamLandsOnTheSwitchWhereThePiecesAreOneFunction) {
   const Expression field = box_blended_ball();
   const CreaseTracingResult r = trace_creases(field);

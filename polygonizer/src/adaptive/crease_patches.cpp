@@ -396,11 +396,16 @@ std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>
         candidates.push_back(e);
       }
       // Pieces tangent at the corner (where two creases of theirs cross) have the same
-      // gradient there: the piece's own darts, where it has some, are the ones to follow.
+      // gradient there: the piece's own darts, where it has some, are the ones to follow. A
+      // seam's darts stay candidates: where a seam runs into a crease (a box's switch hidden
+      // under a smooth difference, running into the other box's edge), the face it splits is
+      // another piece's on either side of it, and which dart bounds the patch is the turn's.
       if (candidates.size() > 1) {
         std::vector<std::size_t> own;
         for (const std::size_t e : candidates)
-          if (same_function(field, piece_of(darts[e]), piece_of(dart))) own.push_back(e);
+          if (same_function(field, piece_of(darts[e]), piece_of(dart)) ||
+              curves[static_cast<std::size_t>(darts[e].curve)].seam_branch >= 0)
+            own.push_back(e);
         if (!own.empty()) candidates = std::move(own);
       }
       if (candidates.size() == 1) next = candidates.front();

@@ -323,6 +323,34 @@ TEST(AdaptiveCreases, AnEdgeRunningOnInsideAFlushFaceIsNoCrease) {
   }
 }
 
+TEST(AdaptiveCreases, ASeamThatRunsIntoAnEdgeBoundsTheFaceItSplits) {
+  // fogleman/sdf's box(1) - box(0.5).translate((0.5, 0.5, 0)).k(0.1): the cutter's hidden
+  // switches run on as seams into the box's edges (CreaseCurves.ASeamThatRunsIntoACrease...).
+  // Each splits a face of the box into two patches, coded by the cutter's two choices there, one
+  // function on either side: at the corner where the seam meets the edge, the face's own darts
+  // were the only ones followed, and "patch boundaries cross". The model was meshed as smooth
+  // with the crease warning. Volume: marching cubes at 1/200 of the box gives 0.96526 (the
+  // sharp difference 0.96875).
+  const auto field = test::field_from_json(
+      R"json({"type": "expression", "value": "b - (c + b)*h + 0.1*h*(1 - h)",
+          "define": {"b": "max(abs(x) - 0.5, abs(y) - 0.5, abs(z) - 0.5)",
+                     "c": "max(abs(x - 0.5) - 0.25, abs(y - 0.5) - 0.25, abs(z) - 0.25)",
+                     "h": "clamp(0.5 - (c + b)*5, 0, 1)"},
+          "bounds": [[-0.6, -0.6, -0.6], [0.6, 0.6, 0.6]]})json");
+  for (const double factor : {1.0, 3.0}) {
+    SCOPED_TRACE(factor);
+    AdaptiveOptions o;
+    o.factor = factor;
+    const PolygonizeResult r = polygonize_adaptive(*field, o);
+    EXPECT_TRUE(r.stats.adaptive->creases.followed) << r.stats.adaptive->creases.fallback;
+    const MeshTopology t = analyze_topology(r.mesh);
+    EXPECT_TRUE(t.watertight());
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.genus, 0);
+    EXPECT_NEAR(t.signed_volume, 0.96526, 0.003);
+  }
+}
+
 TEST(AdaptiveCreases, CreasesCrossingWhereTheirPiecesAreTangentAreFollowed) {
   // The sheet z = -max(0, xy) capping a ball: its creases along the x and y axes fade out at the
   // origin from four sides, a crossing of the creases of z and z + xy where the two are
