@@ -298,6 +298,23 @@ TEST(AdaptiveCreases, PatchVerticesLieOnTheSurfaceWhereTheirPieceIsAnotherFuncti
   EXPECT_TRUE(analyze_topology(r.mesh).watertight());
 }
 
+// Meshed at factors 1 and 3: every crease followed, one closed component of genus 0 (a ball's
+// topology), the volume within `tolerance` of `volume`.
+void expect_creases_followed_genus0(const Field& field, double volume, double tolerance) {
+  for (const double factor : {1.0, 3.0}) {
+    SCOPED_TRACE(factor);
+    AdaptiveOptions o;
+    o.factor = factor;
+    const PolygonizeResult r = polygonize_adaptive(field, o);
+    EXPECT_TRUE(r.stats.adaptive->creases.followed) << r.stats.adaptive->creases.fallback;
+    const MeshTopology t = analyze_topology(r.mesh);
+    EXPECT_TRUE(t.watertight());
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.genus, 0);
+    EXPECT_NEAR(t.signed_volume, volume, tolerance);
+  }
+}
+
 TEST(AdaptiveCreases, AnEdgeRunningOnInsideAFlushFaceIsNoCrease) {
   // The letter H of three boxes: two posts (0.2 x 1 x 0.2 at x = -0.4 and 0.4) and a crossbar
   // (1 x 0.2 x 0.2) ending flush with their outer faces, its front and back flush with theirs.
@@ -309,18 +326,7 @@ TEST(AdaptiveCreases, AnEdgeRunningOnInsideAFlushFaceIsNoCrease) {
       expression("min(max(abs(x+0.4)-0.1, abs(y)-0.5, abs(z)-0.1), max(abs(x-0.4)-0.1, abs(y)-0.5, abs(z)-0.1), "
                  "max(abs(x)-0.5, abs(y)-0.1, abs(z)-0.1))",
                  -0.7, 0.7));
-  for (const double factor : {1.0, 3.0}) {
-    SCOPED_TRACE(factor);
-    AdaptiveOptions o;
-    o.factor = factor;
-    const PolygonizeResult r = polygonize_adaptive(*field, o);
-    EXPECT_TRUE(r.stats.adaptive->creases.followed) << r.stats.adaptive->creases.fallback;
-    const MeshTopology t = analyze_topology(r.mesh);
-    EXPECT_TRUE(t.watertight());
-    EXPECT_EQ(t.components, 1u);
-    EXPECT_EQ(t.genus, 0);
-    EXPECT_NEAR(t.signed_volume, 2 * 0.2 * 1 * 0.2 + 0.6 * 0.2 * 0.2, 1e-9);
-  }
+  expect_creases_followed_genus0(*field, 2 * 0.2 * 1 * 0.2 + 0.6 * 0.2 * 0.2, 1e-9);
 }
 
 TEST(AdaptiveCreases, ASeamThatRunsIntoAnEdgeBoundsTheFaceItSplits) {
@@ -337,18 +343,7 @@ TEST(AdaptiveCreases, ASeamThatRunsIntoAnEdgeBoundsTheFaceItSplits) {
                      "c": "max(abs(x - 0.5) - 0.25, abs(y - 0.5) - 0.25, abs(z) - 0.25)",
                      "h": "clamp(0.5 - (c + b)*5, 0, 1)"},
           "bounds": [[-0.6, -0.6, -0.6], [0.6, 0.6, 0.6]]})json");
-  for (const double factor : {1.0, 3.0}) {
-    SCOPED_TRACE(factor);
-    AdaptiveOptions o;
-    o.factor = factor;
-    const PolygonizeResult r = polygonize_adaptive(*field, o);
-    EXPECT_TRUE(r.stats.adaptive->creases.followed) << r.stats.adaptive->creases.fallback;
-    const MeshTopology t = analyze_topology(r.mesh);
-    EXPECT_TRUE(t.watertight());
-    EXPECT_EQ(t.components, 1u);
-    EXPECT_EQ(t.genus, 0);
-    EXPECT_NEAR(t.signed_volume, 0.96526, 0.003);
-  }
+  expect_creases_followed_genus0(*field, 0.96526, 0.003);
 }
 
 TEST(AdaptiveCreases, CreasesCrossingWhereTheirPiecesAreTangentAreFollowed) {
