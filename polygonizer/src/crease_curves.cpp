@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <utility>
 #include <unordered_map>
 
 namespace cdp {
@@ -90,11 +91,11 @@ constexpr double kFaceDepth = 1e-3;
 // face's to rounding in three), the piece taken there if its switch lies within this share of
 // the step.
 constexpr int kFaceNewtonSteps = 3;
+constexpr double kFaceTakenShare = 0.1;
 // How far from the last point of a hidden seam a crease of other pieces is looked for
 // (Tracer::seam_meets_crease), in min_spacing: the seam's last step is at least min_step
 // (at most min_spacing) short of where it stops.
 constexpr double kSeamCreaseReach = 4;
-constexpr double kFaceTakenShare = 0.1;
 // Bisections that put a corner on a hidden seam (Tracer::seam_corner) to the Newton tolerance:
 // from a step of max_spacing, 0.02 of the diagonal, to 1e-10 of it takes 28.
 constexpr int kSeamCornerBisections = 40;
@@ -252,18 +253,22 @@ struct Tracer {
     if (!field.branch_record(from, r0) || !field.branch_record(to, r1) || r0.taken.size() != r1.taken.size()) return false;
     const std::vector<Field::BranchKind>& kinds = field.branch_kinds();
     const auto kk = static_cast<std::size_t>(k);
-    const auto live_at = [&](const Vec3& q, std::vector<std::uint8_t> code, std::size_t j) {
+    // What the value depends on at q with either side's choice at k (evaluated once a point,
+    // and only where some switch was crossed).
+    const auto live_either_side = [&](const Vec3& q, std::vector<std::uint8_t> code) {
+      std::uint64_t mask = 0;
       for (const Branch* side : {&a, &b}) {
         code[kk] = (*side)[kk];
-        const std::optional<std::uint64_t> live = field.live_branches(q, code);
-        if (live && (*live >> j & 1u)) return true;
+        mask |= field.live_branches(q, code).value_or(0);
       }
-      return false;
+      return mask;
     };
+    std::optional<std::uint64_t> live;
     std::size_t j = r0.taken.size();
     for (std::size_t i = 0; i < r0.taken.size() && i < kinds.size() && i < 64; ++i) {
       if (i == kk || kinds[i] != Field::BranchKind::Creased || r0.taken[i] == r1.taken[i]) continue;
-      if (live_at(from, r0.taken, i) || live_at(to, r1.taken, i)) {
+      if (!live) live = live_either_side(from, r0.taken) | live_either_side(to, r1.taken);
+      if (*live >> i & 1u) {
         j = i;
         break;
       }
@@ -534,8 +539,19 @@ void join_crossings(const Field& field, double min_spacing, CreaseTracingResult&
 // it is bounded on both sides of the seam. A loop is opened there, starting and ending at
 // the corner.
 void split_at_corners(double min_spacing, CreaseTracingResult& result, const std::vector<Vec3>& corners) {
+  // Each curve's points' bounds, grown by min_spacing: only a curve whose bounds hold the corner
+  // is searched (a gyroid ball traced at a tenth of the default spacing has 961 corners and 2708
+  // curves). The halves of a cut curve keep its bounds, which hold them.
+  std::vector<std::pair<Vec3, Vec3>> bounds;
+  for (const CreaseCurve& curve : result.curves) {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const Vec3& q : curve.points) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+    bounds.emplace_back(lo.array() - min_spacing, hi.array() + min_spacing);
+  }
   for (const Vec3& corner : corners)
     for (std::size_t c = 0; c < result.curves.size(); ++c) {
+      const auto& [lo, hi] = bounds[c];
+      if ((corner.array() < lo.array()).any() || (corner.array() > hi.array()).any()) continue;
       CreaseCurve& curve = result.curves[c];
       const std::vector<Vec3>& P = curve.points;
       const std::size_t n = P.size();
@@ -575,6 +591,7 @@ void split_at_corners(double min_spacing, CreaseTracingResult& result, const std
       curve.points = std::move(before);
       curve.points.push_back(corner);
       result.curves.push_back(std::move(second));
+      bounds.push_back(bounds[c]);
     }
 }
 

@@ -364,22 +364,29 @@ TEST(CreaseCurves, AMengerSpongeOfLevelOneHasItsSeventyTwoEdges) {
   }
 }
 
+// Equal pipes of radius 0.5 whose creases meet where the pipes are tangent, at +-0.5 along
+// `axis`: no stop, those two corners (to `within`), and `arcs` open curves, each from one
+// corner to the other, besides the rims on the box's faces.
+void expect_arcs_between_tangent_corners(const CreaseTracingResult& r, int axis, double within, std::size_t arcs) {
+  EXPECT_EQ(r.stops, 0u);
+  ASSERT_EQ(r.corners.size(), 2u);
+  const Vec3 tangent = 0.5 * Vec3::Unit(axis);
+  for (const Vec3& c : r.corners) EXPECT_LT((c.cwiseAbs() - tangent).norm(), within) << c.transpose();
+  std::size_t open = 0;
+  for (const CreaseCurve& c : r.curves) {
+    if (c.closed) continue;  // the rims on the box's faces
+    ++open;
+    EXPECT_TRUE(c.starts_at_corner && c.ends_at_corner);
+    EXPECT_NEAR(std::abs(c.points.front()[axis] - c.points.back()[axis]), 1.0, 1e-3);
+  }
+  EXPECT_EQ(open, arcs);
+}
+
 TEST(CreaseCurves, CreasesThatCrossWhereTheirPiecesAreTangentMeetAtACorner) {
   // Two equal pipes crossing: the ellipses where they meet (in the planes x = y and x = -y) cross
   // at (0, 0, +-0.5), where the pipes are tangent. Four arcs, each from one crossing to the other.
   const Expression pipes = crease_expression("min(hypot(y, z) - 0.5, hypot(x, z) - 0.5)", 1);
-  const CreaseTracingResult r = trace_creases(pipes);
-  EXPECT_EQ(r.stops, 0u);
-  ASSERT_EQ(r.corners.size(), 2u);
-  for (const Vec3& c : r.corners) EXPECT_LT((c.cwiseAbs() - Vec3(0, 0, 0.5)).norm(), 1e-3) << c.transpose();
-  std::size_t arcs = 0;
-  for (const CreaseCurve& c : r.curves) {
-    if (c.closed) continue;  // the rims on the box's faces
-    ++arcs;
-    EXPECT_TRUE(c.starts_at_corner && c.ends_at_corner);
-    EXPECT_NEAR(std::abs(c.points.front().z() - c.points.back().z()), 1.0, 1e-3);
-  }
-  EXPECT_EQ(arcs, 4u);
+  expect_arcs_between_tangent_corners(trace_creases(pipes), 2, 1e-3, 4);
 }
 
 TEST(CreaseCurves, TwoCreasesEndingWhereTheirPiecesAreTangentMeetAtACorner) {
@@ -387,20 +394,9 @@ TEST(CreaseCurves, TwoCreasesEndingWhereTheirPiecesAreTangentMeetAtACorner) {
   // ellipses (in the planes x = z and x = -z) that end at (0, +-0.5, 0), where the pipes are
   // tangent. Two stops there, one of each arc: a corner, as where four arcs cross.
   const Expression tee = crease_expression("min(hypot(y, z) - 0.5, max(hypot(x, y) - 0.5, -z))", 1);
-  const CreaseTracingResult r = trace_creases(tee);
-  EXPECT_EQ(r.stops, 0u);
-  ASSERT_EQ(r.corners.size(), 2u);
   // The corner is the mean of the two stops, each short of it by up to a min_spacing (0.0017
   // here), from two directions at right angles.
-  for (const Vec3& c : r.corners) EXPECT_LT((c.cwiseAbs() - Vec3(0, 0.5, 0)).norm(), 2e-3) << c.transpose();
-  std::size_t arcs = 0;
-  for (const CreaseCurve& c : r.curves) {
-    if (c.closed) continue;  // the rims on the box's faces
-    ++arcs;
-    EXPECT_TRUE(c.starts_at_corner && c.ends_at_corner);
-    EXPECT_NEAR(std::abs(c.points.front().y() - c.points.back().y()), 1.0, 1e-3);
-  }
-  EXPECT_EQ(arcs, 2u);
+  expect_arcs_between_tangent_corners(trace_creases(tee), 1, 2e-3, 2);
 }
 
 TEST(CreaseCurves, LoopsOfACylindersRimsTwoSpheresAndABoxMinusASphere) {
