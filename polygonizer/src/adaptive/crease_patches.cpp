@@ -379,6 +379,17 @@ std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>
       if (guard > darts.size()) throw CreaseLayoutError("adaptive: a patch boundary that does not close");
       used[d] = 1;
       const Dart& dart = darts[d];
+      // A dart's code leaves free the choices hidden where it was taken (Field::pieces). Left
+      // free over the whole patch, such a choice is the field's own wherever the tracker
+      // evaluates, and bends the piece along the field's crease where a blend stops hiding it.
+      // Two boxes smoothly united: the patch of one box's face behind the blend runs on to the
+      // other box's face, whose edge then creased the piece itself; a front vertex landed on that
+      // edge, made a zero-area triangle, and the creases were dropped. So a choice the cycle's
+      // code leaves free is fixed as the first of its darts that fixes it does. (Choices two
+      // darts fix differently keep the first's: freed, the flush faces of stairs, each fixing
+      // its own box's hidden choices, made a piece of the whole field.)
+      for (std::size_t k = 0; k < cycle.piece.size() && k < piece_of(dart).size(); ++k)
+        if (cycle.piece[k] == Field::kFreeBranch) cycle.piece[k] = piece_of(dart)[k];
       if (dart.to < 0) {  // a loop
         cycle.vertices = dart.vertices;
         cycle.sagitta = curves[static_cast<std::size_t>(dart.curve)].sagitta;
