@@ -7,9 +7,11 @@
 #include <cdp/core/surface_seeds.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <utility>
 #include <unordered_map>
@@ -99,6 +101,23 @@ constexpr double kSeamCreaseReach = 4;
 // Bisections that put a corner on a hidden seam (Tracer::seam_corner) to the Newton tolerance:
 // from a step of max_spacing, 0.02 of the diagonal, to 1e-10 of it takes 28.
 constexpr int kSeamCornerBisections = 40;
+
+// trace_creases' pass over the corners: the pieces within this many min_spacing of a corner are
+// those meeting there (a corner is found to the Newton tolerance, so a little reach does), and a
+// crease leaving it is started this many min_spacing along its tangent: far enough from the
+// corner that the third piece is not taken there, near enough to fit on a crease a few
+// min_spacing long.
+constexpr double kCornerReach = 1;
+constexpr double kCornerStep = 2;
+// The hidden seams leaving a corner where a seam ends alone: the field's choices are looked at in
+// kSeamProbes points round the corner, kCornerStep min_spacing from it on each face there; two
+// neighbours that differ by one switch the value depends on, hidden between them, have a seam
+// between them. A seam is known when a curve ends at the corner leaving within about 25 degrees
+// of it (seams meeting at a corner leave at the angles of the switches, 45 degrees or more apart
+// on a box).
+constexpr int kSeamProbes = 24;
+constexpr double kKnownSeamCosine = 0.9;
+constexpr int kSeamProbeNewtonSteps = 4;
 
 struct Tracer {
   const Field& field;
@@ -287,6 +306,87 @@ struct Tracer {
     return true;
   }
 
+  // The hidden seams that leave `corner`, where a seam ends alone (the pieces meeting there in
+  // `at`), other than along `leaving` (the ways curves leave it, to which theirs are added): each
+  // walked from the corner to its other end (ends_at_corner, or a stop). Seams are not found from
+  // the grid's crossings (no crease there), only walked on from a faded crease. Where a box's
+  // edge fades into a pocket a smooth difference cut, and runs on down the pocket's wall as the
+  // box's switch, hidden behind the blend, into the corner where the box's three switches meet,
+  // the two other switches go on from there and bound the wall's patches too: without them the
+  // patch boundary broke off at that corner.
+  std::vector<CreaseCurve> seams_leaving(const Vec3& corner, const std::vector<FieldPiece>& at, std::vector<Vec3>& leaving) {
+    std::vector<CreaseCurve> out;
+    const double r = kCornerStep * min_spacing;
+    const std::vector<Field::BranchKind>& kinds = field.branch_kinds();
+    std::vector<Vec3> faces;
+    for (const FieldPiece& q : at) {
+      const Vec3 n = q.gradient.normalized();
+      if (n.allFinite() && std::none_of(faces.begin(), faces.end(), [&](const Vec3& m) { return m.dot(n) > kSamePieceCosine; }))
+        faces.push_back(n);
+    }
+    for (const Vec3& n : faces) {
+      struct Probe {
+        Vec3 q;
+        std::vector<std::uint8_t> taken;
+        bool ok = false;
+      };
+      std::array<Probe, kSeamProbes> probes;
+      const Vec3 u = n.unitOrthogonal(), v = n.cross(u);
+      for (int i = 0; i < kSeamProbes; ++i) {
+        const double angle = 2 * std::numbers::pi * i / kSeamProbes;
+        Probe& pr = probes[static_cast<std::size_t>(i)];
+        pr.q = corner + r * (std::cos(angle) * u + std::sin(angle) * v);
+        Vec3 g;
+        double value = 0;
+        for (int it = 0; it < kSeamProbeNewtonSteps; ++it) {  // onto the surface along its normal
+          value = field.value_gradient(pr.q, g);
+          if (!std::isfinite(value) || !(g.squaredNorm() > 0)) break;
+          pr.q -= value / g.squaredNorm() * g;
+        }
+        value = field.value_gradient(pr.q, g);
+        Field::BranchRecord record;
+        pr.ok = std::abs(value) <= kActiveRadius * tol * g.norm() && g.normalized().dot(n) > kSamePieceCosine &&
+                (pr.q - corner).norm() <= 2 * r && field.branch_record(pr.q, record);
+        if (pr.ok) pr.taken = std::move(record.taken);
+      }
+      for (int i = 0; i < kSeamProbes; ++i) {
+        const Probe& p0 = probes[static_cast<std::size_t>(i)];
+        const Probe& p1 = probes[static_cast<std::size_t>((i + 1) % kSeamProbes)];
+        if (!p0.ok || !p1.ok || p0.taken.size() != p1.taken.size()) continue;
+        const int k = differing_branch(p0.taken, p1.taken);
+        if (k < 0 || static_cast<std::size_t>(k) >= kinds.size() || kinds[static_cast<std::size_t>(k)] != Field::BranchKind::Creased)
+          continue;
+        const Vec3 mid = 0.5 * (p0.q + p1.q);
+        // Hidden between them, and shaping the value (not a choice a later min or max discards).
+        if (!one_function(mid, p0.taken, p1.taken) || !(field.live_branches(mid, p0.taken).value_or(0) >> k & 1u)) continue;
+        const CreaseProjection c = project_to_seam(field, mid, p0.taken, static_cast<std::size_t>(k), o.newton);
+        if (!c.ok() || (c.point - corner).norm() > 2 * r || (c.point - corner).norm() < 0.25 * r) continue;
+        const Vec3 d = (c.point - corner).normalized();
+        if (std::any_of(leaving.begin(), leaving.end(), [&](const Vec3& l) { return l.dot(d) > kKnownSeamCosine; }))
+          continue;
+        // The pieces as the field's pieces at the probe (hidden choices free), the seam's switch
+        // fixed either way.
+        const std::vector<FieldPiece> own = field.pieces_first_order(p0.q, 0);
+        Branch a = own.empty() ? p0.taken : own.front().branch;
+        if (a.size() != p0.taken.size()) continue;
+        a[static_cast<std::size_t>(k)] = p0.taken[static_cast<std::size_t>(k)];
+        Branch b = a;
+        b[static_cast<std::size_t>(k)] = p1.taken[static_cast<std::size_t>(k)];
+        CreaseCurve& curve = out.emplace_back();
+        curve.pieces = {a, b};
+        curve.seam_branch = k;
+        curve.starts_at_corner = true;
+        std::vector<Vec3> forward;
+        bool on_seam = true;
+        curve.ends_at_corner = walk(c.point, a, b, 0, nullptr, forward, on_seam, &d) == End::Corner;
+        curve.points = {corner, c.point};
+        curve.points.insert(curve.points.end(), forward.begin(), forward.end());
+        leaving.push_back(d);
+      }
+    }
+    return out;
+  }
+
   // Whether the field has a crease within a few min_spacing of p, the last point of a hidden
   // seam that can go no further: the seam has run into a crease of other pieces, which it
   // meets at a corner there (a tetrahedron smoothly united with an octahedron: the
@@ -379,14 +479,18 @@ struct Tracer {
   // ended); pieces that are only tangent, where two creases cross, make a stop as before, which
   // join_crossings turns into the corner it is.
   enum class End { Corner, Loop, Stop };
+  //
+  // With `seam_tangent`, the walk starts on a hidden seam (a and b one function at `start`) along
+  // that direction, as one that went on from a faded crease would there.
   End walk(const Vec3& start, const Branch& a, const Branch& b, double dir, const Vec3* loop_to,
-           std::vector<Vec3>& out, bool& on_seam) {
+           std::vector<Vec3>& out, bool& on_seam, const Vec3* seam_tangent = nullptr) {
     const int k = differing_branch(a, b);
     Vec3 p = start;
-    Vec3 t = dir * tangent(p, a, b);
+    Vec3 t = seam_tangent ? *seam_tangent : dir * tangent(p, a, b);
     double step = max_spacing;
     double travelled = 0;
-    bool seam = false, hidden = false, left_start = false;
+    bool seam = seam_tangent != nullptr, hidden = seam, left_start = false;
+    if (seam_tangent) on_seam = true;
     std::size_t seam_begin = 0;
     Vec3 seam_from = p;
     // The end of a seam: kept where the pieces were one function on it, else a stop where the seam began.
@@ -481,13 +585,6 @@ struct Tracer {
 namespace {
 
 constexpr double kCrossingReach = 4;
-// trace_creases' pass over the corners: the pieces within this many min_spacing of a corner are
-// those meeting there (a corner is found to the Newton tolerance, so a little reach does), and a
-// crease leaving it is started this many min_spacing along its tangent: far enough from the
-// corner that the third piece is not taken there, near enough to fit on a crease a few
-// min_spacing long.
-constexpr double kCornerReach = 1;
-constexpr double kCornerStep = 2;
 constexpr std::size_t kCrossingStops = 2;
 
 void join_crossings(const Field& field, double min_spacing, CreaseTracingResult& result, std::vector<Vec3>& corners) {
@@ -708,17 +805,28 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
   // near enough to be found from the crossings (a table top 0.05 thick with a leg under it: two
   // of its four vertical edges were missed, and the patch boundary broke off at their corners).
   // The corners found so grow the list, each taken once.
+  //
+  // And where a hidden seam ends alone at a corner, the other hidden seams that leave it
+  // (Tracer::seams_leaving).
+  struct Leaving {
+    Vec3 direction, n0, n1;
+  };
   std::vector<Vec3> visited;
+  const std::size_t split_already = corners.size();
   for (std::size_t next = 0; next < corners.size(); ++next) {
     const Vec3 corner = corners[next];
     if (std::any_of(visited.begin(), visited.end(), [&](const Vec3& q) { return (q - corner).norm() <= tr.min_spacing; }))
       continue;
     visited.push_back(corner);
+    // A corner this pass found (where a seam it walked ran into a crease) cuts the curves through
+    // it too, before the ways they leave it are looked at: a box's bottom edge, crossed by the
+    // seams from the corners of a smooth union's flat blend beside it, was traced twice more
+    // from such corners, taken for a crease leaving them.
+    if (next >= split_already) split_at_corners(tr.min_spacing, result, std::vector<Vec3>{corner});
     // The directions the curves ending here leave along, with their pieces' normals.
-    struct Leaving {
-      Vec3 direction, n0, n1;
-    };
     std::vector<Leaving> leaving;
+    std::vector<Vec3> seam_leaving;
+    bool seam_ends = false;  // a seam ends here
     for (const CreaseCurve& curve : result.curves) {
       const std::size_t n = curve.points.size();
       if (curve.closed || n < 2) continue;
@@ -726,7 +834,14 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
         if (!(back ? curve.ends_at_corner : curve.starts_at_corner)) continue;
         const Vec3& end = back ? curve.points[n - 1] : curve.points[0];
         if ((end - corner).norm() > tr.min_spacing) continue;
+        seam_ends = seam_ends || curve.seam_branch >= 0;
         const Vec3& inner = back ? curve.points[n - 2] : curve.points[1];
+        // (A seam that ran into a crease ends where the crease is nearest its last point, and
+        // leaves that corner at any angle: for the seams, the way to a point farther off.)
+        Vec3 far = inner;
+        for (std::size_t i = 1; i < n && (far - end).norm() < 2 * kCornerStep * tr.min_spacing; ++i)
+          far = back ? curve.points[n - 1 - i] : curve.points[i];
+        seam_leaving.push_back((far - end).normalized());
         leaving.push_back({(inner - end).normalized(), field.piece_first_order(corner, curve.pieces[0]).second.normalized(),
                            field.piece_first_order(corner, curve.pieces[1]).second.normalized()});
       }
@@ -751,6 +866,13 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
           if (start_curve(c, two, false))
             leaving.push_back({dir * t, g0, g1});
         }
+      }
+    if (seam_ends && leaving.size() == 1)  // a dead end: the patches beside the seam close nowhere
+      for (CreaseCurve& curve : tr.seams_leaving(corner, at, seam_leaving)) {
+        if (curve.ends_at_corner) corners.push_back(curve.points.back());
+        else ++result.stops;
+        for (std::size_t j = 0; j < curve.points.size(); ++j) traced.insert(curve.points[j], result.curves.size(), j);
+        result.curves.push_back(std::move(curve));
       }
   }
   // Corners once: the ends of several curves meet at each, each found to the Newton tolerance.

@@ -962,6 +962,65 @@ TEST(CreaseCurves, ASeamThatRunsIntoACreaseEndsAtACornerThatCutsTheCrease) {
   }
 }
 
+TEST(CreaseCurves, AHiddenSeamThatEndsAloneAtACornerGoesOnAlongTheSwitchesThatMeetThere) {
+  // fogleman/sdf's box(1) - box(0.6).translate((0.45, 0.33, 0.21)).k(0.07): the cutter takes the
+  // box's corner off, and the box's edge y = z = 0.5 fades into the pocket's rim and runs on down
+  // the pocket's wall x = 0.15 as a seam (the box's switch y = z, hidden behind the blend) to
+  // (0.15, 0.15, 0.15), where the box's three switches meet. Only that seam ended there, and the
+  // wall's patches broke off at the corner. The box's two other switches leave it along the wall:
+  // y = 0.15 down to the pocket's floor (z = -0.09) and z = 0.15 to its side (y = 0.03).
+  const Expression field("d0 - (d1 + d0)*h + 0.07*h*(1 - h)", {}, Box{Vec3::Constant(-0.6), Vec3::Constant(0.6)},
+                         {{"d0", "max(abs(x) - 0.5, abs(y) - 0.5, abs(z) - 0.5)"},
+                          {"d1", "max(abs(x - 0.45) - 0.3, abs(y - 0.33) - 0.3, abs(z - 0.21) - 0.3)"},
+                          {"h", "clamp(0.5 - (d1 + d0)*7.142857142857142, 0, 1)"}});
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.stops, 0u);
+  const Vec3 meet(0.15, 0.15, 0.15);
+  std::size_t ending = 0;
+  bool down = false, across = false;
+  for (const CreaseCurve& c : r.curves) {
+    const bool starts = c.starts_at_corner && (c.points.front() - meet).norm() < 1e-6;
+    const bool ends = c.ends_at_corner && (c.points.back() - meet).norm() < 1e-6;
+    if (!starts && !ends) continue;
+    ++ending;
+    EXPECT_GE(c.seam_branch, 0);
+    const Vec3& far = starts ? c.points.back() : c.points.front();
+    down = down || (far - Vec3(0.15, 0.15, -0.09)).norm() < 1e-3;
+    across = across || (far - Vec3(0.15, 0.03, 0.15)).norm() < 2e-3;
+    for (const Vec3& p : c.points) EXPECT_LE(std::abs(field.value(p)), 1e-9) << p.transpose();
+  }
+  EXPECT_EQ(ending, 3u);
+  EXPECT_TRUE(down);
+  EXPECT_TRUE(across);
+}
+
+TEST(CreaseCurves, ACornerFoundFromAnotherCornerCutsTheCreaseThroughItInsteadOfTracingItAgain) {
+  // fogleman/sdf's box((1.5, 1, 0.5)) | box((0.5, 0.5, 1.2)).translate((0.3, 0.1, 0.4)).k(0.08):
+  // the tower's bottom lies 0.05 above the slab's, within the blend, which bulges the slab's
+  // bottom into a flat bump. The seams from the bump's corners (walked from those corners in the
+  // pass over them) run into the slab's bottom edges, at corners that pass found. The edges ran
+  // through those corners uncut, and each was traced twice more from them, taken for creases
+  // leaving them; the patch boundary at the slab's corner was then ambiguous.
+  const Expression field("d1 + (d0 - d1)*h - 0.08*h*(1 - h)", {}, Box{Vec3(-0.996, -0.746, -0.496), Vec3(0.996, 0.746, 1.246)},
+                         {{"d0", "max(abs(x) - 0.75, abs(y) - 0.5, abs(z) - 0.25)"},
+                          {"d1", "max(abs(x - 0.3) - 0.25, abs(y - 0.1) - 0.25, abs(z - 0.4) - 0.6)"},
+                          {"h", "clamp(0.5 + (d1 - d0)*6.25, 0, 1)"}});
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.stops, 0u);
+  // The slab's four bottom edges, each traced once: their curves' lengths sum to theirs.
+  for (const double y : {-0.5, 0.5}) {
+    double length = 0;
+    for (const CreaseCurve& c : r.curves) {
+      const bool on_edge = std::all_of(c.points.begin(), c.points.end(), [&](const Vec3& p) {
+        return std::abs(p.y() - y) < 1e-9 && std::abs(p.z() + 0.25) < 1e-9;
+      });
+      if (!on_edge) continue;
+      for (std::size_t i = 0; i + 1 < c.points.size(); ++i) length += (c.points[i + 1] - c.points[i]).norm();
+    }
+    EXPECT_NEAR(length, 1.5, 1e-6) << y;
+  }
+}
+
 TEST(CreaseProjection, ProjectToSeamLandsOnTheSwitchWhereThePiecesAreOneFunction) {
   const Expression field = box_blended_ball();
   const CreaseTracingResult r = trace_creases(field);

@@ -320,7 +320,16 @@ std::array<Dart, 2> orient_darts(const Field& field, const LaidCurve& c, int ind
     // crease, the longer box's top face under the other box's bottom face, both zero there).
     const Vec3 m = at_q.gradient.normalized();
     const double depth = kSideDepth * kSideProbe * min_edge;
-    const bool on_left = std::abs(F - mine_value) < std::abs(F - other_value) && surface_passes(field, q, m, depth);
+    bool closer = std::abs(F - mine_value) < std::abs(F - other_value);
+    // On a seam hidden all along (traced from a corner where another ended), the pieces are one
+    // function on either side: the side is the one where the field makes the seam's choice as
+    // this piece does.
+    Field::BranchRecord record;
+    const std::size_t k = static_cast<std::size_t>(c.seam_branch);
+    if (c.seam_branch >= 0 && same_to_rounding(mine_value, at_q.gradient, other_value, field.piece(q, other).gradient) &&
+        field.branch_record(q, record) && k < record.taken.size() && k < mine.size())
+      closer = record.taken[k] == mine[k];
+    const bool on_left = closer && surface_passes(field, q, m, depth);
     Dart& d = out[static_cast<std::size_t>(side)];
     d.curve = index;
     d.side = side;
@@ -362,6 +371,11 @@ struct PatchGroup {
 // same plane), two darts of that plane leave it: the patch's own is the first met turning
 // clockwise (about the piece's normal) from the way the dart came, since the patch lies on
 // the left of both, inside the angle between them.
+// How far from a corner trace_cycles looks at the pieces meeting there, as a share of each dart's
+// first edge: far beyond the corner's Newton tolerance (1e-10 of the diagonal), near enough that
+// a curved piece's normal is the corner's.
+constexpr double kCornerNudge = 1e-4;
+
 std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>& curves,
                                 const std::vector<Dart>& darts, std::span<const Vec3> corners,
                                 std::span<const Vec3> points) {
@@ -398,12 +412,20 @@ std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>
       cycle.vertices.insert(cycle.vertices.end(), dart.vertices.begin(), dart.vertices.end() - 1);
       cycle.sagitta = std::max(cycle.sagitta, curves[static_cast<std::size_t>(dart.curve)].sagitta);
       const Vec3& corner = corners[static_cast<std::size_t>(dart.to)];
-      const Vec3 g = field.piece(corner, piece_of(dart)).gradient.normalized();
+      // Each piece looked at a hair from the corner along its own dart: at the corner itself a
+      // choice its code leaves free may be either way (a seam over a box's top face, coded by
+      // the cutter's walls with the box's choices free, ends on the box's edge, where the box
+      // takes its top or its side by rounding: the top's patch was taken for the side's).
+      const auto beside = [&](int v) {
+        return corner + kCornerNudge * (points[static_cast<std::size_t>(v)] - corner);
+      };
+      const Vec3 g = field.piece(beside(dart.vertices[dart.vertices.size() - 2]), piece_of(dart)).gradient.normalized();
       std::size_t next = darts.size();
       std::vector<std::size_t> candidates;
       for (std::size_t e = 0; e < darts.size(); ++e) {
         if (darts[e].from != dart.to || darts[e].curve == dart.curve) continue;
-        if (field.piece(corner, piece_of(darts[e])).gradient.normalized().dot(g) <= kSamePieceCosine) continue;
+        if (field.piece(beside(darts[e].vertices[1]), piece_of(darts[e])).gradient.normalized().dot(g) <= kSamePieceCosine)
+          continue;
         candidates.push_back(e);
       }
       // Pieces tangent at the corner (where two creases of theirs cross) have the same
