@@ -387,6 +387,45 @@ struct Tracer {
     return out;
   }
 
+  // Whether a hidden seam that can go no further from p (along t) stops at a switch that shapes
+  // the patches beside it, within `step` ahead: the seam's own switch, continued on a's code past
+  // it, crosses that switch there (seam_corner finds it). The field's switch itself turns away
+  // there (beyond, the choice it separated is hidden by the other), so no step of the walk crosses
+  // it: the four seams of a cube's body diagonals' ends, hidden under another box's face by a
+  // smooth intersection, each stopped one step short of the next corner of their square.
+  bool seam_corner_ahead(const Vec3& p, const Vec3& t, double step, const Branch& a, const Branch& b, int k,
+                         Vec3& corner) const {
+    double s = step;
+    for (int h = 0; h <= kMaxHalvings && s >= min_step; ++h, s *= 0.5) {
+      const CreaseProjection c = project_to_seam(field, p + s * t, a, static_cast<std::size_t>(k), o.newton);
+      if (!c.ok() || !((c.point - p).dot(t) > 0) || (c.point - p).norm() > 2 * s) continue;
+      if (seam_corner(p, c.point, a, b, k, corner)) return true;
+    }
+    // Or p lies on that switch already, where the seam turns along it: every projection ahead
+    // lands back on p.
+    Field::BranchRecord r;
+    if (!field.branch_record(p, r)) return false;
+    const std::vector<Field::BranchKind>& kinds = field.branch_kinds();
+    const auto kk = static_cast<std::size_t>(k);
+    std::optional<std::uint64_t> live;
+    for (std::size_t j = 0; j < r.taken.size() && j < kinds.size() && j < 64; ++j) {
+      if (j == kk || kinds[j] != Field::BranchKind::Creased || !(r.distance[j] <= kActiveRadius * tol)) continue;
+      if (!live) {
+        live = 0;
+        for (const Branch* side : {&a, &b}) {
+          std::vector<std::uint8_t> code = r.taken;
+          code[kk] = (*side)[kk];
+          *live |= field.live_branches(p, code).value_or(0);
+        }
+      }
+      if (*live >> j & 1u) {
+        corner = p;
+        return true;
+      }
+    }
+    return false;
+  }
+
   // Whether the field has a crease within a few min_spacing of p, the last point of a hidden
   // seam that can go no further: the seam has run into a crease of other pieces, which it
   // meets at a corner there (a tetrahedron smoothly united with an octahedron: the
@@ -529,7 +568,7 @@ struct Tracer {
       }
       if (!moved) {
         Vec3 corner;
-        if (hidden && seam_meets_crease(p, corner)) {
+        if (hidden && (seam_corner_ahead(p, t, step, a, b, k, corner) || seam_meets_crease(p, corner))) {
           if ((corner - p).norm() > kActiveRadius * tol) out.push_back(corner);
           return End::Corner;
         }

@@ -1021,6 +1021,27 @@ TEST(CreaseCurves, ACornerFoundFromAnotherCornerCutsTheCreaseThroughItInsteadOfT
   }
 }
 
+TEST(CreaseCurves, AHiddenSeamThatTurnsAlongAnotherSwitchEndsAtACornerThere) {
+  // fogleman/sdf's box(1) & box(0.82).translate((-0.08, 0.31, -0.6)).k(0.09): the small box's
+  // switches run hidden over the big box's bottom face (z = -0.5), which the blend takes there,
+  // 0.1 above the small box's centre: a square |x + 0.08| = 0.1, |y - 0.31| = 0.1 where the small
+  // box's z face is its largest, with rays from its corners. A seam along a side of the square
+  // cannot step past the next corner, where its switch turns along the other side's (beyond,
+  // the choice it separates is hidden), and no step crossed that switch: the walks stopped there,
+  // one step short or right on it, and the layout refused the stops.
+  const Expression field("d1 + (d0 - d1)*h + 0.09*h*(1 - h)", {}, Box{Vec3(-0.572, -0.182, -0.582), Vec3(0.412, 0.582, -0.108)},
+                         {{"d0", "max(abs(x) - 0.5, abs(y) - 0.5, abs(z) - 0.5)"},
+                          {"d1", "max(abs(x + 0.08) - 0.41, abs(y - 0.31) - 0.41, abs(z + 0.6) - 0.41)"},
+                          {"h", "clamp(0.5 - (d1 - d0)*5.555555555555555, 0, 1)"}});
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.stops, 0u);
+  for (const Vec3& t : {Vec3(-0.18, 0.21, -0.5), Vec3(0.02, 0.21, -0.5), Vec3(-0.18, 0.41, -0.5), Vec3(0.02, 0.41, -0.5)}) {
+    const bool corner = std::any_of(r.corners.begin(), r.corners.end(), [&](const Vec3& c) { return (c - t).norm() < 1e-6; });
+    EXPECT_TRUE(corner) << t.transpose();
+  }
+  for (const CreaseCurve& c : r.curves) EXPECT_TRUE(c.closed || (c.starts_at_corner && c.ends_at_corner));
+}
+
 TEST(CreaseProjection, ProjectToSeamLandsOnTheSwitchWhereThePiecesAreOneFunction) {
   const Expression field = box_blended_ball();
   const CreaseTracingResult r = trace_creases(field);
