@@ -145,7 +145,14 @@ Field::BranchKind Field::switch_verdict(const Vec3& p, const BranchRecord& recor
       // A kink of the field off the surface does not tell (a rounded box's max(|z| - c, 0) inside
       // its flat faces, where the gradient is not finite either).
       if (!g1.allFinite() || !(n1 > 0.0)) return BranchKind::Unknown;
-      return g0.dot(g1) > kSamePieceCosine * n0 * n1 ? BranchKind::Smooth : BranchKind::Creased;
+      if (!(g0.dot(g1) > kSamePieceCosine * n0 * n1)) return BranchKind::Creased;
+      const Vec3 off = q + kBranchHiddenProbe * cell * normal;
+      branch[b] = 0;
+      const auto [w0, h0] = eval_first_order(off, branch);
+      branch[b] = 1;
+      const auto [w1, h1] = eval_first_order(off, branch);
+      evaluations += 2;
+      return same_to_rounding(w0, h0, w1, h1) ? BranchKind::Unknown : BranchKind::Smooth;
     }
     if (it == kBranchSurfaceSteps) return BranchKind::Unknown;
     const Vec3 u = g0 / n0;

@@ -778,6 +778,29 @@ TEST(BranchKinds, SharpBooleansStayCreasedBesideSmoothOnes) {
   }
 }
 
+TEST(BranchKinds, ASwitchMetMostlyBehindASmoothBooleansOtherShapeIsNoC1Seam) {
+  // fogleman/sdf's box(1) | box(0.76).translate((-0.33, 0.53, 0.48)).k(0.04): the small box's
+  // switch between its z face and its sides meets the surface at its top and bottom edges, and
+  // across the big box's faces, where the blend's clamp multiplies the small box by 0: there the
+  // two sides' normals agree. The samples that met it only there took it for a C1 seam; it was
+  // never split, and the walks along the small box's vertical edges stopped a step short of its
+  // corners. Every min, max and abs of the two boxes is a crease or hidden; only the clamp's two
+  // branch points are smooth.
+  const Expression field("d1 + (d0 - d1)*h - 0.04*h*(1 - h)", {}, Box{Vec3(-0.899, -0.689, -0.689), Vec3(0.689, 1.099, 1.049)},
+                         {{"d0", "max(abs(x) - 0.5, abs(y) - 0.5, abs(z) - 0.5)"},
+                          {"d1", "max(abs(x + 0.33) - 0.38, abs(y - 0.53) - 0.38, abs(z - 0.48) - 0.38)"},
+                          {"h", "clamp(0.5 + (d1 - d0)*12.5, 0, 1)"}});
+  const auto& kinds = field.branch_kinds();
+  ASSERT_EQ(kinds.size(), 12u);
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), Kind::Smooth), 2);
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.stops, 0u);
+  for (const Vec3& t : {Vec3(-0.71, 0.91, 0.86), Vec3(-0.71, 0.91, 0.1), Vec3(0.05, 0.91, 0.86), Vec3(-0.71, 0.15, 0.86)}) {
+    const bool corner = std::any_of(r.corners.begin(), r.corners.end(), [&](const Vec3& c) { return (c - t).norm() < 1e-6; });
+    EXPECT_TRUE(corner) << t.transpose();
+  }
+}
+
 TEST(BranchKinds, ACubesPiecesAreAsTheyWere) {
   // Without smooth branch points nothing is free: the pieces keep every branch fixed.
   const Expression cube = crease_expression(kCubeFormula);

@@ -251,6 +251,13 @@ class Field {
   // inside its flat faces too, and an onion's abs(d) - t midway between its shells: kinks of the
   // field the surface never meets).
   static constexpr double kBranchOnSurface = 1e-3;
+  // Where the two sides' normals agree on the surface, the branches are compared this share of a
+  // cell off the switch too: a choice a smooth boolean's saturated clamp multiplies by 0 (a box's
+  // switch where the other box's face is the surface) gives the same value there as well, and
+  // tells nothing; a C1 switch (max(x, 0)^2, the clamp itself) does not. Taken for Smooth, a
+  // box's switch between its top and its sides, met only behind the other box's face, was never
+  // split, and the walks along its vertical edges stopped a step short of its corners.
+  static constexpr double kBranchHiddenProbe = 0.1;
   // At most this many steps from a sample onto the surface along a switch.
   static constexpr int kBranchSurfaceSteps = 8;
   // A switch whose normal and the surface's are this sine apart at the least (about 3 degrees)
