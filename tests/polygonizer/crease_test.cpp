@@ -34,6 +34,11 @@ Expression crease_expression(const std::string& formula, double half = 2) {
 const char* kCubeFormula = "max(abs(x),max(abs(y),abs(z)))-1";
 
 // The pieces' gradients at p, as a set (order-free comparison).
+// Whether the tracing found a corner within 1e-6 of t.
+bool has_corner(const CreaseTracingResult& r, const Vec3& t) {
+  return std::any_of(r.corners.begin(), r.corners.end(), [&](const Vec3& c) { return (c - t).norm() < 1e-6; });
+}
+
 std::set<std::array<double, 3>> gradients(const std::vector<FieldPiece>& pieces) {
   std::set<std::array<double, 3>> out;
   for (const auto& q : pieces) out.insert({q.gradient.x(), q.gradient.y(), q.gradient.z()});
@@ -796,8 +801,7 @@ TEST(BranchKinds, ASwitchMetMostlyBehindASmoothBooleansOtherShapeIsNoC1Seam) {
   const CreaseTracingResult r = trace_creases(field);
   EXPECT_EQ(r.stops, 0u);
   for (const Vec3& t : {Vec3(-0.71, 0.91, 0.86), Vec3(-0.71, 0.91, 0.1), Vec3(0.05, 0.91, 0.86), Vec3(-0.71, 0.15, 0.86)}) {
-    const bool corner = std::any_of(r.corners.begin(), r.corners.end(), [&](const Vec3& c) { return (c - t).norm() < 1e-6; });
-    EXPECT_TRUE(corner) << t.transpose();
+    EXPECT_TRUE(has_corner(r, t)) << t.transpose();
   }
 }
 
@@ -1059,8 +1063,7 @@ TEST(CreaseCurves, AHiddenSeamThatTurnsAlongAnotherSwitchEndsAtACornerThere) {
   const CreaseTracingResult r = trace_creases(field);
   EXPECT_EQ(r.stops, 0u);
   for (const Vec3& t : {Vec3(-0.18, 0.21, -0.5), Vec3(0.02, 0.21, -0.5), Vec3(-0.18, 0.41, -0.5), Vec3(0.02, 0.41, -0.5)}) {
-    const bool corner = std::any_of(r.corners.begin(), r.corners.end(), [&](const Vec3& c) { return (c - t).norm() < 1e-6; });
-    EXPECT_TRUE(corner) << t.transpose();
+    EXPECT_TRUE(has_corner(r, t)) << t.transpose();
   }
   for (const CreaseCurve& c : r.curves) EXPECT_TRUE(c.closed || (c.starts_at_corner && c.ends_at_corner));
 }
