@@ -257,6 +257,18 @@ struct Tracer {
     return k;
   }
 
+  // The branch points the value depends on at q (Field::live_branches) with the choices `code`
+  // and either of a's and b's at their seam's branch point k.
+  std::uint64_t live_either_side(const Vec3& q, std::vector<std::uint8_t> code, const Branch& a, const Branch& b,
+                                 std::size_t k) const {
+    std::uint64_t mask = 0;
+    for (const Branch* side : {&a, &b}) {
+      code[k] = (*side)[k];
+      mask |= field.live_branches(q, code).value_or(0);
+    }
+    return mask;
+  }
+
   // Whether the seam of a and b (the switch of branch point k, where they are one function)
   // crosses, between two of its points, the switch of another branch point that shapes the
   // pieces beside it: a corner of the patches, hidden as the seam is. A box smoothly intersected
@@ -272,21 +284,12 @@ struct Tracer {
     if (!field.branch_record(from, r0) || !field.branch_record(to, r1) || r0.taken.size() != r1.taken.size()) return false;
     const std::vector<Field::BranchKind>& kinds = field.branch_kinds();
     const auto kk = static_cast<std::size_t>(k);
-    // What the value depends on at q with either side's choice at k (evaluated once a point,
-    // and only where some switch was crossed).
-    const auto live_either_side = [&](const Vec3& q, std::vector<std::uint8_t> code) {
-      std::uint64_t mask = 0;
-      for (const Branch* side : {&a, &b}) {
-        code[kk] = (*side)[kk];
-        mask |= field.live_branches(q, code).value_or(0);
-      }
-      return mask;
-    };
+    // Evaluated once a point, and only where some switch was crossed.
     std::optional<std::uint64_t> live;
     std::size_t j = r0.taken.size();
     for (std::size_t i = 0; i < r0.taken.size() && i < kinds.size() && i < 64; ++i) {
       if (i == kk || kinds[i] != Field::BranchKind::Creased || r0.taken[i] == r1.taken[i]) continue;
-      if (!live) live = live_either_side(from, r0.taken) | live_either_side(to, r1.taken);
+      if (!live) live = live_either_side(from, r0.taken, a, b, kk) | live_either_side(to, r1.taken, a, b, kk);
       if (*live >> i & 1u) {
         j = i;
         break;
@@ -410,14 +413,7 @@ struct Tracer {
     std::optional<std::uint64_t> live;
     for (std::size_t j = 0; j < r.taken.size() && j < kinds.size() && j < 64; ++j) {
       if (j == kk || kinds[j] != Field::BranchKind::Creased || !(r.distance[j] <= kActiveRadius * tol)) continue;
-      if (!live) {
-        live = 0;
-        for (const Branch* side : {&a, &b}) {
-          std::vector<std::uint8_t> code = r.taken;
-          code[kk] = (*side)[kk];
-          *live |= field.live_branches(p, code).value_or(0);
-        }
-      }
+      if (!live) live = live_either_side(p, r.taken, a, b, kk);
       if (*live >> j & 1u) {
         corner = p;
         return true;
@@ -864,23 +860,19 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
     if (next >= split_already) split_at_corners(tr.min_spacing, result, std::vector<Vec3>{corner});
     // The directions the curves ending here leave along, with their pieces' normals.
     std::vector<Leaving> leaving;
-    std::vector<Vec3> seam_leaving;
-    bool seam_ends = false;  // a seam ends here
-    for (const CreaseCurve& curve : result.curves) {
+    // A seam that ends here (its index: the pass below may add curves), and whether at its back.
+    std::optional<std::size_t> seam_end;
+    bool seam_end_back = false;
+    for (std::size_t c = 0; c < result.curves.size(); ++c) {
+      const CreaseCurve& curve = result.curves[c];
       const std::size_t n = curve.points.size();
       if (curve.closed || n < 2) continue;
       for (const bool back : {false, true}) {
         if (!(back ? curve.ends_at_corner : curve.starts_at_corner)) continue;
         const Vec3& end = back ? curve.points[n - 1] : curve.points[0];
         if ((end - corner).norm() > tr.min_spacing) continue;
-        seam_ends = seam_ends || curve.seam_branch >= 0;
+        if (curve.seam_branch >= 0) seam_end = c, seam_end_back = back;
         const Vec3& inner = back ? curve.points[n - 2] : curve.points[1];
-        // (A seam that ran into a crease ends where the crease is nearest its last point, and
-        // leaves that corner at any angle: for the seams, the way to a point farther off.)
-        Vec3 far = inner;
-        for (std::size_t i = 1; i < n && (far - end).norm() < 2 * kCornerStep * tr.min_spacing; ++i)
-          far = back ? curve.points[n - 1 - i] : curve.points[i];
-        seam_leaving.push_back((far - end).normalized());
         leaving.push_back({(inner - end).normalized(), field.piece_first_order(corner, curve.pieces[0]).second.normalized(),
                            field.piece_first_order(corner, curve.pieces[1]).second.normalized()});
       }
@@ -906,13 +898,24 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
             leaving.push_back({dir * t, g0, g1});
         }
       }
-    if (seam_ends && leaving.size() == 1)  // a dead end: the patches beside the seam close nowhere
+    if (seam_end && leaving.size() == 1) {  // a dead end: the patches beside the seam close nowhere
+      // The way the seam leaves, to a point a few min_spacing off: a seam that ran into a crease
+      // ends where the crease is nearest its last point, and its last segment may leave that
+      // corner at any angle.
+      const std::vector<Vec3>& P = result.curves[*seam_end].points;
+      const std::size_t n = P.size();
+      const Vec3& end = seam_end_back ? P[n - 1] : P[0];
+      Vec3 far = seam_end_back ? P[n - 2] : P[1];
+      for (std::size_t i = 1; i < n && (far - end).norm() < 2 * kCornerStep * tr.min_spacing; ++i)
+        far = seam_end_back ? P[n - 1 - i] : P[i];
+      std::vector<Vec3> seam_leaving{(far - end).normalized()};
       for (CreaseCurve& curve : tr.seams_leaving(corner, at, seam_leaving)) {
         if (curve.ends_at_corner) corners.push_back(curve.points.back());
         else ++result.stops;
         for (std::size_t j = 0; j < curve.points.size(); ++j) traced.insert(curve.points[j], result.curves.size(), j);
         result.curves.push_back(std::move(curve));
       }
+    }
   }
   // Corners once: the ends of several curves meet at each, each found to the Newton tolerance.
   for (const Vec3& c : corners) {

@@ -313,8 +313,8 @@ std::array<Dart, 2> orient_darts(const Field& field, const LaidCurve& c, int ind
       q -= f.value / f.gradient.squaredNorm() * f.gradient;
     }
     const double F = field.value(q);
-    const FieldPiece at_q = field.piece(q, mine);
-    const double mine_value = at_q.value, other_value = field.piece(q, other).value;
+    const FieldPiece at_q = field.piece(q, mine), at_other = field.piece(q, other);
+    const double mine_value = at_q.value, other_value = at_other.value;
     // Where the field takes the piece, unless it takes it only where two solids touch, on
     // either side of it the same sign (a box standing flush on a longer one: beside the step's
     // crease, the longer box's top face under the other box's bottom face, both zero there).
@@ -326,7 +326,7 @@ std::array<Dart, 2> orient_darts(const Field& field, const LaidCurve& c, int ind
     // this piece does.
     Field::BranchRecord record;
     const std::size_t k = static_cast<std::size_t>(c.seam_branch);
-    if (c.seam_branch >= 0 && same_to_rounding(mine_value, at_q.gradient, other_value, field.piece(q, other).gradient) &&
+    if (c.seam_branch >= 0 && same_to_rounding(mine_value, at_q.gradient, other_value, at_other.gradient) &&
         field.branch_record(q, record) && k < record.taken.size() && k < mine.size())
       closer = record.taken[k] == mine[k];
     const bool on_left = closer && surface_passes(field, q, m, depth);
@@ -363,6 +363,11 @@ struct PatchGroup {
   Branch piece;
 };
 
+// How far from a corner trace_cycles looks at the pieces meeting there, as a share of each dart's
+// first edge: far beyond the corner's Newton tolerance (1e-10 of the diagonal), near enough that
+// a curved piece's normal is the corner's.
+constexpr double kCornerNudge = 1e-4;
+
 // The boundary cycles of the pieces' patches: a loop's dart is a cycle by itself; a dart that
 // ends at a corner goes on with the dart of the same piece that leaves the corner (the pieces
 // compared by their gradients at the corner, since one piece may carry several branch codes).
@@ -371,11 +376,6 @@ struct PatchGroup {
 // same plane), two darts of that plane leave it: the patch's own is the first met turning
 // clockwise (about the piece's normal) from the way the dart came, since the patch lies on
 // the left of both, inside the angle between them.
-// How far from a corner trace_cycles looks at the pieces meeting there, as a share of each dart's
-// first edge: far beyond the corner's Newton tolerance (1e-10 of the diagonal), near enough that
-// a curved piece's normal is the corner's.
-constexpr double kCornerNudge = 1e-4;
-
 std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>& curves,
                                 const std::vector<Dart>& darts, std::span<const Vec3> corners,
                                 std::span<const Vec3> points) {
