@@ -665,12 +665,53 @@ void join_crossings(const Field& field, double min_spacing, CreaseTracingResult&
   }
 }
 
+// A cut curve's codes are those it was traced with, which fix the choices hidden where tracing
+// started. Where a hidden seam ends at the cut, the part beyond lies on the seam's other side,
+// where the field takes the hidden choice the other way. So each part's codes take a choice
+// hidden near both its ends and at its middle as the field takes it at all three; a choice the
+// piece shows at one of them, or that the field takes both ways along the part (it crosses
+// another hidden switch), is left as traced: trace_cycles matches the darts at a corner by their
+// pieces there. Kept as traced, a smooth union's box edge, cut where the other box's hidden
+// diagonal seam ends on it, coded its short part beyond the seam as the hidden box's other face:
+// the patch whose boundary it began took that face's piece, and its front stalled on the box's
+// visible edge.
+// The probes near the ends lie this share of the end segment in from the corner.
+constexpr double kEndProbe = 0.1;
+
+void take_hidden_choices(const Field& field, CreaseCurve& curve) {
+  const std::vector<Vec3>& P = curve.points;
+  const std::size_t n = P.size();
+  if (n < 2) return;
+  const Vec3 middle = n % 2 ? P[n / 2] : Vec3(0.5 * (P[n / 2 - 1] + P[n / 2]));
+  const std::array<Vec3, 3> at{Vec3(P[0] + kEndProbe * (P[1] - P[0])), middle,
+                               Vec3(P[n - 1] + kEndProbe * (P[n - 2] - P[n - 1]))};
+  std::array<Field::BranchRecord, 3> records;
+  for (std::size_t i = 0; i < 3; ++i)
+    if (!field.branch_record(at[i], records[i])) return;
+  for (std::vector<std::uint8_t>& code : curve.pieces)
+    for (std::size_t k = 0; k < code.size(); ++k) {
+      if (code[k] == Field::kFreeBranch || static_cast<int>(k) == curve.seam_branch) continue;
+      std::vector<std::uint8_t> taken = code;
+      bool hidden = true;
+      for (std::size_t i = 0; i < 3 && hidden; ++i) {
+        if (k >= records[i].taken.size() || records[i].taken[k] == code[k]) hidden = false;
+        else {
+          taken[k] = records[i].taken[k];
+          const auto [v0, g0] = field.piece_first_order(at[i], code);
+          const auto [v1, g1] = field.piece_first_order(at[i], taken);
+          hidden = same_to_rounding(v0, g0, v1, g1);
+        }
+      }
+      if (hidden) code = std::move(taken);
+    }
+}
+
 // Where a corner lies on a curve other than at its ends, the curve is cut there: a seam that
 // runs into another crease (Tracer::seam_meets_crease) ends at a corner on it, and the
 // crease it meets, traced through that point, must end there too, so that the patch beside
 // it is bounded on both sides of the seam. A loop is opened there, starting and ending at
 // the corner.
-void split_at_corners(double min_spacing, CreaseTracingResult& result, const std::vector<Vec3>& corners) {
+void split_at_corners(const Field& field, double min_spacing, CreaseTracingResult& result, const std::vector<Vec3>& corners) {
   // Each curve's points' bounds, grown by min_spacing: only a curve whose bounds hold the corner
   // is searched (a gyroid ball traced at a tenth of the default spacing has 961 corners and 2708
   // curves). The halves of a cut curve keep its bounds, which hold them.
@@ -722,6 +763,8 @@ void split_at_corners(double min_spacing, CreaseTracingResult& result, const std
       curve.ends_at_corner = true;
       curve.points = std::move(before);
       curve.points.push_back(corner);
+      take_hidden_choices(field, curve);
+      take_hidden_choices(field, second);
       result.curves.push_back(std::move(second));
       bounds.push_back(bounds[c]);
     }
@@ -834,7 +877,7 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
       }
   });
   join_crossings(field, tr.min_spacing, result, corners);
-  split_at_corners(tr.min_spacing, result, corners);
+  split_at_corners(field, tr.min_spacing, result, corners);
   // Every crease that leaves a corner, traced from it where no curve ends there along it: a
   // crease shorter than about a grid cell between two corners may pass no crossed grid edge
   // near enough to be found from the crossings (a table top 0.05 thick with a leg under it: two
@@ -857,7 +900,7 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
     // it too, before the ways they leave it are looked at: a box's bottom edge, crossed by the
     // seams from the corners of a smooth union's flat blend beside it, was traced twice more
     // from such corners, taken for a crease leaving them.
-    if (next >= split_already) split_at_corners(tr.min_spacing, result, std::vector<Vec3>{corner});
+    if (next >= split_already) split_at_corners(field, tr.min_spacing, result, std::vector<Vec3>{corner});
     // The directions the curves ending here leave along, with their pieces' normals.
     std::vector<Leaving> leaving;
     // A seam that ends here (its index: the pass below may add curves), and whether at its back.

@@ -1068,6 +1068,40 @@ TEST(CreaseCurves, AHiddenSeamThatTurnsAlongAnotherSwitchEndsAtACornerThere) {
   for (const CreaseCurve& c : r.curves) EXPECT_TRUE(c.closed || (c.starts_at_corner && c.ends_at_corner));
 }
 
+TEST(CreaseCurves, ACurveCutWhereAHiddenSeamEndsTakesTheHiddenChoicesAsTheFieldDoesOnEachPart) {
+  // fogleman/sdf's box(1) | box(0.88).translate((0.54, -0.53, -0.5)).k(0.13): the big box's edge
+  // x = z = 0.5 runs on as a hidden seam over the small box's face y = -0.09, to a corner on that
+  // face's bottom edge. The edge is cut there, and its short part beyond the seam kept the code
+  // it was traced with, which takes the big box's z face where the field takes its x face
+  // (AdaptiveCreases.ABoxEdgeCutWhereAHiddenSeamEndsOnIt...). Every curve's codes take each choice
+  // hidden at its middle (flipping it changes nothing there) as the field takes it there.
+  const Expression field("d1 + (d0 - d1)*h - 0.13*h*(1 - h)", {}, Box{Vec3(-0.804, -1.274, -1.244), Vec3(1.284, 0.804, 0.804)},
+                         {{"d0", "max(abs(x) - 0.5, abs(y) - 0.5, abs(z) - 0.5)"},
+                          {"d1", "max(abs(x - 0.54) - 0.44, abs(y + 0.53) - 0.44, abs(z + 0.5) - 0.44)"},
+                          {"h", "clamp(0.5 + (d1 - d0)*3.846153846153846, 0, 1)"}});
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.stops, 0u);
+  EXPECT_TRUE(has_corner(r, Vec3(0.94, -0.09, -0.94)));
+  std::size_t checked = 0;
+  for (const CreaseCurve& c : r.curves) {
+    const std::size_t n = c.points.size();
+    const Vec3 middle = n % 2 ? c.points[n / 2] : Vec3(0.5 * (c.points[n / 2 - 1] + c.points[n / 2]));
+    Field::BranchRecord record;
+    ASSERT_TRUE(field.branch_record(middle, record));
+    for (const auto& code : c.pieces)
+      for (std::size_t k = 0; k < code.size(); ++k) {
+        if (code[k] == Field::kFreeBranch || static_cast<int>(k) == c.seam_branch || code[k] == record.taken[k]) continue;
+        auto taken = code;
+        taken[k] = record.taken[k];
+        const auto [v0, g0] = field.piece_first_order(middle, code);
+        const auto [v1, g1] = field.piece_first_order(middle, taken);
+        EXPECT_FALSE(same_to_rounding(v0, g0, v1, g1)) << "choice " << k << " hidden at " << middle.transpose();
+        ++checked;
+      }
+  }
+  EXPECT_GT(checked, 0u);  // the crease's own choices, which differ from the field's on one side
+}
+
 TEST(CreaseProjection, ProjectToSeamLandsOnTheSwitchWhereThePiecesAreOneFunction) {
   const Expression field = box_blended_ball();
   const CreaseTracingResult r = trace_creases(field);
