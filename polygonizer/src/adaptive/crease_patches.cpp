@@ -357,6 +357,8 @@ struct Cycle {
   double sagitta = 0;         // the largest of its curves' (LaidCurve::sagitta)
 };
 
+void fit_hidden_choices(const Field& field, const std::vector<bool>& movable, Cycle& cycle, std::span<const Vec3> points);
+
 // The cycles that one tracker meshes, on one piece.
 struct PatchGroup {
   std::vector<std::size_t> cycles;
@@ -388,6 +390,9 @@ std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>
     if (used[start]) continue;
     Cycle cycle;
     cycle.piece = piece_of(darts[start]);
+    // The choices some dart leaves free or fixes otherwise than another: hidden somewhere on the
+    // boundary. A choice every dart fixes alike is the patch's own.
+    std::vector<bool> movable(cycle.piece.size(), false);
     std::size_t d = start;
     for (std::size_t guard = 0;; ++guard) {
       if (guard > darts.size()) throw CreaseLayoutError("adaptive: a patch boundary that does not close");
@@ -401,7 +406,10 @@ std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>
       // edge, made a zero-area triangle, and the creases were dropped. So a choice the cycle's
       // code leaves free is fixed as the first of its darts that fixes it does. (Choices two
       // darts fix differently keep the first's: freed, the flush faces of stairs, each fixing
-      // its own box's hidden choices, made a piece of the whole field.)
+      // its own box's hidden choices, made a piece of the whole field.) Where the piece so coded
+      // is not the field just inside the patch, fit_hidden_choices refits them.
+      for (std::size_t k = 0; k < movable.size() && k < piece_of(dart).size(); ++k)
+        movable[k] = movable[k] || piece_of(dart)[k] == Field::kFreeBranch || piece_of(dart)[k] != piece_of(darts[start])[k];
       for (std::size_t k = 0; k < cycle.piece.size() && k < piece_of(dart).size(); ++k)
         if (cycle.piece[k] == Field::kFreeBranch) cycle.piece[k] = piece_of(dart)[k];
       if (dart.to < 0) {  // a loop
@@ -463,6 +471,7 @@ std::vector<Cycle> trace_cycles(const Field& field, const std::vector<LaidCurve>
       d = next;
     }
     if (cycle.vertices.size() < 3) throw CreaseLayoutError("adaptive: a patch bounded by fewer than three crease vertices");
+    if (std::find(movable.begin(), movable.end(), true) != movable.end()) fit_hidden_choices(field, movable, cycle, points);
     cycles.push_back(std::move(cycle));
   }
   return cycles;
@@ -523,6 +532,43 @@ std::vector<Vec3> inside_points(const Field& field, const Cycle& cycle, std::spa
 
 bool same_near(const Field& field, const Branch& a, const Branch& b, std::span<const Vec3> at) {
   return std::all_of(at.begin(), at.end(), [&](const Vec3& p) { return same_at(field, a, b, p); });
+}
+
+// A cycle's code fixes the choices its darts fix where they were traced, some of them hidden there
+// (trace_cycles). Where the piece so coded is not the field just inside the patch, the choices
+// it fixes otherwise than the field takes them there are taken as the field takes them (or left
+// free where it takes them both ways), if that makes it the field at every point inside. The
+// bottom face of a box smoothly cut by another, whose choice of face is hidden all over it, took
+// the other box's x face from the edge its first dart ran along: that piece is the face cut off
+// by the other box's x plane, and the front stalled where the plane left the face.
+void fit_hidden_choices(const Field& field, const std::vector<bool>& movable, Cycle& cycle, std::span<const Vec3> points) {
+  // Inside as the piece with those choices free sees it: the piece as coded may be a plane
+  // across the patch, whose tangent plane put the points on the boundary.
+  Cycle freed = cycle;
+  for (std::size_t k = 0; k < freed.piece.size() && k < movable.size(); ++k)
+    if (movable[k]) freed.piece[k] = Field::kFreeBranch;
+  const std::vector<Vec3> inside = inside_points(field, freed, points, kInsideStep);
+  const Branch own(cycle.piece.size(), Field::kFreeBranch);
+  constexpr std::uint8_t kUnset = 0xff - 1;
+  static_assert(kUnset != Field::kFreeBranch);
+  Branch taken(cycle.piece.size(), kUnset);
+  bool any = false;
+  for (const Vec3& p : inside) {
+    if (same_at(field, cycle.piece, own, p)) continue;
+    Field::BranchRecord record;
+    if (!field.branch_record(p, record)) return;
+    for (std::size_t k = 0; k < cycle.piece.size() && k < record.taken.size() && k < movable.size(); ++k) {
+      if (!movable[k] || cycle.piece[k] == Field::kFreeBranch || record.taken[k] == cycle.piece[k]) continue;
+      taken[k] = taken[k] == kUnset || taken[k] == record.taken[k] ? record.taken[k] : Field::kFreeBranch;
+      any = true;
+    }
+  }
+  if (!any) return;
+  Branch fitted = cycle.piece;
+  for (std::size_t k = 0; k < taken.size(); ++k)
+    if (taken[k] != kUnset) fitted[k] = taken[k];
+  if (same_near(field, fitted, own, inside)) cycle.piece = std::move(fitted);
+  else if (same_near(field, freed.piece, own, inside)) cycle.piece = std::move(freed.piece);
 }
 
 // One code for two pieces that are one function near their boundaries: a choice either fixes is
