@@ -440,7 +440,7 @@ TEST(AdaptiveCreases, AFaceWhoseChoicesAreHiddenAllOverTakesThemAsTheFieldDoes) 
           "define": {"d0": "max(abs(x) - 0.5, abs(y) - 0.5, abs(z) - 0.5)",
                      "d1": "max(abs(x - 0.45) - 0.255, abs(y + 0.47) - 0.255, abs(z - 0.03) - 0.255)",
                      "h": "clamp(0.5 + (d1 - d0)*3.846153846153846, 0, 1)"},
-          "bounds": [[-0.778, -1.004, -0.778], [0.984, 0.778, 0.778]]})json");
+          "bounds": [[-0.7785, -1.0035, -0.7785], [0.9835, 0.7785, 0.7785]]})json");
   expect_creases_followed_genus0(*field, 1.09518, 0.005);
 }
 
