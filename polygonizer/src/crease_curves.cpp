@@ -706,6 +706,41 @@ void take_hidden_choices(const Field& field, CreaseCurve& curve) {
     }
 }
 
+// An open curve between the same two corners as an earlier one and on it all along (every point
+// within `on` of the earlier polyline) is the same crease traced twice, and is dropped
+// (CreaseTracingResult::duplicates). A box's edge running into a smooth union's blend was traced
+// from its corner and again as the part of a longer walk cut at the corner where the blend
+// begins: the two darts of each side met at the box's corner along the same direction, and the
+// layout refused them ("a piece meets the corner more than once").
+void drop_duplicate_curves(double min_spacing, double on, CreaseTracingResult& result) {
+  const auto polyline_distance = [](const Vec3& q, const std::vector<Vec3>& P) {
+    double d = (q - P[0]).norm();
+    for (std::size_t i = 0; i + 1 < P.size(); ++i) d = std::min(d, segment_distance(q, P[i], P[i + 1]));
+    return d;
+  };
+  std::vector<CreaseCurve> kept;
+  PointGrid starts(min_spacing);  // the kept open curves' first points (index 0) and last (1)
+  for (CreaseCurve& curve : result.curves) {
+    if (!curve.closed && curve.points.size() >= 2) {
+      const Vec3 &a = curve.points.front(), &b = curve.points.back();
+      // A kept curve with an end within min_spacing of a, whose other end is within it of b.
+      const bool twice = starts.any_within(a, min_spacing, [&](std::size_t k, std::size_t end) {
+        const std::vector<Vec3>& P = kept[k].points;
+        return (b - (end == 0 ? P.back() : P.front())).norm() <= min_spacing &&
+               std::all_of(curve.points.begin(), curve.points.end(), [&](const Vec3& q) { return polyline_distance(q, P) <= on; });
+      });
+      if (twice) {
+        ++result.duplicates;
+        continue;
+      }
+      starts.insert(a, kept.size(), 0);
+      starts.insert(b, kept.size(), 1);
+    }
+    kept.push_back(std::move(curve));
+  }
+  result.curves = std::move(kept);
+}
+
 // Where a corner lies on a curve other than at its ends, the curve is cut there: a seam that
 // runs into another crease (Tracer::seam_meets_crease) ends at a corner on it, and the
 // crease it meets, traced through that point, must end there too, so that the patch beside
@@ -960,6 +995,7 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
       }
     }
   }
+  drop_duplicate_curves(tr.min_spacing, kOnTracedCurve * tr.max_spacing, result);
   // Corners once: the ends of several curves meet at each, each found to the Newton tolerance.
   for (const Vec3& c : corners) {
     const bool seen = std::any_of(result.corners.begin(), result.corners.end(),

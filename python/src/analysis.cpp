@@ -257,6 +257,7 @@ py::dict trace_creases_py(const Field& field, std::optional<int> resolution, std
   d["curves"] = curves;
   d["corners"] = to_array(r.corners);
   d["stops"] = r.stops;
+  d["duplicates"] = r.duplicates;
   return d;
 }
 

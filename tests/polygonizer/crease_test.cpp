@@ -1102,6 +1102,39 @@ TEST(CreaseCurves, ACurveCutWhereAHiddenSeamEndsTakesTheHiddenChoicesAsTheFieldD
   EXPECT_GT(checked, 0u);  // the crease's own choices, which differ from the field's on one side
 }
 
+TEST(CreaseCurves, ACreaseTracedTwiceBetweenTheSameCornersIsKeptOnce) {
+  // fogleman/sdf's box(1) | box(0.48).translate((0.16, 0.44, 0.03)).k(0.12): the big box's edge
+  // x = y = 0.5 runs up from its corner into the blend, where a corner cuts it at z = -0.311. It
+  // was traced from the box's corner and again as part of a walk cut at the blend's corner: two
+  // curves on the same edge between the same corners, whose darts met at the box's corner along
+  // the same direction, and the layout refused them. No two curves between the same corners now
+  // lie on each other.
+  const Expression field("d1 + (d0 - d1)*h - 0.12*h*(1 - h)", {}, Box{Vec3(-0.762, -0.762, -0.762), Vec3(0.762, 0.942, 0.762)},
+                         {{"d0", "max(abs(x) - 0.5, abs(y) - 0.5, abs(z) - 0.5)"},
+                          {"d1", "max(abs(x - 0.16) - 0.24, abs(y - 0.44) - 0.24, abs(z - 0.03) - 0.24)"},
+                          {"h", "clamp(0.5 + (d1 - d0)*4.166666666666667, 0, 1)"}});
+  const CreaseTracingResult r = trace_creases(field);
+  EXPECT_EQ(r.stops, 0u);
+  EXPECT_GE(r.duplicates, 1u);
+  const auto near = [](const Vec3& a, const Vec3& b) { return (a - b).norm() <= 1e-3; };
+  for (std::size_t i = 0; i < r.curves.size(); ++i)
+    for (std::size_t j = i + 1; j < r.curves.size(); ++j) {
+      const CreaseCurve &a = r.curves[i], &b = r.curves[j];
+      if (a.closed || b.closed) continue;
+      const bool same_ends = (near(a.points.front(), b.points.front()) && near(a.points.back(), b.points.back())) ||
+                             (near(a.points.front(), b.points.back()) && near(a.points.back(), b.points.front()));
+      if (!same_ends) continue;
+      const Vec3& mid = a.points[a.points.size() / 2];
+      double d = std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k + 1 < b.points.size(); ++k) {
+        const Vec3 e = b.points[k + 1] - b.points[k];
+        const double t = std::clamp((mid - b.points[k]).dot(e) / e.squaredNorm(), 0.0, 1.0);
+        d = std::min(d, (b.points[k] + t * e - mid).norm());
+      }
+      EXPECT_GT(d, 1e-3) << "curves " << i << " and " << j << " from " << a.points.front().transpose();
+    }
+}
+
 TEST(CreaseProjection, ProjectToSeamLandsOnTheSwitchWhereThePiecesAreOneFunction) {
   const Expression field = box_blended_ball();
   const CreaseTracingResult r = trace_creases(field);

@@ -98,7 +98,7 @@ def test_evaluate_a_callable_field():
 def test_trace_creases_of_a_cube_and_a_capped_cylinder():
     cube = cdp.expression("max(abs(x),max(abs(y),abs(z)))-1", bounds=[[-1.5] * 3, [1.5] * 3])
     r = cdp.trace_creases(cube)
-    assert len(r["curves"]) == 12 and r["stops"] == 0
+    assert len(r["curves"]) == 12 and r["stops"] == 0 and r["duplicates"] == 0
     assert r["corners"].shape == (8, 3)
     assert np.allclose(np.abs(r["corners"]), 1, atol=1e-9)
     for c in r["curves"]:

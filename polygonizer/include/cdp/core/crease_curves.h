@@ -58,6 +58,7 @@ struct CreaseTracingResult {
   std::vector<CreaseCurve> curves;
   std::vector<Vec3> corners;  // every corner once
   std::size_t stops = 0;      // curve ends that are not corners (tangent pieces, failed projections)
+  std::size_t duplicates = 0;  // curves dropped as the same crease traced twice
 };
 
 // Every crease of `field` as polylines on both pieces (see the top of this file).
