@@ -549,7 +549,7 @@ void fit_hidden_choices(const Field& field, const std::vector<bool>& movable, Cy
     if (movable[k]) freed.piece[k] = Field::kFreeBranch;
   const std::vector<Vec3> inside = inside_points(field, freed, points, kInsideStep);
   const Branch own(cycle.piece.size(), Field::kFreeBranch);
-  constexpr std::uint8_t kUnset = 0xff - 1;
+  constexpr std::uint8_t kUnset = 0xff;  // no point inside has taken the choice otherwise yet
   static_assert(kUnset != Field::kFreeBranch);
   Branch taken(cycle.piece.size(), kUnset);
   bool any = false;
