@@ -1070,8 +1070,8 @@ TEST(CreaseCurves, AHiddenSeamThatTurnsAlongAnotherSwitchEndsAtACornerThere) {
 
 TEST(CreaseCurves, ACurveCutWhereAHiddenSeamEndsTakesTheHiddenChoicesAsTheFieldDoesOnEachPart) {
   // fogleman/sdf's box(1) | box(0.88).translate((0.54, -0.53, -0.5)).k(0.13): the big box's edge
-  // x = z = 0.5 runs on as a hidden seam over the small box's face y = -0.09, to a corner on that
-  // face's bottom edge. The edge is cut there, and its short part beyond the seam kept the code
+  // x = 0.5, z = -0.5 runs on as a hidden seam over the small box's face y = -0.09, to a corner on
+  // that face's bottom edge. The edge is cut there, and its short part beyond the seam kept the code
   // it was traced with, which takes the big box's z face where the field takes its x face
   // (AdaptiveCreases.ABoxEdgeCutWhereAHiddenSeamEndsOnIt...). Every curve's codes take each choice
   // hidden at its middle (flipping it changes nothing there) as the field takes it there.

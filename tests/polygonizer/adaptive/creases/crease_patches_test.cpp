@@ -412,8 +412,8 @@ TEST(AdaptiveCreases, TwoBoxesSmoothlyIntersectedAreMeshedAlongTheirCreasesAndHi
 
 TEST(AdaptiveCreases, ABoxEdgeCutWhereAHiddenSeamEndsOnItIsCodedOnEachSideOfTheSeam) {
   // fogleman/sdf's box(1) | box(0.88).translate((0.54, -0.53, -0.5)).k(0.13): the big box's edge
-  // x = z = 0.5 fades into the blend and runs on as a hidden seam over the small box's face y =
-  // -0.09, down to that face's bottom edge, which the seam's corner cuts. The short part beyond
+  // x = 0.5, z = -0.5 fades into the blend and runs on as a hidden seam over the small box's face
+  // y = -0.09, down to that face's bottom edge, which the seam's corner cuts. The short part beyond
   // the seam kept the codes the edge was traced with, which take the big box's z face where the
   // field takes its x face: the patch it began took the z face's piece, and its front stalled on
   // the big box's edge. The model was meshed as smooth with the crease warning, 4 % short of the
