@@ -62,6 +62,14 @@ class PointGrid {
   std::unordered_map<std::uint64_t, std::vector<Entry>> cells_;
 };
 
+// Whether pieces a and b are one function at p, to rounding: the switch between them is hidden
+// there by another branch.
+bool one_function(const Field& field, const Vec3& p, const Branch& a, const Branch& b) {
+  const auto [va, ga] = field.piece_first_order(p, a);
+  const auto [vb, gb] = field.piece_first_order(p, b);
+  return same_to_rounding(va, ga, vb, gb);
+}
+
 // Distance from p to segment a-b.
 double segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
   const Vec3 ab = b - a;
@@ -449,10 +457,7 @@ struct Tracer {
   // Whether a and b are one function at p, to rounding: their switch is hidden there by another
   // branch (a box's edge where a smooth union's blend has left the box: its clamp at 0 multiplies
   // the box's difference from the ball by 0).
-  bool one_function(const Vec3& p, const Branch& a, const Branch& b) const {
-    const FirstOrder fa = piece(p, a), fb = piece(p, b);
-    return same_to_rounding(fa.value, fa.gradient, fb.value, fb.gradient);
-  }
+  bool one_function(const Vec3& p, const Branch& a, const Branch& b) const { return cdp::one_function(field, p, a, b); }
   // Whether a and b are the same piece at p (kSamePieceCosine): no crease between them there.
   bool same_piece(const Vec3& p, const Branch& a, const Branch& b) const {
     return piece(p, a).gradient.normalized().dot(piece(p, b).gradient.normalized()) > kSamePieceCosine;
@@ -697,9 +702,7 @@ void take_hidden_choices(const Field& field, CreaseCurve& curve) {
         if (k >= records[i].taken.size() || records[i].taken[k] == code[k]) hidden = false;
         else {
           taken[k] = records[i].taken[k];
-          const auto [v0, g0] = field.piece_first_order(at[i], code);
-          const auto [v1, g1] = field.piece_first_order(at[i], taken);
-          hidden = same_to_rounding(v0, g0, v1, g1);
+          hidden = one_function(field, at[i], code, taken);
         }
       }
       if (hidden) code = std::move(taken);

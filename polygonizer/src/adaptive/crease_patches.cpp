@@ -514,16 +514,18 @@ bool same_function(const Field& field, const Branch& a, const Branch& b) {
 // A share of each boundary edge's length: how far inside_points lie from it.
 constexpr double kInsideStep = 0.25;
 
-// Points just inside a cycle's patch: each boundary edge's midpoint moved `share` of the edge to
-// its left (the patch's side) in the piece's tangent plane; a negative share, just outside.
-std::vector<Vec3> inside_points(const Field& field, const Cycle& cycle, std::span<const Vec3> points, double share) {
+// Points just inside a patch bounded by the polygon `vertices`: each boundary edge's midpoint
+// moved `share` of the edge to its left (the patch's side) in the tangent plane of `piece`; a
+// negative share, just outside.
+std::vector<Vec3> inside_points(const Field& field, const Branch& piece, std::span<const int> vertices,
+                                std::span<const Vec3> points, double share) {
   std::vector<Vec3> out;
-  const std::size_t n = cycle.vertices.size();
+  const std::size_t n = vertices.size();
   for (std::size_t k = 0; k < n; ++k) {
-    const Vec3& a = points[static_cast<std::size_t>(cycle.vertices[k])];
-    const Vec3& b = points[static_cast<std::size_t>(cycle.vertices[(k + 1) % n])];
+    const Vec3& a = points[static_cast<std::size_t>(vertices[k])];
+    const Vec3& b = points[static_cast<std::size_t>(vertices[(k + 1) % n])];
     const Vec3 m = 0.5 * (a + b);
-    const Vec3 g = field.piece_first_order(m, cycle.piece).second;
+    const Vec3 g = field.piece_first_order(m, piece).second;
     if (!(g.squaredNorm() > 0)) continue;
     out.push_back(m + share * g.normalized().cross(b - a));
   }
@@ -544,19 +546,31 @@ bool same_near(const Field& field, const Branch& a, const Branch& b, std::span<c
 void fit_hidden_choices(const Field& field, const std::vector<bool>& movable, Cycle& cycle, std::span<const Vec3> points) {
   // Inside as the piece with those choices free sees it: the piece as coded may be a plane
   // across the patch, whose tangent plane put the points on the boundary.
-  Cycle freed = cycle;
-  for (std::size_t k = 0; k < freed.piece.size() && k < movable.size(); ++k)
-    if (movable[k]) freed.piece[k] = Field::kFreeBranch;
-  const std::vector<Vec3> inside = inside_points(field, freed, points, kInsideStep);
+  Branch freed = cycle.piece;
+  for (std::size_t k = 0; k < freed.size() && k < movable.size(); ++k)
+    if (movable[k]) freed[k] = Field::kFreeBranch;
+  const std::vector<Vec3> inside = inside_points(field, freed, cycle.vertices, points, kInsideStep);
+  // The field there (every choice its own), evaluated once for the codes compared with it.
   const Branch own(cycle.piece.size(), Field::kFreeBranch);
+  std::vector<std::pair<double, Vec3>> at_field;
+  for (const Vec3& p : inside) at_field.push_back(field.piece_first_order(p, own));
+  const auto is_field_at = [&](const Branch& code, std::size_t i) {
+    const auto [value, gradient] = field.piece_first_order(inside[i], code);
+    return same_to_rounding(at_field[i].first, at_field[i].second, value, gradient);
+  };
+  const auto is_field = [&](const Branch& code) {
+    for (std::size_t i = 0; i < inside.size(); ++i)
+      if (!is_field_at(code, i)) return false;
+    return true;
+  };
   constexpr std::uint8_t kUnset = 0xff;  // no point inside has taken the choice otherwise yet
   static_assert(kUnset != Field::kFreeBranch);
   Branch taken(cycle.piece.size(), kUnset);
   bool any = false;
-  for (const Vec3& p : inside) {
-    if (same_at(field, cycle.piece, own, p)) continue;
+  for (std::size_t i = 0; i < inside.size(); ++i) {
+    if (is_field_at(cycle.piece, i)) continue;
     Field::BranchRecord record;
-    if (!field.branch_record(p, record)) return;
+    if (!field.branch_record(inside[i], record)) return;
     for (std::size_t k = 0; k < cycle.piece.size() && k < record.taken.size() && k < movable.size(); ++k) {
       if (!movable[k] || cycle.piece[k] == Field::kFreeBranch || record.taken[k] == cycle.piece[k]) continue;
       taken[k] = taken[k] == kUnset || taken[k] == record.taken[k] ? record.taken[k] : Field::kFreeBranch;
@@ -567,8 +581,8 @@ void fit_hidden_choices(const Field& field, const std::vector<bool>& movable, Cy
   Branch fitted = cycle.piece;
   for (std::size_t k = 0; k < taken.size(); ++k)
     if (taken[k] != kUnset) fitted[k] = taken[k];
-  if (same_near(field, fitted, own, inside)) cycle.piece = std::move(fitted);
-  else if (same_near(field, freed.piece, own, inside)) cycle.piece = std::move(freed.piece);
+  if (is_field(fitted)) cycle.piece = std::move(fitted);
+  else if (is_field(freed)) cycle.piece = std::move(freed);
 }
 
 // One code for two pieces that are one function near their boundaries: a choice either fixes is
@@ -716,8 +730,8 @@ std::vector<PatchGroup> group_cycles(const Field& field, const std::vector<Cycle
   std::vector<std::vector<Vec3>> inside, outside;
   std::vector<double> edges;
   for (const Cycle& c : cycles) {
-    inside.push_back(inside_points(field, c, points, kInsideStep));
-    outside.push_back(inside_points(field, c, points, -kInsideStep));
+    inside.push_back(inside_points(field, c.piece, c.vertices, points, kInsideStep));
+    outside.push_back(inside_points(field, c.piece, c.vertices, points, -kInsideStep));
     for (std::size_t k = 0; k < c.vertices.size(); ++k)
       edges.push_back((points[static_cast<std::size_t>(c.vertices[k])] -
                        points[static_cast<std::size_t>(c.vertices[(k + 1) % c.vertices.size()])]).norm());
