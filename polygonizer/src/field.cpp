@@ -343,8 +343,16 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
     // Moved: the comparisons below read the other pieces' numbers, never their branches.
     FieldPiece piece = std::move(all[mask]);
     if (any_free) {
+      // A choice whose result a later given choice discards changes nothing: free without an
+      // evaluation (a knurled cylinder's 253 branch points, a few dozen of them reaching the value).
+      std::vector<std::uint8_t> reaches;
+      const bool known = choices_reaching(piece.branch, reaches);
       for (std::size_t k = 0; k < piece.branch.size(); ++k) {
         if (base[k] == kFreeBranch || std::binary_search(split.begin(), split.end(), static_cast<int>(k))) continue;
+        if (known && !reaches[k]) {
+          piece.branch[k] = kFreeBranch;
+          continue;
+        }
         std::vector<std::uint8_t> flipped = piece.branch;
         flipped[k] ^= 1u;
         const auto [v, g] = eval_first_order(p, flipped);

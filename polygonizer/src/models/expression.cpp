@@ -12,6 +12,7 @@
 #include <cstring>
 #include <map>
 #include <limits>
+#include <array>
 #include <new>
 #include <numbers>
 #include <vector>
@@ -62,6 +63,41 @@ struct ExpressionProgram {
   std::vector<Instruction> code;
   int branch_points = 0;
   int slots = 0;  // named sub-expressions kept
+  // The program as a graph, for choices_reaching: each instruction's operands (the instructions
+  // that pushed them, -1 for none; a Load's is the Store it reads), its branch point's number
+  // (-1 if none), and the instruction whose result is the value.
+  std::vector<std::array<int, 2>> operands;
+  std::vector<int> branch_number;
+  int result = -1;
+
+  void link() {
+    operands.assign(code.size(), {-1, -1});
+    branch_number.assign(code.size(), -1);
+    std::vector<int> pushed, stored(static_cast<std::size_t>(std::max(slots, 1)), -1);
+    int branch = 0;
+    for (std::size_t i = 0; i < code.size(); ++i) {
+      const auto pop = [&] {
+        const int top = pushed.back();
+        pushed.pop_back();
+        return top;
+      };
+      const Instruction& in = code[i];
+      auto& args = operands[i];
+      switch (in.op) {
+        case Op::Const: case Op::X: case Op::Y: case Op::Z: break;
+        case Op::Load: args[0] = stored[static_cast<std::size_t>(in.constant)]; break;
+        case Op::Store: stored[static_cast<std::size_t>(in.constant)] = static_cast<int>(i); args[0] = pop(); break;
+        case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Pow: case Op::Atan2: case Op::Min: case Op::Max:
+          args[1] = pop();
+          args[0] = pop();
+          break;
+        default: args[0] = pop(); break;
+      }
+      if (in.op == Op::Min || in.op == Op::Max || in.op == Op::Abs) branch_number[i] = branch++;
+      if (in.op != Op::Store) pushed.push_back(static_cast<int>(i));
+    }
+    result = pushed.empty() ? -1 : pushed.back();
+  }
 
   template <class T>
   T run(const T& x, const T& y, const T& z) const {
@@ -574,6 +610,7 @@ Expression::Expression(const std::string& formula, const std::map<std::string, d
   program_->slots = defs.slots;
   for (const auto& in : program_->code)
     if (in.op == detail::Op::Min || in.op == detail::Op::Max || in.op == detail::Op::Abs) ++program_->branch_points;
+  program_->link();
   if (detail::stack_depth(program_->code) > detail::kMaxStack)
     throw InvalidInputError("expression: formula nested too deeply (more than " +
                             std::to_string(detail::kMaxStack) + " pending operands)");
@@ -666,6 +703,28 @@ bool Expression::eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>&
         Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2), log);
     piece.value = r.v;
     piece.gradient = r.g;
+  }
+  return true;
+}
+
+bool Expression::choices_reaching(const std::vector<std::uint8_t>& branch, std::vector<std::uint8_t>& reaches) const {
+  check_branch(branch);
+  const detail::ExpressionProgram& program = *program_;
+  std::vector<std::uint8_t> live(program.code.size(), 0);
+  if (program.result >= 0) live[static_cast<std::size_t>(program.result)] = 1;
+  reaches.assign(branch.size(), 0);
+  // Backwards from the value: a min or max with its choice given passes on the argument it takes
+  // only; one whose values choose, both (a change on either side may change what they choose).
+  for (std::size_t i = program.code.size(); i-- > 0;) {
+    if (!live[i]) continue;
+    const int k = program.branch_number[i];
+    if (k >= 0) reaches[static_cast<std::size_t>(k)] = 1;
+    const detail::Op op = program.code[i].op;
+    const std::uint8_t choice = k >= 0 && op != detail::Op::Abs ? branch[static_cast<std::size_t>(k)] : kFreeBranch;
+    for (int a = 0; a < 2; ++a) {
+      const int from = program.operands[i][static_cast<std::size_t>(a)];
+      if (from >= 0 && (choice == kFreeBranch || choice == a)) live[static_cast<std::size_t>(from)] = 1;
+    }
   }
   return true;
 }

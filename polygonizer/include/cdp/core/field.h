@@ -538,6 +538,15 @@ class Field {
     (void)p, (void)branch, (void)bits, (void)hessian, (void)piece, (void)live;
     return false;
   }
+  // In `reaches`, for each branch point, whether its choice can change the value with the other
+  // choices as `branch` gives them: whether its result reaches the value without a later min or
+  // max whose choice is given (not kFreeBranch) discarding it. Flipping a choice that does not
+  // reach it gives the same numbers, bit for bit, at every point. False (the default) where the
+  // model cannot tell.
+  virtual bool choices_reaching(const std::vector<std::uint8_t>& branch, std::vector<std::uint8_t>& reaches) const {
+    (void)branch, (void)reaches;
+    return false;
+  }
 
   // The pieces near p from the record there: every branch point whose switch lies within `radius`
   // and that is not Smooth is split into both branches (the nearest kMaxSplitBranchPoints),

@@ -61,6 +61,7 @@ class Expression : public Field {
   FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
   bool eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>& branch, const std::int8_t* bits, bool hessian,
                        FieldPiece& piece, std::uint64_t& live) const override;
+  bool choices_reaching(const std::vector<std::uint8_t>& branch, std::vector<std::uint8_t>& reaches) const override;
 
  private:
   void check_branch(const std::vector<std::uint8_t>& branch) const;  // InvalidInputError unless one of ours

@@ -57,6 +57,9 @@ class LevelShift final : public Field {
   std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
   bool eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>& branch, const std::int8_t* bits, bool hessian,
                        FieldPiece& piece, std::uint64_t& live) const override;
+  bool choices_reaching(const std::vector<std::uint8_t>& branch, std::vector<std::uint8_t>& reaches) const override {
+    return field_.choices_reaching(branch, reaches);
+  }
 
  private:
   const Field& field_;
