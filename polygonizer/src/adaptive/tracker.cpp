@@ -547,6 +547,18 @@ std::string sheets_advice(const Field& field, double gap, double edge, double mi
 }
 
 void Tracker::emit_triangle(int a, int b, int c) {
+  // The last triangle again, either way round: no manifold mesh has a triangle twice, and a
+  // front that has made it twice makes it again and again (fogleman/sdf's knurling example,
+  // meshed across its creases at factor 1: one triangle 39,178 times, each way round in turn,
+  // its front pinched at a corner of it, for 50 s until kTrianglesPerVertex's bound below).
+  if (!mesh_.triangles.empty()) {
+    std::array<int, 3> last = mesh_.triangles.back(), made{a, b, c};
+    std::sort(last.begin(), last.end());
+    std::sort(made.begin(), made.end());
+    if (last == made)
+      throw LimitExceededError("adaptive: a front is meshing finished mesh again near " +
+                               format_point(mesh_.positions[a]) + ": it made the same triangle twice");
+  }
   detail::grow_apart(s_.cancel, "adaptive", 1, mesh_.triangles);
   mesh_.triangles.push_back({a, b, c});
   const Vec3& pa = mesh_.positions[a];
