@@ -5,6 +5,7 @@
 #include "interval.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -12,7 +13,6 @@
 #include <cstring>
 #include <map>
 #include <limits>
-#include <array>
 #include <new>
 #include <numbers>
 #include <vector>
@@ -69,12 +69,14 @@ struct ExpressionProgram {
   std::vector<std::array<int, 2>> operands;
   std::vector<int> branch_number;
   int result = -1;
+  int depth = 0;  // the most operands pending at once (the evaluator's stack holds kMaxStack)
 
+  // Fills the graph, branch_points and depth from `code`.
   void link() {
     operands.assign(code.size(), {-1, -1});
     branch_number.assign(code.size(), -1);
     std::vector<int> pushed, stored(static_cast<std::size_t>(std::max(slots, 1)), -1);
-    int branch = 0;
+    branch_points = depth = 0;
     for (std::size_t i = 0; i < code.size(); ++i) {
       const auto pop = [&] {
         const int top = pushed.back();
@@ -93,8 +95,9 @@ struct ExpressionProgram {
           break;
         default: args[0] = pop(); break;
       }
-      if (in.op == Op::Min || in.op == Op::Max || in.op == Op::Abs) branch_number[i] = branch++;
+      if (in.op == Op::Min || in.op == Op::Max || in.op == Op::Abs) branch_number[i] = branch_points++;
       if (in.op != Op::Store) pushed.push_back(static_cast<int>(i));
+      depth = std::max(depth, static_cast<int>(pushed.size()));
     }
     result = pushed.empty() ? -1 : pushed.back();
   }
@@ -568,20 +571,6 @@ class Parser {
   int nesting_ = 0;
 };
 
-int stack_depth(const std::vector<Instruction>& code) {
-  int depth = 0, max_depth = 0;
-  for (const auto& in : code) {
-    switch (in.op) {
-      case Op::Const: case Op::X: case Op::Y: case Op::Z: case Op::Load: ++depth; break;
-      case Op::Add: case Op::Sub: case Op::Mul: case Op::Div: case Op::Pow: case Op::Atan2: case Op::Min: case Op::Max:
-      case Op::Store: --depth; break;
-      default: break;
-    }
-    max_depth = std::max(max_depth, depth);
-  }
-  return max_depth;
-}
-
 }  // namespace
 }  // namespace detail
 
@@ -608,10 +597,8 @@ Expression::Expression(const std::string& formula, const std::map<std::string, d
   program_->code = std::move(defs.code);
   detail::SharedEmitter(program_->code, defs.slots).emit(root);
   program_->slots = defs.slots;
-  for (const auto& in : program_->code)
-    if (in.op == detail::Op::Min || in.op == detail::Op::Max || in.op == detail::Op::Abs) ++program_->branch_points;
   program_->link();
-  if (detail::stack_depth(program_->code) > detail::kMaxStack)
+  if (program_->depth > detail::kMaxStack)
     throw InvalidInputError("expression: formula nested too deeply (more than " +
                             std::to_string(detail::kMaxStack) + " pending operands)");
   if (!bounds.valid()) throw InvalidInputError("expression: bounds must be a non-empty box");
