@@ -59,7 +59,7 @@ std::vector<FieldPiece> Field::eval_pieces(const Vec3& p, double radius, bool he
 }
 
 std::optional<Field::BranchSwitch> Field::branch_switch(const Vec3& p, std::size_t k) const {
-  n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+  counter_.add_value_gradients(1);
   BranchRecord record;
   if (!eval_branch_record(p, {}, record) || k >= record.taken.size()) return std::nullopt;
   const Vec3& n = record.seam_normal[k];
@@ -70,7 +70,7 @@ std::optional<Field::BranchSwitch> Field::branch_switch(const Vec3& p, std::size
 }
 
 std::optional<std::uint64_t> Field::live_branches(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
-  n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+  counter_.add_value_gradients(1);
   std::vector<std::int8_t> bits(branch.size(), -1);
   for (std::size_t k = 0; k < branch.size() && k < 64; ++k) bits[k] = static_cast<std::int8_t>(k);
   FieldPiece piece;
@@ -86,13 +86,13 @@ std::vector<Field::SmoothSide> Field::eval_smooth_sides(const Vec3& p, double ra
   const std::vector<BranchKind>& kinds = branch_kinds();
   if (!any_smooth_) return out;
   BranchRecord record;
-  n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+  counter_.add_value_gradients(1);
   if (!eval_branch_record(p, branch, record)) return out;
   for (std::size_t k = 0; k < std::min(kinds.size(), record.taken.size()); ++k) {
     if (kinds[k] != BranchKind::Smooth || !(record.distance[k] <= radius)) continue;
     std::vector<std::uint8_t> beyond = record.taken;
     beyond[k] ^= 1u;
-    n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
+    counter_.add_gradient_hessians(1);
     const Vec3 q = at == SeamSideAt::Seam ? Vec3(p + record.seam_step[k]) : p;
     out.push_back({record.distance[k], eval_piece(q, beyond)});
   }
@@ -202,7 +202,7 @@ const std::vector<Field::BranchKind>& Field::branch_kinds() const {
             if (verdict == BranchKind::Creased) kinds[b] = BranchKind::Creased;
           }
         }
-    n_value_gradient_.fetch_add(evaluations, std::memory_order_relaxed);
+    counter_.add_value_gradients(evaluations);
     // Free in every piece: the Smooth branch points, and beside them the Hidden ones, which may
     // show where the Smooth ones let them (a rounded box's abs(z) under max(|z| - c, 0)): a
     // piece fixed to z > 0 there would go on flat where the box rounds below. In a field without
@@ -367,7 +367,7 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
     }
     out.push_back(std::move(piece));
   }
-  n_value_gradient_.fetch_add(evaluations, std::memory_order_relaxed);
+  counter_.add_value_gradients(evaluations);
   return out;
 }
 

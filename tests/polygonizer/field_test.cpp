@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "common/same_bits.h"
@@ -131,6 +132,35 @@ TEST(FieldBatches, AnEmptyBatchEvaluatesAndCountsNothing) {
   field->values_gradients(nullptr, nullptr, nullptr, 0);
   field->gradients_hessians(nullptr, nullptr, nullptr, nullptr, 0);
   field->evaluate_together({}, {}, {});
+  EXPECT_EQ(field->counts().total(), 0u);
+}
+
+// Each thread counts in a slot of its own (EvaluationCounter): more threads than slots share
+// them, and every evaluation of every thread is in the total, kind by kind.
+TEST(FieldCounts, EveryThreadsEvaluationsAreCountedOnce) {
+  const auto field = test::tanglecube();
+  constexpr int kThreads = 11, kCalls = 2000;  // more threads than slots
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t)
+    threads.emplace_back([&, t] {
+      Vec3 g;
+      Mat3 h;
+      for (int i = 0; i < kCalls; ++i) {
+        const Vec3 p(0.001 * i, 0.1 * t, 0.3);
+        field->value(p);
+        field->value_gradient(p, g);
+        if (i % 2 == 0) field->gradient_hessian(p, g, h);
+      }
+      std::vector<Vec3> points(3, Vec3(0.2, 0.1, 0.3));
+      std::vector<double> values(3);
+      field->values(points.data(), values.data(), 3);
+    });
+  for (auto& t : threads) t.join();
+  const EvaluationCounts c = field->counts();
+  EXPECT_EQ(c.value, std::uint64_t{kThreads} * (kCalls + 3));
+  EXPECT_EQ(c.value_gradient, std::uint64_t{kThreads} * kCalls);
+  EXPECT_EQ(c.gradient_hessian, std::uint64_t{kThreads} * kCalls / 2);
+  field->reset_counts();
   EXPECT_EQ(field->counts().total(), 0u);
 }
 

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -56,6 +57,52 @@ struct EvaluationCounts {
     gradient_hessian += o.gradient_hessian;
     return *this;
   }
+};
+
+// The evaluations of one field counted by kind from any number of threads, each thread adding
+// to its own slot (threads beyond kSlots share them, round robin) and counts() summing the slots:
+// with one counter every evaluation of one thread would take the counter's cache line, and the
+// field's own data beside it, from the others.
+class EvaluationCounter {
+ public:
+  void add_values(std::uint64_t n) const { slot().value.fetch_add(n, std::memory_order_relaxed); }
+  void add_value_gradients(std::uint64_t n) const { slot().value_gradient.fetch_add(n, std::memory_order_relaxed); }
+  void add_gradient_hessians(std::uint64_t n) const {
+    slot().gradient_hessian.fetch_add(n, std::memory_order_relaxed);
+  }
+  // Exact while no thread counts; a snapshot of what was counted so far otherwise.
+  EvaluationCounts counts() const {
+    EvaluationCounts c;
+    for (std::size_t i = 0; i < kSlots; ++i) {
+      c.value += slots_[i].value.load(std::memory_order_relaxed);
+      c.value_gradient += slots_[i].value_gradient.load(std::memory_order_relaxed);
+      c.gradient_hessian += slots_[i].gradient_hessian.load(std::memory_order_relaxed);
+    }
+    return c;
+  }
+  void reset() const {
+    for (std::size_t i = 0; i < kSlots; ++i) {
+      slots_[i].value.store(0, std::memory_order_relaxed);
+      slots_[i].value_gradient.store(0, std::memory_order_relaxed);
+      slots_[i].gradient_hessian.store(0, std::memory_order_relaxed);
+    }
+  }
+
+ private:
+  // As many as the threads a run uses by default (at most 8, --threads).
+  static constexpr std::size_t kSlots = 8;
+  // A cache line each (64 bytes on the x86-64 and ARM64 machines we build for).
+  struct alignas(64) Slot {
+    std::atomic<std::uint64_t> value{0}, value_gradient{0}, gradient_hessian{0};
+  };
+  static std::size_t thread_slot() {
+    static std::atomic<std::size_t> next{0};
+    thread_local const std::size_t mine = next.fetch_add(1, std::memory_order_relaxed) % kSlots;
+    return mine;
+  }
+  Slot& slot() const { return slots_[thread_slot()]; }
+  // On the heap: a field's members stay off these lines, and Field itself is not over-aligned.
+  std::unique_ptr<Slot[]> slots_ = std::make_unique<Slot[]>(kSlots);
 };
 
 // One smooth piece of a field built with min, max or abs (a CSG shape): which argument the
@@ -106,13 +153,13 @@ class Field {
   // \throw what the model's evaluation throws, unchanged (a Python field: InvalidInputError for a
   //        result of the wrong shape, or the function's own error); the built-in models throw none.
   double value(const Vec3& p) const {
-    n_value_.fetch_add(1, std::memory_order_relaxed);
+    counter_.add_values(1);
     return eval_value(p);
   }
   // Value and gradient in one evaluation; returns the value.
   // \throw as value().
   double value_gradient(const Vec3& p, Vec3& gradient) const {
-    n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+    counter_.add_value_gradients(1);
     return eval_value_gradient(p, gradient);
   }
   // \return the gradient of F at p (one value_gradient evaluation).
@@ -125,14 +172,14 @@ class Field {
   // Value, gradient and Hessian in one evaluation; returns the value.
   // \throw as value().
   double gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const {
-    n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
+    counter_.add_gradient_hessians(1);
     return eval_gradient_hessian(p, gradient, hessian);
   }
   // Batched values: out[i] = F(points[i]). Models with a vectorized kernel override eval_values.
   // \pre points and out hold n elements each.
   // \throw as value().
   void values(const Vec3* points, double* out, std::size_t n) const {
-    n_value_.fetch_add(n, std::memory_order_relaxed);
+    counter_.add_values(n);
     eval_values(points, out, n);
   }
   // Values on a cubic lattice of n^3 points: out[(c * n + b) * n + a] = F(origin + step * (a, b,
@@ -141,7 +188,7 @@ class Field {
   // \pre n >= 1 and out holds n^3 elements.
   // \throw as value().
   void values_on_lattice(const Vec3& origin, double step, int n, double* out) const {
-    n_value_.fetch_add(static_cast<std::size_t>(n) * n * n, std::memory_order_relaxed);
+    counter_.add_values(static_cast<std::size_t>(n) * n * n);
     eval_values_on_lattice(origin, step, n, out);
   }
   // Batched value_gradient: values[i] and gradients[i] at points[i]. Counted as n value_gradient
@@ -149,14 +196,14 @@ class Field {
   // \pre points, values and gradients hold n elements each.
   // \throw as value().
   void values_gradients(const Vec3* points, double* values, Vec3* gradients, std::size_t n) const {
-    n_value_gradient_.fetch_add(n, std::memory_order_relaxed);
+    counter_.add_value_gradients(n);
     eval_values_gradients(points, values, gradients, n);
   }
   // Batched gradient_hessian, counted as n gradient_hessian evaluations.
   // \pre points, values, gradients and hessians hold n elements each.
   // \throw as value().
   void gradients_hessians(const Vec3* points, double* values, Vec3* gradients, Mat3* hessians, std::size_t n) const {
-    n_gradient_hessian_.fetch_add(n, std::memory_order_relaxed);
+    counter_.add_gradient_hessians(n);
     eval_gradients_hessians(points, values, gradients, hessians, n);
   }
 
@@ -179,9 +226,9 @@ class Field {
   //      Hessians).
   // \throw as value().
   void evaluate_together(const Batch& plain, const Batch& with_gradients, const Batch& with_hessians) const {
-    n_value_.fetch_add(plain.n, std::memory_order_relaxed);
-    n_value_gradient_.fetch_add(with_gradients.n, std::memory_order_relaxed);
-    n_gradient_hessian_.fetch_add(with_hessians.n, std::memory_order_relaxed);
+    counter_.add_values(plain.n);
+    counter_.add_value_gradients(with_gradients.n);
+    counter_.add_gradient_hessians(with_hessians.n);
     eval_together(plain, with_gradients, with_hessians);
   }
 
@@ -197,9 +244,9 @@ class Field {
   //         point at p (always, for a model without branch points).
   // \throw as value() (a first call also classifies the branch points: branch_kinds).
   std::vector<FieldPiece> pieces(const Vec3& p, double radius) const {
-    n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+    counter_.add_value_gradients(1);
     std::vector<FieldPiece> out = eval_pieces(p, radius, true);
-    n_gradient_hessian_.fetch_add(out.size(), std::memory_order_relaxed);
+    counter_.add_gradient_hessians(out.size());
     return out;
   }
   // pieces() without their Hessians (left zero), for callers that compare normals only (crease
@@ -210,9 +257,9 @@ class Field {
   // \return as pieces().
   // \throw as pieces().
   std::vector<FieldPiece> pieces_first_order(const Vec3& p, double radius) const {
-    n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+    counter_.add_value_gradients(1);
     std::vector<FieldPiece> out = eval_pieces(p, radius, false);
-    n_value_gradient_.fetch_add(out.size(), std::memory_order_relaxed);
+    counter_.add_value_gradients(out.size());
     return out;
   }
   // Whether the model has creases: a branch point (min, max, abs) of kind Creased
@@ -340,7 +387,7 @@ class Field {
   //        expression, one whose length is not the number of calls of min, max and abs a
   //        compiled model (AutodiffField) makes at p. Otherwise as value().
   FieldPiece piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
-    n_gradient_hessian_.fetch_add(1, std::memory_order_relaxed);
+    counter_.add_gradient_hessians(1);
     return eval_piece(p, branch);
   }
   // The value and gradient of piece(p, branch), the same numbers bit for bit, without its
@@ -350,7 +397,7 @@ class Field {
   //        check the branch: choices past its calls are ignored, missing ones take the values' branch.
   //        Otherwise as value().
   std::pair<double, Vec3> piece_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
-    n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+    counter_.add_value_gradients(1);
     return eval_first_order(p, branch);
   }
 
@@ -432,15 +479,8 @@ class Field {
   virtual std::optional<double> constraint_spacing() const { return std::nullopt; }
 
   // \return the evaluations counted by kind since construction or the last reset_counts().
-  EvaluationCounts counts() const {
-    return {n_value_.load(std::memory_order_relaxed), n_value_gradient_.load(std::memory_order_relaxed),
-            n_gradient_hessian_.load(std::memory_order_relaxed)};
-  }
-  void reset_counts() const {
-    n_value_ = 0;
-    n_value_gradient_ = 0;
-    n_gradient_hessian_ = 0;
-  }
+  EvaluationCounts counts() const { return counter_.counts(); }
+  void reset_counts() const { counter_.reset(); }
 
   // One evaluation's record of its branch points: `taken` the branch each took (0: first
   // argument of min and max, +u for abs; 1: second argument, -u), `distance` how far its switch
@@ -461,7 +501,7 @@ class Field {
   // \return false, the record left alone, for a model without branch points.
   // \throw as value().
   bool branch_record(const Vec3& p, BranchRecord& record) const {
-    n_value_gradient_.fetch_add(1, std::memory_order_relaxed);
+    counter_.add_value_gradients(1);
     return has_branch_points() && eval_branch_record(p, {}, record);
   }
   // In a piece's branch (FieldPiece::branch, Field::piece), this choice at a branch point means
@@ -570,9 +610,7 @@ class Field {
   Box bounds_;
 
  private:
-  mutable std::atomic<std::uint64_t> n_value_{0};
-  mutable std::atomic<std::uint64_t> n_value_gradient_{0};
-  mutable std::atomic<std::uint64_t> n_gradient_hessian_{0};
+  EvaluationCounter counter_;
   BranchKind switch_verdict(const Vec3& p, const BranchRecord& record, std::size_t b, double cell,
                             std::uint64_t& evaluations) const;
   mutable std::once_flag kinds_once_;
