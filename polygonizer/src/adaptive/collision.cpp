@@ -124,6 +124,15 @@ bool Tracker::can_bridge(int node, int q) const {
   if (vm == n.vertex || vm == a.vertex || vm == b.vertex || vm == fs_.nodes[a.prev].vertex ||
       vm == fs_.nodes[b.next].vertex)
     return false;
+  // The same the other way round: after a split the point's vertex can also sit at a node near
+  // q on q's front. fogleman/sdf's knurling example meshed across its creases bridged to two
+  // nodes before its own vertex there, cutting off a triangle of the other front that both fronts
+  // then made, again and again.
+  const FrontNode& c = fs_.nodes[m.prev];
+  const FrontNode& d = fs_.nodes[m.next];
+  const int vn = n.vertex;
+  if (vn == c.vertex || vn == d.vertex || vn == fs_.nodes[c.prev].vertex || vn == fs_.nodes[d.next].vertex)
+    return false;
   // A bridge is an edge like any placed one: it may not join points whose normals turned more
   // than a placement may (kMaxTurnCosine), which also keeps it off a sheet facing the other way.
   // Chmutov's sextic at factors 1 and 3 stalled behind bridges of 0.5 across its saddles, where
