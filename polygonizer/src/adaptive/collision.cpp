@@ -116,23 +116,19 @@ bool Tracker::can_bridge(int node, int q) const {
   const FrontNode& m = fs_.nodes[q];
   if (m.front < 0) return false;
   // The point itself, its neighbours and (as the paper requires with varying edge lengths) the
-  // neighbours' neighbours are never in the way; compare vertices, since after a split or merge
-  // a vertex occurs at two nodes.
-  const FrontNode& a = fs_.nodes[n.prev];
-  const FrontNode& b = fs_.nodes[n.next];
+  // neighbours' neighbours are never in the way, and the same the other way round; compare
+  // vertices, since after a split or merge a vertex occurs at two nodes. The other way round
+  // matters there: the point's vertex can also sit at a node near q on q's front (fogleman/sdf's
+  // knurling example meshed across its creases bridged to two nodes before its own vertex there,
+  // cutting off a triangle of the other front that both fronts then made, again and again).
+  const auto within_two = [&](const FrontNode& at, int v) {
+    const FrontNode& before = fs_.nodes[at.prev];
+    const FrontNode& after = fs_.nodes[at.next];
+    return v == at.vertex || v == before.vertex || v == after.vertex || v == fs_.nodes[before.prev].vertex ||
+           v == fs_.nodes[after.next].vertex;
+  };
   const int vm = m.vertex;
-  if (vm == n.vertex || vm == a.vertex || vm == b.vertex || vm == fs_.nodes[a.prev].vertex ||
-      vm == fs_.nodes[b.next].vertex)
-    return false;
-  // The same the other way round: after a split the point's vertex can also sit at a node near
-  // q on q's front. fogleman/sdf's knurling example meshed across its creases bridged to two
-  // nodes before its own vertex there, cutting off a triangle of the other front that both fronts
-  // then made, again and again.
-  const FrontNode& c = fs_.nodes[m.prev];
-  const FrontNode& d = fs_.nodes[m.next];
-  const int vn = n.vertex;
-  if (vn == c.vertex || vn == d.vertex || vn == fs_.nodes[c.prev].vertex || vn == fs_.nodes[d.next].vertex)
-    return false;
+  if (within_two(n, vm) || within_two(m, n.vertex)) return false;
   // A bridge is an edge like any placed one: it may not join points whose normals turned more
   // than a placement may (kMaxTurnCosine), which also keeps it off a sheet facing the other way.
   // Chmutov's sextic at factors 1 and 3 stalled behind bridges of 0.5 across its saddles, where

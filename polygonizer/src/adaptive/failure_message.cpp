@@ -45,6 +45,7 @@ std::optional<std::pair<double, Vec3>> sharpest_crease(const Field& field, const
 std::string across_creases_advice(const Field& field, const AdaptiveOptions& options, const std::string& message) {
   const bool across_by_choice = options.creases == CreaseHandling::Ignore || options.variant == Variant::Paper;
   if (!across_by_choice || !field.has_pieces() || message.find(kAlongCreaseAdvice) != std::string::npos) return "";
+  const std::string across = "; the field has creases, which this run meshed across as if they were curvature";
   const std::string along = "the improved variant with creases: follow (the defaults) meshes along them";
   try {
     CreaseTracingOptions co;
@@ -52,8 +53,7 @@ std::string across_creases_advice(const Field& field, const AdaptiveOptions& opt
     co.max_points = kAdviceCreasePoints;
     if (const auto sharpest = sharpest_crease(field, trace_creases(field, co))) {
       std::ostringstream crease;
-      crease << "; the field has creases, which this run meshed across as if they were curvature (the sharpest: "
-             << "faces meeting at " << std::lround(sharpest->first) << " degrees near "
+      crease << across << " (the sharpest: faces meeting at " << std::lround(sharpest->first) << " degrees near "
              << describe_point(sharpest->second) << "); " << along;
       return crease.str();
     }
@@ -61,9 +61,9 @@ std::string across_creases_advice(const Field& field, const AdaptiveOptions& opt
     throw;
   } catch (const LimitExceededError&) {
     // Too many creases to trace for a message: that they are there (has_pieces) is enough.
-    return "; the field has creases, which this run meshed across as if they were curvature; " + along;
+    return across + "; " + along;
   } catch (const std::exception&) {
-    // no layout to name (a tracing bound or a field that fails there): the message as it is
+    // no layout to name (a field that fails there): the message as it is
   }
   return "";
 }
