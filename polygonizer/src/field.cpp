@@ -44,6 +44,32 @@ void Field::BranchRecord::add(bool branch, double gap, const Vec3& slope) {
   seam_normal.push_back(sloped ? Vec3(slope / s) : Vec3::Zero());
 }
 
+void Field::eval_first_order_flips(const Vec3& p, std::vector<std::uint8_t>& branch, std::span<const ChoiceStep> steps,
+                                   const std::function<bool(double, const Vec3&)>& hidden) const {
+  for (const ChoiceStep& step : steps) {
+    const auto k = static_cast<std::size_t>(step.choice);
+    if (step.flip) {
+      std::vector<std::uint8_t> flipped = branch;
+      flipped[k] ^= 1u;
+      const auto [v, g] = eval_first_order(p, flipped);
+      if (!hidden(v, g)) continue;
+    }
+    branch[k] = kFreeBranch;
+  }
+}
+
+void Field::eval_first_order_combinations(const Vec3& p, const std::vector<std::uint8_t>& base,
+                                          std::span<const int> split,
+                                          std::vector<std::pair<double, Vec3>>& out) const {
+  out.assign(std::size_t{1} << split.size(), {});
+  for (std::size_t mask = 0; mask < out.size(); ++mask) {
+    std::vector<std::uint8_t> branch = base;
+    for (std::size_t j = 0; j < split.size(); ++j)
+      if (mask >> j & 1u) branch[static_cast<std::size_t>(split[j])] ^= 1u;
+    out[mask] = eval_first_order(p, branch);
+  }
+}
+
 std::pair<double, Vec3> Field::eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
   if (!branch.empty())
     throw InvalidInputError(type_name() + ": the model has no branch points, a piece's branch must be empty");
@@ -310,6 +336,8 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
   std::vector<FieldPiece> all;
   std::vector<std::size_t> kept;
   all.reserve(combinations);
+  std::vector<std::pair<double, Vec3>> first_order;
+  if (!hessians) eval_first_order_combinations(p, base, split, first_order);
   for (std::size_t mask = 0; mask < combinations; ++mask) {
     std::vector<std::uint8_t> branch = base;
     for (std::size_t j = 0; j < split.size(); ++j)
@@ -318,7 +346,7 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
       all.push_back(eval_piece(p, branch));
     } else {
       FieldPiece& piece = all.emplace_back();
-      std::tie(piece.value, piece.gradient) = eval_first_order(p, branch);
+      std::tie(piece.value, piece.gradient) = first_order[mask];
       piece.branch = std::move(branch);
     }
     // Different branches often give the same function (a choice inside an argument that is not
@@ -347,18 +375,16 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
       // evaluation (a knurled cylinder's 253 branch points, a few dozen of them reaching the value).
       std::vector<std::uint8_t> reaches;
       const bool known = choices_reaching(piece.branch, reaches);
+      std::vector<ChoiceStep> steps;
       for (std::size_t k = 0; k < piece.branch.size(); ++k) {
         if (base[k] == kFreeBranch || std::binary_search(split.begin(), split.end(), static_cast<int>(k))) continue;
-        if (known && !reaches[k]) {
-          piece.branch[k] = kFreeBranch;
-          continue;
-        }
-        std::vector<std::uint8_t> flipped = piece.branch;
-        flipped[k] ^= 1u;
-        const auto [v, g] = eval_first_order(p, flipped);
-        ++evaluations;
-        if (same_to_rounding(piece.value, piece.gradient, v, g)) piece.branch[k] = kFreeBranch;
+        const bool flip = !(known && !reaches[k]);
+        steps.push_back({static_cast<int>(k), flip});
+        evaluations += flip;
       }
+      eval_first_order_flips(p, piece.branch, steps, [&](double v, const Vec3& g) {
+        return same_to_rounding(piece.value, piece.gradient, v, g);
+      });
       // Likewise a split choice this piece does not depend on at p.
       for (std::size_t j = 0; j < split.size(); ++j) {
         if (same_numbers(all[mask ^ (std::size_t{1} << j)], piece))

@@ -142,6 +142,12 @@ class EveryCombination : public Expression {
     ++evaluations;
     return Expression::eval_first_order(p, branch);
   }
+  // Each combination counts as one evaluation, as it was before Expression got them from one run.
+  void eval_first_order_combinations(const Vec3& p, const std::vector<std::uint8_t>& base, std::span<const int> split,
+                                     std::vector<std::pair<double, Vec3>>& out) const override {
+    evaluations += std::size_t{1} << split.size();
+    Expression::eval_first_order_combinations(p, base, split, out);
+  }
 };
 class CountedLive : public Expression {
  public:
@@ -226,6 +232,18 @@ class EveryFlip : public Expression {
   std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const override {
     ++evaluations;
     return Expression::eval_first_order(p, branch);
+  }
+  // A flip or a combination counts as one evaluation, as each was before Expression got them
+  // from one run.
+  void eval_first_order_flips(const Vec3& p, std::vector<std::uint8_t>& branch, std::span<const ChoiceStep> steps,
+                              const std::function<bool(double, const Vec3&)>& hidden) const override {
+    for (const ChoiceStep& step : steps) evaluations += step.flip;
+    Expression::eval_first_order_flips(p, branch, steps, hidden);
+  }
+  void eval_first_order_combinations(const Vec3& p, const std::vector<std::uint8_t>& base, std::span<const int> split,
+                                     std::vector<std::pair<double, Vec3>>& out) const override {
+    evaluations += std::size_t{1} << split.size();
+    Expression::eval_first_order_combinations(p, base, split, out);
   }
 
  private:

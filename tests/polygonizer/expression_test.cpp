@@ -4,7 +4,12 @@
 #include <cdp/core/errors.h>
 #include <cdp/core/models/expression.h>
 
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <span>
 #include <numbers>
+#include <random>
 
 namespace cdp {
 namespace {
@@ -179,6 +184,110 @@ TEST(Expression, RejectsNestingThatWouldOverflowTheCallStack) {
   EXPECT_DOUBLE_EQ(eval(repeat("(", 200) + "x" + repeat(")", 200)), 0.5);
   EXPECT_DOUBLE_EQ(eval(repeat("-", 200) + "x"), 0.5);
   EXPECT_DOUBLE_EQ(eval(repeat("x+", 9999) + "x"), 5000);
+}
+
+}  // namespace
+}  // namespace cdp
+
+namespace cdp {
+namespace {
+
+// Expression's protected piece evaluations, for comparing its own flips with Field's (one
+// eval_first_order a flip).
+class PieceProbe : public Expression {
+ public:
+  using Expression::Expression;
+  using Expression::eval_first_order_combinations;
+  using Expression::eval_first_order_flips;
+  using Field::ChoiceStep;
+  void combinations_one_by_one(const Vec3& p, const std::vector<std::uint8_t>& base, std::span<const int> split,
+                               std::vector<std::pair<double, Vec3>>& out) const {
+    Field::eval_first_order_combinations(p, base, split, out);
+  }
+  void flips_one_by_one(const Vec3& p, std::vector<std::uint8_t>& branch, std::span<const ChoiceStep> steps,
+                        const std::function<bool(double, const Vec3&)>& hidden) const {
+    Field::eval_first_order_flips(p, branch, steps, hidden);
+  }
+};
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+TEST(Expression, FlipsAndCombinationsFromOneRunGiveTheBitsOfARunEach) {
+  // Subtrees written twice (stored where first computed, and read inside an argument another
+  // choice takes), definitions that use each other, abs, clamp, n-ary min and max: each flip
+  // recomputed from one run gives the value and gradient, bit for bit, of a run with the choice
+  // flipped, and the choices made free as the answers say (some free where the values choose
+  // otherwise than the branch did, so the run is made again) change the later flips as they do
+  // one by one. Likewise every combination of a few choices flipped together.
+  const Box box{{-2, -2, -2}, {2, 2, 2}};
+  std::vector<std::unique_ptr<PieceProbe>> fields;
+  const auto add = [&](const std::string& formula, const std::map<std::string, std::string>& definitions = {}) {
+    fields.push_back(std::make_unique<PieceProbe>(formula, std::map<std::string, double>{}, box, definitions));
+  };
+  add("min(min(abs(x)-1, max(y, z*z)), max(abs(x+y) - 0.5, min(z, x)))");
+  add("min(max(x*x+y*y-1, z), max(x*x+y*y-2, -z)) + min(x*x+y*y, abs(sin(x*x+y*y)))");
+  add("max(c, -min(r - 0.5, c + 0.1)) + min(max(c, 0), clamp(r, 0.2, 0.4)) * atan2(y, x + 3)",
+      {{"r", "sqrt(x^2+y^2+0.01)"}, {"c", "min(r - 1, abs(z) - 0.5)"}});
+  add("min(max(abs(x)-1, abs(y)-1, abs(z)-1), max(abs(x-1)-0.5, abs(y)-0.5, abs(z-1)-0.5), "
+      "max(abs(x)-1, abs(y)-1, abs(z)-1) + 0.3, sqrt(max(abs(x)-0.5, 0)^2 + max(abs(y)-0.5, 0)^2) - 0.1)");
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coordinate(-1.5, 1.5);
+  std::uniform_int_distribution<int> choice(0, 2);
+  std::size_t flips = 0, freed = 0, combinations = 0;
+  for (std::size_t which = 0; which < fields.size(); ++which) {
+    const PieceProbe& f = *fields[which];
+    const std::size_t n = f.branch_kinds().size();
+    ASSERT_GT(n, 0u);
+    for (int trial = 0; trial < 300; ++trial) {
+      SCOPED_TRACE("formula " + std::to_string(which) + ", trial " + std::to_string(trial));
+      std::vector<std::uint8_t> branch(n);
+      std::vector<PieceProbe::ChoiceStep> steps;
+      for (std::size_t k = 0; k < n; ++k) {
+        branch[k] = static_cast<std::uint8_t>(choice(rng));
+        if (branch[k] != Field::kFreeBranch) steps.push_back({static_cast<int>(k), choice(rng) != 0});
+      }
+      const Vec3 p(coordinate(rng), coordinate(rng), coordinate(rng));
+      // Every other flip answered hidden.
+      std::vector<std::pair<double, Vec3>> seen[2];
+      std::vector<std::uint8_t> result[2] = {branch, branch};
+      for (int way = 0; way < 2; ++way) {
+        int calls = 0;
+        const auto hidden = [&](double v, const Vec3& g) {
+          seen[way].emplace_back(v, g);
+          return calls++ % 2 == 1;
+        };
+        if (way == 0)
+          f.flips_one_by_one(p, result[0], steps, hidden);
+        else
+          f.eval_first_order_flips(p, result[1], steps, hidden);
+      }
+      EXPECT_EQ(result[0], result[1]);
+      ASSERT_EQ(seen[0].size(), seen[1].size());
+      for (std::size_t i = 0; i < seen[0].size(); ++i) {
+        EXPECT_TRUE(same_bits(seen[0][i].first, seen[1][i].first));
+        for (int c = 0; c < 3; ++c) EXPECT_TRUE(same_bits(seen[0][i].second[c], seen[1][i].second[c]));
+      }
+      // The combinations of up to five given choices, each from the one before in Gray code order.
+      std::vector<int> split;
+      for (const auto& step : steps)
+        if (split.size() < 5 && step.flip) split.push_back(step.choice);
+      std::vector<std::pair<double, Vec3>> combined[2];
+      f.combinations_one_by_one(p, branch, split, combined[0]);
+      f.eval_first_order_combinations(p, branch, split, combined[1]);
+      ASSERT_EQ(combined[0].size(), std::size_t{1} << split.size());
+      ASSERT_EQ(combined[1].size(), combined[0].size());
+      for (std::size_t i = 0; i < combined[0].size(); ++i) {
+        EXPECT_TRUE(same_bits(combined[0][i].first, combined[1][i].first));
+        for (int c = 0; c < 3; ++c) EXPECT_TRUE(same_bits(combined[0][i].second[c], combined[1][i].second[c]));
+      }
+      combinations += combined[0].size();
+      flips += seen[0].size();
+      for (std::size_t k = 0; k < n; ++k) freed += result[0][k] != branch[k];
+    }
+  }
+  EXPECT_GT(flips, 1000u);
+  EXPECT_GT(freed, 1000u);
+  EXPECT_GT(combinations, 10000u);
 }
 
 }  // namespace

@@ -6,11 +6,13 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <limits>
 #include <new>
@@ -50,13 +52,16 @@ constexpr int kMaxDefinitions = 256;
 // are, else as the values choose); take given branches (Forced).
 // ForcedLive: as Forced, and also report which branch points the value depends on
 // (Field::eval_piece_live).
-enum class Branching { Free, Record, Forced, ForcedLive };
+// Taped: as Forced, and also keep each instruction's result (a Store's: the value it stores) in
+// BranchLog::tape (Expression::eval_first_order_flips).
+enum class Branching { Free, Record, Forced, ForcedLive, Taped };
 
 struct BranchLog {
   const std::uint8_t* forced = nullptr;      // Forced (Record: or null): the branch to take at each branch point
   Field::BranchRecord* record = nullptr;     // Record: the branch taken and where it switches
   const std::int8_t* bit = nullptr;          // ForcedLive: each branch point's bit in *live, or -1
   std::uint64_t* live = nullptr;             // ForcedLive: the bits of the branch points the value depends on
+  void* tape = nullptr;                      // Taped: a T per instruction
 };
 
 struct ExpressionProgram {
@@ -68,6 +73,11 @@ struct ExpressionProgram {
   // (-1 if none), and the instruction whose result is the value.
   std::vector<std::array<int, 2>> operands;
   std::vector<int> branch_number;
+  // Each branch point's instruction, and each instruction's consumers (the instructions whose
+  // operand it is; a Store's are the Loads that read it): consumers_of[consumer_start[i] ..
+  // consumer_start[i + 1]), for eval_first_order_flips.
+  std::vector<int> branch_instruction;
+  std::vector<int> consumer_start, consumers_of;
   int result = -1;
   int depth = 0;  // the most operands pending at once (the evaluator's stack holds kMaxStack)
 
@@ -100,6 +110,19 @@ struct ExpressionProgram {
       depth = std::max(depth, static_cast<int>(pushed.size()));
     }
     result = pushed.empty() ? -1 : pushed.back();
+    branch_instruction.assign(static_cast<std::size_t>(branch_points), -1);
+    consumer_start.assign(code.size() + 1, 0);
+    for (std::size_t i = 0; i < code.size(); ++i) {
+      if (branch_number[i] >= 0) branch_instruction[static_cast<std::size_t>(branch_number[i])] = static_cast<int>(i);
+      for (const int from : operands[i])
+        if (from >= 0) ++consumer_start[static_cast<std::size_t>(from) + 1];
+    }
+    for (std::size_t i = 0; i < code.size(); ++i) consumer_start[i + 1] += consumer_start[i];
+    consumers_of.assign(static_cast<std::size_t>(consumer_start.back()), 0);
+    std::vector<int> next(consumer_start.begin(), consumer_start.end() - 1);
+    for (std::size_t i = 0; i < code.size(); ++i)
+      for (const int from : operands[i])
+        if (from >= 0) consumers_of[static_cast<std::size_t>(next[static_cast<std::size_t>(from)]++)] = static_cast<int>(i);
   }
 
   template <class T>
@@ -131,7 +154,7 @@ struct ExpressionProgram {
     // At a branch point: the branch to take, given that `natural` is the one the values choose.
     [[maybe_unused]] const auto choose = [&](bool natural, const T& a, const T& b) {
       const int k = branch_point++;
-      if constexpr (mode == Branching::Forced || kLive)
+      if constexpr (mode == Branching::Forced || kLive || mode == Branching::Taped)
         return record.forced[k] == Field::kFreeBranch ? natural : record.forced[k] != 0;
       if constexpr (mode == Branching::Record) {
         const bool taken =
@@ -141,7 +164,8 @@ struct ExpressionProgram {
       }
       return natural;
     };
-    for (const Instruction& in : code) {
+    for (std::size_t i = 0; i < code.size(); ++i) {
+      const Instruction& in = code[i];
       switch (in.op) {
         case Op::Const: new (&stack[++top]) T(in.constant); if constexpr (kLive) dep[top] = 0; break;
         case Op::X: new (&stack[++top]) T(x); if constexpr (kLive) dep[top] = 0; break;
@@ -196,11 +220,41 @@ struct ExpressionProgram {
           if constexpr (kLive) dep[top] |= own_bit();
           break;
       }
+      if constexpr (mode == Branching::Taped)
+        static_cast<T*>(record.tape)[i] = in.op == Op::Store ? slot[static_cast<int>(in.constant)] : stack[top];
     }
     if constexpr (kLive) *record.live = dep[0];
     return stack[0];
   }
 };
+
+// One instruction's result from its operands' (a the first, b the second), computed as run
+// computes it, for every operation but the leaves, the branch points, Store and Load.
+template <class T>
+T apply(const Instruction& in, const T& a, const T& b) {
+  using std::atan, std::atan2, std::cos, std::exp, std::floor, std::log, std::pow, std::round, std::sin, std::sqrt,
+      std::tan;
+  switch (in.op) {
+    case Op::Add: return a + b;
+    case Op::Sub: return a - b;
+    case Op::Mul: return a * b;
+    case Op::Div: return a / b;
+    case Op::Pow: return pow(a, b);
+    case Op::Neg: return -a;
+    case Op::PowConst: return pow(a, in.constant);
+    case Op::Sqrt: return sqrt(a);
+    case Op::Exp: return exp(a);
+    case Op::Log: return log(a);
+    case Op::Sin: return sin(a);
+    case Op::Cos: return cos(a);
+    case Op::Tan: return tan(a);
+    case Op::Atan: return atan(a);
+    case Op::Atan2: return atan2(a, b);
+    case Op::Floor: return floor(a);
+    case Op::Round: return round(a);
+    default: return a;  // not asked for
+  }
+}
 
 namespace {
 
@@ -673,6 +727,176 @@ std::pair<double, Vec3> Expression::eval_first_order(const Vec3& p, const std::v
                                                                 Jet1::variable(p.z(), 2),
                                                                 detail::BranchLog{branch.data(), nullptr});
   return {r.v, r.g};
+}
+
+namespace detail {
+namespace {
+
+// A run of the program kept instruction by instruction (Taped), and choices flipped on it: a flip
+// recomputes only the instructions its choice reaches (the consumers of what changed, in program
+// order; a min or max whose choice is given passes on a change of the argument it takes only),
+// each from its operands' results, the same operations on the same numbers, so the same bits as
+// a run with the choice flipped. Kept (commit), the flip's results replace the run's. A knurled
+// cylinder's pieces (1,702 instructions) test a few dozen choices each, and up to 64
+// combinations of the choices near a point: a run each before. One FlipRun at a time on a thread
+// (its buffers are the thread's).
+class FlipRun {
+ public:
+  FlipRun(const ExpressionProgram& program, std::vector<std::uint8_t>& branch, const Vec3& p)
+      : program_(program), branch_(branch), x_(Jet1::variable(p.x(), 0)), y_(Jet1::variable(p.y(), 1)),
+        z_(Jet1::variable(p.z(), 2)) {
+    const std::size_t n = program.code.size();
+    tape_.resize(n);
+    flipped_.resize(n);
+    state_.assign(n, kSame);
+    run();
+  }
+
+  // A run with the branch as it stands (after a choice was changed otherwise than by commit).
+  void run() {
+    BranchLog log{branch_.data(), nullptr};
+    log.tape = tape_.data();
+    program_.run<Jet1, Branching::Taped>(x_, y_, z_, log);
+  }
+  const Jet1& value() const { return tape_[static_cast<std::size_t>(program_.result)]; }
+
+  // The value with choice k flipped (0 <-> 1), the run left as it was until commit or discard.
+  const Jet1& flip(std::size_t k) {
+    const auto m = static_cast<std::size_t>(program_.branch_instruction[k]);
+    const auto& [a, b] = program_.operands[m];
+    const std::uint8_t c = branch_[k];
+    flipped_[m] = program_.code[m].op == Op::Abs ? (c == 0 ? -tape_[a] : tape_[a]) : tape_[c == 0 ? b : a];
+    flipped_k_ = k;
+    change(m);
+    while (!queue_.empty()) {
+      std::pop_heap(queue_.begin(), queue_.end(), std::greater<>{});
+      const auto i = static_cast<std::size_t>(queue_.back());
+      queue_.pop_back();
+      const Instruction& in = program_.code[i];
+      const auto& [u, v] = program_.operands[i];
+      if (const int bn = program_.branch_number[i]; bn >= 0) {
+        const std::uint8_t choice = branch_[static_cast<std::size_t>(bn)];
+        const bool second = takes_second(i, choice);
+        if (in.op == Op::Abs) {
+          flipped_[i] = second ? -at(u) : at(u);
+        } else {
+          const int taken = second ? v : u;
+          if (choice != Field::kFreeBranch && state_[static_cast<std::size_t>(taken)] != kChanged) {
+            state_[i] = kSame;
+            continue;
+          }
+          flipped_[i] = at(taken);
+        }
+      } else if (in.op == Op::Store || in.op == Op::Load) {
+        flipped_[i] = at(u);
+      } else {
+        flipped_[i] = apply(in, at(u), v >= 0 ? at(v) : at(u));
+      }
+      change(i);
+    }
+    return at(program_.result);
+  }
+  void commit() {
+    for (const int t : touched_) {
+      if (state_[static_cast<std::size_t>(t)] == kChanged) tape_[static_cast<std::size_t>(t)] = flipped_[t];
+      state_[static_cast<std::size_t>(t)] = kSame;
+    }
+    touched_.clear();
+    branch_[flipped_k_] ^= 1u;
+  }
+  void discard() {
+    for (const int t : touched_) state_[static_cast<std::size_t>(t)] = kSame;
+    touched_.clear();
+  }
+
+  // Makes choice k kFreeBranch, and runs again if the values choose otherwise than it did.
+  void free(std::size_t k) {
+    const std::uint8_t c = branch_[k];
+    branch_[k] = Field::kFreeBranch;
+    if (takes_second(static_cast<std::size_t>(program_.branch_instruction[k]), Field::kFreeBranch) != (c != 0)) run();
+  }
+
+ private:
+  enum : std::uint8_t { kSame, kQueued, kChanged };
+  const Jet1& at(int i) const {
+    return state_[static_cast<std::size_t>(i)] == kChanged ? flipped_[static_cast<std::size_t>(i)]
+                                                           : tape_[static_cast<std::size_t>(i)];
+  }
+  // Whether branch point i takes its second argument (-u for abs) with choice c and its
+  // operands as they stand (kFreeBranch: as run's choose takes them).
+  bool takes_second(std::size_t i, std::uint8_t c) const {
+    if (c != Field::kFreeBranch) return c != 0;
+    const auto& [a, b] = program_.operands[i];
+    switch (program_.code[i].op) {
+      case Op::Min: return at(b).v < at(a).v;
+      case Op::Max: return at(a).v < at(b).v;
+      default: return at(a).v < 0;  // abs
+    }
+  }
+  void change(std::size_t i) {
+    if (state_[i] == kSame) touched_.push_back(static_cast<int>(i));
+    state_[i] = kChanged;
+    for (int c = program_.consumer_start[i]; c < program_.consumer_start[i + 1]; ++c) {
+      const auto j = static_cast<std::size_t>(program_.consumers_of[static_cast<std::size_t>(c)]);
+      if (state_[j] != kSame) continue;
+      state_[j] = kQueued;
+      touched_.push_back(static_cast<int>(j));
+      queue_.push_back(static_cast<int>(j));
+      std::push_heap(queue_.begin(), queue_.end(), std::greater<>{});
+    }
+  }
+
+  const ExpressionProgram& program_;
+  std::vector<std::uint8_t>& branch_;
+  Jet1 x_, y_, z_;
+  std::size_t flipped_k_ = 0;
+  // Per thread, reused: a run of a large formula per piece would otherwise allocate its tape.
+  static thread_local std::vector<Jet1> tape_, flipped_;
+  static thread_local std::vector<std::uint8_t> state_;
+  static thread_local std::vector<int> queue_, touched_;
+};
+
+thread_local std::vector<Jet1> FlipRun::tape_, FlipRun::flipped_;
+thread_local std::vector<std::uint8_t> FlipRun::state_;
+thread_local std::vector<int> FlipRun::queue_, FlipRun::touched_;
+
+}  // namespace
+}  // namespace detail
+
+void Expression::eval_first_order_flips(const Vec3& p, std::vector<std::uint8_t>& branch,
+                                        std::span<const ChoiceStep> steps,
+                                        const std::function<bool(double, const Vec3&)>& hidden) const {
+  check_branch(branch);
+  if (program_->result < 0) return Field::eval_first_order_flips(p, branch, steps, hidden);
+  detail::FlipRun run(*program_, branch, p);
+  for (const ChoiceStep& step : steps) {
+    const auto k = static_cast<std::size_t>(step.choice);
+    if (step.flip) {
+      const Jet1& r = run.flip(k);
+      const bool is_hidden = hidden(r.v, r.g);
+      run.discard();
+      if (!is_hidden) continue;
+    }
+    run.free(k);
+  }
+}
+
+void Expression::eval_first_order_combinations(const Vec3& p, const std::vector<std::uint8_t>& base,
+                                               std::span<const int> split,
+                                               std::vector<std::pair<double, Vec3>>& out) const {
+  check_branch(base);
+  if (program_->result < 0 || split.size() >= 64) return Field::eval_first_order_combinations(p, base, split, out);
+  // In Gray code order each combination is the one before with one choice flipped, kept.
+  std::vector<std::uint8_t> branch = base;
+  detail::FlipRun run(*program_, branch, p);
+  const std::size_t combinations = std::size_t{1} << split.size();
+  out.assign(combinations, {});
+  out[0] = {run.value().v, run.value().g};
+  for (std::size_t g = 1; g < combinations; ++g) {
+    const Jet1& r = run.flip(static_cast<std::size_t>(split[static_cast<std::size_t>(std::countr_zero(g))]));
+    out[g ^ (g >> 1)] = {r.v, r.g};
+    run.commit();
+  }
 }
 
 bool Expression::eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>& branch, const std::int8_t* bits,

@@ -62,6 +62,19 @@ std::pair<double, Vec3> LevelShift::eval_first_order(const Vec3& p, const std::v
   return first;
 }
 
+void LevelShift::eval_first_order_flips(const Vec3& p, std::vector<std::uint8_t>& branch,
+                                        std::span<const ChoiceStep> steps,
+                                        const std::function<bool(double, const Vec3&)>& hidden) const {
+  field_.eval_first_order_flips(p, branch, steps, [&](double v, const Vec3& g) { return hidden(v - level_, g); });
+}
+
+void LevelShift::eval_first_order_combinations(const Vec3& p, const std::vector<std::uint8_t>& base,
+                                               std::span<const int> split,
+                                               std::vector<std::pair<double, Vec3>>& out) const {
+  field_.eval_first_order_combinations(p, base, split, out);
+  for (auto& [v, g] : out) v -= level_;
+}
+
 bool LevelShift::eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>& branch, const std::int8_t* bits,
                                  bool hessian, FieldPiece& piece, std::uint64_t& live) const {
   if (!field_.eval_piece_live(p, branch, bits, hessian, piece, live)) return false;

@@ -16,6 +16,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -568,6 +569,28 @@ class Field {
   }
   // The field's value and gradient with the given branches (kFreeBranch: as the values choose).
   virtual std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const;
+  // One step of eval_first_order_flips: with `flip`, evaluate the branch with choice `choice`
+  // flipped (0 <-> 1) and make the choice kFreeBranch if `hidden` says so; without, make it
+  // kFreeBranch at once.
+  struct ChoiceStep {
+    int choice;
+    bool flip;
+  };
+  // The steps in turn on `branch`, each flip's value and gradient, eval_first_order(p, branch
+  // with the choice flipped) as the branch stands at its step, given to `hidden`. The same numbers,
+  // bit for bit, as those calls one by one (the default); a model may get them more cheaply
+  // (Expression: from one run, each flip recomputing only what its choice reaches).
+  // \pre each flipped choice is 0 or 1.
+  virtual void eval_first_order_flips(const Vec3& p, std::vector<std::uint8_t>& branch,
+                                      std::span<const ChoiceStep> steps,
+                                      const std::function<bool(double, const Vec3&)>& hidden) const;
+  // In out[mask], for each mask < 2^split.size(), eval_first_order(p, base with choice split[j]
+  // flipped for each bit j of mask): the same numbers, bit for bit, as those calls (the
+  // default); Expression gets them from one run, in Gray code order, each a flip of the one
+  // before. \pre each choice in `split` is 0 or 1 in `base`.
+  virtual void eval_first_order_combinations(const Vec3& p, const std::vector<std::uint8_t>& base,
+                                             std::span<const int> split,
+                                             std::vector<std::pair<double, Vec3>>& out) const;
   // eval_piece (with `hessian`; else eval_first_order's numbers, the Hessian left alone) into
   // `piece`, and in `live` bit bits[k] for each branch point k with bits[k] >= 0 whose choice the
   // value depends on: its chosen argument reaches the value, not discarded by a later min or

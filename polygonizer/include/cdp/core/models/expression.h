@@ -58,6 +58,10 @@ class Expression : public Field {
   bool has_branch_points() const override;
   bool eval_branch_record(const Vec3& p, const std::vector<std::uint8_t>& branch, BranchRecord& record) const override;
   std::pair<double, Vec3> eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
+  void eval_first_order_flips(const Vec3& p, std::vector<std::uint8_t>& branch, std::span<const ChoiceStep> steps,
+                              const std::function<bool(double, const Vec3&)>& hidden) const override;
+  void eval_first_order_combinations(const Vec3& p, const std::vector<std::uint8_t>& base, std::span<const int> split,
+                                     std::vector<std::pair<double, Vec3>>& out) const override;
   FieldPiece eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const override;
   bool eval_piece_live(const Vec3& p, const std::vector<std::uint8_t>& branch, const std::int8_t* bits, bool hessian,
                        FieldPiece& piece, std::uint64_t& live) const override;
