@@ -749,6 +749,7 @@ class FlipRun {
     tape_.resize(n);
     flipped_.resize(n);
     state_.assign(n, kSame);
+    queued_.assign((n + 63) / 64, 0);
     run();
   }
 
@@ -768,10 +769,16 @@ class FlipRun {
     flipped_[m] = program_.code[m].op == Op::Abs ? (c == 0 ? -tape_[a] : tape_[a]) : tape_[c == 0 ? b : a];
     flipped_k_ = k;
     change(m);
-    while (!queue_.empty()) {
-      std::pop_heap(queue_.begin(), queue_.end(), std::greater<>{});
-      const auto i = static_cast<std::size_t>(queue_.back());
-      queue_.pop_back();
+    // The queued instructions in program order: a consumer comes after what it consumes, so the
+    // bits set while one is recomputed lie ahead of it.
+    for (std::size_t w = m / 64; w < queued_.size();) {
+      const std::uint64_t bits = queued_[w];
+      if (bits == 0) {
+        ++w;
+        continue;
+      }
+      queued_[w] = bits & (bits - 1);
+      const std::size_t i = w * 64 + static_cast<std::size_t>(std::countr_zero(bits));
       const Instruction& in = program_.code[i];
       const auto& [u, v] = program_.operands[i];
       if (const int bn = program_.branch_number[i]; bn >= 0) {
@@ -841,8 +848,7 @@ class FlipRun {
       if (state_[j] != kSame) continue;
       state_[j] = kQueued;
       touched_.push_back(static_cast<int>(j));
-      queue_.push_back(static_cast<int>(j));
-      std::push_heap(queue_.begin(), queue_.end(), std::greater<>{});
+      queued_[j / 64] |= std::uint64_t{1} << (j % 64);
     }
   }
 
@@ -853,12 +859,14 @@ class FlipRun {
   // Per thread, reused: a run of a large formula per piece would otherwise allocate its tape.
   static thread_local std::vector<Jet1> tape_, flipped_;
   static thread_local std::vector<std::uint8_t> state_;
-  static thread_local std::vector<int> queue_, touched_;
+  static thread_local std::vector<std::uint64_t> queued_;  // a bit an instruction
+  static thread_local std::vector<int> touched_;
 };
 
 thread_local std::vector<Jet1> FlipRun::tape_, FlipRun::flipped_;
 thread_local std::vector<std::uint8_t> FlipRun::state_;
-thread_local std::vector<int> FlipRun::queue_, FlipRun::touched_;
+thread_local std::vector<std::uint64_t> FlipRun::queued_;
+thread_local std::vector<int> FlipRun::touched_;
 
 }  // namespace
 }  // namespace detail
