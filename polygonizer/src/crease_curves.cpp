@@ -126,6 +126,10 @@ constexpr double kCornerStep = 2;
 constexpr int kSeamProbes = 24;
 constexpr double kKnownSeamCosine = 0.9;
 constexpr int kSeamProbeNewtonSteps = 4;
+// Progress is reported every this many grid crossings or corners looked at: a call some
+// milliseconds apart where each costs piece searches (knurling: 2,040 crossings in 4.5 s, then
+// 1,963 corners in 7.4 s).
+constexpr std::size_t kProgressSteps = 16;
 
 struct Tracer {
   const Field& field;
@@ -541,6 +545,7 @@ struct Tracer {
       return End::Stop;
     };
     for (;;) {
+      if (o.cancel) o.cancel->check("trace_creases");
       if (++points > o.max_points)
         throw LimitExceededError("trace_creases: more than " + std::to_string(o.max_points) +
                                  " crease points (CreaseTracingOptions::max_points)");
@@ -890,7 +895,20 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
     result.curves.push_back(std::move(curve));
     return true;
   };
+  // Progress: the crossings looked at as the first half, the corners (a list that grows) as the
+  // second, never going back.
+  std::size_t crossings = 0, looked_at = 0;
+  double reported = 0;
+  const auto report = [&](double share) {
+    if (share <= reported) return;
+    reported = share;
+    options.progress(share);
+  };
+  if (options.progress) grid.for_each_sign_change([&](const std::array<int, 3>&, const std::array<int, 3>&) { ++crossings; });
   grid.for_each_sign_change([&](const std::array<int, 3>& ia, const std::array<int, 3>& ib) {
+    if (options.cancel) options.cancel->check("trace_creases");
+    if (options.progress && ++looked_at % kProgressSteps == 0)
+      report(0.5 * static_cast<double>(looked_at) / static_cast<double>(crossings));
     const Vec3 pa = grid.point(ia[0], ia[1], ia[2]), pb = grid.point(ib[0], ib[1], ib[2]);
     const double fa = grid.value(ia[0], ia[1], ia[2]), fb = grid.value(ib[0], ib[1], ib[2]);
     const ProjectionResult s = project_to_surface(field, pa + fa / (fa - fb) * (pb - pa));
@@ -930,6 +948,9 @@ CreaseTracingResult trace_creases(const Field& field, const CreaseTracingOptions
   std::vector<Vec3> visited;
   const std::size_t split_already = corners.size();
   for (std::size_t next = 0; next < corners.size(); ++next) {
+    if (options.cancel) options.cancel->check("trace_creases");
+    if (options.progress && next % kProgressSteps == 0)
+      report(0.5 + 0.5 * static_cast<double>(next) / static_cast<double>(corners.size()));
     const Vec3 corner = corners[next];
     if (std::any_of(visited.begin(), visited.end(), [&](const Vec3& q) { return (q - corner).norm() <= tr.min_spacing; }))
       continue;

@@ -7,12 +7,17 @@
 #include <cdp/baselines/marching_tetrahedra.h>
 #include <cdp/core/adaptive_polygonizer.h>
 #include <cdp/core/cancel.h>
+#include <cdp/core/crease_curves.h>
+#include <cdp/core/models/expression.h>
 #include <cdp/core/models/analytic.h>
 #include <cdp/core/triangle_intersection.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <string>
 #include <thread>
+#include <vector>
 
 namespace cdp {
 namespace {
@@ -59,6 +64,44 @@ TEST(CancelToken, EveryMethodEndsWithCancelledErrorWhenCancelledBeforeItStarts) 
   EXPECT_THROW(marching_tetrahedra(sphere, m), CancelledError);
   m.traversal = Traversal::Grid;
   EXPECT_THROW(marching_cubes(sphere, m), CancelledError);
+}
+
+// A model's creases may take seconds to trace (fogleman/sdf's knurling example: 13 s): the
+// tracing reports its progress, never going back, and a token cancelled from its progress
+// callback ends it with CancelledError; polygonize_adaptive passes both on and names the phase.
+TEST(CancelToken, CreaseTracingReportsProgressAndPollsIt) {
+  // A box with three square holes through it: 24 creases and 40 corners.
+  const Expression sponge("max(max(abs(x),abs(y),abs(z))-1, -min(max(abs(x),abs(y))-0.4, max(abs(y),abs(z))-0.4, "
+                          "max(abs(x),abs(z))-0.4))",
+                          {}, Box{Vec3::Constant(-1.2), Vec3::Constant(1.2)});
+  CreaseTracingOptions o;
+  std::vector<double> shares;
+  o.progress = [&](double share) { shares.push_back(share); };
+  const CreaseTracingResult traced = trace_creases(sponge, o);
+  EXPECT_GE(traced.curves.size(), 24u);
+  ASSERT_GE(shares.size(), 3u);
+  EXPECT_TRUE(std::is_sorted(shares.begin(), shares.end()));
+  EXPECT_GT(shares.front(), 0.0);
+  EXPECT_LT(shares.front(), 0.5);  // the grid's crossings, then the corners
+  EXPECT_GT(shares.back(), 0.5);
+  EXPECT_LE(shares.back(), 1.0);
+  const CancelToken token;
+  o.cancel = &token;
+  o.progress = [&](double share) {
+    if (share > 0.5) token.cancel();  // among the corners
+  };
+  EXPECT_THROW(trace_creases(sponge, o), CancelledError);
+  token.reset();
+  o.progress = [&](double) { token.cancel(); };  // among the crossings
+  EXPECT_THROW(trace_creases(sponge, o), CancelledError);
+  AdaptiveOptions a;
+  std::vector<std::string> phases;
+  a.phase = [&](const std::string& phase) { phases.push_back(phase); };
+  a.progress = [&](double) {
+    if (!phases.empty() && phases.back() == "tracing creases") a.cancel.cancel();
+  };
+  EXPECT_THROW(polygonize_adaptive(sponge, a), CancelledError);
+  EXPECT_EQ(phases.back(), "tracing creases");
 }
 
 TEST(CancelToken, TheSelfIntersectionSearchPollsIt) {

@@ -51,13 +51,13 @@ def test_progress_and_phase_callbacks(sphere):
     cdp.polygonize(cdp.torus(major_radius=1, minor_radius=0.3), factor=3, progress=fractions.append, phase=phases.append)
     # The default variant repairs slivers after meshing (polygonizer/src/adaptive/quality.h).
     assert phases == ["sampling the seed grid", "meshing", "repairing triangles", "checking the mesh"]
-    # A field with creases meshes along them first.
+    # A field with creases traces them, then meshes along them first.
     phases.clear()
     cube = cdp.field_from_json({"type": "expression", "value": "max(abs(x),max(abs(y),abs(z)))-1",
                                 "bounds": [[-1.6, -1.6, -1.6], [1.5, 1.5, 1.5]]})
     cdp.polygonize(cube, factor=3, phase=phases.append)
-    assert phases == ["sampling the seed grid", "meshing along creases", "meshing", "repairing triangles",
-                      "checking the mesh"]
+    assert phases == ["sampling the seed grid", "tracing creases", "meshing along creases", "meshing",
+                      "repairing triangles", "checking the mesh"]
     assert fractions and fractions[-1] == 1.0
     fractions.clear()
     cdp.marching_cubes(sphere, cell=0.05, progress=fractions.append)

@@ -45,7 +45,12 @@ CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options,
         co.grid = &finer;
         out.estimated_area = std::max(estimated_area, measured_area(finer));
       }
-      out.traced = trace_creases(field, co);  // no work for a field without pieces
+      // No work for a field without pieces. A CSG model's creases may take seconds (fogleman/sdf's
+      // knurling example: 14 s), so the phase is named and its progress reported.
+      if (field.has_pieces() && options.phase) options.phase(attempt == 0 ? "tracing creases" : "tracing creases again");
+      co.cancel = &options.cancel;
+      co.progress = options.progress;
+      out.traced = trace_creases(field, co);
       if (!out.traced.curves.empty()) {
         if (attempt == 0 && options.phase) options.phase("meshing along creases");
         out.mesh = mesh_patches(field, out.traced, settings, out.estimated_area);

@@ -104,13 +104,14 @@ struct AdaptiveOptions {
   // Past the default bound the surface is meshed again with rollbacks, as after a stalled front,
   // before any error; past a bound set here the run ends with LimitExceededError.
   std::size_t max_search_visits = 0;
-  // Called now and then with an estimate of the fraction of the meshing done.
+  // Called now and then with an estimate of the fraction of the phase done (tracing creases, meshing).
   ProgressCallback progress;
   // Cancels the run from outside (cancel.h): polled in every phase's loops, it ends the run
   // with CancelledError.
   CancelToken cancel;
-  // Called on entering each phase: "sampling the seed grid", "meshing along creases" (a field
-  // with creases, CreaseHandling::Follow), "meshing", "repairing triangles", "checking the mesh".
+  // Called on entering each phase: "sampling the seed grid", "tracing creases" and "meshing
+  // along creases" (a field with creases, CreaseHandling::Follow; "tracing creases again" on a
+  // finer grid where the patches need it), "meshing", "repairing triangles", "checking the mesh".
   PhaseCallback phase;
 };
 

@@ -4,8 +4,10 @@
 // measures compare a mesh with, and what crease-aware meshing will start from.
 #pragma once
 
+#include <cdp/core/cancel.h>
 #include <cdp/core/crease.h>
 #include <cdp/core/field.h>
+#include <cdp/core/progress.h>
 #include <cdp/core/surface_seeds.h>
 
 #include <array>
@@ -36,6 +38,11 @@ struct CreaseTracingOptions {
   // has sampled it already (the adaptive polygonizer's seed grid): its crossings are searched
   // instead of those of a grid sampled again. Must outlive the call.
   const SeedGrid* grid = nullptr;
+  // Polled at every crossing of the grid looked at, every corner and every step along a crease
+  // (cancel.h): the tracing then ends with CancelledError. Must outlive the call.
+  const CancelToken* cancel = nullptr;
+  // Called now and then with the share of the grid's crossings looked at.
+  ProgressCallback progress;
 };
 
 struct CreaseCurve {
