@@ -378,7 +378,7 @@ std::vector<FieldPiece> Field::pieces_near_branches(const Vec3& p, const BranchR
       std::vector<ChoiceStep> steps;
       for (std::size_t k = 0; k < piece.branch.size(); ++k) {
         if (base[k] == kFreeBranch || std::binary_search(split.begin(), split.end(), static_cast<int>(k))) continue;
-        const bool flip = !(known && !reaches[k]);
+        const bool flip = !known || reaches[k];
         steps.push_back({static_cast<int>(k), flip});
         evaluations += flip;
       }
