@@ -28,6 +28,8 @@ CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options,
   if (!follows_creases(options)) return out;
   CreaseTracingOptions co;
   co.resolution = options.seed_resolution;
+  co.cancel = &options.cancel;
+  co.progress = options.progress;
   for (int attempt = 0; attempt < kCreaseTracings; ++attempt, co.resolution *= 2) {
     try {
       out.tracing_resolution = co.resolution;
@@ -48,8 +50,6 @@ CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options,
       // No work for a field without pieces. A CSG model's creases may take seconds (fogleman/sdf's
       // knurling example: 14 s), so the phase is named and its progress reported.
       if (field.has_pieces() && options.phase) options.phase(attempt == 0 ? "tracing creases" : "tracing creases again");
-      co.cancel = &options.cancel;
-      co.progress = options.progress;
       out.traced = trace_creases(field, co);
       if (!out.traced.curves.empty()) {
         if (attempt == 0 && options.phase) options.phase("meshing along creases");

@@ -23,6 +23,9 @@ namespace cdp {
 
 namespace detail {
 
+// An operation is computed in ExpressionProgram::run and, for the flips of a piece, in apply:
+// a new one goes in both (Expression.FlipsAndCombinationsFromOneRunGiveTheBitsOfARunEach
+// compares them on the formulas it uses).
 enum class Op {
   Const, X, Y, Z, Add, Sub, Mul, Div, Neg, PowConst, Pow, Sqrt, Exp, Log, Sin, Cos, Tan, Atan, Atan2, Floor, Round,
   Abs, Min, Max,
