@@ -236,6 +236,25 @@ def batched_vs_scalar(run):
     return sorted(rows, key=lambda r: r["batched"])
 
 
+def regions_vs_whole(run):
+    """An expression's evaluation with its programs specialized to the cells of its box against the
+    whole formula at the same points (BM_Field/<field>/<kind> against BM_Field/<field>_whole/<kind>,
+    bench/fields.cpp), by their rate counter."""
+    benches = {key(b): b for b in run["benchmarks"] if not b.get("error")}
+    rows = []
+    for k, whole in benches.items():
+        parts = k.split("/")
+        if len(parts) < 3 or not parts[1].endswith("_whole"):
+            continue
+        b = benches.get("/".join([parts[0], parts[1][:-len("_whole")]] + parts[2:]))
+        if b is None:
+            continue
+        (rb, cb), (rw, cw) = _rate(b), _rate(whole)
+        if rb and rw and cb == cw:
+            rows.append({"benchmark": key(b), "whole": k, "speedup": rb / rw})
+    return sorted(rows, key=lambda r: r["benchmark"])
+
+
 def thread_speedups(run):
     """Rows {benchmark, label, speedup, one, two, p8, p16, q8, q16, passes} of the benchmarks that time
     one run on one thread and one on two (counter speedup_1_to_2; bench/adaptive.cpp's

@@ -223,6 +223,19 @@ def inrun_section(runs):
         out.append('<p class="note">Not available: no pair of benchmarks named …/values_batched and …/values_scalar '
                    'in the latest run.</p>')
 
+    # An expression run by cell against the whole formula (the same bits).
+    rows = bl.regions_vs_whole(latest)
+    out.append("<h3>Expressions by cell against the whole formula (the same bits)</h3>")
+    if rows:
+        out.append(table(["Benchmark", "Whole formula", "Speedup"],
+                         [[E(r["benchmark"]), E(r["whole"]), fnum(r["speedup"], "{:.3f}")] for r in rows]))
+        series = ratio_series(runs, bl.regions_vs_whole, "benchmark", "speedup")
+        out.append(img(ratio_plot(runs, series, "evaluations per second, by cell / whole", "speedup"),
+                       "expression by cell vs whole formula over commits"))
+    else:
+        out.append('<p class="note">Not available: no pair of benchmarks named BM_Field/&lt;field&gt;/… and '
+                   'BM_Field/&lt;field&gt;_whole/… in the latest run.</p>')
+
     # One thread against two (the same mesh, bit for bit, or the benchmark fails).
     rows = bl.thread_speedups(latest)
     out.append("<h3>Speedup from one thread to two (the same mesh on both)</h3>")

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cctype>
 #include <cmath>
@@ -15,6 +16,8 @@
 #include <functional>
 #include <map>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <new>
 #include <numbers>
 #include <vector>
@@ -83,6 +86,9 @@ struct ExpressionProgram {
   std::vector<int> consumer_start, consumers_of;
   int result = -1;
   int depth = 0;  // the most operands pending at once (the evaluator's stack holds kMaxStack)
+  // A program specialized to a region (specialize) only: the branch points it took out, each with
+  // the branch it takes there.
+  std::vector<std::pair<int, std::uint8_t>> fixed;
 
   // Fills the graph, branch_points and depth from `code`.
   void link() {
@@ -96,7 +102,7 @@ struct ExpressionProgram {
         pushed.pop_back();
         return top;
       };
-      const Instruction& in = code[i];
+      Instruction& in = code[i];
       auto& args = operands[i];
       switch (in.op) {
         case Op::Const: case Op::X: case Op::Y: case Op::Z: break;
@@ -108,7 +114,12 @@ struct ExpressionProgram {
           break;
         default: args[0] = pop(); break;
       }
-      if (in.op == Op::Min || in.op == Op::Max || in.op == Op::Abs) branch_number[i] = branch_points++;
+      // A branch point's number is also its instruction's constant, which a specialized program
+      // (specialize) keeps for the branch points it keeps.
+      if (in.op == Op::Min || in.op == Op::Max || in.op == Op::Abs) {
+        branch_number[i] = branch_points++;
+        code[i].constant = branch_number[i];
+      }
       if (in.op != Op::Store) pushed.push_back(static_cast<int>(i));
       depth = std::max(depth, static_cast<int>(pushed.size()));
     }
@@ -144,19 +155,19 @@ struct ExpressionProgram {
     alignas(T) unsigned char slot_storage[sizeof(T) * kMaxDefinitions];
     T* slot = reinterpret_cast<T*>(slot_storage);
     int top = -1;
-    [[maybe_unused]] int branch_point = 0;
+    [[maybe_unused]] int branch_point = 0;  // the branch point's number (its instruction's constant)
     // ForcedLive: beside each stack entry and slot, the bits of the branch points whose choice
     // reaches it (a min or max passes on its chosen argument's only, and its own).
     constexpr bool kLive = mode == Branching::ForcedLive;
     [[maybe_unused]] std::uint64_t dep[kLive ? kMaxStack : 1];
     [[maybe_unused]] std::uint64_t dep_slot[kLive ? kMaxDefinitions : 1];
     [[maybe_unused]] const auto own_bit = [&] {
-      const int b = record.bit[branch_point - 1];
+      const int b = record.bit[branch_point];
       return b >= 0 ? std::uint64_t{1} << b : std::uint64_t{0};
     };
     // At a branch point: the branch to take, given that `natural` is the one the values choose.
     [[maybe_unused]] const auto choose = [&](bool natural, const T& a, const T& b) {
-      const int k = branch_point++;
+      const int k = branch_point;
       if constexpr (mode == Branching::Forced || kLive || mode == Branching::Taped)
         return record.forced[k] == Field::kFreeBranch ? natural : record.forced[k] != 0;
       if constexpr (mode == Branching::Record) {
@@ -181,6 +192,7 @@ struct ExpressionProgram {
         case Op::Pow: --top; stack[top] = pow(stack[top], stack[top + 1]); if constexpr (kLive) dep[top] |= dep[top + 1]; break;
         case Op::Min:
           --top;
+          if constexpr (mode != Branching::Free) branch_point = static_cast<int>(in.constant);
           if constexpr (mode == Branching::Free) stack[top] = min(stack[top], stack[top + 1]);
           else if (choose(stack[top + 1].v < stack[top].v, stack[top], stack[top + 1])) {
             stack[top] = stack[top + 1];
@@ -190,6 +202,7 @@ struct ExpressionProgram {
           break;
         case Op::Max:
           --top;
+          if constexpr (mode != Branching::Free) branch_point = static_cast<int>(in.constant);
           if constexpr (mode == Branching::Free) stack[top] = max(stack[top], stack[top + 1]);
           else if (choose(stack[top].v < stack[top + 1].v, stack[top], stack[top + 1])) {
             stack[top] = stack[top + 1];
@@ -218,6 +231,7 @@ struct ExpressionProgram {
           if constexpr (kLive) dep[top] = dep_slot[static_cast<int>(in.constant)];
           break;
         case Op::Abs:
+          if constexpr (mode != Branching::Free) branch_point = static_cast<int>(in.constant);
           if constexpr (mode == Branching::Free) stack[top] = abs(stack[top]);
           else if (choose(stack[top].v < 0, stack[top], -stack[top])) stack[top] = -stack[top];
           if constexpr (kLive) dep[top] |= own_bit();
@@ -258,6 +272,203 @@ T apply(const Instruction& in, const T& a, const T& b) {
     default: return a;  // not asked for
   }
 }
+
+// Which runs a specialized program (specialize) stands in for.
+enum class Runs {
+  Free,    // Free runs: every min and max takes what the values choose
+  Forced,  // also Forced runs whose given choices agree with ExpressionProgram::fixed
+};
+
+// `program` with what cannot matter inside `region` left out: a min or max whose arguments'
+// ranges over the region (interval.h) do not overlap is the code of the argument it takes there,
+// an abs of an argument whose sign the range fixes is that argument or its negation, and what no
+// kept instruction reads goes (a shared subexpression's Store stays while a kept Load reads it).
+// A run of it at a point of the region gives the bits a run of the whole program gives: the same
+// operations on the same numbers, only those whose results a min or max discarded skipped.
+//
+// Not where a range may hold NaN or an infinity (the root or logarithm of a range reaching below
+// zero, a division by a range holding zero, a pole, an overflow): min and max let a NaN through
+// on one side only, so there the argument a range takes is not the one a run takes. For Forced
+// runs the range of a min or max that stays is the hull of its arguments' (a given choice may
+// take either), and the choices the ranges decide are `fixed`, those left out and those in code
+// left out alike (another branch given there changes the ranges after it): a run whose given
+// choices take another branch at one of them runs the whole program. Kept branch points keep
+// their numbers (the instructions' constants).
+ExpressionProgram specialize(const ExpressionProgram& program, const Box& region, Runs runs) {
+  const std::vector<Instruction>& code = program.code;
+  const std::size_t n = code.size();
+  std::vector<Interval> range(n);
+  std::vector<char> wild(n, 0);  // may be NaN or infinite somewhere in the region
+  // A min or max: the argument it takes throughout (0 or 1), an abs: 0 for +u, 1 for -u; else -1.
+  std::vector<signed char> takes(n, -1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Instruction& in = code[i];
+    const auto [a, b] = program.operands[i];
+    const Interval ra = a >= 0 ? range[static_cast<std::size_t>(a)] : Interval();
+    const Interval rb = b >= 0 ? range[static_cast<std::size_t>(b)] : Interval();
+    bool w = (a >= 0 && wild[static_cast<std::size_t>(a)]) || (b >= 0 && wild[static_cast<std::size_t>(b)]);
+    Interval r;
+    switch (in.op) {
+      case Op::Const: r = in.constant; break;
+      case Op::X: r = {region.min.x(), region.max.x()}; break;
+      case Op::Y: r = {region.min.y(), region.max.y()}; break;
+      case Op::Z: r = {region.min.z(), region.max.z()}; break;
+      case Op::Store: case Op::Load: r = ra; break;
+      case Op::Min: case Op::Max: {
+        const bool max = in.op == Op::Max;
+        if (!w) takes[i] = (max ? ra.hi < rb.lo : rb.hi < ra.lo) ? 1 : (max ? rb.hi < ra.lo : ra.hi < rb.lo) ? 0 : -1;
+        r = takes[i] >= 0 || runs == Runs::Free ? (max ? detail::max(ra, rb) : detail::min(ra, rb)) : hull(ra, rb);
+        break;
+      }
+      case Op::Abs:
+        if (!w) takes[i] = ra.lo > 0 ? 0 : ra.hi < 0 ? 1 : -1;
+        r = takes[i] >= 0 || runs == Runs::Free ? abs(ra) : hull(ra, -ra);
+        break;
+      default:
+        r = apply(in, ra, rb);
+        // A sum or product of doubles that are not negative is not negative (the outward
+        // rounding reached below zero): the root of a sum of squares is defined.
+        if ((in.op == Op::Add || in.op == Op::Mul) && ra.lo >= 0 && rb.lo >= 0) r.lo = std::max(r.lo, 0.0);
+        // The interval functions bound a root and a power only where they are defined.
+        if (in.op == Op::Sqrt) w = w || ra.lo < 0;
+        if (in.op == Op::Log || in.op == Op::Pow) w = w || !(ra.lo > 0);
+        if (in.op == Op::PowConst) w = w || (ra.lo < 0 && in.constant != std::round(in.constant));
+        break;
+    }
+    wild[i] = w || !std::isfinite(r.lo) || !std::isfinite(r.hi);
+    range[i] = r;
+  }
+  // Backwards from the value: a min or max that takes one argument reads that one only.
+  std::vector<char> live(n, 0);
+  if (program.result >= 0) live[static_cast<std::size_t>(program.result)] = 1;
+  for (std::size_t i = n; i-- > 0;) {
+    if (!live[i]) continue;
+    const auto [a, b] = program.operands[i];
+    if ((code[i].op == Op::Min || code[i].op == Op::Max) && takes[i] >= 0) {
+      live[static_cast<std::size_t>(takes[i] == 1 ? b : a)] = 1;
+      continue;
+    }
+    if (a >= 0) live[static_cast<std::size_t>(a)] = 1;
+    if (b >= 0) live[static_cast<std::size_t>(b)] = 1;
+  }
+  // A min or max taken out leaves the argument it takes where it would have left its result.
+  ExpressionProgram out;
+  out.slots = program.slots;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Op op = code[i].op;
+    const bool branch_point = op == Op::Min || op == Op::Max || op == Op::Abs;
+    // Left out or not: another choice given there changes the ranges after it.
+    if (branch_point && takes[i] >= 0)
+      out.fixed.emplace_back(program.branch_number[i], static_cast<std::uint8_t>(takes[i]));
+    if (!live[i]) continue;
+    if (branch_point && takes[i] >= 0 && (op != Op::Abs || takes[i] == 0)) continue;
+    out.code.push_back(op == Op::Abs && takes[i] == 1 ? Instruction{Op::Neg} : code[i]);
+  }
+  return out;
+}
+
+// Fewer branch points than this, and a formula is run whole everywhere: a few min, max and abs
+// (a rounded box) save less than finding the cell costs.
+constexpr int kRegionBranchPoints = 4;
+
+// The program specialized (specialize) to each cell of a grid over the field's box, made when a
+// point of the cell is first evaluated. A formula of many primitives (a union of 48 twisted boxes)
+// is, near any point, the formula of a few of them.
+class RegionPrograms {
+ public:
+  RegionPrograms(const ExpressionProgram& full, const Box& box) : full_(full), box_(box) {
+    const Vec3 size = box.size();
+    const double edge = std::cbrt(size.prod() / kCells);
+    std::size_t count = 1;
+    for (int k = 0; k < 3; ++k) {
+      n_[k] = std::clamp(static_cast<int>(std::lround(size[k] / edge)), 1, kMaxPerAxis);
+      cell_[k] = size[k] / n_[k];
+      count *= static_cast<std::size_t>(n_[k]);
+    }
+    for (auto& cells : cells_) cells = std::vector<Cell>(count);
+  }
+
+  // The program a run of kind `runs` at p may run: its cell's, or the whole one outside the box
+  // (or at NaN).
+  const ExpressionProgram& at(const Vec3& p, Runs runs) const {
+    std::size_t index = 0;
+    int c[3];
+    for (int k = 0; k < 3; ++k) {
+      const double t = (p[k] - box_.min[k]) / cell_[k];
+      if (!(t >= 0 && t < n_[k])) return full_;
+      c[k] = static_cast<int>(t);
+      index = index * static_cast<std::size_t>(n_[k]) + static_cast<std::size_t>(c[k]);
+    }
+    Cell& cell = cells_[static_cast<int>(runs)][index];
+    if (const ExpressionProgram* made = cell.program.load(std::memory_order_acquire)) return *made;
+    // Counted without a lock: a count lost between threads only specializes the cell later.
+    const std::uint32_t seen = cell.evaluations.load(std::memory_order_relaxed) + 1;
+    cell.evaluations.store(seen, std::memory_order_relaxed);
+    return seen < kEvaluationsFirst ? full_ : make(cell, c, runs);
+  }
+
+  // For a Forced run with the choices `forced`: its cell's program if they agree with what it fixed.
+  const ExpressionProgram& at(const Vec3& p, const std::uint8_t* forced) const {
+    const ExpressionProgram& cell = at(p, Runs::Forced);
+    for (const auto& [k, choice] : cell.fixed)
+      if (forced[k] != Field::kFreeBranch && forced[k] != choice) return full_;
+    return cell;
+  }
+
+ private:
+  // About this many cells over the box, cubes as near as its shape allows.
+  static constexpr double kCells = 4096;
+  static constexpr int kMaxPerAxis = 64;
+  // A cell keeps a program of its own only when it is this much shorter than the whole one.
+  static constexpr double kShorter = 0.8;
+  // Evaluations in a cell before it is specialized, which costs a few runs of the whole program
+  // with intervals: the seed grid samples every cell of the box a few times, and a small model
+  // (three boxes as stairs, 0.03 s) took 1.7 times as long when each cell was specialized at its
+  // first evaluation.
+  static constexpr std::uint32_t kEvaluationsFirst = 64;
+  // Instructions kept in the cells' programs at most (16 bytes each, 32 MB): past them a cell runs
+  // the whole formula. fogleman/sdf's knurling (1,702 instructions; its cells' programs about 700
+  // for plain runs, 1,100 for Forced ones) fills them with about 2,200 programs.
+  static constexpr std::size_t kMaxKept = std::size_t{1} << 21;
+
+  struct Cell {
+    std::atomic<const ExpressionProgram*> program{nullptr};  // made: the cell's, or the whole one
+    std::atomic<std::uint32_t> evaluations{0};                // before it was made
+  };
+
+  const ExpressionProgram& make(Cell& slot, const int c[3], Runs runs) const {
+    Box cell;
+    for (int k = 0; k < 3; ++k) {
+      // Widened by a hair: a point the division above put in the cell may lie a rounding outside it.
+      const double margin = 1e-9 * cell_[k];
+      cell.min[k] = box_.min[k] + c[k] * cell_[k] - margin;
+      cell.max[k] = box_.min[k] + (c[k] + 1) * cell_[k] + margin;
+    }
+    // Past the bound, the cells left run the whole formula without being specialized first.
+    ExpressionProgram special = kept_.load(std::memory_order_relaxed) < kMaxKept ? specialize(full_, cell, runs)
+                                                                                  : ExpressionProgram{};
+    const ExpressionProgram* program = &full_;
+    std::lock_guard lock(mutex_);
+    if (const ExpressionProgram* made = slot.program.load(std::memory_order_acquire)) return *made;
+    const std::size_t kept = kept_.load(std::memory_order_relaxed);
+    if (!special.code.empty() && kept + special.code.size() <= kMaxKept &&
+        static_cast<double>(special.code.size()) <= kShorter * static_cast<double>(full_.code.size())) {
+      kept_.store(kept + special.code.size(), std::memory_order_relaxed);
+      program = owned_.emplace_back(std::make_unique<ExpressionProgram>(std::move(special))).get();
+    }
+    slot.program.store(program, std::memory_order_release);
+    return *program;
+  }
+
+  const ExpressionProgram& full_;
+  Box box_;
+  int n_[3];
+  Vec3 cell_;
+  mutable std::array<std::vector<Cell>, 2> cells_;  // by Runs
+  mutable std::mutex mutex_;
+  mutable std::vector<std::unique_ptr<ExpressionProgram>> owned_;
+  mutable std::atomic<std::size_t> kept_{0};  // instructions in owned_ (written under mutex_)
+};
 
 namespace {
 
@@ -660,6 +871,8 @@ Expression::Expression(const std::string& formula, const std::map<std::string, d
                             std::to_string(detail::kMaxStack) + " pending operands)");
   if (!bounds.valid()) throw InvalidInputError("expression: bounds must be a non-empty box");
   set_bounds(bounds);
+  if (program_->branch_points >= detail::kRegionBranchPoints)
+    regions_ = std::make_unique<detail::RegionPrograms>(*program_, bounds);
 }
 
 Expression::~Expression() = default;
@@ -682,16 +895,26 @@ std::optional<std::pair<double, double>> Expression::derivative_range(const Box&
   return std::pair{d.lo, d.hi};
 }
 
-double Expression::eval_value(const Vec3& p) const { return program_->run(p.x(), p.y(), p.z()); }
+const detail::ExpressionProgram& Expression::program_at(const Vec3& p, const std::uint8_t* forced) const {
+  // A trace of the branches taken (autodiff.h) sees every branch point of the whole program.
+  if (!regions_ || detail::active_branch_trace) return *program_;
+  return forced ? regions_->at(p, forced) : regions_->at(p, detail::Runs::Free);
+}
+
+std::size_t Expression::instructions_at(const Vec3& p) const { return program_at(p).code.size(); }
+
+std::size_t Expression::instructions() const { return program_->code.size(); }
+
+double Expression::eval_value(const Vec3& p) const { return program_at(p).run(p.x(), p.y(), p.z()); }
 
 double Expression::eval_value_gradient(const Vec3& p, Vec3& gradient) const {
-  const Jet1 r = program_->run(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2));
+  const Jet1 r = program_at(p).run(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1), Jet1::variable(p.z(), 2));
   gradient = r.g;
   return r.v;
 }
 
 double Expression::eval_gradient_hessian(const Vec3& p, Vec3& gradient, Mat3& hessian) const {
-  const Jet2 r = program_->run(Jet2::variable(p.x(), 0), Jet2::variable(p.y(), 1), Jet2::variable(p.z(), 2));
+  const Jet2 r = program_at(p).run(Jet2::variable(p.x(), 0), Jet2::variable(p.y(), 1), Jet2::variable(p.z(), 2));
   gradient = r.g;
   hessian = r.h;
   return r.v;
@@ -726,7 +949,7 @@ void Expression::check_branch(const std::vector<std::uint8_t>& branch) const {
 
 std::pair<double, Vec3> Expression::eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
   check_branch(branch);
-  const Jet1 r = program_->run<Jet1, detail::Branching::Forced>(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1),
+  const Jet1 r = program_at(p, branch.data()).run<Jet1, detail::Branching::Forced>(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1),
                                                                 Jet1::variable(p.z(), 2),
                                                                 detail::BranchLog{branch.data(), nullptr});
   return {r.v, r.g};
@@ -953,7 +1176,7 @@ bool Expression::choices_reaching(const std::vector<std::uint8_t>& branch, std::
 
 FieldPiece Expression::eval_piece(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
   check_branch(branch);
-  const Jet2 r = program_->run<Jet2, detail::Branching::Forced>(
+  const Jet2 r = program_at(p, branch.data()).run<Jet2, detail::Branching::Forced>(
       Jet2::variable(p.x(), 0), Jet2::variable(p.y(), 1), Jet2::variable(p.z(), 2),
       detail::BranchLog{branch.data(), nullptr});
   return piece_from_jet(branch, r);

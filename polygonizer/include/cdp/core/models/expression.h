@@ -13,6 +13,7 @@
 
 #include <cdp/core/field.h>
 
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -21,6 +22,7 @@ namespace cdp {
 
 namespace detail {
 struct ExpressionProgram;
+class RegionPrograms;
 }
 
 class Expression : public Field {
@@ -41,6 +43,16 @@ class Expression : public Field {
   std::string type_name() const override { return "expression"; }
   bool thread_safe() const override { return true; }  // evaluation reads immutable data only
   const std::string& formula() const { return formula_; }
+  // The length of the program a plain evaluation at p runs, and of the whole formula's. Inside
+  // bounds() a formula with several min, max or abs runs specialized to p's cell of a grid over
+  // the box: the min and max whose arguments' ranges over the cell (value_range's interval
+  // arithmetic) do not overlap are left out with what only they read, so a union of many
+  // primitives is near any point the formula of a few. The values, gradients and Hessians are
+  // the same bits as the whole formula's (what is left out is what a min or max discarded). A
+  // cell is specialized once evaluated 64 times (asking here counts as one), and while its
+  // programs stay within 32 MB for the whole field.
+  std::size_t instructions_at(const Vec3& p) const;
+  std::size_t instructions() const;
 
   // By interval arithmetic over the formula (src/models/interval.h): bounds that hold, loose
   // where a variable occurs more than once; infinite where nothing bounds them (a division by
@@ -69,8 +81,13 @@ class Expression : public Field {
 
  private:
   void check_branch(const std::vector<std::uint8_t>& branch) const;  // InvalidInputError unless one of ours
+  // What an evaluation at p runs (with `forced`, one with those choices given): the program
+  // specialized to p's cell of the box (the min and max that cannot switch there left out: the
+  // same bits), or the whole one.
+  const detail::ExpressionProgram& program_at(const Vec3& p, const std::uint8_t* forced = nullptr) const;
   std::string formula_;
   std::unique_ptr<detail::ExpressionProgram> program_;
+  std::unique_ptr<detail::RegionPrograms> regions_;  // after program_, which it refers to
 };
 
 }  // namespace cdp
