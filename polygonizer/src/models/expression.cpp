@@ -903,6 +903,11 @@ const detail::ExpressionProgram& Expression::program_at(const Vec3& p, const std
 
 std::size_t Expression::instructions_at(const Vec3& p) const { return program_at(p).code.size(); }
 
+std::size_t Expression::instructions_at(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
+  check_branch(branch);
+  return program_at(p, branch.data()).code.size();
+}
+
 std::size_t Expression::instructions() const { return program_->code.size(); }
 
 double Expression::eval_value(const Vec3& p) const { return program_at(p).run(p.x(), p.y(), p.z()); }

@@ -52,6 +52,9 @@ class Expression : public Field {
   // cell is specialized once evaluated 64 times (asking here counts as one), and while its
   // programs stay within 32 MB for the whole field.
   std::size_t instructions_at(const Vec3& p) const;
+  // The same for a piece with the choices `branch` given (Field::piece): its cell's program for
+  // such runs, when the choices agree with those the cell's ranges decide.
+  std::size_t instructions_at(const Vec3& p, const std::vector<std::uint8_t>& branch) const;
   std::size_t instructions() const;
 
   // By interval arithmetic over the formula (src/models/interval.h): bounds that hold, loose
