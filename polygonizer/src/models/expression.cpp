@@ -273,6 +273,11 @@ T apply(const Instruction& in, const T& a, const T& b) {
   }
 }
 
+// How far apart two ranges must be for specialize to decide a min or max between them, relative
+// to their size: far more than the rounding interval.h allows for, far less than a formula's
+// own differences.
+constexpr double kDecisionMargin = 1e-12;
+
 // Which runs a specialized program (specialize) stands in for.
 enum class Runs {
   Free,    // Free runs: every min and max takes what the values choose
@@ -301,6 +306,9 @@ ExpressionProgram specialize(const ExpressionProgram& program, const Box& region
   std::vector<char> wild(n, 0);  // may be NaN or infinite somewhere in the region
   // A min or max: the argument it takes throughout (0 or 1), an abs: 0 for +u, 1 for -u; else -1.
   std::vector<signed char> takes(n, -1);
+  // x below y by more than the library functions' ulp a range of them may be off by (glibc's sin,
+  // exp, ... are within an ulp, which the outward rounding only just covers).
+  const auto below = [](double x, double y) { return x < y - kDecisionMargin * (std::abs(x) + std::abs(y)); };
   for (std::size_t i = 0; i < n; ++i) {
     const Instruction& in = code[i];
     const auto [a, b] = program.operands[i];
@@ -316,7 +324,10 @@ ExpressionProgram specialize(const ExpressionProgram& program, const Box& region
       case Op::Store: case Op::Load: r = ra; break;
       case Op::Min: case Op::Max: {
         const bool max = in.op == Op::Max;
-        if (!w) takes[i] = (max ? ra.hi < rb.lo : rb.hi < ra.lo) ? 1 : (max ? rb.hi < ra.lo : ra.hi < rb.lo) ? 0 : -1;
+        if (!w)
+          takes[i] = (max ? below(ra.hi, rb.lo) : below(rb.hi, ra.lo)) ? 1
+                     : (max ? below(rb.hi, ra.lo) : below(ra.hi, rb.lo)) ? 0
+                                                                         : -1;
         r = takes[i] >= 0 || runs == Runs::Free ? (max ? detail::max(ra, rb) : detail::min(ra, rb)) : hull(ra, rb);
         break;
       }
@@ -426,10 +437,11 @@ class RegionPrograms {
   // (three boxes as stairs, 0.03 s) took 1.7 times as long when each cell was specialized at its
   // first evaluation.
   static constexpr std::uint32_t kEvaluationsFirst = 64;
-  // Instructions kept in the cells' programs at most (16 bytes each, 32 MB): past them a cell runs
-  // the whole formula. fogleman/sdf's knurling (1,702 instructions; its cells' programs about 700
-  // for plain runs, 1,100 for Forced ones) fills them with about 2,200 programs.
-  static constexpr std::size_t kMaxKept = std::size_t{1} << 21;
+  // Bytes of the cells' programs at most (their code at 16 bytes an instruction, and their fixed
+  // choices): past them a cell runs the whole formula. fogleman/sdf's knurling (1,702
+  // instructions; its cells' programs about 700 for plain runs, 1,100 for Forced ones) fills them
+  // with about 2,000 programs.
+  static constexpr std::size_t kMaxKept = std::size_t{32} << 20;
 
   struct Cell {
     std::atomic<const ExpressionProgram*> program{nullptr};  // made: the cell's, or the whole one
@@ -439,8 +451,9 @@ class RegionPrograms {
   const ExpressionProgram& make(Cell& slot, const int c[3], Runs runs) const {
     Box cell;
     for (int k = 0; k < 3; ++k) {
-      // Widened by a hair: a point the division above put in the cell may lie a rounding outside it.
-      const double margin = 1e-9 * cell_[k];
+      // Widened by a hair: a point the division above put in the cell may lie a rounding outside
+      // it, and the cell's corners are rounded (by up to an ulp of the box's coordinates).
+      const double margin = 1e-9 * cell_[k] + 1e-15 * (std::abs(box_.min[k]) + std::abs(box_.max[k]));
       cell.min[k] = box_.min[k] + c[k] * cell_[k] - margin;
       cell.max[k] = box_.min[k] + (c[k] + 1) * cell_[k] + margin;
     }
@@ -451,9 +464,12 @@ class RegionPrograms {
     std::lock_guard lock(mutex_);
     if (const ExpressionProgram* made = slot.program.load(std::memory_order_acquire)) return *made;
     const std::size_t kept = kept_.load(std::memory_order_relaxed);
-    if (!special.code.empty() && kept + special.code.size() <= kMaxKept &&
+    special.code.shrink_to_fit();
+    special.fixed.shrink_to_fit();
+    const std::size_t bytes = special.code.size() * sizeof(Instruction) + special.fixed.size() * sizeof(special.fixed[0]);
+    if (!special.code.empty() && kept + bytes <= kMaxKept &&
         static_cast<double>(special.code.size()) <= kShorter * static_cast<double>(full_.code.size())) {
-      kept_.store(kept + special.code.size(), std::memory_order_relaxed);
+      kept_.store(kept + bytes, std::memory_order_relaxed);
       program = owned_.emplace_back(std::make_unique<ExpressionProgram>(std::move(special))).get();
     }
     slot.program.store(program, std::memory_order_release);
@@ -467,7 +483,7 @@ class RegionPrograms {
   mutable std::array<std::vector<Cell>, 2> cells_;  // by Runs
   mutable std::mutex mutex_;
   mutable std::vector<std::unique_ptr<ExpressionProgram>> owned_;
-  mutable std::atomic<std::size_t> kept_{0};  // instructions in owned_ (written under mutex_)
+  mutable std::atomic<std::size_t> kept_{0};  // bytes in owned_ (written under mutex_)
 };
 
 namespace {

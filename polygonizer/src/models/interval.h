@@ -112,6 +112,9 @@ inline Interval pow(const Interval& a, double c) {
     const Interval r = widened(power(low), power(m));
     return {std::max(r.lo, 0.0), r.hi};
   }
+  // An integer beyond the powers above, of a base that may be negative: defined there (a
+  // double's pow of -3 and 66 is 3^66), so not the real power's bound below.
+  if (c == std::round(c) && !(a.lo >= 0)) return Interval::entire();
   // A real exponent: defined for a >= 0 (the rest is NaN, as for sqrt).
   if (!(a.hi >= 0)) return Interval::entire();
   const double lo = std::max(a.lo, 0.0);
@@ -133,19 +136,24 @@ inline Interval sin(const Interval& a) {
   // A peak within a ulp of an end counts as inside (the ends' own rounding).
   const auto peak_inside = [&](double at) {
     const double k = std::ceil((a.lo - at) / two_pi - 1e-12);
-    return at + k * two_pi <= a.hi * (1 + 1e-12) + 1e-12;
+    return at + k * two_pi <= a.hi + std::abs(a.hi) * 1e-12 + 1e-12;
   };
   if (peak_inside(pi / 2)) r.hi = 1;
   if (peak_inside(-pi / 2)) r.lo = -1;
   return {std::max(r.lo, -1.0), std::min(r.hi, 1.0)};
 }
-inline Interval cos(const Interval& a) { return sin(a + Interval(std::numbers::pi / 2)); }
+// The double pi / 2 is 6.1e-17 short of the true one, more than the outward rounding of a small
+// sum widens it by: the shifted range is widened by that much more.
+inline Interval cos(const Interval& a) {
+  const Interval s = a + Interval(std::numbers::pi / 2);
+  return sin(Interval(s.lo - 2e-16, s.hi + 2e-16));
+}
 inline Interval tan(const Interval& a) {
   constexpr double pi = std::numbers::pi;
   if (!std::isfinite(a.lo) || !std::isfinite(a.hi) || a.hi - a.lo >= pi) return Interval::entire();
   // A pole pi/2 + k pi inside (or within rounding of an end) makes it unbounded.
   const double k = std::ceil((a.lo - pi / 2) / pi - 1e-12);
-  if (pi / 2 + k * pi <= a.hi * (1 + 1e-12) + 1e-12) return Interval::entire();
+  if (pi / 2 + k * pi <= a.hi + std::abs(a.hi) * 1e-12 + 1e-12) return Interval::entire();
   return outward(std::tan(a.lo), std::tan(a.hi));
 }
 inline Interval atan(const Interval& a) { return outward(std::atan(a.lo), std::atan(a.hi)); }

@@ -41,7 +41,9 @@ class Expression : public Field {
       : Expression(formula, params, bounds, definitions) {}
   ~Expression() override;
   std::string type_name() const override { return "expression"; }
-  bool thread_safe() const override { return true; }  // evaluation reads immutable data only
+  // Evaluation reads immutable data, and the cells' programs (instructions_at), made once each
+  // under a lock and published atomically.
+  bool thread_safe() const override { return true; }
   const std::string& formula() const { return formula_; }
   // The length of the program a plain evaluation at p runs, and of the whole formula's. Inside
   // bounds() a formula with several min, max or abs runs specialized to p's cell of a grid over
@@ -49,7 +51,7 @@ class Expression : public Field {
   // arithmetic) do not overlap are left out with what only they read, so a union of many
   // primitives is near any point the formula of a few. The values, gradients and Hessians are
   // the same bits as the whole formula's (what is left out is what a min or max discarded). A
-  // cell is specialized once evaluated 64 times (asking here counts as one), and while its
+  // cell is specialized once evaluated 64 times (asking here counts as one), while the cells'
   // programs stay within 32 MB for the whole field.
   std::size_t instructions_at(const Vec3& p) const;
   // The same for a piece with the choices `branch` given (Field::piece): its cell's program for
