@@ -118,7 +118,7 @@ struct ExpressionProgram {
       // (specialize) keeps for the branch points it keeps.
       if (in.op == Op::Min || in.op == Op::Max || in.op == Op::Abs) {
         branch_number[i] = branch_points++;
-        code[i].constant = branch_number[i];
+        in.constant = branch_number[i];
       }
       if (in.op != Op::Store) pushed.push_back(static_cast<int>(i));
       depth = std::max(depth, static_cast<int>(pushed.size()));
@@ -155,19 +155,18 @@ struct ExpressionProgram {
     alignas(T) unsigned char slot_storage[sizeof(T) * kMaxDefinitions];
     T* slot = reinterpret_cast<T*>(slot_storage);
     int top = -1;
-    [[maybe_unused]] int branch_point = 0;  // the branch point's number (its instruction's constant)
     // ForcedLive: beside each stack entry and slot, the bits of the branch points whose choice
     // reaches it (a min or max passes on its chosen argument's only, and its own).
     constexpr bool kLive = mode == Branching::ForcedLive;
     [[maybe_unused]] std::uint64_t dep[kLive ? kMaxStack : 1];
     [[maybe_unused]] std::uint64_t dep_slot[kLive ? kMaxDefinitions : 1];
-    [[maybe_unused]] const auto own_bit = [&] {
-      const int b = record.bit[branch_point];
+    // A branch point's number is its instruction's constant (link).
+    [[maybe_unused]] const auto own_bit = [&](int k) {
+      const int b = record.bit[k];
       return b >= 0 ? std::uint64_t{1} << b : std::uint64_t{0};
     };
     // At a branch point: the branch to take, given that `natural` is the one the values choose.
-    [[maybe_unused]] const auto choose = [&](bool natural, const T& a, const T& b) {
-      const int k = branch_point;
+    [[maybe_unused]] const auto choose = [&](int k, bool natural, const T& a, const T& b) {
       if constexpr (mode == Branching::Forced || kLive || mode == Branching::Taped)
         return record.forced[k] == Field::kFreeBranch ? natural : record.forced[k] != 0;
       if constexpr (mode == Branching::Record) {
@@ -192,23 +191,21 @@ struct ExpressionProgram {
         case Op::Pow: --top; stack[top] = pow(stack[top], stack[top + 1]); if constexpr (kLive) dep[top] |= dep[top + 1]; break;
         case Op::Min:
           --top;
-          if constexpr (mode != Branching::Free) branch_point = static_cast<int>(in.constant);
           if constexpr (mode == Branching::Free) stack[top] = min(stack[top], stack[top + 1]);
-          else if (choose(stack[top + 1].v < stack[top].v, stack[top], stack[top + 1])) {
+          else if (choose(static_cast<int>(in.constant), stack[top + 1].v < stack[top].v, stack[top], stack[top + 1])) {
             stack[top] = stack[top + 1];
             if constexpr (kLive) dep[top] = dep[top + 1];
           }
-          if constexpr (kLive) dep[top] |= own_bit();
+          if constexpr (kLive) dep[top] |= own_bit(static_cast<int>(in.constant));
           break;
         case Op::Max:
           --top;
-          if constexpr (mode != Branching::Free) branch_point = static_cast<int>(in.constant);
           if constexpr (mode == Branching::Free) stack[top] = max(stack[top], stack[top + 1]);
-          else if (choose(stack[top].v < stack[top + 1].v, stack[top], stack[top + 1])) {
+          else if (choose(static_cast<int>(in.constant), stack[top].v < stack[top + 1].v, stack[top], stack[top + 1])) {
             stack[top] = stack[top + 1];
             if constexpr (kLive) dep[top] = dep[top + 1];
           }
-          if constexpr (kLive) dep[top] |= own_bit();
+          if constexpr (kLive) dep[top] |= own_bit(static_cast<int>(in.constant));
           break;
         case Op::Neg: stack[top] = -stack[top]; break;
         case Op::PowConst: stack[top] = pow(stack[top], in.constant); break;
@@ -231,10 +228,9 @@ struct ExpressionProgram {
           if constexpr (kLive) dep[top] = dep_slot[static_cast<int>(in.constant)];
           break;
         case Op::Abs:
-          if constexpr (mode != Branching::Free) branch_point = static_cast<int>(in.constant);
           if constexpr (mode == Branching::Free) stack[top] = abs(stack[top]);
-          else if (choose(stack[top].v < 0, stack[top], -stack[top])) stack[top] = -stack[top];
-          if constexpr (kLive) dep[top] |= own_bit();
+          else if (choose(static_cast<int>(in.constant), stack[top].v < 0, stack[top], -stack[top])) stack[top] = -stack[top];
+          if constexpr (kLive) dep[top] |= own_bit(static_cast<int>(in.constant));
           break;
       }
       if constexpr (mode == Branching::Taped)
@@ -324,10 +320,10 @@ ExpressionProgram specialize(const ExpressionProgram& program, const Box& region
       case Op::Store: case Op::Load: r = ra; break;
       case Op::Min: case Op::Max: {
         const bool max = in.op == Op::Max;
-        if (!w)
-          takes[i] = (max ? below(ra.hi, rb.lo) : below(rb.hi, ra.lo)) ? 1
-                     : (max ? below(rb.hi, ra.lo) : below(ra.hi, rb.lo)) ? 0
-                                                                         : -1;
+        // The argument whose range lies wholly on the side the operation takes.
+        const bool first = max ? below(rb.hi, ra.lo) : below(ra.hi, rb.lo);
+        const bool second = max ? below(ra.hi, rb.lo) : below(rb.hi, ra.lo);
+        if (!w) takes[i] = second ? 1 : first ? 0 : -1;
         r = takes[i] >= 0 || runs == Runs::Free ? (max ? detail::max(ra, rb) : detail::min(ra, rb)) : hull(ra, rb);
         break;
       }
@@ -366,14 +362,14 @@ ExpressionProgram specialize(const ExpressionProgram& program, const Box& region
   ExpressionProgram out;
   out.slots = program.slots;
   for (std::size_t i = 0; i < n; ++i) {
-    const Op op = code[i].op;
-    const bool branch_point = op == Op::Min || op == Op::Max || op == Op::Abs;
-    // Left out or not: another choice given there changes the ranges after it.
-    if (branch_point && takes[i] >= 0)
+    if (takes[i] >= 0) {
+      // Fixed whether its code is left out or not: another choice given there changes the ranges
+      // after it.
       out.fixed.emplace_back(program.branch_number[i], static_cast<std::uint8_t>(takes[i]));
-    if (!live[i]) continue;
-    if (branch_point && takes[i] >= 0 && (op != Op::Abs || takes[i] == 0)) continue;
-    out.code.push_back(op == Op::Abs && takes[i] == 1 ? Instruction{Op::Neg} : code[i]);
+      if (live[i] && code[i].op == Op::Abs && takes[i] == 1) out.code.push_back({Op::Neg});
+      continue;
+    }
+    if (live[i]) out.code.push_back(code[i]);
   }
   return out;
 }
@@ -382,8 +378,8 @@ ExpressionProgram specialize(const ExpressionProgram& program, const Box& region
 // (a rounded box) save less than finding the cell costs.
 constexpr int kRegionBranchPoints = 4;
 
-// The program specialized (specialize) to each cell of a grid over the field's box, made when a
-// point of the cell is first evaluated. A formula of many primitives (a union of 48 twisted boxes)
+// The program specialized (specialize) to each cell of a grid over the field's box, made once the
+// cell has been evaluated often enough (kEvaluationsFirst). A formula of many primitives (a union of 48 twisted boxes)
 // is, near any point, the formula of a few of them.
 class RegionPrograms {
  public:
@@ -970,9 +966,10 @@ void Expression::check_branch(const std::vector<std::uint8_t>& branch) const {
 
 std::pair<double, Vec3> Expression::eval_first_order(const Vec3& p, const std::vector<std::uint8_t>& branch) const {
   check_branch(branch);
-  const Jet1 r = program_at(p, branch.data()).run<Jet1, detail::Branching::Forced>(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1),
-                                                                Jet1::variable(p.z(), 2),
-                                                                detail::BranchLog{branch.data(), nullptr});
+  const Jet1 r = program_at(p, branch.data())
+                     .run<Jet1, detail::Branching::Forced>(Jet1::variable(p.x(), 0), Jet1::variable(p.y(), 1),
+                                                           Jet1::variable(p.z(), 2),
+                                                           detail::BranchLog{branch.data(), nullptr});
   return {r.v, r.g};
 }
 
