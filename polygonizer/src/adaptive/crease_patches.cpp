@@ -1,5 +1,6 @@
 #include "crease_patches.h"
 #include "spatial_hash.h"
+#include "../parallel.h"
 #include "../surface_passes.h"
 #include "../union_find.h"
 
@@ -9,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -844,6 +846,56 @@ void land_on_field(const Field& field, CreaseMesh& out, std::size_t first, doubl
   }
 }
 
+// One group's patches meshed by a tracker of its own (mesh_crease_patches runs them on several
+// threads: nothing here is shared but the field and what is read).
+struct PatchPart {
+  Mesh mesh;
+  std::vector<std::vector<int>> ids;  // the tracker's vertex of each group cycle's vertex
+  std::vector<double> target, mac, shape_index;
+  std::size_t steps = 0, splits = 0, merges = 0, forced_closures = 0, patch_refusals = 0;
+  std::pair<double, Vec3> tightest{std::numeric_limits<double>::infinity(), Vec3::Zero()};
+  std::exception_ptr error;
+};
+
+PatchPart mesh_patch_group(const Field& field, const PatchGroup& patch, const std::vector<Cycle>& cycles,
+                           const std::vector<Vec3>& points, const Settings& settings, const CancelToken& cancel,
+                           double estimated_area, double look_ahead_gradation) {
+  PatchPart out;
+  const Branch& branch = patch.piece;
+  const PieceField piece(field, branch);
+  std::vector<std::vector<Tracker::Placed>> loops;
+  for (const std::size_t i : patch.cycles) {
+    std::vector<Tracker::Placed>& loop = loops.emplace_back();
+    for (const int v : cycles[i].vertices) {
+      const Vec3& p = points[static_cast<std::size_t>(v)];
+      const FieldPiece q = field.piece(p, branch);
+      loop.push_back({p, curvature_from_derivatives(q.gradient, q.hessian)});
+    }
+  }
+  Settings patch_settings = settings;
+  patch_settings.look_ahead = true;
+  patch_settings.look_ahead_gradation = look_ahead_gradation;
+  patch_settings.cancel = cancel;
+  Tracker tracker(piece, patch_settings, out.mesh);
+  if (estimated_area > 0) tracker.set_estimated_area(estimated_area);
+  tracker.set_patch_test([&field, &branch](const Vec3& a, const Vec3& b) { return inside_patch(field, branch, a, b); });
+  double sagitta = 0;
+  for (const std::size_t i : patch.cycles) sagitta = std::max(sagitta, cycles[i].sagitta);
+  tracker.set_point_test(
+      [&field, &branch, sagitta](const Vec3& x, double d) { return in_patch(field, branch, x, d, sagitta); });
+  out.ids = tracker.mesh_from_loops(loops);
+  out.target = tracker.vertex_edge_length();
+  out.mac = tracker.vertex_mac();
+  out.shape_index = tracker.vertex_shape_index();
+  out.steps = tracker.steps();
+  out.splits = tracker.splits();
+  out.merges = tracker.merges();
+  out.forced_closures = tracker.forced_closures();
+  out.patch_refusals = tracker.patch_refusals();
+  out.tightest = tracker.tightest_bend();
+  return out;
+}
+
 }  // namespace
 
 CreaseMesh start_shared(const std::vector<Vec3>& shared) {
@@ -896,7 +948,7 @@ void finish_shared(CreaseMesh& out, std::size_t shared, const std::string& unrea
 }
 
 CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& creases, const Settings& settings,
-                               double estimated_area, double look_ahead_gradation) {
+                               double estimated_area, double look_ahead_gradation, int threads) {
   CreaseMesh out;
   const double diagonal = settings.diagonal;
   CreaseVertices cv;
@@ -926,41 +978,50 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
 
   const std::vector<PatchGroup> groups = group_cycles(field, cycles, cv.points);
   const std::size_t nc = cv.points.size();
-  out = start_shared(cv.points);
-  for (const PatchGroup& patch : groups) {
-    const std::vector<std::size_t>& group = patch.cycles;
-    const Branch& branch = patch.piece;
-    const PieceField piece(field, branch);
-    std::vector<std::vector<Tracker::Placed>> loops;
-    for (const std::size_t i : group) {
-      std::vector<Tracker::Placed>& loop = loops.emplace_back();
-      for (const int v : cycles[i].vertices) {
-        const Vec3& p = cv.points[static_cast<std::size_t>(v)];
-        const FieldPiece q = field.piece(p, branch);
-        loop.push_back({p, curvature_from_derivatives(q.gradient, q.hessian)});
-      }
+  // Each group's tracker into its own slot, on `threads` threads for a thread-safe field, the
+  // largest groups (by boundary vertices) first; the parts joined in group order, so the mesh is
+  // the same on any number of threads. Where a group fails, the first failing one in group order
+  // decides, as on one thread: a failure cancels the groups after it (their parts could change
+  // nothing), and those before it run to their end.
+  std::vector<PatchPart> parts(groups.size());
+  std::vector<CancelToken> stops(groups.size());
+  for (CancelToken& t : stops) t = settings.cancel.linked();
+  const auto run_group = [&](std::size_t g) {
+    try {
+      parts[g] = mesh_patch_group(field, groups[g], cycles, cv.points, settings, stops[g], estimated_area,
+                                  look_ahead_gradation);
+    } catch (...) {
+      parts[g].error = std::current_exception();
+      for (std::size_t later = g + 1; later < groups.size(); ++later) stops[later].cancel();
     }
-    Mesh part;
-    Settings patch_settings = settings;
-    patch_settings.look_ahead = true;
-    patch_settings.look_ahead_gradation = look_ahead_gradation;
-    Tracker tracker(piece, patch_settings, part);
-    if (estimated_area > 0) tracker.set_estimated_area(estimated_area);
-    tracker.set_patch_test([&field, &branch](const Vec3& a, const Vec3& b) { return inside_patch(field, branch, a, b); });
-    double sagitta = 0;
-    for (const std::size_t i : group) sagitta = std::max(sagitta, cycles[i].sagitta);
-    tracker.set_point_test(
-        [&field, &branch, sagitta](const Vec3& x, double d) { return in_patch(field, branch, x, d, sagitta); });
-    const std::vector<std::vector<int>> ids = tracker.mesh_from_loops(loops);
+  };
+  std::vector<std::size_t> order(groups.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  const auto weight = [&](std::size_t g) {
+    std::size_t w = 0;
+    for (const std::size_t i : groups[g].cycles) w += cycles[i].vertices.size();
+    return w;
+  };
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return weight(x) > weight(y); });
+  const unsigned workers = field.thread_safe() ? detail::worker_count(threads) : 1u;
+  detail::parallel_blocks(order.size(), 1, workers, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end; ++i) run_group(order[i]);
+  });
+  for (const PatchPart& p : parts)
+    if (p.error) std::rethrow_exception(p.error);
+  out = start_shared(cv.points);
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    PatchPart& p = parts[g];
     std::vector<std::vector<int>> shared;
-    for (const std::size_t i : group) shared.push_back(cycles[i].vertices);
-    add_part(out, part, ids, shared, tracker.vertex_edge_length(), tracker.vertex_mac(), tracker.vertex_shape_index());
-    out.steps += tracker.steps();
-    out.splits += tracker.splits();
-    out.merges += tracker.merges();
-    out.forced_closures += tracker.forced_closures();
-    out.patch_refusals += tracker.patch_refusals();
-    if (tracker.tightest_bend().first < out.tightest.first) out.tightest = tracker.tightest_bend();
+    for (const std::size_t i : groups[g].cycles) shared.push_back(cycles[i].vertices);
+    add_part(out, p.mesh, p.ids, shared, p.target, p.mac, p.shape_index);
+    out.steps += p.steps;
+    out.splits += p.splits;
+    out.merges += p.merges;
+    out.forced_closures += p.forced_closures;
+    out.patch_refusals += p.patch_refusals;
+    if (p.tightest.first < out.tightest.first) out.tightest = p.tightest;
+    p = PatchPart{};  // its memory back before the next is joined
   }
   finish_shared(out, nc, "a crease vertex no patch reached");
   out.crease_vertices = nc;

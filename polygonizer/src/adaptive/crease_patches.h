@@ -16,7 +16,8 @@
 //   group_cycles     the cycles of one smooth region together (by function, or where hidden
 //                    choices code one region differently along its boundaries, by growing the
 //                    regions over the surface, each sample's code from RegionCodes), on one code
-//   mesh_crease_patches  one tracker per group, its fronts the group's cycles, then one mesh
+//   mesh_crease_patches  one tracker per group, its fronts the group's cycles (the groups on all
+//                    threads), then one mesh in group order
 #pragma once
 
 #include "tracker.h"
@@ -128,9 +129,12 @@ class RegionCodes {
 
 // Lays out `creases` (from trace_creases on `field`) and meshes every patch they bound, its
 // fronts looking ahead with `look_ahead_gradation` (Settings::look_ahead_gradation;
-// kPatchLookAheadGradations, stage_creases.h). Throws CreaseLayoutError as above, and whatever a
-// tracker throws (StalledFrontError, LimitExceededError).
+// kPatchLookAheadGradations, stage_creases.h). The groups' trackers run on `threads` threads
+// (AdaptiveOptions::threads: 0 all cores) for a thread-safe field, each group's mesh joined in
+// group order: the mesh is the same on any number. Throws CreaseLayoutError as above, and
+// whatever a tracker throws (StalledFrontError, LimitExceededError; the first group's in group
+// order).
 CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& creases, const Settings& settings,
-                               double estimated_area, double look_ahead_gradation);
+                               double estimated_area, double look_ahead_gradation, int threads = 1);
 
 }  // namespace cdp::adaptive

@@ -10,10 +10,10 @@ namespace {
 
 // The patches meshed with each of kPatchLookAheadGradations in turn until none stalls.
 CreaseMesh mesh_patches(const Field& field, const CreaseTracingResult& traced, const Settings& settings,
-                        double estimated_area) {
+                        double estimated_area, int threads) {
   for (std::size_t k = 0;; ++k) {
     try {
-      return mesh_crease_patches(field, traced, settings, estimated_area, kPatchLookAheadGradations[k]);
+      return mesh_crease_patches(field, traced, settings, estimated_area, kPatchLookAheadGradations[k], threads);
     } catch (const StalledFrontError&) {
       if (k + 1 == kPatchLookAheadGradations.size()) throw;
     }
@@ -53,7 +53,7 @@ CreaseLayout lay_out_creases(const Field& field, const AdaptiveOptions& options,
       out.traced = trace_creases(field, co);
       if (!out.traced.curves.empty()) {
         if (attempt == 0 && options.phase) options.phase("meshing along creases");
-        out.mesh = mesh_patches(field, out.traced, settings, out.estimated_area);
+        out.mesh = mesh_patches(field, out.traced, settings, out.estimated_area, options.threads);
         out.components = analyze_topology(out.mesh->mesh).components;
         out.fallback.clear();
       }
