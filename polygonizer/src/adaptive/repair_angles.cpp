@@ -1,7 +1,9 @@
 // The angle repair (repair_angles.h).
 #include "repair_angles.h"
 
+#include <cstddef>
 #include <numbers>
+#include <vector>
 
 namespace cdp::adaptive::repair {
 namespace {
@@ -66,6 +68,60 @@ bool repair_triangle(RepairContext& ctx, int t) {
   return false;
 }
 
+
+// What each visit of repair_triangle found, so that a triangle it failed on is not tried again
+// while nothing around it has changed. Its operations read the mesh within two rings of its
+// corners (a corner's neighbours' stars, their valences and links) and the field there, so where
+// no triangle with a corner in those rings has changed since a visit failed, the next visit
+// would fail the same way and is skipped: the repair makes the same operations in the same
+// order, with fewer visits. (Triangles whose corners all lie on creases cannot be mended by
+// moves and were tried every round: 9,837 visits for 204 operations on the table of the SDF
+// sweep, a third of its run.) Not quite: an operation is also refused where it would cross a
+// triangle near it in space but not in the mesh (RepairContext::intersects), which a change far
+// away in the mesh could free; such a refusal stands until a change nears it.
+class Visits {
+ public:
+  explicit Visits(std::size_t vertices) : changed_at_(vertices, -1) {}
+  // Whether t was visited, failed, and no triangle within two rings of its corners changed since.
+  bool unchanged_since_failure(const RepairContext& ctx, int t) const {
+    const auto ti = static_cast<std::size_t>(t);
+    if (ti >= failed_at_.size() || failed_at_[ti] < 0) return false;
+    const long since = failed_at_[ti];
+    const auto changed = [&](int v) {
+      const auto vi = static_cast<std::size_t>(v);
+      return vi >= changed_at_.size() || changed_at_[vi] >= since;
+    };
+    // The corners of the stars of the corners of t's corners' stars (no sorted neighbour lists:
+    // this runs on every triangle still failing, every round).
+    for (const int v : ctx.mesh_.triangles[ti])
+      for (const int u : ctx.vt_[static_cast<std::size_t>(v)])
+        for (const int w : ctx.mesh_.triangles[static_cast<std::size_t>(u)]) {
+          if (changed(w)) return false;
+          for (const int y : ctx.vt_[static_cast<std::size_t>(w)])
+            for (const int x : ctx.mesh_.triangles[static_cast<std::size_t>(y)])
+              if (changed(x)) return false;
+        }
+    return true;
+  }
+  // After a visit of t: the corners of the triangles it changed or made (touched_ from `stamped`
+  // on) stamped with this visit, and t's failure.
+  void record(const RepairContext& ctx, int t, bool applied, std::size_t& stamped) {
+    for (; stamped < ctx.touched_.size(); ++stamped)
+      for (const int v : ctx.mesh_.triangles[static_cast<std::size_t>(ctx.touched_[stamped])]) {
+        const auto vi = static_cast<std::size_t>(v);
+        if (vi >= changed_at_.size()) changed_at_.resize(vi + 1, -1);
+        changed_at_[vi] = visit_;
+      }
+    const auto ti = static_cast<std::size_t>(t);
+    if (ti >= failed_at_.size()) failed_at_.resize(ti + 1, -1);
+    failed_at_[ti] = applied ? -1 : visit_;
+    ++visit_;
+  }
+
+ private:
+  long visit_ = 0;
+  std::vector<long> failed_at_, changed_at_;  // per triangle, per vertex; -1 none
+};
 }  // namespace
 
 void repair_angles(RepairContext& ctx) {
@@ -75,18 +131,23 @@ void repair_angles(RepairContext& ctx) {
     if (ctx.alive_[t] && ctx.tri_below(ctx.mesh_.triangles[t])) work.push_back(t);
   }
   ctx.report_.bad_before = std::max(ctx.report_.bad_before, work.size());
+  Visits visits(ctx.mesh_.positions.size());
   for (int round = 0; round < kQualityRounds && !work.empty(); ++round) {
     std::vector<std::pair<double, int>> order;
     for (int t : work)
       if (ctx.alive_[t]) order.push_back({ctx.tri_min_angle(ctx.mesh_.triangles[t]), t});
     std::sort(order.begin(), order.end());
     ctx.touched_.clear();
+    std::size_t stamped = 0;
     bool changed = false;
     for (std::size_t i = 0; i < order.size(); ++i) {
       ctx.poll(i);
       const int t = order[i].second;
       if (!ctx.alive_[t] || !(ctx.tri_min_angle(ctx.mesh_.triangles[t]) < ctx.options_.improve_below)) continue;
-      changed = repair_triangle(ctx, t) || changed;
+      if (visits.unchanged_since_failure(ctx, t)) continue;
+      const bool applied = repair_triangle(ctx, t);
+      visits.record(ctx, t, applied, stamped);
+      changed = applied || changed;
     }
     if (!changed) break;
     // Next round: what is still bad among the triangles visited or changed.
