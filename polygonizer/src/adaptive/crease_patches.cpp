@@ -1021,6 +1021,7 @@ CreaseMesh mesh_crease_patches(const Field& field, const CreaseTracingResult& cr
     out.forced_closures += p.forced_closures;
     out.patch_refusals += p.patch_refusals;
     if (p.tightest.first < out.tightest.first) out.tightest = p.tightest;
+    out.group_ends.push_back(out.mesh.triangles.size());
     p = PatchPart{};  // its memory back before the next is joined
   }
   finish_shared(out, nc, "a crease vertex no patch reached");

@@ -61,6 +61,9 @@ struct CreaseMesh {
   // Per vertex, as the tracker keeps them (Tracker::vertex_edge_length, vertex_mac, vertex_shape_index).
   std::vector<double> target, mac, shape_index;
   std::size_t crease_vertices = 0, pieces = 0;
+  // Where each group's triangles end in mesh.triangles (the groups' parts in group order, each
+  // holding its triangles together): the repair repairs the groups side by side (repair_mesh).
+  std::vector<std::size_t> group_ends;
   std::size_t steps = 0, splits = 0, merges = 0;
   // Stuck fronts the patches' trackers closed ear by ear (Tracker::forced_closures).
   std::size_t forced_closures = 0;
