@@ -399,8 +399,10 @@ BENCHMARK(BM_AdaptiveBookkeeping)->ArgName("shape")->DenseRange(0, 1)->UseManual
 // Tanglecube (a cheap field: the serial tracking dominates), the bunny VIS-800 (a dear one,
 // too small to split) and the Igea VIS-4004 (which splits), at factor 3, and the gyroid clipped by
 // a ball of the hard-surface suite at factor 3 (issue 58's surface with creases: meshed along
-// them, not in blocks). On a machine with one core the second run has nothing to share and the
-// ratio is about 1.
+// them, not in blocks: its two groups of patches meshed and repaired side by side), and
+// fogleman/sdf's README model at tolerance 1e-4 (about 85,000 triangles in ten groups of
+// patches). On a machine with one core the second run has nothing to share and the ratio is
+// about 1.
 const Field& igea() {
   static const std::unique_ptr<Field> field =
       load_field(std::string(CDP_SOURCE_DIR) + "/experiments/fields/igea_vis4004.json");
@@ -408,16 +410,22 @@ const Field& igea() {
 }
 
 void BM_AdaptiveThreads(benchmark::State& state) {
-  // 0 tanglecube, 1 bunny VIS-800, 2 Igea VIS-4004, 3 the gyroid ball
+  // 0 tanglecube, 1 bunny VIS-800, 2 Igea VIS-4004, 3 the gyroid ball, 4 fogleman/sdf's README model
   const int shape = static_cast<int>(state.range(0));
   std::unique_ptr<Field> own;
   if (shape == 0) own = make_shape(kTanglecube);
   if (shape == 3)
     own = std::make_unique<Expression>("max(sin(4*x)*cos(4*y)+sin(4*y)*cos(4*z)+sin(4*z)*cos(4*x), x^2+y^2+z^2-4)",
                                        std::map<std::string, double>{}, Box{{-2.2, -2.2, -2.2}, {2.2, 2.2, 2.2}});
+  if (shape == 4)
+    own = std::make_unique<Expression>(
+        "max(max(sqrt(x^2+y^2+z^2)-1.2, max(max(abs(x),abs(y)),abs(z))-1), "
+        "-min(min(sqrt(y^2+z^2)-0.5, sqrt(x^2+z^2)-0.5), sqrt(x^2+y^2)-0.5))",
+        std::map<std::string, double>{}, Box{{-1.5, -1.5, -1.5}, {1.5, 1.5, 1.5}});
   const Field& field = shape == 1 ? bunny() : shape == 2 ? igea() : *own;
   AdaptiveOptions o;
   o.factor = 3;
+  if (shape == 4) o.sizing = SizingMode::Tolerance, o.tolerance = 1e-4;
   double one = 0, two = 0;
   for (auto _ : state) {
     o.threads = 1;
@@ -440,9 +448,10 @@ void BM_AdaptiveThreads(benchmark::State& state) {
   state.SetLabel(shape == 0   ? "tanglecube/adaptive/threads"
                  : shape == 1 ? "bunny_vis800/adaptive/threads"
                  : shape == 2 ? "igea_vis4004/adaptive/threads"
-                              : "gyroid_ball/adaptive/threads");
+                 : shape == 3 ? "gyroid_ball/adaptive/threads"
+                              : "fogleman_readme_tol1e-4/adaptive/threads");
 }
-BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 3)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AdaptiveThreads)->ArgName("shape")->DenseRange(0, 4)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // Issue 58's blocks (AdaptiveOptions::blocks): each iteration meshes the field by tracking alone
 // on one thread, then with blocks on one thread and on two, in turn, and requires the two block
