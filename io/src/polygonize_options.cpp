@@ -67,8 +67,8 @@ const std::vector<OptionSpec>& table() {
       {"max_triangles", OptionKind::Integer, OptionMethods::All, "N", "", "", {}, {}, 1, INT_MAX,
        "stop with an error beyond N triangles"},
       {"threads", OptionKind::Integer, OptionMethods::All, "N", "0", "", {}, {}, 0, INT_MAX,
-       "threads of the seed grid (thread-safe fields), the adaptive method's blocks (--blocks), relaxation and final "
-       "check, and a second for half of each costly evaluation while it tracks (a VIS from 1024 centres) (0: all cores this "
+       "threads of the seed grid (thread-safe fields), the adaptive method's blocks (--blocks) and groups of crease "
+       "patches (meshed, then repaired, side by side), relaxation and final check, and a second for half of each costly evaluation while it tracks (a VIS from 1024 centres) (0: all cores this "
        "process may use, at most 8); the mesh is the same on any number"},
   };
   return options;

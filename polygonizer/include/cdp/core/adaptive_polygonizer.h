@@ -66,7 +66,8 @@ struct AdaptiveOptions {
   // Threads of the data-parallel passes (the seed grid of a thread-safe field, the relaxation's
   // targets, projections and intersection tests, the tolerance's estimates, the final checks):
   // 0 all cores this process may run on (its CPU affinity; at most 8), 1 the caller's only. The
-  // tracker itself runs on the caller's thread (with `blocks`, the blocks' trackers on these);
+  // tracker itself runs on the caller's thread (with `blocks`, the blocks' trackers on these; with
+  // creases followed, the trackers and repairs of the groups of crease patches);
   // from two threads, a costly field's evaluations there run half their sums on a second (a Vis
   // from Vis::kSplitGradientHessianCentres centres; stats "split_evaluations"). The mesh is the same, bit for bit, on any number.
   int threads = 0;
