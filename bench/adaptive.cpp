@@ -419,9 +419,9 @@ void BM_AdaptiveThreads(benchmark::State& state) {
                                        std::map<std::string, double>{}, Box{{-2.2, -2.2, -2.2}, {2.2, 2.2, 2.2}});
   if (shape == 4)
     own = std::make_unique<Expression>(
-        "max(max(sqrt(x^2+y^2+z^2)-1.2, max(max(abs(x),abs(y)),abs(z))-1), "
+        "max(max(sqrt(x^2+y^2+z^2)-1, max(max(abs(x),abs(y)),abs(z))-0.75), "
         "-min(min(sqrt(y^2+z^2)-0.5, sqrt(x^2+z^2)-0.5), sqrt(x^2+y^2)-0.5))",
-        std::map<std::string, double>{}, Box{{-1.5, -1.5, -1.5}, {1.5, 1.5, 1.5}});
+        std::map<std::string, double>{}, Box{{-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}});
   const Field& field = shape == 1 ? bunny() : shape == 2 ? igea() : *own;
   AdaptiveOptions o;
   o.factor = 3;

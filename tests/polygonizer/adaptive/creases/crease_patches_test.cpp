@@ -221,9 +221,9 @@ TEST(AdaptiveCreases, SameMeshOnAnyThreadCount) {
   // groups of patches, whose trackers run on all threads (mesh_crease_patches) and are joined
   // in group order.
   const auto field = test::field_from_json(expression(
-      "max(max(sqrt(x^2+y^2+z^2)-1.2, max(max(abs(x),abs(y)),abs(z))-1), "
+      "max(max(sqrt(x^2+y^2+z^2)-1, max(max(abs(x),abs(y)),abs(z))-0.75), "
       "-min(min(sqrt(y^2+z^2)-0.5, sqrt(x^2+z^2)-0.5), sqrt(x^2+y^2)-0.5))",
-      -1.5, 1.5));
+      -1.2, 1.2));
   AdaptiveOptions o;
   o.factor = 3;
   o.threads = 1;
