@@ -56,6 +56,21 @@ void check_overlap(const RunContext& run, const Settings& resolved, const SeedGr
 QualityReport repair_patches(const Field& field, Mesh& mesh, const CreaseMesh& patches, const QualityOptions& qo,
                              BandChanges& band);
 
+// After a repair in parts (the blocks' and their band's, the crease groups' and theirs), whose
+// searches could not aim at the whole mesh's mean edge ratio: where that mean is over the aim,
+// the whole mesh repaired once more with the search, as a mesh repaired at once would be, its
+// counts added to `report` and its tolerance count taken as the mesh's (it measured every
+// triangle). Returns whether it ran.
+bool repair_whole_over_aim(const Field& field, Mesh& mesh, const QualityOptions& qo, QualityReport& report) {
+  if (!(qo.aim_mean_edge_ratio > 0 && mean_edge_ratio(mesh, qo.threads) > qo.aim_mean_edge_ratio)) return false;
+  const QualityReport whole = improve_mesh(field, mesh, qo);
+  add_repair_counts(report, whole);
+  report.over_tolerance = whole.over_tolerance;
+  report.over_tolerance_worst = whole.over_tolerance_worst;
+  report.over_tolerance_near = whole.over_tolerance_near;
+  return true;
+}
+
 }  // namespace
 
 QualityOptions repair_options(const RunContext& run, const Settings& resolved, const CreaseLayout& creases) {
@@ -124,15 +139,8 @@ QualityReport repair_mesh(const RunContext& run, const Settings& resolved, const
   // mesh is repaired again with the search, as a mesh tracked alone would be (rare: the blocks'
   // meshes are better shaped; a block's own mean over it made the random blobs at 1e-3 search in
   // four of their eight blocks, 1.5 times the evaluations of the whole run).
-  if (qo.aim_mean_edge_ratio > 0 && mean_edge_ratio(mesh, qo.threads) > qo.aim_mean_edge_ratio) {
-    const QualityReport whole = improve_mesh(run.field, mesh, qo);
-    add_repair_counts(report, whole);
-    // It measured every triangle against the tolerance: its count is the mesh's.
-    report.over_tolerance = whole.over_tolerance;
-    report.over_tolerance_worst = whole.over_tolerance_worst;
-    report.over_tolerance_near = whole.over_tolerance_near;
+  if (repair_whole_over_aim(run.field, mesh, qo, report))
     band = {};  // every vertex measured again (add_curvature_properties)
-  }
   // Afresh: the blocks' counts include triangles beside a seam that the band's repair changed.
   report.bad_after = triangles_under(mesh, qo.improve_below, qo.threads);
   return report;
@@ -471,13 +479,7 @@ QualityReport repair_patches(const Field& field, Mesh& mesh, const CreaseMesh& p
   in_band.aim_mean_edge_ratio = 0;
   BandChanges around;
   add_repair_counts(report, repair_band(field, mesh, patches.crease_vertices, mesh.positions.size(), in_band, around));
-  if (qo.aim_mean_edge_ratio > 0 && mean_edge_ratio(mesh, qo.threads) > qo.aim_mean_edge_ratio) {
-    const QualityReport whole = improve_mesh(field, mesh, qo);
-    add_repair_counts(report, whole);
-    report.over_tolerance = whole.over_tolerance;
-    report.over_tolerance_worst = whole.over_tolerance_worst;
-    report.over_tolerance_near = whole.over_tolerance_near;
-  }
+  repair_whole_over_aim(field, mesh, qo, report);
   band = {};  // every vertex measured again where curvature is asked for (add_curvature_properties)
   report.bad_before = done.report.bad_before;  // the parts hold every triangle; the band's were among them
   report.bad_after = triangles_under(mesh, qo.improve_below, qo.threads);
